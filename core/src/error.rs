@@ -1,0 +1,52 @@
+//! The one error type of the solver crate.
+
+use thiserror::Error;
+
+/// Everything that can go wrong while reading a scene, setting up or running a simulation.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum Error {
+    /// The scene text is not valid TOML, has a missing, unknown or mistyped key.
+    #[error("{file}: {message}")]
+    SceneSyntax { file: String, message: String },
+    /// A key is present and well typed but its value is not physical or not consistent.
+    #[error("{file}:{line}: `{key}`: {message}")]
+    SceneValue {
+        file: String,
+        line: usize,
+        key: String,
+        message: String,
+    },
+    /// The particle layout does not support a well-posed RK approximation.
+    #[error("shape functions: {0}")]
+    ShapeFunctions(String),
+    /// The state became non-finite or left the physically admissible range.
+    #[error("step {step} (t = {time:.6e} s): {what}")]
+    Diverged { step: u64, time: f64, what: String },
+    /// The energy balance error exceeded the scene's bound.
+    #[error("step {step} (t = {time:.6e} s): energy balance error {error_rel:.3e} of the reference energy exceeds the bound {bound:.3e} ({detail})")]
+    EnergyBalance {
+        step: u64,
+        time: f64,
+        error_rel: f64,
+        bound: f64,
+        detail: String,
+    },
+    /// The time step is above the stable step.
+    #[error("step {step} (t = {time:.6e} s): time step {dt:.3e} s exceeds the stable step {dt_crit:.3e} s ({detail})")]
+    Unstable {
+        step: u64,
+        time: f64,
+        dt: f64,
+        dt_crit: f64,
+        detail: String,
+    },
+    /// A request from a wrapper (FMU, ROS node) that the simulation cannot honour.
+    #[error("{0}")]
+    Request(String),
+    /// A saved state that cannot be restored.
+    #[error("state: {0}")]
+    State(String),
+}
+
+/// Result alias of the solver crate.
+pub type Result<T> = std::result::Result<T, Error>;

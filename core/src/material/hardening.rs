@@ -1,0 +1,119 @@
+//! Isotropic hardening laws: flow stress as a function of the equivalent plastic strain.
+
+use crate::math::Real;
+use serde::{Deserialize, Serialize};
+
+/// Flow stress `sigma_y(eps_p)` (Pa) as a function of equivalent plastic strain (-).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Hardening {
+    /// Linear: `sigma_y = sigma_y0 + H eps_p` (paper Table 2: 400 MPa, H = 100 MPa).
+    Linear {
+        /// Initial yield stress `sigma_y0` (Pa).
+        yield_stress_pa: Real,
+        /// Plastic hardening modulus `H` (Pa).
+        modulus_pa: Real,
+    },
+    /// Power law (Swift): `sigma_y = K (eps0 + eps_p)^n`
+    /// (paper Table 4: K = 576.79 MPa, eps0 = 0.01658, n = 0.3593).
+    Power {
+        /// Strength coefficient `K` (Pa).
+        k_pa: Real,
+        /// Pre-strain `eps0` (-), > 0 so that the initial yield `K eps0^n` is finite and positive.
+        eps0: Real,
+        /// Hardening exponent `n` (-).
+        n: Real,
+    },
+}
+
+impl Hardening {
+    /// Flow stress `sigma_y(eps_p)` (Pa).
+    #[inline]
+    pub fn flow_stress(&self, eps_p: Real) -> Real {
+        match *self {
+            Hardening::Linear {
+                yield_stress_pa,
+                modulus_pa,
+            } => yield_stress_pa + modulus_pa * eps_p,
+            Hardening::Power { k_pa, eps0, n } => k_pa * (eps0 + eps_p).powf(n),
+        }
+    }
+
+    /// Hardening slope `d sigma_y / d eps_p` (Pa).
+    #[inline]
+    pub fn slope(&self, eps_p: Real) -> Real {
+        match *self {
+            Hardening::Linear { modulus_pa, .. } => modulus_pa,
+            Hardening::Power { k_pa, eps0, n } => k_pa * n * (eps0 + eps_p).powf(n - 1.0),
+        }
+    }
+
+    /// Initial yield stress `sigma_y(0)` (Pa).
+    pub fn initial_yield(&self) -> Real {
+        self.flow_stress(0.0)
+    }
+
+    /// Plastic work density `int_0^eps_p sigma_y de` (J/m^3), exact for both laws.
+    pub fn plastic_work(&self, eps_p: Real) -> Real {
+        match *self {
+            Hardening::Linear {
+                yield_stress_pa,
+                modulus_pa,
+            } => yield_stress_pa * eps_p + 0.5 * modulus_pa * eps_p * eps_p,
+            Hardening::Power { k_pa, eps0, n } => {
+                k_pa / (n + 1.0) * ((eps0 + eps_p).powf(n + 1.0) - eps0.powf(n + 1.0))
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_table_4_initial_yield_is_132_mpa() {
+        let h = Hardening::Power {
+            k_pa: 576.79e6,
+            eps0: 0.01658,
+            n: 0.3593,
+        };
+        assert!(
+            (h.initial_yield() / 1e6 - 132.2).abs() < 0.1,
+            "{}",
+            h.initial_yield()
+        );
+    }
+
+    #[test]
+    fn slope_and_work_are_consistent_with_flow_stress() {
+        let laws = [
+            Hardening::Linear {
+                yield_stress_pa: 400e6,
+                modulus_pa: 100e6,
+            },
+            Hardening::Power {
+                k_pa: 576.79e6,
+                eps0: 0.01658,
+                n: 0.3593,
+            },
+        ];
+        for h in laws {
+            for &e in &[0.0, 0.1, 1.0, 2.5] {
+                let d = 1e-7;
+                let fd = (h.flow_stress(e + d) - h.flow_stress((e - d).max(0.0)))
+                    / (e + d - (e - d).max(0.0));
+                assert!(
+                    (fd - h.slope(e)).abs() < 1e-4 * h.slope(e).abs().max(1.0),
+                    "{h:?} {e}"
+                );
+                let fw = (h.plastic_work(e + d) - h.plastic_work((e - d).max(0.0)))
+                    / (e + d - (e - d).max(0.0));
+                assert!(
+                    (fw - h.flow_stress(e)).abs() < 1e-5 * h.flow_stress(e),
+                    "{h:?} {e}"
+                );
+            }
+        }
+    }
+}

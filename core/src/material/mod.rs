@@ -1,0 +1,7 @@
+//! Materials: isotropic elasticity and J2 plasticity at finite strain.
+
+pub mod hardening;
+pub mod simo1992_hencky_j2;
+
+pub use hardening::Hardening;
+pub use simo1992_hencky_j2::{HenckyJ2, PointState, StressUpdate};

@@ -1,0 +1,1021 @@
+//! The explicit RKPM solver (total Lagrangian, Lagrangian kernel).
+//!
+//! Setup (once, reference configuration): particle grid and planar volumes; integration
+//! points of the chosen rule; RK shape functions and gradients at the points (point-major
+//! rows) and at the particles; the particle-major gather table for internal forces;
+//! row-sum lumped masses `m_I = sum_p rho N_I(x_p) w_p`; essential conditions.
+//!
+//! One step `n -> n+1` of the central-difference scheme (Belytschko, Liu, Moran 2000,
+//! Box 6.1) with the paper's predictor-corrector contact (section II-3):
+//! 1. stress stage: `F = I + sum_I d_I (x) grad N_I` at each point (plus `F_33 = r/R` in
+//!    axisymmetry), Hencky J2 update, first Piola-Kirchhoff stress `P`;
+//! 2. time step: fixed, or `dt_safety * dt_crit`; `dt_crit = dt_crit0 * h_min / h_min0`,
+//!    `dt_crit0 = 2 / omega_max` measured at setup (power iteration on `M^{-1} K`) and
+//!    `h_min` the smallest altitude of the deformed cells
+//!    `det F hx hy / max(|F e_x| hx, |F e_y| hy)`;
+//! 3. force stage: `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p` gathered per particle;
+//! 4. predictor: `v* = v_{n-1/2} + dt_avg (-f_int / m)`, `d* = d_n + dt v*`;
+//! 5. contact: penetration of the predicted boundary particles into the tools at `t_{n+1}`,
+//!    paper eqs. 4-6, spread with eq. 7;
+//! 6. corrector: `v_{n+1/2} = v* + dt_avg f_c / m`, Lagrange-multiplier projection onto the
+//!    essential conditions, `d_{n+1} = d_n + dt v_{n+1/2}`, tools advance;
+//! 7. energy account and divergence checks.
+
+use crate::constraints::Constraints;
+use crate::error::{Error, Result};
+use crate::integration::{grid_points, PointSet};
+use crate::material::{HenckyJ2, PointState};
+use crate::math::Real;
+use crate::rk_shape::{KernelCloud, ShapeTable};
+use crate::scene::{Component, Edge, Kinematics, Scene};
+use crate::tools::{penalty_force, penetration, Tool, ToolState, SEARCH_DEPTH_SPACINGS};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+use std::time::{Duration, Instant};
+
+/// Points or particles handled by one parallel task; fixed so that results do not depend
+/// on the number of threads.
+const CHUNK: usize = 256;
+
+/// Energy account (J), whole ring in axisymmetry, per depth in plane strain.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct Energy {
+    /// Kinetic energy at the start.
+    pub initial: Real,
+    /// Kinetic energy `sum m_I |v_I|^2 / 2` at the last half step.
+    pub kinetic: Real,
+    /// Stored elastic energy `sum_p W(eps_e) w_p`.
+    pub elastic: Real,
+    /// Plastic dissipation `sum_p w_p int sigma_y d eps_p`.
+    pub plastic: Real,
+    /// Work done by the tools' contact forces on the workpiece.
+    pub contact_work: Real,
+    /// Sum of the magnitudes of the contact work increments (scale for the balance).
+    pub contact_work_abs: Real,
+}
+
+impl Energy {
+    /// Internal energy: stored elastic plus plastic dissipation.
+    pub fn internal(&self) -> Real {
+        self.elastic + self.plastic
+    }
+    /// `kinetic + internal - contact_work - initial` (J): zero for an exact account.
+    pub fn balance_error(&self) -> Real {
+        self.kinetic + self.internal() - self.contact_work - self.initial
+    }
+    /// The energy against which the balance error is measured: the larger of the initial
+    /// energy and the total contact work exchanged.
+    pub fn reference(&self) -> Real {
+        self.initial.max(self.contact_work_abs)
+    }
+    /// Balance error relative to the reference energy (0 when nothing happened yet).
+    pub fn balance_error_rel(&self) -> Real {
+        let r = self.reference();
+        if r > 0.0 {
+            self.balance_error().abs() / r
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Wall time spent in each stage.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Neighbours, shape functions, masses, constraints.
+    pub setup: Duration,
+    /// Deformation gradient and stress update at the points.
+    pub stress: Duration,
+    /// Internal force gather.
+    pub internal_force: Duration,
+    /// Contact search and forces.
+    pub contact: Duration,
+    /// Time integration, constraints and energy.
+    pub integration: Duration,
+}
+
+/// Everything that changes during a run: saving and restoring it continues bit for bit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct State {
+    /// Steps taken.
+    pub step: u64,
+    /// Time (s).
+    pub time: Real,
+    /// Length of the last step (s), 0 before the first.
+    pub dt_prev: Real,
+    /// RK coefficients of the displacement `d_I` (m).
+    pub d: Vec<[Real; 2]>,
+    /// Coefficient velocities at the last half step (m/s).
+    pub v: Vec<[Real; 2]>,
+    /// Integration point histories.
+    pub points: Vec<PointState>,
+    /// Tool states.
+    pub tools: Vec<ToolState>,
+    /// Energy account.
+    pub energy: Energy,
+    /// Largest penetration seen at an output time (m).
+    pub max_penetration: Real,
+    /// Stable step estimate on the deformation at `time` (s).
+    pub stable_dt: Real,
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct PointOut {
+    piola: [Real; 5],
+    von_mises: Real,
+}
+
+/// Sums over one chunk of points in the stress stage.
+#[derive(Debug, Clone)]
+struct ChunkSums {
+    elastic: Real,
+    plastic: Real,
+    min_altitude: Real,
+    failure: Option<(usize, String)>,
+}
+
+/// Particle-major table for the internal force gather: for particle `I`, the points `p` of
+/// its support with `w_p dN_I/dX`, `w_p dN_I/dY`, the hoop weight `w_p N_I / R_p` and `w_p N_I`.
+#[derive(Debug, Clone, Default)]
+struct Gather {
+    offsets: Vec<u32>,
+    point: Vec<u32>,
+    gx: Vec<Real>,
+    gy: Vec<Real>,
+    hoop: Vec<Real>,
+    nw: Vec<Real>,
+}
+
+/// Axis-aligned bounds of the deformed workpiece (m).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Extents {
+    /// Smallest and largest x (r).
+    pub x: [Real; 2],
+    /// Smallest and largest y (z).
+    pub y: [Real; 2],
+}
+
+/// Particle fields for output frames.
+#[derive(Debug, Clone, Default)]
+pub struct Fields {
+    /// Physical positions `X_J + u(X_J)` (m).
+    pub positions: Vec<[Real; 2]>,
+    /// Physical displacements `u(X_J)` (m).
+    pub displacement: Vec<[Real; 2]>,
+    /// Physical velocities (m/s).
+    pub velocity: Vec<[Real; 2]>,
+    /// Equivalent plastic strain smoothed to particles (-).
+    pub plastic_strain: Vec<Real>,
+    /// Von Mises stress smoothed to particles (Pa).
+    pub von_mises: Vec<Real>,
+}
+
+/// A running simulation of one scene.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    scene: Scene,
+    material: HenckyJ2,
+    wave_speed: Real,
+    nx: usize,
+    ny: usize,
+    spacing: [Real; 2],
+    ref_pos: Vec<[Real; 2]>,
+    mass: Vec<Real>,
+    points: PointSet,
+    weights: Vec<Real>,
+    radius: Vec<Real>,
+    pt: ShapeTable,
+    gather: Gather,
+    nodal: ShapeTable,
+    boundary: Vec<u32>,
+    constraints: Option<Constraints>,
+    tools: Vec<Tool>,
+    st: State,
+    out: Vec<PointOut>,
+    f_int: Vec<[Real; 2]>,
+    f_con: Vec<[Real; 2]>,
+    v_prev: Vec<[Real; 2]>,
+    critical_dt0: Real,
+    /// Wall time per stage since setup.
+    pub times: StageTimes,
+}
+
+impl Simulation {
+    /// Build the discretisation of a validated scene.
+    pub fn new(scene: &Scene) -> Result<Simulation> {
+        let t0 = Instant::now();
+        let axi = scene.model.kinematics == Kinematics::Axisymmetric;
+        let w = &scene.workpiece;
+        let [nx, ny] = w.particles;
+        let h = [
+            w.size_m[0] / (nx - 1) as Real,
+            w.size_m[1] / (ny - 1) as Real,
+        ];
+        let mut ref_pos = Vec::with_capacity(nx * ny);
+        let mut volumes = Vec::with_capacity(nx * ny);
+        for j in 0..ny {
+            for i in 0..nx {
+                ref_pos.push([
+                    w.origin_m[0] + i as Real * h[0],
+                    w.origin_m[1] + j as Real * h[1],
+                ]);
+                let fx = if i == 0 || i == nx - 1 { 0.5 } else { 1.0 };
+                let fy = if j == 0 || j == ny - 1 { 0.5 } else { 1.0 };
+                volumes.push(h[0] * h[1] * fx * fy);
+            }
+        }
+        let support = [
+            scene.discretization.support[0] * h[0],
+            scene.discretization.support[1] * h[1],
+        ];
+        let cloud = KernelCloud::new(ref_pos.clone(), volumes, support);
+        let points = grid_points(scene.discretization.integration, w.origin_m, h, nx, ny);
+        let pt = cloud.shape_table(&points.positions, &|p| {
+            format!("integration point {p} (cell {})", points.cells[p])
+        })?;
+        let nodal = cloud.shape_table(&ref_pos, &|j| format!("particle {j}"))?;
+        let (weights, radius): (Vec<Real>, Vec<Real>) = points
+            .positions
+            .iter()
+            .zip(&points.areas)
+            .map(|(x, a)| {
+                if axi {
+                    (a * 2.0 * PI * x[0], x[0])
+                } else {
+                    (a * scene.model.depth_m, 1.0)
+                }
+            })
+            .unzip();
+        let rho = scene.material.density_kg_per_m3;
+        // Particle-major gather table and row-sum lumped masses.
+        let np = ref_pos.len();
+        let mut counts = vec![0u32; np + 1];
+        for &i in &pt.index {
+            counts[i as usize + 1] += 1;
+        }
+        for k in 1..=np {
+            counts[k] += counts[k - 1];
+        }
+        let nnz = pt.entries();
+        let mut g = Gather {
+            offsets: counts.clone(),
+            point: vec![0; nnz],
+            gx: vec![0.0; nnz],
+            gy: vec![0.0; nnz],
+            hoop: vec![0.0; nnz],
+            nw: vec![0.0; nnz],
+        };
+        let mut fill = counts;
+        let mut mass = vec![0.0; np];
+        for p in 0..pt.rows() {
+            for e in pt.row(p) {
+                let i = pt.index[e] as usize;
+                let k = fill[i] as usize;
+                fill[i] += 1;
+                g.point[k] = p as u32;
+                g.gx[k] = pt.dx[e] * weights[p];
+                g.gy[k] = pt.dy[e] * weights[p];
+                g.nw[k] = pt.n[e] * weights[p];
+                g.hoop[k] = if axi {
+                    pt.n[e] * weights[p] / radius[p]
+                } else {
+                    0.0
+                };
+                mass[i] += rho * pt.n[e] * weights[p];
+            }
+        }
+        if let Some((i, m)) = mass.iter().enumerate().find(|(_, m)| !(**m > 0.0)) {
+            return Err(Error::ShapeFunctions(format!(
+                "lumped mass of particle {i} at {:?} m is {m:.3e} kg; increase the support or the resolution",
+                ref_pos[i]
+            )));
+        }
+        // Boundary ring, counter-clockwise.
+        let id = |i: usize, j: usize| (j * nx + i) as u32;
+        let mut boundary = Vec::new();
+        boundary.extend((0..nx).map(|i| id(i, 0)));
+        boundary.extend((1..ny).map(|j| id(nx - 1, j)));
+        boundary.extend((0..nx - 1).rev().map(|i| id(i, ny - 1)));
+        boundary.extend((1..ny - 1).rev().map(|j| id(0, j)));
+        // Essential conditions: user edges, plus the axis of an axisymmetric body.
+        let edge_particles = |e: Edge| -> Vec<u32> {
+            match e {
+                Edge::XMin => (0..ny).map(|j| id(0, j)).collect(),
+                Edge::XMax => (0..ny).map(|j| id(nx - 1, j)).collect(),
+                Edge::YMin => (0..nx).map(|i| id(i, 0)).collect(),
+                Edge::YMax => (0..nx).map(|i| id(i, ny - 1)).collect(),
+            }
+        };
+        let mut rows = Vec::new();
+        for c in &scene.constraints {
+            for comp in &c.fix {
+                let k = match comp {
+                    Component::X => 0,
+                    Component::Y => 1,
+                };
+                rows.extend(edge_particles(c.edge).into_iter().map(|j| (j, k)));
+            }
+        }
+        if axi && w.origin_m[0] == 0.0 {
+            rows.extend(edge_particles(Edge::XMin).into_iter().map(|j| (j, 0)));
+        }
+        let constraints = Constraints::new(rows, &nodal, &mass)?;
+        let material = HenckyJ2::new(
+            scene.material.youngs_modulus_pa,
+            scene.material.poisson_ratio,
+            scene.material.hardening,
+        );
+        let wave_speed = material.wave_speed(rho);
+        let tools: Vec<Tool> = scene.tools.iter().map(Tool::new).collect();
+        let mut v = vec![w.initial_velocity_m_per_s; np];
+        if let Some(c) = &constraints {
+            c.project(&mut v, &mass);
+        }
+        let initial = 0.5
+            * mass
+                .iter()
+                .zip(&v)
+                .map(|(m, v)| m * (v[0] * v[0] + v[1] * v[1]))
+                .sum::<Real>();
+        let npts = points.positions.len();
+        let stable_dt = h[0].min(h[1]) / wave_speed;
+        let mut sim = Simulation {
+            material,
+            wave_speed,
+            nx,
+            ny,
+            spacing: h,
+            mass,
+            weights,
+            radius,
+            gather: g,
+            boundary,
+            constraints,
+            st: State {
+                step: 0,
+                time: 0.0,
+                dt_prev: 0.0,
+                d: vec![[0.0; 2]; np],
+                v: v.clone(),
+                points: vec![PointState::default(); npts],
+                tools: tools.iter().map(|t| t.state).collect(),
+                energy: Energy {
+                    initial,
+                    kinetic: initial,
+                    ..Default::default()
+                },
+                max_penetration: 0.0,
+                stable_dt,
+            },
+            tools,
+            out: vec![PointOut::default(); npts],
+            f_int: vec![[0.0; 2]; np],
+            f_con: vec![[0.0; 2]; np],
+            v_prev: v,
+            critical_dt0: stable_dt,
+            ref_pos,
+            points,
+            pt,
+            nodal,
+            scene: scene.clone(),
+            times: StageTimes {
+                setup: t0.elapsed(),
+                ..Default::default()
+            },
+        };
+        sim.critical_dt0 = sim.measure_critical_step()?;
+        sim.stress_stage()?;
+        sim.times.setup = t0.elapsed();
+        if let Some(dt) = scene.time.dt_s {
+            if dt > sim.st.stable_dt {
+                return Err(Error::Unstable {
+                    step: 0,
+                    time: 0.0,
+                    dt,
+                    dt_crit: sim.st.stable_dt,
+                    detail: format!(
+                        "time.dt_s is above the critical step 2 / omega_max of this discretisation (h_min / c = {:.4e} s); lower it or remove it to use dt_safety",
+                        h[0].min(h[1]) / wave_speed
+                    ),
+                });
+            }
+        }
+        Ok(sim)
+    }
+
+    /// The scene being run.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.ref_pos.len()
+    }
+    /// Number of integration points.
+    pub fn point_count(&self) -> usize {
+        self.points.positions.len()
+    }
+    /// Grid size `(nx, ny)`.
+    pub fn grid(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+    /// Particle spacings (m).
+    pub fn spacing(&self) -> [Real; 2] {
+        self.spacing
+    }
+    /// Reference particle positions (m).
+    pub fn reference_positions(&self) -> &[[Real; 2]] {
+        &self.ref_pos
+    }
+    /// Lumped masses (kg).
+    pub fn masses(&self) -> &[Real] {
+        &self.mass
+    }
+    /// Boundary particles, counter-clockwise.
+    pub fn boundary(&self) -> &[u32] {
+        &self.boundary
+    }
+    /// Time (s).
+    pub fn time(&self) -> Real {
+        self.st.time
+    }
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.st.step
+    }
+    /// Stable step estimate `h_min / c` on the current deformation (s).
+    pub fn stable_dt(&self) -> Real {
+        self.st.stable_dt
+    }
+    /// The step the next call to `step` will take when not limited (s).
+    pub fn next_dt(&self) -> Real {
+        self.scene
+            .time
+            .dt_s
+            .unwrap_or(self.scene.time.dt_safety * self.st.stable_dt)
+    }
+    /// Energy account.
+    pub fn energy(&self) -> Energy {
+        self.st.energy
+    }
+    /// Tools.
+    pub fn tools(&self) -> &[Tool] {
+        &self.tools
+    }
+    /// Index of the tool named `name`.
+    pub fn tool_index(&self, name: &str) -> Option<usize> {
+        self.tools.iter().position(|t| t.name == name)
+    }
+    /// Set a tool's velocity along its axis (m/s) from outside, overriding the scene motion.
+    pub fn set_tool_velocity(&mut self, tool: usize, v: Real) -> Result<()> {
+        let t = self
+            .tools
+            .get_mut(tool)
+            .ok_or_else(|| Error::Request(format!("no tool with index {tool}")))?;
+        if !t.is_movable() {
+            return Err(Error::Request(format!(
+                "tool `{}` is fixed in the scene",
+                t.name
+            )));
+        }
+        if !v.is_finite() {
+            return Err(Error::Request(format!(
+                "velocity {v} for tool `{}` is not finite",
+                t.name
+            )));
+        }
+        t.state.command = Some(v);
+        Ok(())
+    }
+    /// Largest equivalent plastic strain over the integration points.
+    pub fn max_plastic_strain(&self) -> Real {
+        self.st.points.iter().map(|s| s.eps_p).fold(0.0, Real::max)
+    }
+    /// Largest penetration seen at an output time (m).
+    pub fn max_penetration(&self) -> Real {
+        self.st.max_penetration
+    }
+    /// The whole changing state.
+    pub fn state(&self) -> &State {
+        &self.st
+    }
+    /// Restore a state saved from a simulation of the same scene.
+    pub fn restore(&mut self, st: State) -> Result<()> {
+        if st.d.len() != self.st.d.len()
+            || st.v.len() != self.st.v.len()
+            || st.points.len() != self.st.points.len()
+            || st.tools.len() != self.st.tools.len()
+        {
+            return Err(Error::State(
+                "the saved state belongs to another discretisation".into(),
+            ));
+        }
+        for (t, s) in self.tools.iter_mut().zip(&st.tools) {
+            t.state = *s;
+        }
+        self.v_prev.clone_from(&st.v);
+        self.st = st;
+        Ok(())
+    }
+
+    /// One central-difference step, at most `max_dt` long (s). See the module doc.
+    pub fn step(&mut self, max_dt: Option<Real>) -> Result<()> {
+        let t0 = Instant::now();
+        let (elastic, plastic) = self.stress_stage()?;
+        let t1 = Instant::now();
+        let dt_full = self.next_dt();
+        let dt = match max_dt {
+            Some(m) if m < dt_full * (1.0 - 1e-9) => m,
+            _ => dt_full,
+        };
+        if !(dt > 0.0) {
+            return Err(Error::Request(format!(
+                "step length {dt} s is not positive"
+            )));
+        }
+        let dt_avg = 0.5 * (dt + self.st.dt_prev);
+        self.force_stage();
+        let t2 = Instant::now();
+        // Predictor.
+        self.v_prev.copy_from_slice(&self.st.v);
+        for ((v, f), m) in self.st.v.iter_mut().zip(&self.f_int).zip(&self.mass) {
+            v[0] -= dt_avg * f[0] / m;
+            v[1] -= dt_avg * f[1] / m;
+        }
+        // Tools advance over the step at their mid-step velocity.
+        let t_mid = self.st.time + 0.5 * dt;
+        for t in self.tools.iter_mut() {
+            t.state.velocity = t.velocity_at(t_mid);
+            t.state.stroke += dt * t.state.velocity;
+        }
+        let t3 = Instant::now();
+        let contact_work_rate = self.contact_stage(dt, dt_avg);
+        let t4 = Instant::now();
+        // Corrector, constraints, update.
+        if contact_work_rate {
+            for ((v, f), m) in self.st.v.iter_mut().zip(&self.f_con).zip(&self.mass) {
+                v[0] += dt_avg * f[0] / m;
+                v[1] += dt_avg * f[1] / m;
+            }
+        }
+        if let Some(c) = &self.constraints {
+            c.project(&mut self.st.v, &self.mass);
+        }
+        let mut kinetic = 0.0;
+        let mut work = 0.0;
+        for i in 0..self.st.v.len() {
+            let v = self.st.v[i];
+            let vp = self.v_prev[i];
+            kinetic += 0.5 * self.mass[i] * (v[0] * v[0] + v[1] * v[1]);
+            if contact_work_rate {
+                let f = self.f_con[i];
+                // Exact discrete identity: dKE = dt_avg f . (v_new + v_old) / 2.
+                work += 0.5 * dt_avg * (f[0] * (v[0] + vp[0]) + f[1] * (v[1] + vp[1]));
+            }
+            let d = &mut self.st.d[i];
+            d[0] += dt * v[0];
+            d[1] += dt * v[1];
+        }
+        if !kinetic.is_finite() {
+            let i = self
+                .st
+                .v
+                .iter()
+                .position(|v| !(v[0].is_finite() && v[1].is_finite()))
+                .unwrap_or(0);
+            return Err(Error::Diverged {
+                step: self.st.step,
+                time: self.st.time,
+                what: format!(
+                    "velocity of particle {i} at {:?} m is not finite",
+                    self.ref_pos[i]
+                ),
+            });
+        }
+        let e = &mut self.st.energy;
+        e.kinetic = kinetic;
+        e.elastic = elastic;
+        e.plastic = plastic;
+        e.contact_work += work;
+        e.contact_work_abs += work.abs();
+        self.st.time += dt;
+        self.st.step += 1;
+        self.st.dt_prev = dt;
+        for (t, s) in self.tools.iter().zip(self.st.tools.iter_mut()) {
+            *s = t.state;
+        }
+        let rel = e.balance_error_rel();
+        let tol = self.scene.checks.energy_balance_tol;
+        if rel > tol {
+            let e = *e;
+            return Err(Error::EnergyBalance {
+                step: self.st.step,
+                time: self.st.time,
+                error_rel: rel,
+                bound: tol,
+                detail: format!(
+                    "kinetic {:.4e} J + elastic {:.4e} J + plastic {:.4e} J - contact work {:.4e} J vs initial {:.4e} J",
+                    e.kinetic, e.elastic, e.plastic, e.contact_work, e.initial
+                ),
+            });
+        }
+        let t5 = Instant::now();
+        self.times.stress += t1 - t0;
+        self.times.internal_force += t2 - t1;
+        self.times.contact += t4 - t3;
+        self.times.integration += (t3 - t2) + (t5 - t4);
+        Ok(())
+    }
+
+    /// Step until `time` reaches `t_end` (s), the last step shortened to land on it.
+    pub fn run_to(&mut self, t_end: Real, mut on_step: impl FnMut(&Simulation)) -> Result<()> {
+        while self.st.time < t_end - 1e-12 * t_end.abs() {
+            self.step(Some(t_end - self.st.time))?;
+            on_step(self);
+        }
+        Ok(())
+    }
+
+    /// Stress stage over all points in parallel chunks; returns (elastic, plastic) energy.
+    fn stress_stage(&mut self) -> Result<(Real, Real)> {
+        let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
+        let (pt, d, mat, weights, radius) = (
+            &self.pt,
+            &self.st.d,
+            &self.material,
+            &self.weights,
+            &self.radius,
+        );
+        let [hx, hy] = self.spacing;
+        let hardening = mat.hardening;
+        let sums: Vec<ChunkSums> = self
+            .st
+            .points
+            .par_chunks_mut(CHUNK)
+            .zip(self.out.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(c, (states, outs))| {
+                let mut s = ChunkSums {
+                    elastic: 0.0,
+                    plastic: 0.0,
+                    min_altitude: Real::INFINITY,
+                    failure: None,
+                };
+                for (k, (state, out)) in states.iter_mut().zip(outs.iter_mut()).enumerate() {
+                    let p = c * CHUNK + k;
+                    let (mut f11, mut f12, mut f21, mut f22, mut ur) = (1.0, 0.0, 0.0, 1.0, 0.0);
+                    for e in pt.row(p) {
+                        let di = d[pt.index[e] as usize];
+                        let (gx, gy) = (pt.dx[e], pt.dy[e]);
+                        f11 += di[0] * gx;
+                        f12 += di[0] * gy;
+                        f21 += di[1] * gx;
+                        f22 += di[1] * gy;
+                        ur += di[0] * pt.n[e];
+                    }
+                    let f33 = if axi { 1.0 + ur / radius[p] } else { 1.0 };
+                    match mat.update([f11, f12, f21, f22], f33, state) {
+                        Ok(u) => {
+                            out.piola = u.piola;
+                            out.von_mises = u.von_mises;
+                            s.elastic += u.elastic_energy * weights[p];
+                            s.plastic += hardening.plastic_work(state.eps_p) * weights[p];
+                            // Smallest altitude of the deformed cell spanned by F (hx e_x), F (hy e_y).
+                            let ex = hx * (f11 * f11 + f21 * f21).sqrt();
+                            let ey = hy * (f12 * f12 + f22 * f22).sqrt();
+                            let alt = (f11 * f22 - f12 * f21) * hx * hy / ex.max(ey);
+                            s.min_altitude = s.min_altitude.min(alt);
+                        }
+                        Err(m) => {
+                            s.failure = Some((p, m));
+                            break;
+                        }
+                    }
+                }
+                s
+            })
+            .collect();
+        let (mut elastic, mut plastic, mut min_altitude) = (0.0, 0.0, Real::INFINITY);
+        for s in &sums {
+            if let Some((p, m)) = &s.failure {
+                return Err(Error::Diverged {
+                    step: self.st.step,
+                    time: self.st.time,
+                    what: format!(
+                        "integration point {p} (reference position {:?} m): {m}",
+                        self.points.positions[*p]
+                    ),
+                });
+            }
+            elastic += s.elastic;
+            plastic += s.plastic;
+            min_altitude = min_altitude.min(s.min_altitude);
+        }
+        self.st.stable_dt = self.critical_dt0 * min_altitude / self.spacing[0].min(self.spacing[1]);
+        Ok((elastic, plastic))
+    }
+
+    /// Internal forces `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p`, gathered per
+    /// particle in parallel chunks (deterministic: each particle sums in a fixed order).
+    fn force_stage(&mut self) {
+        let (g, out) = (&self.gather, &self.out);
+        self.f_int
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, fs)| {
+                for (k, f) in fs.iter_mut().enumerate() {
+                    let i = c * CHUNK + k;
+                    let (mut fx, mut fy) = (0.0, 0.0);
+                    for e in g.offsets[i] as usize..g.offsets[i + 1] as usize {
+                        let p = &out[g.point[e] as usize].piola;
+                        let (gx, gy) = (g.gx[e], g.gy[e]);
+                        fx += p[0] * gx + p[1] * gy + p[4] * g.hoop[e];
+                        fy += p[2] * gx + p[3] * gy;
+                    }
+                    *f = [fx, fy];
+                }
+            });
+    }
+
+    /// Contact of the predicted boundary positions with the tools (paper eqs. 4-7).
+    /// Fills `f_con`; returns whether any force acts.
+    fn contact_stage(&mut self, dt: Real, dt_avg: Real) -> bool {
+        for t in self.tools.iter_mut() {
+            t.state.force = [0.0; 2];
+        }
+        if self.tools.is_empty() {
+            return false;
+        }
+        self.f_con.iter_mut().for_each(|f| *f = [0.0; 2]);
+        let depth = SEARCH_DEPTH_SPACINGS * self.spacing[0].max(self.spacing[1]);
+        let verts: Vec<Vec<[Real; 2]>> = self.tools.iter().map(|t| t.vertices()).collect();
+        let bounds: Vec<Extents> = verts.iter().map(|v| bounds_of(v, depth)).collect();
+        let mut any = false;
+        for &j in &self.boundary {
+            let j = j as usize;
+            let (mut x, mut vj) = (self.ref_pos[j], [0.0; 2]);
+            for e in self.nodal.row(j) {
+                let i = self.nodal.index[e] as usize;
+                let n = self.nodal.n[e];
+                let v = self.st.v[i];
+                let d = self.st.d[i];
+                x[0] += n * (d[0] + dt * v[0]);
+                x[1] += n * (d[1] + dt * v[1]);
+                vj[0] += n * v[0];
+                vj[1] += n * v[1];
+            }
+            for (k, tool) in self.tools.iter_mut().enumerate() {
+                let b = &bounds[k];
+                if x[0] < b.x[0] || x[0] > b.x[1] || x[1] < b.y[0] || x[1] > b.y[1] {
+                    continue;
+                }
+                let Some(pen) = penetration(&verts[k], x, depth) else {
+                    continue;
+                };
+                let vt = [
+                    tool.axis[0] * tool.state.velocity,
+                    tool.axis[1] * tool.state.velocity,
+                ];
+                let f = penalty_force(
+                    self.mass[j],
+                    pen,
+                    [vj[0] - vt[0], vj[1] - vt[1]],
+                    tool.friction,
+                    dt,
+                    dt_avg,
+                );
+                tool.state.force[0] -= f[0];
+                tool.state.force[1] -= f[1];
+                for e in self.nodal.row(j) {
+                    let i = self.nodal.index[e] as usize;
+                    let n = self.nodal.n[e];
+                    self.f_con[i][0] += n * f[0];
+                    self.f_con[i][1] += n * f[1];
+                }
+                any = true;
+            }
+        }
+        for t in self.tools.iter_mut() {
+            let f = t.state.force;
+            t.state.peak_force = t.state.peak_force.max((f[0] * f[0] + f[1] * f[1]).sqrt());
+        }
+        any
+    }
+
+    /// Critical step of central differences with lumped masses on the undeformed
+    /// discretisation, `dt_crit = 2 / omega_max` (s), with `omega_max^2` the largest
+    /// eigenvalue of `M^{-1} K` found by power iteration; `K x` is the internal force of a
+    /// displacement small enough to stay linear elastic. It depends on the support, the
+    /// integration rule and the mass lumping, which `h / c` ignores.
+    fn measure_critical_step(&mut self) -> Result<Real> {
+        let np = self.ref_pos.len();
+        let saved_points = self.st.points.clone();
+        let amplitude = 1e-9 * self.spacing[0].min(self.spacing[1]);
+        // Deterministic pseudo-random start (xorshift), so no mode is missed by symmetry.
+        let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
+        };
+        let mut x: Vec<[Real; 2]> = (0..np).map(|_| [rnd(), rnd()]).collect();
+        let mut lambda = 0.0;
+        for it in 0..300 {
+            let xmax = x
+                .iter()
+                .map(|v| v[0].abs().max(v[1].abs()))
+                .fold(0.0, Real::max);
+            let scale = amplitude / xmax;
+            self.st.d = x.iter().map(|v| [v[0] * scale, v[1] * scale]).collect();
+            self.stress_stage()?;
+            self.force_stage();
+            // Rayleigh quotient x.Kx / x.Mx and the next iterate M^{-1} K x.
+            let (mut xkx, mut xmx) = (0.0, 0.0);
+            for i in 0..np {
+                let (k, d, m) = (self.f_int[i], self.st.d[i], self.mass[i]);
+                xkx += k[0] * d[0] + k[1] * d[1];
+                xmx += m * (d[0] * d[0] + d[1] * d[1]);
+                x[i] = [k[0] / m, k[1] / m];
+            }
+            let next = xkx / xmx;
+            let converged = it > 10 && (next - lambda).abs() <= 1e-5 * next;
+            lambda = next;
+            if converged {
+                break;
+            }
+        }
+        self.st.d = vec![[0.0; 2]; np];
+        self.st.points = saved_points;
+        if !(lambda > 0.0 && lambda.is_finite()) {
+            return Err(Error::ShapeFunctions(format!(
+                "the stiffness has no positive eigenvalue ({lambda:.3e})"
+            )));
+        }
+        Ok(2.0 / lambda.sqrt())
+    }
+
+    /// Critical step measured on the undeformed discretisation (s).
+    pub fn critical_dt0(&self) -> Real {
+        self.critical_dt0
+    }
+
+    /// Physical positions `X_J + sum_I N_I(X_J) d_I` of all particles (m).
+    pub fn positions(&self) -> Vec<[Real; 2]> {
+        (0..self.ref_pos.len())
+            .map(|j| {
+                let u = self.nodal.interpolate(j, &self.st.d);
+                [self.ref_pos[j][0] + u[0], self.ref_pos[j][1] + u[1]]
+            })
+            .collect()
+    }
+
+    /// Bounds of the deformed workpiece over all particles (m).
+    pub fn extents(&self) -> Extents {
+        bounds(&self.positions())
+    }
+
+    /// Volume enclosed by the physical boundary particles now (m^3).
+    pub fn volume(&self) -> Real {
+        self.volume_of(&self.positions())
+    }
+
+    /// Volume of the undeformed workpiece (m^3).
+    pub fn reference_volume(&self) -> Real {
+        self.volume_of(&self.ref_pos)
+    }
+
+    /// Volume enclosed by the boundary particles of the particle positions `x` (m^3):
+    /// Pappus' theorem `2 pi r_c A` in axisymmetry, `A depth` in plane strain.
+    pub fn volume_of(&self, x: &[[Real; 2]]) -> Real {
+        let ring: Vec<[Real; 2]> = self.boundary.iter().map(|&j| x[j as usize]).collect();
+        let (mut a, mut ax) = (0.0, 0.0);
+        for k in 0..ring.len() {
+            let (p, q) = (ring[k], ring[(k + 1) % ring.len()]);
+            let c = p[0] * q[1] - q[0] * p[1];
+            a += 0.5 * c;
+            ax += (p[0] + q[0]) * c / 6.0;
+        }
+        match self.scene.model.kinematics {
+            Kinematics::Axisymmetric => 2.0 * PI * ax,
+            Kinematics::PlaneStrain => a * self.scene.model.depth_m,
+        }
+    }
+
+    /// Largest penetration of a boundary particle into a tool now (m); also kept as the
+    /// run's maximum.
+    pub fn measure_penetration(&mut self) -> Real {
+        let depth = SEARCH_DEPTH_SPACINGS * self.spacing[0].max(self.spacing[1]);
+        let x = self.positions();
+        let mut worst: Real = 0.0;
+        for t in &self.tools {
+            let verts = t.vertices();
+            for &j in &self.boundary {
+                if let Some(p) = penetration(&verts, x[j as usize], depth) {
+                    worst = worst.max(p.gap);
+                }
+            }
+        }
+        self.st.max_penetration = self.st.max_penetration.max(worst);
+        worst
+    }
+
+    /// Particle fields for output: physical positions, displacements and velocities;
+    /// plastic strain and von Mises stress smoothed from the points with weights `|N_I| w_p`.
+    pub fn fields(&self) -> Fields {
+        let np = self.ref_pos.len();
+        let mut f = Fields {
+            positions: self.positions(),
+            ..Default::default()
+        };
+        for j in 0..np {
+            f.displacement.push(self.nodal.interpolate(j, &self.st.d));
+            f.velocity.push(self.nodal.interpolate(j, &self.st.v));
+            let g = &self.gather;
+            let (mut wsum, mut ep, mut vm) = (0.0, 0.0, 0.0);
+            for e in g.offsets[j] as usize..g.offsets[j + 1] as usize {
+                let p = g.point[e] as usize;
+                let w = g.nw[e].abs();
+                wsum += w;
+                ep += w * self.st.points[p].eps_p;
+                vm += w * self.out[p].von_mises;
+            }
+            f.plastic_strain
+                .push(if wsum > 0.0 { ep / wsum } else { 0.0 });
+            f.von_mises.push(if wsum > 0.0 { vm / wsum } else { 0.0 });
+        }
+        f
+    }
+
+    /// Internal force on each coefficient from the current stresses (N); for tests.
+    pub fn internal_forces(&mut self) -> Result<Vec<[Real; 2]>> {
+        self.stress_stage()?;
+        self.force_stage();
+        Ok(self.f_int.clone())
+    }
+
+    /// Set the displacement coefficients directly (m); for tests and restarts.
+    pub fn set_displacement(&mut self, d: Vec<[Real; 2]>) -> Result<()> {
+        if d.len() != self.st.d.len() {
+            return Err(Error::State(format!(
+                "expected {} coefficients, got {}",
+                self.st.d.len(),
+                d.len()
+            )));
+        }
+        self.st.d = d;
+        Ok(())
+    }
+
+    /// Shape functions at the integration points (point-major).
+    pub fn point_shapes(&self) -> &ShapeTable {
+        &self.pt
+    }
+    /// Shape functions at the particles (`N_I(X_J)`, row J).
+    pub fn nodal_shapes(&self) -> &ShapeTable {
+        &self.nodal
+    }
+    /// Reference volume weights of the integration points (m^3; 2 pi R included).
+    pub fn point_weights(&self) -> &[Real] {
+        &self.weights
+    }
+    /// Reference positions of the integration points (m).
+    pub fn point_positions(&self) -> &[[Real; 2]] {
+        &self.points.positions
+    }
+    /// Equivalent plastic strain at each integration point.
+    pub fn point_plastic_strain(&self) -> Vec<Real> {
+        self.st.points.iter().map(|s| s.eps_p).collect()
+    }
+    /// The material model.
+    pub fn material(&self) -> &HenckyJ2 {
+        &self.material
+    }
+    /// Largest physical velocity of a constrained component (m/s): zero up to round-off.
+    pub fn constraint_residual(&self) -> Real {
+        self.constraints
+            .as_ref()
+            .map_or(0.0, |c| c.residual(&self.st.v))
+    }
+}
+
+/// Bounds of a point set (m).
+pub fn bounds(p: &[[Real; 2]]) -> Extents {
+    bounds_of(p, 0.0)
+}
+
+/// Bounds of a point set, grown by `pad` (m).
+fn bounds_of(p: &[[Real; 2]], pad: Real) -> Extents {
+    let mut e = Extents {
+        x: [Real::INFINITY, Real::NEG_INFINITY],
+        y: [Real::INFINITY, Real::NEG_INFINITY],
+    };
+    for q in p {
+        e.x = [e.x[0].min(q[0]), e.x[1].max(q[0])];
+        e.y = [e.y[0].min(q[1]), e.y[1].max(q[1])];
+    }
+    e.x = [e.x[0] - pad, e.x[1] + pad];
+    e.y = [e.y[0] - pad, e.y[1] + pad];
+    e
+}
