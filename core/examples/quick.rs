@@ -1,3 +1,4 @@
+//! Development driver: run a scene and print a coarse history (not part of the product).
 use rkforge_core::*;
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -5,28 +6,40 @@ fn main() {
     if let Some(r) = args.get(2) {
         scene = scene.with_integration(IntegrationRule::parse(r).unwrap());
     }
-    if let Some(s) = args.get(3) {
-        let s: f64 = s.parse().unwrap();
-        scene.discretization.support = [s, s];
-    }
     let t0 = std::time::Instant::now();
     let mut sim = Simulation::new(&scene).unwrap();
     let end = scene.time.end_s;
-    let mut next = 0.0;
-    let res = sim.run_to(end, |s| {
-        if s.time() >= next {
-            next += 10e-6;
-            let e = s.energy(); let x = s.extents();
-            println!("t={:.1}us r={:.3}mm h={:.3}mm KE={:.2} el={:.2} pl={:.2} W={:.2} err={:.2e} eps={:.2}", s.time()*1e6, x.x[1]*1e3, (x.y[1]-x.y[0])*1e3, e.kinetic, e.elastic, e.plastic, e.contact_work, e.balance_error_rel(), s.max_plastic_strain());
+    let n = 10;
+    for k in 1..=n {
+        let res = sim.run_to(end * k as f64 / n as f64, |_| {});
+        let e = sim.energy();
+        let x = sim.extents();
+        let f: Vec<String> = sim
+            .tools()
+            .iter()
+            .map(|t| {
+                format!(
+                    "{}: s={:.4} F={:.4e}",
+                    t.name,
+                    t.state.stroke,
+                    t.axial_force()
+                )
+            })
+            .collect();
+        println!(
+            "t={:.3e} x=[{:.4},{:.4}] y=[{:.4},{:.4}] KE={:.3e} el={:.3e} pl={:.3e} W={:.3e} err={:.2e} eps={:.2} {} steps={}",
+            sim.time(), x.x[0], x.x[1], x.y[0], x.y[1], e.kinetic, e.elastic, e.plastic, e.contact_work, e.balance_error_rel(), sim.max_plastic_strain(), f.join(" "), sim.steps()
+        );
+        if let Err(e) = res {
+            println!("{e}");
+            break;
         }
-    });
+    }
     println!(
-        "{:?} dt0={:.4e} h/c={:.4e}",
-        res,
+        "vol={:.3e} wall={:.2}s dt0={:.3e} times={:?}",
+        sim.volume() / sim.reference_volume() - 1.0,
+        t0.elapsed().as_secs_f64(),
         sim.critical_dt0(),
-        0.16e-3 / 4586.0
+        sim.times
     );
-    let x = sim.extents();
-    let v0 = 3.14159265 * 0.0032f64.powi(2) * 0.0324;
-    println!("final r={:.4}mm h={:.4}mm vol={:.4e} rel={:.3e} eps_max={:.3} wall={:.2}s times={:?} pts={} entries={}", x.x[1]*1e3, (x.y[1]-x.y[0])*1e3, sim.volume(), sim.volume()/v0-1.0, sim.max_plastic_strain(), t0.elapsed().as_secs_f64(), sim.times, sim.point_count(), sim.point_shapes().entries());
 }

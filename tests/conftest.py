@@ -1,0 +1,27 @@
+"""Shared fixtures: the rkforge binary and scene files derived from the shipped scenes."""
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="session")
+def rkforge_bin():
+    """Path to the release `rkforge` binary (built by tests/run.sh, or here if missing)."""
+    path = os.environ.get("RKFORGE_BIN")
+    if path and pathlib.Path(path).is_file():
+        return path
+    subprocess.run(["cargo", "build", "--release", "-p", "rkforge"], cwd=ROOT, check=True)
+    return str(ROOT / "target" / "release" / "rkforge")
+
+
+def scene_variant(src: str, replacements: dict) -> str:
+    """The text of a shipped scene with exact line replacements (each must match once)."""
+    text = (ROOT / "scenes" / src).read_text()
+    for old, new in replacements.items():
+        assert text.count(old) == 1, f"{old!r} not found exactly once in {src}"
+        text = text.replace(old, new)
+    return text

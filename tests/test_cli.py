@@ -1,0 +1,121 @@
+"""End-to-end tests of `rkforge run`: the files it writes, their keys and values, and its
+answers to bad scene files."""
+import csv
+import json
+import subprocess
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from conftest import scene_variant
+
+COARSE = {
+    "particles = [21, 51]": "particles = [11, 26]",
+    "dt_s = 5.0e-9                    # paper Table 1 (about 0.14 of the stable step)": "dt_safety = 0.5",
+}
+
+
+@pytest.fixture(scope="module")
+def coarse_run(rkforge_bin, tmp_path_factory):
+    """A coarse Taylor bar run with q4 (overriding the scene's q2 from the command line)."""
+    tmp = tmp_path_factory.mktemp("taylor")
+    scene = tmp / "taylor_coarse.toml"
+    scene.write_text(scene_variant("taylor_bar.toml", COARSE))
+    out = tmp / "out"
+    proc = subprocess.run(
+        [rkforge_bin, "run", str(scene), "--integration", "q4", "--out", str(out), "--quiet"],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return out, proc.stdout
+
+
+def test_summary_has_the_documented_keys_and_physical_values(coarse_run):
+    out, _ = coarse_run
+    s = json.loads((out / "summary.json").read_text())
+    for key in ["scene", "integration", "particles", "integration_points", "steps", "end_time_s", "wall_s"]:
+        assert key in s, key
+    assert s["scene"] == "taylor_bar" and s["integration"] == "q4"
+    assert s["particles"] == 11 * 26 and s["integration_points"] == 4 * 10 * 25
+    assert abs(s["end_time_s"] - 80e-6) < 1e-12
+    w = s["workpiece"]
+    assert 6.8e-3 < w["radius_m"] < 7.5e-3
+    assert 21.2e-3 < w["height_m"] < 21.9e-3
+    assert abs(w["volume_change_rel"]) < 0.01
+    assert w["max_plastic_strain"] > 1.5
+    e = s["energy"]
+    assert abs(e["initial_J"] - 239.8) < 0.2
+    assert e["balance_error_rel"] < 0.01
+    for key in ["kinetic_J", "internal_J", "plastic_J", "contact_J"]:
+        assert key in e
+    assert e["plastic_J"] > 0.9 * e["initial_J"] - abs(e["contact_J"]) - e["kinetic_J"] - e["elastic_J"] - 1.0
+    (wall,) = s["tools"]
+    assert wall["name"] == "wall" and wall["stroke_m"] == 0.0
+    assert len(wall["force_N"]) == 2 and wall["peak_force_N"] > 1e5
+    assert 0.0 <= s["contact"]["max_penetration_rel"] < 0.1
+
+
+def test_history_is_a_time_series_with_tool_and_workpiece_columns(coarse_run):
+    out, _ = coarse_run
+    with open(out / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) > 100
+    for col in ["time_s", "wall.stroke_m", "wall.force_N", "workpiece.radius_m", "workpiece.height_m",
+                "energy.kinetic_J", "energy.plastic_J"]:
+        assert col in rows[0], col
+    t = [float(r["time_s"]) for r in rows]
+    assert t[0] == 0.0 and all(b > a for a, b in zip(t, t[1:]))
+    h = [float(r["workpiece.height_m"]) for r in rows]
+    assert h[0] == pytest.approx(32.4e-3) and h[-1] < 22e-3
+    # The bar pushes the wall along its axis (0, -1): positive axial force while in contact.
+    f = [float(r["wall.force_N"]) for r in rows[1:20]]
+    assert max(f) > 1e5
+
+
+def test_frames_are_valid_vtk_and_plots_are_png(coarse_run):
+    out, _ = coarse_run
+    frames = sorted((out / "frames").glob("*.vtu"))
+    assert len(frames) == 6  # t = 0 and the scene's 5 frames
+    grid = ET.parse(frames[-1]).getroot().find("UnstructuredGrid/Piece")
+    assert int(grid.get("NumberOfPoints")) == 11 * 26
+    assert int(grid.get("NumberOfCells")) == 10 * 25
+    names = {a.get("Name") for a in grid.find("PointData")}
+    assert {"plastic_strain", "von_mises_Pa", "displacement_m", "velocity_m_per_s"} <= names
+    pvd = ET.parse(out / "frames.pvd").getroot()
+    assert len(pvd.findall("Collection/DataSet")) == 6
+    for png in ["shape.png", "stages.png", "radius_history.png", "height_history.png", "energy.png", "forces.png"]:
+        data = (out / png).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n", png
+
+
+def test_table_is_printed_beside_the_references(coarse_run):
+    _, stdout = coarse_run
+    assert "Sidibe et al. 2009, Table 3, RKPM Q2" in stdout
+    assert "radius (mm)" in stdout and "height (mm)" in stdout
+
+
+@pytest.mark.parametrize(
+    "old,new,expected",
+    [
+        ("density_kg_per_m3 = 8930.0\n", "", ["missing field `density_kg_per_m3`", "line "]),
+        ("poisson_ratio = 0.35", "poisson_ratio = 0.5", ["material.poisson_ratio", "(-1, 0.5)", ":28:"]),
+        ("density_kg_per_m3 = 8930.0", "density_kg_per_m3 = -8930.0", ["material.density_kg_per_m3", ":26:"]),
+        ("particles = [21, 51]", "particles = [0, 51]", ["workpiece.particles", ":22:"]),
+        ("poisson_ratio = 0.35", "poisson_ratio = \"0.35\"", ["line 28", "poisson_ratio"]),
+        ("end_s = 80.0e-6", "end_s = 80.0e-6\nend_time = 1.0", ["unknown field `end_time`", "line 37"]),
+    ],
+)
+def test_bad_scene_is_refused_with_key_and_line(rkforge_bin, tmp_path, old, new, expected):
+    scene = tmp_path / "bad.toml"
+    scene.write_text(scene_variant("taylor_bar.toml", {old: new}))
+    proc = subprocess.run([rkforge_bin, "run", str(scene), "--out", str(tmp_path / "o"), "--quiet"],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 1, proc.stdout
+    assert "panicked" not in proc.stderr
+    for e in expected:
+        assert e in proc.stderr, (e, proc.stderr)
+
+
+def test_missing_scene_file_is_a_clear_error(rkforge_bin, tmp_path):
+    proc = subprocess.run([rkforge_bin, "run", str(tmp_path / "nope.toml")], capture_output=True, text=True)
+    assert proc.returncode == 1 and "cannot read" in proc.stderr
