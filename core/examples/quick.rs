@@ -36,7 +36,8 @@ fn main() {
         }
     }
     println!(
-        "vol={:.3e} wall={:.2}s dt0={:.3e} times={:?}",
+        "intvol={:.3e} vol={:.3e} wall={:.2}s dt0={:.3e} times={:?}",
+        sim.integrated_volume() / sim.reference_volume() - 1.0,
         sim.volume() / sim.reference_volume() - 1.0,
         t0.elapsed().as_secs_f64(),
         sim.critical_dt0(),

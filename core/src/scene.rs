@@ -599,16 +599,69 @@ impl Scene {
     }
 }
 
-/// toml's own message, which already names the line, column and key.
+/// toml's message with the line, and the dotted key whose value holds the error when toml
+/// does not name it (a wrong type).
 fn syntax_message(text: &str, e: &toml::de::Error) -> String {
     let msg = e.message().trim().to_string();
     match e.span() {
         Some(span) => {
             let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
-            format!("line {line}: {msg}")
+            match key_at(text, span.start) {
+                Some(key)
+                    if !msg.contains(&format!("`{}`", key.rsplit('.').next().unwrap_or(&key))) =>
+                {
+                    format!("line {line}: `{key}`: {msg}")
+                }
+                _ => format!("line {line}: {msg}"),
+            }
         }
         None => msg,
     }
+}
+
+/// The dotted path of the innermost key whose value span contains byte `offset`. Every
+/// entry is searched: a table opened by a `[header]` does not span its body.
+fn key_at(text: &str, offset: usize) -> Option<String> {
+    fn walk(
+        value: &toml::de::DeValue,
+        offset: usize,
+        path: &str,
+        best: &mut Option<(usize, String)>,
+    ) {
+        let mut visit = |span: std::ops::Range<usize>, child: &toml::de::DeValue, name: String| {
+            if span.contains(&offset) && best.as_ref().is_none_or(|(len, _)| span.len() <= *len) {
+                *best = Some((span.len(), name.clone()));
+            }
+            walk(child, offset, &name, best);
+        };
+        match value {
+            toml::de::DeValue::Table(t) => {
+                for (k, v) in t.iter() {
+                    let name = if path.is_empty() {
+                        k.get_ref().to_string()
+                    } else {
+                        format!("{path}.{}", k.get_ref())
+                    };
+                    visit(v.span(), v.get_ref(), name);
+                }
+            }
+            toml::de::DeValue::Array(a) => {
+                for (i, v) in a.iter().enumerate() {
+                    visit(v.span(), v.get_ref(), format!("{path}[{i}]"));
+                }
+            }
+            _ => {}
+        }
+    }
+    let root = toml::de::DeTable::parse(text).ok()?;
+    let mut best = None;
+    walk(
+        &toml::de::DeValue::Table(root.into_inner()),
+        offset,
+        "",
+        &mut best,
+    );
+    best.map(|(_, key)| key)
 }
 
 /// Line (1-based) of a dotted key path such as `tools[1].axis` in scene text.
@@ -698,9 +751,17 @@ motion = { kind = "fixed" }
     }
 
     #[test]
-    fn wrong_type_is_named_with_its_line() {
+    fn wrong_type_is_named_with_its_key_and_line() {
         let e = err(&GOOD.replace("poisson_ratio = 0.35", "poisson_ratio = \"soft\""));
-        assert!(e.contains("line 13"), "{e}");
+        assert!(
+            e.contains("line 13") && e.contains("`material.poisson_ratio`"),
+            "{e}"
+        );
+        let e = err(&GOOD.replace("axis = [0.0, -1.0]", "axis = [0.0, \"down\"]"));
+        assert!(
+            e.contains("line 20") && e.contains("`tools[0].axis[1]`"),
+            "{e}"
+        );
     }
 
     #[test]

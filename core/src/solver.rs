@@ -53,6 +53,11 @@ pub struct Energy {
     pub contact_work: Real,
     /// Sum of the magnitudes of the contact work increments (scale for the balance).
     pub contact_work_abs: Real,
+    /// Work delivered by the tools' motion, `sum dt_avg f_J . v_tool` (J): what a press
+    /// would measure. It differs from `contact_work` by what the penalty interface takes.
+    pub tool_work: Real,
+    /// Sum of the magnitudes of the tool work increments (J).
+    pub tool_work_abs: Real,
     /// Internal work over the half step from `d_n` to `d_{n+1/2}`, `dt f_int . v_{n+1/2} / 2`,
     /// which puts the internal energy at the time of the kinetic energy.
     pub internal_half_step: Real,
@@ -74,7 +79,15 @@ impl Energy {
     /// The energy against which the balance error is measured: the larger of the initial
     /// energy and the total contact work exchanged.
     pub fn reference(&self) -> Real {
-        self.initial.max(self.contact_work_abs)
+        self.initial
+            .max(self.contact_work_abs)
+            .max(self.tool_work_abs)
+    }
+    /// Energy gained by the penalty interface, `contact_work - tool_work` (J): negative or
+    /// near zero (the paper's penalty stops particles at a tool, which dissipates); a clear
+    /// gain means the contact produced energy.
+    pub fn interface_gain(&self) -> Real {
+        self.contact_work - self.tool_work
     }
     /// Balance error relative to the reference energy (0 when nothing happened yet).
     pub fn balance_error_rel(&self) -> Real {
@@ -131,6 +144,7 @@ pub struct State {
 struct PointOut {
     piola: [Real; 5],
     von_mises: Real,
+    jacobian: Real,
 }
 
 /// Sums over one chunk of points in the stress stage.
@@ -183,7 +197,6 @@ pub struct Fields {
 pub struct Simulation {
     scene: Scene,
     material: HenckyJ2,
-    wave_speed: Real,
     nx: usize,
     ny: usize,
     spacing: [Real; 2],
@@ -292,7 +305,11 @@ impl Simulation {
                 mass[i] += rho * pt.n[e] * weights[p];
             }
         }
-        if let Some((i, m)) = mass.iter().enumerate().find(|(_, m)| !(**m > 0.0)) {
+        if let Some((i, m)) = mass
+            .iter()
+            .enumerate()
+            .find(|(_, m)| m.is_nan() || **m <= 0.0)
+        {
             return Err(Error::ShapeFunctions(format!(
                 "lumped mass of particle {i} at {:?} m is {m:.3e} kg; increase the support or the resolution",
                 ref_pos[i]
@@ -349,7 +366,6 @@ impl Simulation {
         let stable_dt = h[0].min(h[1]) / wave_speed;
         let mut sim = Simulation {
             material,
-            wave_speed,
             nx,
             ny,
             spacing: h,
@@ -532,11 +548,8 @@ impl Simulation {
         let (elastic, plastic) = self.stress_stage()?;
         let t1 = Instant::now();
         let dt_full = self.next_dt();
-        let dt = match max_dt {
-            Some(m) if m < dt_full * (1.0 - 1e-9) => m,
-            _ => dt_full,
-        };
-        if !(dt > 0.0) {
+        let dt = landing_step(dt_full, max_dt);
+        if dt.is_nan() || dt <= 0.0 {
             return Err(Error::Request(format!(
                 "step length {dt} s is not positive"
             )));
@@ -557,7 +570,7 @@ impl Simulation {
             t.state.stroke += dt * t.state.velocity;
         }
         let t3 = Instant::now();
-        let contact_work_rate = self.contact_stage(dt, dt_avg);
+        let (contact_work_rate, tool_work) = self.contact_stage(dt_full, dt_avg);
         let t4 = Instant::now();
         // Corrector, constraints, update.
         if contact_work_rate {
@@ -609,6 +622,8 @@ impl Simulation {
         e.plastic = plastic;
         e.contact_work += work;
         e.contact_work_abs += work.abs();
+        e.tool_work += tool_work;
+        e.tool_work_abs += tool_work.abs();
         e.internal_half_step = half_step;
         self.st.time += dt;
         self.st.step += 1;
@@ -635,6 +650,20 @@ impl Simulation {
                     dt,
                     self.st.stable_dt,
                     if dt > self.st.stable_dt { " (the step exceeds the estimate: likely an instability)" } else { "" }
+                ),
+            });
+        }
+        let gain = e.interface_gain();
+        if gain > tol * e.reference() {
+            let e = *e;
+            return Err(Error::EnergyBalance {
+                step: self.st.step,
+                time: self.st.time,
+                error_rel: gain / e.reference(),
+                bound: tol,
+                detail: format!(
+                    "the contact interface generated {gain:.4e} J: the contact forces did {:.4e} J of work on the workpiece while the tools delivered {:.4e} J",
+                    e.contact_work, e.tool_work
                 ),
             });
         }
@@ -712,6 +741,7 @@ impl Simulation {
                         Ok(u) => {
                             out.piola = u.piola;
                             out.von_mises = u.von_mises;
+                            out.jacobian = u.jacobian;
                             s.elastic += u.elastic_energy * weights[p];
                             s.plastic += hardening.plastic_work(state.eps_p) * weights[p];
                             // Smallest altitude of the deformed cell spanned by F (hx e_x), F (hy e_y).
@@ -777,14 +807,18 @@ impl Simulation {
     }
 
     /// Contact of the predicted boundary positions with the tools (paper eqs. 4-7).
-    /// Fills `f_con`; returns whether any force acts.
-    fn contact_stage(&mut self, dt: Real, dt_avg: Real) -> bool {
+    /// The penalty stiffness `m_s / dt^2` uses the solver's natural step `dt` (equal to the
+    /// actual step except when a step is shortened to land on a requested time), so a short
+    /// step never turns a residual penetration into a huge impulse. Fills `f_con`; returns
+    /// whether any force acts.
+    fn contact_stage(&mut self, dt: Real, dt_avg: Real) -> (bool, Real) {
         for t in self.tools.iter_mut() {
             t.state.force = [0.0; 2];
         }
         if self.tools.is_empty() {
-            return false;
+            return (false, 0.0);
         }
+        let mut tool_work = 0.0;
         self.f_con.iter_mut().for_each(|f| *f = [0.0; 2]);
         let depth = SEARCH_DEPTH_SPACINGS * self.spacing[0].max(self.spacing[1]);
         let verts: Vec<Vec<[Real; 2]>> = self.tools.iter().map(|t| t.vertices()).collect();
@@ -825,6 +859,7 @@ impl Simulation {
                 );
                 tool.state.force[0] -= f[0];
                 tool.state.force[1] -= f[1];
+                tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
                 for e in self.nodal.row(j) {
                     let i = self.nodal.index[e] as usize;
                     let n = self.nodal.n[e];
@@ -838,7 +873,7 @@ impl Simulation {
             let f = t.state.force;
             t.state.peak_force = t.state.peak_force.max((f[0] * f[0] + f[1] * f[1]).sqrt());
         }
-        any
+        (any, tool_work)
     }
 
     /// Critical step of central differences with lumped masses on the undeformed
@@ -871,11 +906,15 @@ impl Simulation {
             self.force_stage();
             // Rayleigh quotient x.Kx / x.Mx and the next iterate M^{-1} K x.
             let (mut xkx, mut xmx) = (0.0, 0.0);
-            for i in 0..np {
-                let (k, d, m) = (self.f_int[i], self.st.d[i], self.mass[i]);
+            for (((xi, k), d), m) in x
+                .iter_mut()
+                .zip(&self.f_int)
+                .zip(&self.st.d)
+                .zip(&self.mass)
+            {
                 xkx += k[0] * d[0] + k[1] * d[1];
                 xmx += m * (d[0] * d[0] + d[1] * d[1]);
-                x[i] = [k[0] / m, k[1] / m];
+                *xi = [k[0] / m, k[1] / m];
             }
             let next = xkx / xmx;
             let converged = it > 10 && (next - lambda).abs() <= 1e-5 * next;
@@ -917,6 +956,16 @@ impl Simulation {
     /// Volume enclosed by the physical boundary particles now (m^3).
     pub fn volume(&self) -> Real {
         self.volume_of(&self.positions())
+    }
+
+    /// Current volume as the integration rule sees it, `sum_p J_p w_p` (m^3), at the last
+    /// stress stage.
+    pub fn integrated_volume(&self) -> Real {
+        self.out
+            .iter()
+            .zip(&self.weights)
+            .map(|(o, w)| o.jacobian * w)
+            .sum()
     }
 
     /// Volume of the undeformed workpiece (m^3).
@@ -1038,6 +1087,21 @@ impl Simulation {
     }
 }
 
+/// Length of the next step: the full step `dt_full`, or, when `max_dt` (the time left to a
+/// requested instant) is not a whole number of full steps, that time split into equal steps,
+/// so that no step is shorter than half a full one. An exact multiple keeps `dt_full` itself.
+fn landing_step(dt_full: Real, max_dt: Option<Real>) -> Real {
+    let Some(left) = max_dt else { return dt_full };
+    let tol = 1e-9 * dt_full;
+    // Steps still needed, not counting a rounding residue as one more.
+    let n = ((left - tol) / dt_full).ceil().max(1.0);
+    if (left - n * dt_full).abs() <= tol {
+        dt_full
+    } else {
+        left / n
+    }
+}
+
 /// Bounds of a point set (m).
 pub fn bounds(p: &[[Real; 2]]) -> Extents {
     bounds_of(p, 0.0)
@@ -1056,4 +1120,27 @@ fn bounds_of(p: &[[Real; 2]], pad: Real) -> Extents {
     e.x = [e.x[0] - pad, e.x[1] + pad];
     e.y = [e.y[0] - pad, e.y[1] + pad];
     e
+}
+
+#[cfg(test)]
+mod tests {
+    use super::landing_step;
+
+    #[test]
+    fn landing_steps_are_equal_and_never_overshoot() {
+        let dt = 2.0;
+        assert_eq!(landing_step(dt, None), dt);
+        assert_eq!(landing_step(dt, Some(6.0)), dt);
+        assert_eq!(landing_step(dt, Some(6.0 + 1e-12)), dt);
+        assert_eq!(landing_step(dt, Some(5.0)), 5.0 / 3.0);
+        assert_eq!(landing_step(dt, Some(2.5)), 1.25);
+        assert_eq!(landing_step(dt, Some(0.5)), 0.5);
+        for left in [0.1, 1.9, 2.0000001, 3.3, 7.77] {
+            let h = landing_step(dt, Some(left));
+            assert!(
+                h <= left * (1.0 + 1e-12) && h <= dt && (h >= 0.5 * dt || left < dt),
+                "{left}: {h}"
+            );
+        }
+    }
 }

@@ -7,6 +7,7 @@
 //! - stick force (eq. 6): `f_st = -m_s v_TR / dt`, `v_TR` the tangential relative velocity;
 //! - Coulomb friction (eq. 5): `f_f = -min(mu f_n, |f_st|) v_TR / |v_TR|`;
 //! - the particle force is spread to the RK coefficients (eq. 7): `f_I += f_J N_I(X_J)`.
+//!
 //! The force on the tool is the reaction: minus the sum of the slave forces.
 
 use crate::math::Real;

@@ -96,7 +96,7 @@ impl HenckyJ2 {
         let (k, g) = (self.bulk, self.shear);
         let det2 = f[0] * f[3] - f[1] * f[2];
         let jac = det2 * f33;
-        if !(jac > 0.0 && f33 > 0.0) || !jac.is_finite() {
+        if !(jac > 0.0 && f33 > 0.0 && jac.is_finite()) {
             return Err(format!(
                 "deformation gradient inverted or non-finite (det F = {jac:.3e}, F33 = {f33:.3e})"
             ));

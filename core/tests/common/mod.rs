@@ -1,4 +1,5 @@
-//! Scenes built in code for the physics tests.
+//! Scenes built in code for the physics tests (each test binary uses a subset).
+#![allow(dead_code)]
 
 use rkforge_core::material::Hardening;
 use rkforge_core::scene::*;

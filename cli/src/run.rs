@@ -1,0 +1,224 @@
+//! One run of a scene: the time loop, samples, frames and the files written.
+
+use crate::output::{self, plots, vtu, History};
+use indicatif::{ProgressBar, ProgressStyle};
+use rkforge_core::{Kinematics, Scene, Simulation};
+use serde_json::{json, Value};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// A frame kept for the stage plot: time (s), particle positions (m), plastic strain, tool outlines.
+type Shape = (f64, Vec<[f64; 2]>, Vec<f64>, Vec<Vec<[f64; 2]>>);
+
+/// How to run.
+pub struct Options {
+    /// Output folder.
+    pub out: PathBuf,
+    /// Show a progress bar.
+    pub progress: bool,
+    /// Write VTK frames and PNG plots.
+    pub frames: bool,
+}
+
+/// What a finished run produced.
+pub struct Report {
+    /// The summary written to summary.json.
+    pub summary: Value,
+    scene: Scene,
+}
+
+impl Report {
+    /// Our figures beside the scene's references, as a text table.
+    pub fn table(&self) -> String {
+        output::reference_table(&self.scene, &self.summary)
+    }
+}
+
+/// Run `scene` to its end time, writing results into `opts.out`. A run that fails midway
+/// still writes its history and a summary with `"status": "error"` before returning the error.
+pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
+    std::fs::create_dir_all(&opts.out)
+        .map_err(|e| format!("cannot create {}: {e}", opts.out.display()))?;
+    let wall = Instant::now();
+    let mut sim = Simulation::new(scene).map_err(|e| e.to_string())?;
+    let end = scene.time.end_s;
+    let interval = scene.output.history_interval_s.unwrap_or(end / 200.0);
+    let samples = ((end / interval).round() as u64).max(1);
+    let frames = if opts.frames { scene.output.frames } else { 0 };
+    // Sample times k * interval and frame times k * end / frames, merged in order.
+    let mut schedule: Vec<(f64, bool, bool)> = (1..=samples)
+        .map(|k| ((k as f64 * interval).min(end), true, false))
+        .collect();
+    schedule.extend((1..=frames).map(|k| (end * k as f64 / frames as f64, false, true)));
+    schedule.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let bar = progress_bar(opts.progress, end);
+    let mut history = History::new(&sim);
+    let mut frame_list = Vec::new();
+    let mut stage_shapes = Vec::new();
+    history.record(&mut sim);
+    if frames > 0 {
+        write_frame(&sim, opts, &mut frame_list, &mut stage_shapes)?;
+    }
+    let mut failure = None;
+    for (t, sample, frame) in schedule {
+        if t > sim.time() + 1e-12 * end {
+            if let Err(e) = sim.run_to(t, |_| {}) {
+                failure = Some(e.to_string());
+                break;
+            }
+        }
+        if sample {
+            history.record(&mut sim);
+        }
+        if frame {
+            write_frame(&sim, opts, &mut frame_list, &mut stage_shapes)?;
+        }
+        bar.set_position((sim.time() / end * 1000.0) as u64);
+    }
+    bar.finish_and_clear();
+    if failure.is_some() {
+        history.record(&mut sim);
+    }
+    history.write(&opts.out.join("history.csv"))?;
+    if frames > 0 {
+        vtu::write_pvd(&opts.out.join("frames.pvd"), &frame_list).map_err(|e| e.to_string())?;
+    }
+    let summary = output::summary(&sim, wall.elapsed().as_secs_f64(), failure.as_deref());
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    std::fs::write(opts.out.join("summary.json"), text)
+        .map_err(|e| format!("cannot write summary.json: {e}"))?;
+    if opts.frames {
+        history.plots(&sim, &opts.out)?;
+        write_stages(&sim, opts, &stage_shapes)?;
+    }
+    match failure {
+        Some(e) => Err(format!(
+            "{e}\n(history and summary up to the failure are in {})",
+            opts.out.display()
+        )),
+        None => Ok(Report {
+            summary,
+            scene: scene.clone(),
+        }),
+    }
+}
+
+fn progress_bar(show: bool, end: f64) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% of {msg} (eta {eta})",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message(format!("{:.3e} s", end));
+    bar
+}
+
+/// Grid cells as quads of particle indices.
+pub fn quads(sim: &Simulation) -> Vec<[u32; 4]> {
+    let (nx, ny) = sim.grid();
+    let id = |i: usize, j: usize| (j * nx + i) as u32;
+    let mut q = Vec::with_capacity((nx - 1) * (ny - 1));
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            q.push([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    q
+}
+
+fn axis_labels(sim: &Simulation) -> (&'static str, &'static str) {
+    match sim.scene().model.kinematics {
+        Kinematics::Axisymmetric => ("r (mm)", "z (mm)"),
+        Kinematics::PlaneStrain => ("x (mm)", "y (mm)"),
+    }
+}
+
+/// A VTK frame and the shape kept for the stage plot.
+fn write_frame(
+    sim: &Simulation,
+    opts: &Options,
+    list: &mut Vec<(f64, String)>,
+    shapes: &mut Vec<Shape>,
+) -> Result<(), String> {
+    let dir = opts.out.join("frames");
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let f = sim.fields();
+    let name = format!("frame_{:04}.vtu", list.len());
+    vtu::write_vtu(
+        &dir.join(&name),
+        &f.positions,
+        &quads(sim),
+        &[
+            ("plastic_strain", &f.plastic_strain),
+            ("von_mises_Pa", &f.von_mises),
+        ],
+        &[
+            ("displacement_m", &f.displacement),
+            ("velocity_m_per_s", &f.velocity),
+        ],
+    )
+    .map_err(|e| format!("cannot write {name}: {e}"))?;
+    list.push((sim.time(), format!("frames/{name}")));
+    let tools = sim.tools().iter().map(|t| t.vertices()).collect();
+    shapes.push((sim.time(), f.positions, f.plastic_strain, tools));
+    Ok(())
+}
+
+/// The final deformed shape and the stages side by side, coloured by plastic strain.
+fn write_stages(sim: &Simulation, opts: &Options, shapes: &[Shape]) -> Result<(), String> {
+    let Some(last) = shapes.last() else {
+        return Ok(());
+    };
+    let q = quads(sim);
+    let name = &sim.scene().name;
+    plots::shape_plot(
+        &opts.out.join("shape.png"),
+        &format!("{name}: plastic strain at t = {:.3e} s", last.0),
+        &last.1,
+        &q,
+        &last.2,
+        "equivalent plastic strain",
+        &last.3,
+        axis_labels(sim),
+        1e3,
+    )?;
+    let stages: Vec<plots::Stage> = shapes
+        .iter()
+        .map(|s| plots::Stage {
+            title: format!("t = {:.3e} s", s.0),
+            positions: &s.1,
+            values: &s.2,
+            tools: s.3.clone(),
+        })
+        .collect();
+    plots::stages_plot(
+        &opts.out.join("stages.png"),
+        &format!(
+            "{name}: deformation stages ({})",
+            sim.scene().discretization.integration.name()
+        ),
+        &q,
+        &stages,
+        "equivalent plastic strain",
+        axis_labels(sim),
+        1e3,
+    )
+}
+
+/// Used by the summary: the JSON object of one tool.
+pub fn tool_json(sim: &Simulation, k: usize) -> Value {
+    let t = &sim.tools()[k];
+    json!({
+        "name": t.name,
+        "stroke_m": t.state.stroke,
+        "velocity_m_per_s": t.state.velocity,
+        "force_N": t.state.force,
+        "axial_force_N": t.axial_force(),
+        "peak_force_N": t.state.peak_force,
+    })
+}

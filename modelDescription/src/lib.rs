@@ -1,0 +1,303 @@
+//! The FMU's variable table, derived from a scene.
+//!
+//! Variables are named after the scene's tools: `<tool>.velocity` (input, m/s, for every
+//! tool that is not fixed), `<tool>.force` and `<tool>.stroke` (outputs); the workpiece's
+//! extents, largest plastic strain and energies are outputs; the speed/accuracy knobs are
+//! parameters. Value references are assigned in table order, so the same scene always gives
+//! the same table. The same table is meant to drive `modelDescription.xml` and the FMU's
+//! getters and setters, so the two cannot drift.
+
+use rkforge_core::scene::{Kinematics, Motion, Scene};
+
+/// FMI 2.0 causality.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Causality {
+    /// Set before initialisation.
+    Parameter,
+    /// Set by the master during simulation.
+    Input,
+    /// Read by the master.
+    Output,
+}
+
+/// FMI 2.0 variability.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Variability {
+    /// Fixed after initialisation.
+    Fixed,
+    /// Changes continuously in time.
+    Continuous,
+}
+
+/// FMI 2.0 base type with the start value.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Kind {
+    /// `Real` with an optional start value.
+    Real(Option<f64>),
+    /// `Integer` with an optional start value.
+    Integer(Option<i32>),
+    /// `String` with an optional start value.
+    String(Option<String>),
+}
+
+/// What a variable reads or writes in the simulation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Binding {
+    /// Velocity along the axis of tool `k` (m/s).
+    ToolVelocity(usize),
+    /// Force of the workpiece on tool `k` along its axis (N).
+    ToolForce(usize),
+    /// Displacement of tool `k` along its axis (m).
+    ToolStroke(usize),
+    /// Lateral size: largest r (axisymmetric) or x extent (plane strain) (m).
+    WorkpieceLateral,
+    /// Axial extent (m).
+    WorkpieceHeight,
+    /// Largest equivalent plastic strain (-).
+    MaxPlasticStrain,
+    /// Kinetic energy (J).
+    KineticEnergy,
+    /// Plastic dissipation (J).
+    PlasticEnergy,
+    /// Integration rule name (`q4` or `q2`).
+    Integration,
+    /// Particles along x (or r).
+    ParticlesX,
+    /// Particles along y (or z).
+    ParticlesY,
+    /// Time-step safety factor (-).
+    DtSafety,
+    /// Coulomb coefficient of tool `k` (-).
+    Friction(usize),
+}
+
+/// One row of the table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variable {
+    /// Name, unique in the table.
+    pub name: String,
+    /// Value reference, unique per base type.
+    pub value_reference: u32,
+    /// Causality.
+    pub causality: Causality,
+    /// Variability.
+    pub variability: Variability,
+    /// Base type and start value.
+    pub kind: Kind,
+    /// SI unit, if any.
+    pub unit: Option<&'static str>,
+    /// Human description.
+    pub description: String,
+    /// What it maps to.
+    pub binding: Binding,
+}
+
+/// The variable table of a scene.
+pub fn variable_table(scene: &Scene) -> Vec<Variable> {
+    let mut t = Vec::new();
+    let mut push =
+        |name: String, causality, variability, kind, unit, description: String, binding| {
+            let value_reference = t.len() as u32;
+            t.push(Variable {
+                name,
+                value_reference,
+                causality,
+                variability,
+                kind,
+                unit,
+                description,
+                binding,
+            });
+        };
+    use Causality::*;
+    use Variability::*;
+    for (k, tool) in scene.tools.iter().enumerate() {
+        let start = match &tool.motion {
+            Motion::Fixed => None,
+            Motion::Constant { velocity_m_per_s } => Some(*velocity_m_per_s),
+            Motion::Table { points } => Some(points[0][1]),
+            Motion::External {
+                initial_velocity_m_per_s,
+            } => Some(*initial_velocity_m_per_s),
+        };
+        if let Some(v) = start {
+            push(
+                format!("{}.velocity", tool.name),
+                Input,
+                Continuous,
+                Kind::Real(Some(v)),
+                Some("m/s"),
+                format!("velocity of tool {} along its axis", tool.name),
+                Binding::ToolVelocity(k),
+            );
+        }
+        push(
+            format!("{}.force", tool.name),
+            Output,
+            Continuous,
+            Kind::Real(None),
+            Some("N"),
+            format!(
+                "force of the workpiece on tool {} along its axis",
+                tool.name
+            ),
+            Binding::ToolForce(k),
+        );
+        push(
+            format!("{}.stroke", tool.name),
+            Output,
+            Continuous,
+            Kind::Real(None),
+            Some("m"),
+            format!("displacement of tool {} along its axis", tool.name),
+            Binding::ToolStroke(k),
+        );
+    }
+    let lateral = match scene.model.kinematics {
+        Kinematics::Axisymmetric => ("workpiece.radius", "largest radius of the workpiece"),
+        Kinematics::PlaneStrain => ("workpiece.width", "width of the workpiece"),
+    };
+    let outputs = [
+        (lateral.0, Some("m"), lateral.1, Binding::WorkpieceLateral),
+        (
+            "workpiece.height",
+            Some("m"),
+            "height of the workpiece",
+            Binding::WorkpieceHeight,
+        ),
+        (
+            "workpiece.max_plastic_strain",
+            None,
+            "largest equivalent plastic strain",
+            Binding::MaxPlasticStrain,
+        ),
+        (
+            "energy.kinetic",
+            Some("J"),
+            "kinetic energy of the workpiece",
+            Binding::KineticEnergy,
+        ),
+        (
+            "energy.plastic",
+            Some("J"),
+            "plastic dissipation in the workpiece",
+            Binding::PlasticEnergy,
+        ),
+    ];
+    for (name, unit, d, b) in outputs {
+        push(
+            name.into(),
+            Output,
+            Continuous,
+            Kind::Real(None),
+            unit,
+            d.into(),
+            b,
+        );
+    }
+    push(
+        "integration".into(),
+        Parameter,
+        Fixed,
+        Kind::String(Some(scene.discretization.integration.name().into())),
+        None,
+        "integration rule: q4 (2x2 Gauss) or q2 (two-point)".into(),
+        Binding::Integration,
+    );
+    let [nx, ny] = scene.workpiece.particles;
+    push(
+        "resolution.nx".into(),
+        Parameter,
+        Fixed,
+        Kind::Integer(Some(nx as i32)),
+        None,
+        "particles along x (r)".into(),
+        Binding::ParticlesX,
+    );
+    push(
+        "resolution.ny".into(),
+        Parameter,
+        Fixed,
+        Kind::Integer(Some(ny as i32)),
+        None,
+        "particles along y (z)".into(),
+        Binding::ParticlesY,
+    );
+    push(
+        "dt_safety".into(),
+        Parameter,
+        Fixed,
+        Kind::Real(Some(scene.time.dt_safety)),
+        None,
+        "fraction of the stable time step".into(),
+        Binding::DtSafety,
+    );
+    for (k, tool) in scene.tools.iter().enumerate() {
+        push(
+            format!("{}.friction", tool.name),
+            Parameter,
+            Fixed,
+            Kind::Real(Some(tool.friction)),
+            None,
+            format!("Coulomb friction coefficient of tool {}", tool.name),
+            Binding::Friction(k),
+        );
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene() -> Scene {
+        Scene::from_str_named(
+            include_str!("../../scenes/taylor_bar.toml"),
+            "taylor_bar.toml",
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn names_and_value_references_are_unique() {
+        let t = variable_table(&scene());
+        let mut names: Vec<_> = t.iter().map(|v| v.name.clone()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), t.len());
+        for (i, v) in t.iter().enumerate() {
+            assert_eq!(v.value_reference as usize, i);
+        }
+    }
+
+    #[test]
+    fn fixed_tools_have_no_velocity_input_and_moving_tools_do() {
+        let mut s = scene();
+        let t = variable_table(&s);
+        assert!(!t.iter().any(|v| v.name == "wall.velocity"));
+        assert!(t.iter().any(|v| v.name == "wall.force"
+            && v.causality == Causality::Output
+            && v.unit == Some("N")));
+        s.tools[0].motion = Motion::Constant {
+            velocity_m_per_s: 10.0,
+        };
+        let t = variable_table(&s);
+        let v = t.iter().find(|v| v.name == "wall.velocity").unwrap();
+        assert_eq!(
+            (v.causality, v.kind.clone()),
+            (Causality::Input, Kind::Real(Some(10.0)))
+        );
+    }
+
+    #[test]
+    fn knobs_are_parameters_with_the_scene_as_start() {
+        let t = variable_table(&scene());
+        let i = t.iter().find(|v| v.name == "integration").unwrap();
+        assert_eq!(i.kind, Kind::String(Some("q2".into())));
+        assert!(t
+            .iter()
+            .filter(|v| v.causality == Causality::Parameter)
+            .all(|v| v.variability == Variability::Fixed));
+        assert!(t.iter().any(|v| v.name == "workpiece.radius"));
+    }
+}
