@@ -2,7 +2,7 @@
 //!
 //! Setup (once, reference configuration): particle grid and planar volumes; integration
 //! points of the chosen rule; RK shape functions and gradients at the points (point-major
-//! rows) and at the particles; the particle-major gather table for internal forces;
+//! rows) and at the particles; the chunked scatter buffers for internal forces;
 //! row-sum lumped masses `m_I = sum_p rho N_I(x_p) w_p`; essential conditions.
 //!
 //! One step `n -> n+1` of the central-difference scheme (Belytschko, Liu, Moran 2000,
@@ -13,7 +13,8 @@
 //!    `dt_crit0 = 2 / omega_max` measured at setup (power iteration on `M^{-1} K`) and
 //!    `h_min` the smallest altitude of the deformed cells
 //!    `det F hx hy / max(|F e_x| hx, |F e_y| hy)`;
-//! 3. force stage: `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p` gathered per particle;
+//! 3. force stage, fused with 1: `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p`
+//!    scattered per chunk of points and summed per particle in a fixed order;
 //! 4. predictor: `v* = v_{n-1/2} + dt_avg (-f_int / m)`, `d* = d_n + dt v*`;
 //! 5. contact: penetration of the predicted boundary particles into the tools at `t_{n+1}`,
 //!    paper eqs. 4-6, spread with eq. 7;
@@ -138,11 +139,16 @@ pub struct State {
     pub max_penetration: Real,
     /// Stable step estimate on the deformation at `time` (s).
     pub stable_dt: Real,
+    /// Time (s) and step count at the last step that was not a full fixed step: with a
+    /// fixed step, `time = anchor_time + (step - anchor_step) dt` has no rounding drift, so
+    /// requested instants that are whole multiples of the step are reached exactly.
+    pub anchor_time: Real,
+    /// Step count at `anchor_time`.
+    pub anchor_step: u64,
 }
 
 #[derive(Debug, Clone, Copy, Default)]
 struct PointOut {
-    piola: [Real; 5],
     von_mises: Real,
     jacobian: Real,
 }
@@ -156,16 +162,56 @@ struct ChunkSums {
     failure: Option<(usize, String)>,
 }
 
-/// Particle-major table for the internal force gather: for particle `I`, the points `p` of
-/// its support with `w_p dN_I/dX`, `w_p dN_I/dY`, the hoop weight `w_p N_I / R_p` and `w_p N_I`.
+/// Deterministic parallel scatter of point forces. The points are cut into fixed chunks of
+/// `chunk` points (cells in row order, so a chunk touches a contiguous band of particles);
+/// chunk `c` adds its contributions to particles `lo[c]..lo[c] + len` into its own slice
+/// `offsets[c]..offsets[c + 1]` of `buf`, and each particle then sums the slices that cover
+/// it in chunk order (`cover`). The bits do not depend on the number of threads.
 #[derive(Debug, Clone, Default)]
-struct Gather {
-    offsets: Vec<u32>,
-    point: Vec<u32>,
-    gx: Vec<Real>,
-    gy: Vec<Real>,
-    hoop: Vec<Real>,
-    nw: Vec<Real>,
+struct Scatter {
+    chunk: usize,
+    lo: Vec<u32>,
+    offsets: Vec<usize>,
+    buf: Vec<[Real; 2]>,
+    cover_offsets: Vec<u32>,
+    cover: Vec<u32>,
+}
+
+impl Scatter {
+    fn new(pt: &ShapeTable, particles: usize, chunk: usize) -> Scatter {
+        let chunks = pt.rows().div_ceil(chunk);
+        let (mut lo, mut offsets) = (Vec::with_capacity(chunks), vec![0usize]);
+        let mut covering: Vec<Vec<u32>> = vec![Vec::new(); particles];
+        for c in 0..chunks {
+            let rows = c * chunk..((c + 1) * chunk).min(pt.rows());
+            let entries = pt.offsets[rows.start] as usize..pt.offsets[rows.end] as usize;
+            let idx = &pt.index[entries];
+            let (a, b) = (
+                idx.iter().copied().min().unwrap_or(0),
+                idx.iter().copied().max().unwrap_or(0),
+            );
+            let base = offsets[c];
+            for i in a..=b {
+                covering[i as usize].push((base + (i - a) as usize) as u32);
+            }
+            lo.push(a);
+            offsets.push(base + (b - a) as usize + 1);
+        }
+        let mut cover_offsets = vec![0u32];
+        let mut cover = Vec::new();
+        for list in covering {
+            cover.extend(list);
+            cover_offsets.push(cover.len() as u32);
+        }
+        Scatter {
+            chunk,
+            lo,
+            buf: vec![[0.0; 2]; *offsets.last().unwrap_or(&0)],
+            offsets,
+            cover_offsets,
+            cover,
+        }
+    }
 }
 
 /// Axis-aligned bounds of the deformed workpiece (m).
@@ -206,7 +252,7 @@ pub struct Simulation {
     weights: Vec<Real>,
     radius: Vec<Real>,
     pt: ShapeTable,
-    gather: Gather,
+    scatter: Scatter,
     nodal: ShapeTable,
     boundary: Vec<u32>,
     constraints: Option<Constraints>,
@@ -268,43 +314,18 @@ impl Simulation {
             })
             .unzip();
         let rho = scene.material.density_kg_per_m3;
-        // Particle-major gather table and row-sum lumped masses.
+        // Row-sum lumped masses m_I = sum_p rho N_I(x_p) w_p.
         let np = ref_pos.len();
-        let mut counts = vec![0u32; np + 1];
-        for &i in &pt.index {
-            counts[i as usize + 1] += 1;
-        }
-        for k in 1..=np {
-            counts[k] += counts[k - 1];
-        }
-        let nnz = pt.entries();
-        let mut g = Gather {
-            offsets: counts.clone(),
-            point: vec![0; nnz],
-            gx: vec![0.0; nnz],
-            gy: vec![0.0; nnz],
-            hoop: vec![0.0; nnz],
-            nw: vec![0.0; nnz],
-        };
-        let mut fill = counts;
         let mut mass = vec![0.0; np];
-        for p in 0..pt.rows() {
+        for (p, w) in weights.iter().enumerate() {
             for e in pt.row(p) {
-                let i = pt.index[e] as usize;
-                let k = fill[i] as usize;
-                fill[i] += 1;
-                g.point[k] = p as u32;
-                g.gx[k] = pt.dx[e] * weights[p];
-                g.gy[k] = pt.dy[e] * weights[p];
-                g.nw[k] = pt.n[e] * weights[p];
-                g.hoop[k] = if axi {
-                    pt.n[e] * weights[p] / radius[p]
-                } else {
-                    0.0
-                };
-                mass[i] += rho * pt.n[e] * weights[p];
+                mass[pt.index[e] as usize] += rho * pt.n[e] * w;
             }
         }
+        // Chunks of about two rows of cells, at least 64 points: enough chunks to balance
+        // the threads, few enough that the buffers overlap little.
+        let chunk = (2 * pt.rows() / (ny - 1)).max(64);
+        let scatter = Scatter::new(&pt, np, chunk);
         if let Some((i, m)) = mass
             .iter()
             .enumerate()
@@ -372,7 +393,7 @@ impl Simulation {
             mass,
             weights,
             radius,
-            gather: g,
+            scatter,
             boundary,
             constraints,
             st: State {
@@ -390,6 +411,8 @@ impl Simulation {
                 },
                 max_penetration: 0.0,
                 stable_dt,
+                anchor_time: 0.0,
+                anchor_step: 0,
             },
             tools,
             out: vec![PointOut::default(); npts],
@@ -409,7 +432,10 @@ impl Simulation {
         };
         sim.critical_dt0 = sim.measure_critical_step()?;
         sim.stress_stage()?;
-        sim.times.setup = t0.elapsed();
+        sim.times = StageTimes {
+            setup: t0.elapsed(),
+            ..Default::default()
+        };
         if let Some(dt) = scene.time.dt_s {
             if dt > sim.st.stable_dt {
                 return Err(Error::Unstable {
@@ -544,7 +570,6 @@ impl Simulation {
 
     /// One central-difference step, at most `max_dt` long (s). See the module doc.
     pub fn step(&mut self, max_dt: Option<Real>) -> Result<()> {
-        let t0 = Instant::now();
         let (elastic, plastic) = self.stress_stage()?;
         let t1 = Instant::now();
         let dt_full = self.next_dt();
@@ -555,8 +580,6 @@ impl Simulation {
             )));
         }
         let dt_avg = 0.5 * (dt + self.st.dt_prev);
-        self.force_stage();
-        let t2 = Instant::now();
         // Predictor.
         self.v_prev.copy_from_slice(&self.st.v);
         for ((v, f), m) in self.st.v.iter_mut().zip(&self.f_int).zip(&self.mass) {
@@ -625,8 +648,18 @@ impl Simulation {
         e.tool_work += tool_work;
         e.tool_work_abs += tool_work.abs();
         e.internal_half_step = half_step;
-        self.st.time += dt;
         self.st.step += 1;
+        match self.scene.time.dt_s {
+            Some(fixed) if dt == fixed => {
+                self.st.time =
+                    self.st.anchor_time + (self.st.step - self.st.anchor_step) as Real * fixed;
+            }
+            _ => {
+                self.st.time += dt;
+                self.st.anchor_time = self.st.time;
+                self.st.anchor_step = self.st.step;
+            }
+        }
         self.st.dt_prev = dt;
         for (t, s) in self.tools.iter().zip(self.st.tools.iter_mut()) {
             *s = t.state;
@@ -668,10 +701,8 @@ impl Simulation {
             });
         }
         let t5 = Instant::now();
-        self.times.stress += t1 - t0;
-        self.times.internal_force += t2 - t1;
         self.times.contact += t4 - t3;
-        self.times.integration += (t3 - t2) + (t5 - t4);
+        self.times.integration += (t3 - t1) + (t5 - t4);
         Ok(())
     }
 
@@ -699,8 +730,13 @@ impl Simulation {
         }
     }
 
-    /// Stress stage over all points in parallel chunks; returns (elastic, plastic) energy.
+    /// Stress and internal force stage, fused, over fixed chunks of points in parallel:
+    /// `F = I + sum_I d_I (x) grad N_I` (and `F_33 = 1 + u_r / R` in axisymmetry), the
+    /// Hencky J2 update, and the scatter of `(P grad N_I + e_r P_33 N_I / R) w_p` into the
+    /// chunk's buffer; then `f_I` sums the buffers covering `I` in chunk order.
+    /// Returns (elastic, plastic) energy.
     fn stress_stage(&mut self) -> Result<(Real, Real)> {
+        let t0 = Instant::now();
         let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
         let (pt, d, mat, weights, radius) = (
             &self.pt,
@@ -711,13 +747,24 @@ impl Simulation {
         );
         let [hx, hy] = self.spacing;
         let hardening = mat.hardening;
+        let sc = &mut self.scatter;
+        let chunk = sc.chunk;
+        let mut slices = Vec::with_capacity(sc.lo.len());
+        let mut rest = sc.buf.as_mut_slice();
+        for c in 0..sc.lo.len() {
+            let (head, tail) = rest.split_at_mut(sc.offsets[c + 1] - sc.offsets[c]);
+            slices.push((sc.lo[c] as usize, head));
+            rest = tail;
+        }
         let sums: Vec<ChunkSums> = self
             .st
             .points
-            .par_chunks_mut(CHUNK)
-            .zip(self.out.par_chunks_mut(CHUNK))
+            .par_chunks_mut(chunk)
+            .zip(self.out.par_chunks_mut(chunk))
+            .zip(slices.into_par_iter())
             .enumerate()
-            .map(|(c, (states, outs))| {
+            .map(|(c, ((states, outs), (lo, buf)))| {
+                buf.iter_mut().for_each(|b| *b = [0.0; 2]);
                 let mut s = ChunkSums {
                     elastic: 0.0,
                     plastic: 0.0,
@@ -725,35 +772,49 @@ impl Simulation {
                     failure: None,
                 };
                 for (k, (state, out)) in states.iter_mut().zip(outs.iter_mut()).enumerate() {
-                    let p = c * CHUNK + k;
+                    let p = c * chunk + k;
+                    let r = pt.row(p);
+                    let entries = || {
+                        pt.index[r.clone()]
+                            .iter()
+                            .zip(&pt.n[r.clone()])
+                            .zip(&pt.dx[r.clone()])
+                            .zip(&pt.dy[r.clone()])
+                    };
                     let (mut f11, mut f12, mut f21, mut f22, mut ur) = (1.0, 0.0, 0.0, 1.0, 0.0);
-                    for e in pt.row(p) {
-                        let di = d[pt.index[e] as usize];
-                        let (gx, gy) = (pt.dx[e], pt.dy[e]);
+                    for (((&i, &n), &gx), &gy) in entries() {
+                        let di = d[i as usize];
                         f11 += di[0] * gx;
                         f12 += di[0] * gy;
                         f21 += di[1] * gx;
                         f22 += di[1] * gy;
-                        ur += di[0] * pt.n[e];
+                        ur += di[0] * n;
                     }
                     let f33 = if axi { 1.0 + ur / radius[p] } else { 1.0 };
-                    match mat.update([f11, f12, f21, f22], f33, state) {
-                        Ok(u) => {
-                            out.piola = u.piola;
-                            out.von_mises = u.von_mises;
-                            out.jacobian = u.jacobian;
-                            s.elastic += u.elastic_energy * weights[p];
-                            s.plastic += hardening.plastic_work(state.eps_p) * weights[p];
-                            // Smallest altitude of the deformed cell spanned by F (hx e_x), F (hy e_y).
-                            let ex = hx * (f11 * f11 + f21 * f21).sqrt();
-                            let ey = hy * (f12 * f12 + f22 * f22).sqrt();
-                            let alt = (f11 * f22 - f12 * f21) * hx * hy / ex.max(ey);
-                            s.min_altitude = s.min_altitude.min(alt);
-                        }
+                    let u = match mat.update([f11, f12, f21, f22], f33, state) {
+                        Ok(u) => u,
                         Err(m) => {
                             s.failure = Some((p, m));
                             break;
                         }
+                    };
+                    out.von_mises = u.von_mises;
+                    out.jacobian = u.jacobian;
+                    s.elastic += u.elastic_energy * weights[p];
+                    s.plastic += hardening.plastic_work(state.eps_p) * weights[p];
+                    // Smallest altitude of the deformed cell spanned by F (hx e_x), F (hy e_y).
+                    let ex = hx * (f11 * f11 + f21 * f21).sqrt();
+                    let ey = hy * (f12 * f12 + f22 * f22).sqrt();
+                    let alt = (f11 * f22 - f12 * f21) * hx * hy / ex.max(ey);
+                    s.min_altitude = s.min_altitude.min(alt);
+                    // Scatter w_p (P grad N_I + e_r P_33 N_I / R_p).
+                    let w = weights[p];
+                    let pw = u.piola.map(|x| x * w);
+                    let hoop = if axi { pw[4] / radius[p] } else { 0.0 };
+                    for (((&i, &n), &gx), &gy) in entries() {
+                        let b = &mut buf[i as usize - lo];
+                        b[0] += pw[0] * gx + pw[1] * gy + hoop * n;
+                        b[1] += pw[2] * gx + pw[3] * gy;
                     }
                 }
                 s
@@ -776,34 +837,25 @@ impl Simulation {
             min_altitude = min_altitude.min(s.min_altitude);
         }
         self.st.stable_dt = self.critical_dt0 * min_altitude / self.spacing[0].min(self.spacing[1]);
-        Ok((elastic, plastic))
-    }
-
-    /// Internal forces `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p`, gathered per
-    /// particle in parallel chunks (deterministic: each particle sums in a fixed order).
-    fn force_stage(&mut self) {
-        let (g, out) = (&self.gather, &self.out);
+        let t1 = Instant::now();
+        let sc = &self.scatter;
         self.f_int
             .par_chunks_mut(CHUNK)
             .enumerate()
             .for_each(|(c, fs)| {
                 for (k, f) in fs.iter_mut().enumerate() {
                     let i = c * CHUNK + k;
-                    let (mut fx, mut fy) = (0.0, 0.0);
-                    let r = g.offsets[i] as usize..g.offsets[i + 1] as usize;
-                    let entries = g.point[r.clone()]
-                        .iter()
-                        .zip(&g.gx[r.clone()])
-                        .zip(&g.gy[r.clone()])
-                        .zip(&g.hoop[r]);
-                    for (((&p, &gx), &gy), &hoop) in entries {
-                        let p = &out[p as usize].piola;
-                        fx += p[0] * gx + p[1] * gy + p[4] * hoop;
-                        fy += p[2] * gx + p[3] * gy;
-                    }
-                    *f = [fx, fy];
+                    let covering =
+                        &sc.cover[sc.cover_offsets[i] as usize..sc.cover_offsets[i + 1] as usize];
+                    *f = covering.iter().fold([0.0; 2], |a, &b| {
+                        let v = sc.buf[b as usize];
+                        [a[0] + v[0], a[1] + v[1]]
+                    });
                 }
             });
+        self.times.stress += t1 - t0;
+        self.times.internal_force += t1.elapsed();
+        Ok((elastic, plastic))
     }
 
     /// Contact of the predicted boundary positions with the tools (paper eqs. 4-7).
@@ -903,7 +955,6 @@ impl Simulation {
             let scale = amplitude / xmax;
             self.st.d = x.iter().map(|v| [v[0] * scale, v[1] * scale]).collect();
             self.stress_stage()?;
-            self.force_stage();
             // Rayleigh quotient x.Kx / x.Mx and the next iterate M^{-1} K x.
             let (mut xkx, mut xmx) = (0.0, 0.0);
             for (((xi, k), d), m) in x
@@ -1016,21 +1067,23 @@ impl Simulation {
             positions: self.positions(),
             ..Default::default()
         };
+        let (mut wsum, mut ep, mut vm) = (vec![0.0; np], vec![0.0; np], vec![0.0; np]);
+        for p in 0..self.pt.rows() {
+            let (eps_p, mises) = (self.st.points[p].eps_p, self.out[p].von_mises);
+            for e in self.pt.row(p) {
+                let i = self.pt.index[e] as usize;
+                let w = (self.pt.n[e] * self.weights[p]).abs();
+                wsum[i] += w;
+                ep[i] += w * eps_p;
+                vm[i] += w * mises;
+            }
+        }
         for j in 0..np {
             f.displacement.push(self.nodal.interpolate(j, &self.st.d));
             f.velocity.push(self.nodal.interpolate(j, &self.st.v));
-            let g = &self.gather;
-            let (mut wsum, mut ep, mut vm) = (0.0, 0.0, 0.0);
-            for e in g.offsets[j] as usize..g.offsets[j + 1] as usize {
-                let p = g.point[e] as usize;
-                let w = g.nw[e].abs();
-                wsum += w;
-                ep += w * self.st.points[p].eps_p;
-                vm += w * self.out[p].von_mises;
-            }
-            f.plastic_strain
-                .push(if wsum > 0.0 { ep / wsum } else { 0.0 });
-            f.von_mises.push(if wsum > 0.0 { vm / wsum } else { 0.0 });
+            let w = if wsum[j] > 0.0 { 1.0 / wsum[j] } else { 0.0 };
+            f.plastic_strain.push(ep[j] * w);
+            f.von_mises.push(vm[j] * w);
         }
         f
     }
@@ -1038,7 +1091,6 @@ impl Simulation {
     /// Internal force on each coefficient from the current stresses (N); for tests.
     pub fn internal_forces(&mut self) -> Result<Vec<[Real; 2]>> {
         self.stress_stage()?;
-        self.force_stage();
         Ok(self.f_int.clone())
     }
 
