@@ -119,3 +119,21 @@ def test_bad_scene_is_refused_with_key_and_line(rkforge_bin, tmp_path, old, new,
 def test_missing_scene_file_is_a_clear_error(rkforge_bin, tmp_path):
     proc = subprocess.run([rkforge_bin, "run", str(tmp_path / "nope.toml")], capture_output=True, text=True)
     assert proc.returncode == 1 and "cannot read" in proc.stderr
+
+
+def test_compare_prints_table_5_beside_ours(rkforge_bin, tmp_path):
+    scene = tmp_path / "taylor_coarse.toml"
+    scene.write_text(scene_variant("taylor_bar.toml", {**COARSE, "end_s = 80.0e-6": "end_s = 20.0e-6"}))
+    out = tmp_path / "cmp"
+    proc = subprocess.run([rkforge_bin, "compare", str(scene), "--out", str(out)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    table = (out / "compare.md").read_text()
+    row = next(line for line in table.splitlines() if line.startswith("| taylor_bar"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    q4, q2, ratio = float(cells[1]), float(cells[2]), float(cells[3])
+    assert q4 > 0 and q2 > 0 and abs(ratio - q2 / q4) < 0.01
+    assert cells[4] == "1238" and cells[5] == "644" and cells[6] == "0.520"
+    for rule in ("q4", "q2"):
+        s = json.loads((out / "taylor_bar" / rule / "summary.json").read_text())
+        assert s["integration"] == rule and s["status"] == "ok"

@@ -3,6 +3,7 @@
 //! With no arguments it runs the built-in Taylor bar (the paper's Tables 1-2) with the
 //! two-point rule and prints its radius and height beside the paper's Table 3.
 
+mod compare;
 mod output;
 mod run;
 
@@ -29,6 +30,24 @@ struct Cli {
 enum Command {
     /// Run a scene and write summary.json, history.csv, VTK frames and PNG plots.
     Run(RunArgs),
+    /// Run scenes with q4 and q2 and print the paper's Table 5 beside ours.
+    Compare(CompareArgs),
+}
+
+#[derive(clap::Args)]
+struct CompareArgs {
+    /// Scene files (TOML).
+    #[arg(required = true)]
+    scenes: Vec<PathBuf>,
+    /// Runs per rule and scene (alternating q4 and q2); medians are reported.
+    #[arg(long, default_value_t = 1)]
+    repeat: usize,
+    /// Output folder for the runs and compare.md (default: out/compare/).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 #[derive(clap::Args)]
@@ -57,6 +76,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => default_run(),
         Some(Command::Run(a)) => run_command(a),
+        Some(Command::Compare(a)) => compare_command(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -97,6 +117,18 @@ fn run_command(a: RunArgs) -> Result<(), String> {
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
     println!("results in {}", opts.out.display());
+    Ok(())
+}
+
+fn compare_command(a: CompareArgs) -> Result<(), String> {
+    set_threads(a.threads)?;
+    if a.repeat == 0 {
+        return Err("--repeat must be at least 1".into());
+    }
+    let out = a.out.unwrap_or_else(|| PathBuf::from("out").join("compare"));
+    let report = compare::compare(&a.scenes, a.repeat, &out)?;
+    println!("{report}");
+    println!("runs and compare.md in {}", out.display());
     Ok(())
 }
 

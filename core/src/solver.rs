@@ -29,7 +29,7 @@ use crate::material::{HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::{KernelCloud, ShapeTable};
 use crate::scene::{Component, Edge, Kinematics, Scene};
-use crate::tools::{penalty_force, penetration, Tool, ToolState, SEARCH_DEPTH_SPACINGS};
+use crate::tools::{penalty_force, Tool, ToolState, SEARCH_DEPTH_SPACINGS};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -372,7 +372,8 @@ impl Simulation {
             scene.material.hardening,
         );
         let wave_speed = material.wave_speed(rho);
-        let tools: Vec<Tool> = scene.tools.iter().map(Tool::new).collect();
+        let depth = SEARCH_DEPTH_SPACINGS * h[0].max(h[1]);
+        let tools: Vec<Tool> = scene.tools.iter().map(|t| Tool::new(t, depth)).collect();
         let mut v = vec![w.initial_velocity_m_per_s; np];
         if let Some(c) = &constraints {
             c.project(&mut v, &mass);
@@ -872,9 +873,7 @@ impl Simulation {
         }
         let mut tool_work = 0.0;
         self.f_con.iter_mut().for_each(|f| *f = [0.0; 2]);
-        let depth = SEARCH_DEPTH_SPACINGS * self.spacing[0].max(self.spacing[1]);
-        let verts: Vec<Vec<[Real; 2]>> = self.tools.iter().map(|t| t.vertices()).collect();
-        let bounds: Vec<Extents> = verts.iter().map(|v| bounds_of(v, depth)).collect();
+        let bounds: Vec<Extents> = self.tools.iter().map(|t| bounds_of(&t.vertices(), t.depth)).collect();
         let mut any = false;
         for &j in &self.boundary {
             let j = j as usize;
@@ -894,7 +893,7 @@ impl Simulation {
                 if x[0] < b.x[0] || x[0] > b.x[1] || x[1] < b.y[0] || x[1] > b.y[1] {
                     continue;
                 }
-                let Some(pen) = penetration(&verts[k], x, depth) else {
+                let Some(pen) = tool.penetration(x) else {
                     continue;
                 };
                 let vt = [
@@ -1044,13 +1043,11 @@ impl Simulation {
     /// Largest penetration of a boundary particle into a tool now (m); also kept as the
     /// run's maximum.
     pub fn measure_penetration(&mut self) -> Real {
-        let depth = SEARCH_DEPTH_SPACINGS * self.spacing[0].max(self.spacing[1]);
         let x = self.positions();
         let mut worst: Real = 0.0;
         for t in &self.tools {
-            let verts = t.vertices();
             for &j in &self.boundary {
-                if let Some(p) = penetration(&verts, x[j as usize], depth) {
+                if let Some(p) = t.penetration(x[j as usize]) {
                     worst = worst.max(p.gap);
                 }
             }

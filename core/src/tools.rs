@@ -29,6 +29,10 @@ pub struct Tool {
     pub friction: Real,
     /// Moving state (saved with the simulation state).
     pub state: ToolState,
+    /// Segment bins in the tool's own coordinates.
+    pub bins: SegmentBins,
+    /// Largest penetration treated as contact (m).
+    pub depth: Real,
 }
 
 /// What changes while a tool moves.
@@ -51,8 +55,9 @@ pub struct ToolState {
 pub const SEARCH_DEPTH_SPACINGS: Real = 3.0;
 
 impl Tool {
-    /// From its scene description.
-    pub fn new(spec: &ToolSpec) -> Tool {
+    /// From its scene description; `depth` (m) is the largest penetration treated as
+    /// contact (deeper points behind a segment belong to the other side of the tool).
+    pub fn new(spec: &ToolSpec, depth: Real) -> Tool {
         let v0 = match spec.motion {
             Motion::External {
                 initial_velocity_m_per_s,
@@ -69,7 +74,16 @@ impl Tool {
                 velocity: v0,
                 ..Default::default()
             },
+            bins: SegmentBins::new(&spec.points_m, depth),
+            depth,
         }
+    }
+
+    /// The penetration of the point `x` (m) into the tool in its current position.
+    pub fn penetration(&self, x: [Real; 2]) -> Option<Penetration> {
+        let s = self.state.stroke;
+        let local = [x[0] - s * self.axis[0], x[1] - s * self.axis[1]];
+        penetration(&self.points0, self.bins.candidates(local), local, self.depth)
     }
 
     /// Whether the tool can move (its velocity is an input of the FMU and ROS node).
@@ -118,66 +132,125 @@ impl Tool {
     }
 }
 
-/// A slave point's penetration of a tool: gap (m, > 0 inside) and outward unit normal.
+/// A slave point's penetration of a tool: gap (m, > 0 inside) and push direction.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Penetration {
-    /// Gap `g` (m), positive when the point is behind the tool surface.
+    /// Gap `g` (m): distance from the point to the tool surface, the point being inside.
     pub gap: Real,
-    /// Unit normal of the master segment, pointing to the workpiece side.
+    /// Unit direction from the point to the closest surface point (the segment normal on a
+    /// face, the direction to the vertex at a corner).
     pub normal: [Real; 2],
 }
 
-/// The penetration of point `x` into the polyline `verts` (workpiece on the left), or none.
-/// Among the segments whose extent contains the projection of `x` and behind which `x`
-/// lies by at most `depth`, the one with the smallest gap wins; a point behind both lines
-/// at a left-turning vertex but beyond both segments' ends takes the nearer line.
-pub fn penetration(verts: &[[Real; 2]], x: [Real; 2], depth: Real) -> Option<Penetration> {
-    fn better(
-        best: Option<Penetration>,
-        gap: Real,
-        normal: [Real; 2],
-        depth: Real,
-    ) -> Option<Penetration> {
-        if gap > 0.0 && gap <= depth && best.is_none_or(|b| gap < b.gap) {
-            Some(Penetration { gap, normal })
-        } else {
-            best
-        }
-    }
-    let mut best: Option<Penetration> = None;
-    let nseg = verts.len() - 1;
-    let mut gaps = Vec::with_capacity(nseg);
-    for k in 0..nseg {
-        let (a, b) = (verts[k], verts[k + 1]);
-        let (tx, ty) = (b[0] - a[0], b[1] - a[1]);
-        let len = (tx * tx + ty * ty).sqrt();
-        let (tx, ty) = (tx / len, ty / len);
-        let n = [-ty, tx];
-        let (rx, ry) = (x[0] - a[0], x[1] - a[1]);
-        let s = (rx * tx + ry * ty) / len;
-        let gap = -(rx * n[0] + ry * n[1]);
-        gaps.push((gap, n, s));
-        if (0.0..=1.0).contains(&s) {
-            best = better(best, gap, n, depth);
-        }
-    }
-    if best.is_none() {
-        // Behind a left-turning vertex (a corner the workpiece fills), beyond the end of one
-        // segment and before the start of the next: no segment's extent holds the point.
-        for k in 1..nseg {
-            let (g0, n0, s0) = gaps[k - 1];
-            let (g1, n1, s1) = gaps[k];
-            let turn = n0[0] * n1[1] - n0[1] * n1[0];
-            if turn > 0.0 && s0 > 1.0 && s1 < 0.0 && g0 > 0.0 && g1 > 0.0 {
-                best = if g0 < g1 {
-                    better(best, g0, n0, depth)
-                } else {
-                    better(best, g1, n1, depth)
-                };
+/// Uniform bins over a polyline's segments, in the tool's own (initial) coordinates; a tool
+/// only translates, so the bins are built once. Each segment is listed in every bin that its
+/// bounding box, grown by the search depth, overlaps.
+#[derive(Debug, Clone, Default)]
+pub struct SegmentBins {
+    origin: [Real; 2],
+    size: Real,
+    dims: [usize; 2],
+    offsets: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl SegmentBins {
+    /// Bins of size `depth` (m) over the segments of `verts`.
+    pub fn new(verts: &[[Real; 2]], depth: Real) -> SegmentBins {
+        let mut lo = [Real::INFINITY; 2];
+        let mut hi = [Real::NEG_INFINITY; 2];
+        for v in verts {
+            for k in 0..2 {
+                lo[k] = lo[k].min(v[k] - depth);
+                hi[k] = hi[k].max(v[k] + depth);
             }
         }
+        // At most about 4096 bins per direction.
+        let size = depth.max((hi[0] - lo[0]).max(hi[1] - lo[1]) / 4096.0);
+        let dims = [0, 1].map(|k| ((hi[k] - lo[k]) / size).ceil().max(1.0) as usize);
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1]];
+        for (k, s) in verts.windows(2).enumerate() {
+            let range = |c: usize| {
+                let a = ((s[0][c].min(s[1][c]) - depth - lo[c]) / size).floor().max(0.0) as usize;
+                let b = ((s[0][c].max(s[1][c]) + depth - lo[c]) / size).floor() as usize;
+                a..=b.min(dims[c] - 1)
+            };
+            for j in range(1) {
+                for i in range(0) {
+                    lists[j * dims[0] + i].push(k as u32);
+                }
+            }
+        }
+        let mut offsets = vec![0u32];
+        let mut items = Vec::new();
+        for l in lists {
+            items.extend(l);
+            offsets.push(items.len() as u32);
+        }
+        SegmentBins { origin: lo, size, dims, offsets, items }
     }
-    best
+
+    /// Segments that may lie within the search depth of the point `x` (tool coordinates).
+    pub fn candidates(&self, x: [Real; 2]) -> &[u32] {
+        let i = ((x[0] - self.origin[0]) / self.size).floor();
+        let j = ((x[1] - self.origin[1]) / self.size).floor();
+        if i < 0.0 || j < 0.0 || i >= self.dims[0] as Real || j >= self.dims[1] as Real {
+            return &[];
+        }
+        let b = j as usize * self.dims[0] + i as usize;
+        &self.items[self.offsets[b] as usize..self.offsets[b + 1] as usize]
+    }
+}
+
+/// Signed distance from `x` to the polyline `verts` (workpiece on the left of travel) over
+/// the candidate segments; `Some` when `x` is inside the tool by at most `depth`.
+///
+/// The closest point over all candidates decides: on a segment's interior its normal tells
+/// the side; at a vertex, the pseudo-normal (sum of the adjacent segments' normals) does, which
+/// is right at convex and concave corners alike. The push direction points from `x` to the
+/// closest point, so a particle is carried smoothly round a corner.
+pub fn penetration(verts: &[[Real; 2]], candidates: &[u32], x: [Real; 2], depth: Real) -> Option<Penetration> {
+    let normal = |k: usize| {
+        let (a, b) = (verts[k], verts[k + 1]);
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        [-(b[1] - a[1]) / len, (b[0] - a[0]) / len]
+    };
+    // (signed distance, negative inside; closest point; side normal; on a face interior)
+    let mut best: Option<(Real, [Real; 2], [Real; 2], bool)> = None;
+    for &k in candidates {
+        let k = k as usize;
+        let (a, b) = (verts[k], verts[k + 1]);
+        let t = [b[0] - a[0], b[1] - a[1]];
+        let s = ((x[0] - a[0]) * t[0] + (x[1] - a[1]) * t[1]) / (t[0] * t[0] + t[1] * t[1]);
+        let (c, side, face) = if s <= 0.0 {
+            let n = normal(k);
+            let m = if k > 0 { normal(k - 1) } else { n };
+            (a, [n[0] + m[0], n[1] + m[1]], false)
+        } else if s >= 1.0 {
+            let n = normal(k);
+            let m = if k + 2 < verts.len() { normal(k + 1) } else { n };
+            (b, [n[0] + m[0], n[1] + m[1]], false)
+        } else {
+            ([a[0] + s * t[0], a[1] + s * t[1]], normal(k), true)
+        };
+        // On a face, the distance and side come from the face normal itself, free of the
+        // rounding of the projected point; at a vertex, from the vertex.
+        let signed = if face {
+            (x[0] - a[0]) * side[0] + (x[1] - a[1]) * side[1]
+        } else {
+            let d = (c[0] - x[0]).hypot(c[1] - x[1]);
+            if (x[0] - c[0]) * side[0] + (x[1] - c[1]) * side[1] < 0.0 { -d } else { d }
+        };
+        if best.is_none_or(|(d, ..)| signed.abs() < d.abs()) {
+            best = Some((signed, c, side, face));
+        }
+    }
+    let (signed, c, side, face) = best?;
+    let gap = -signed;
+    (gap > 0.0 && gap <= depth).then(|| Penetration {
+        gap,
+        normal: if face { side } else { [(c[0] - x[0]) / gap, (c[1] - x[1]) / gap] },
+    })
 }
 
 /// Paper eqs. 4-6: contact force on a slave of mass `m` (kg) with gap `g` (m) along the
@@ -212,50 +285,83 @@ pub fn penalty_force(
 mod tests {
     use super::*;
 
+    fn pen(verts: &[[Real; 2]], x: [Real; 2], depth: Real) -> Option<Penetration> {
+        let all: Vec<u32> = (0..verts.len() as u32 - 1).collect();
+        penetration(verts, &all, x, depth)
+    }
+
+    fn close(a: [Real; 2], b: [Real; 2]) -> bool {
+        (a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12
+    }
+
     #[test]
     fn flat_wall_gap_and_normal() {
         let wall = [[0.0, 0.0], [1.0, 0.0]];
-        let p = penetration(&wall, [0.5, -0.01], 0.1).unwrap();
-        assert!((p.gap - 0.01).abs() < 1e-15 && p.normal == [0.0, 1.0]);
-        assert!(penetration(&wall, [0.5, 0.01], 0.1).is_none());
-        assert!(penetration(&wall, [0.5, -0.2], 0.1).is_none());
-        assert!(penetration(&wall, [1.5, -0.01], 0.1).is_none());
+        let p = pen(&wall, [0.5, -0.01], 0.1).unwrap();
+        assert!((p.gap - 0.01).abs() < 1e-15 && close(p.normal, [0.0, 1.0]));
+        assert!(pen(&wall, [0.5, 0.01], 0.1).is_none());
+        assert!(pen(&wall, [0.5, -0.2], 0.1).is_none());
+        assert!(pen(&wall, [0.5, 0.0], 0.1).is_none(), "on the surface is not inside");
     }
 
     #[test]
-    fn corner_takes_the_smaller_gap() {
+    fn faces_at_a_die_corner_take_the_nearest() {
         // A die: floor then a wall going up at x = 1 (workpiece above and left).
         let die = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]];
-        let p = penetration(&die, [1.01, 0.3], 0.5).unwrap();
-        assert!(
-            (p.gap - 0.01).abs() < 1e-12 && p.normal == [-1.0, 0.0],
-            "{p:?}"
-        );
-        let q = penetration(&die, [0.3, -0.02], 0.5).unwrap();
-        assert!(
-            (q.gap - 0.02).abs() < 1e-12 && q.normal == [-0.0, 1.0],
-            "{q:?}"
-        );
-        // Obtuse corner where both segments claim the point: smaller gap wins.
-        let v = [[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]];
-        let r = penetration(&v, [0.95, -0.01], 0.5).unwrap();
-        assert!((r.gap - 0.01).abs() < 1e-12, "{r:?}");
+        let p = pen(&die, [1.01, 0.3], 0.5).unwrap();
+        assert!((p.gap - 0.01).abs() < 1e-12 && close(p.normal, [-1.0, 0.0]), "{p:?}");
+        let q = pen(&die, [0.3, -0.02], 0.5).unwrap();
+        assert!((q.gap - 0.02).abs() < 1e-12 && close(q.normal, [0.0, 1.0]), "{q:?}");
+        // In the die's solid corner, past the ends of both faces: the corner vertex is the
+        // nearest surface point.
+        let r = pen(&die, [1.01, -0.03], 0.5).unwrap();
+        let d = 0.01_f64.hypot(0.03);
+        assert!((r.gap - d).abs() < 1e-12 && close(r.normal, [-0.01 / d, 0.03 / d]), "{r:?}");
+        // Outside the corner (beyond the floor's end, below the wall): free.
+        assert!(pen(&die, [0.5, 0.5], 0.5).is_none());
     }
 
     #[test]
-    fn point_behind_a_filled_corner_vertex_is_caught() {
-        // Workpiece in the quadrant x > 0, y > 0; tool wall x < 0 then floor y < 0.
+    fn a_point_on_the_extension_of_a_face_past_a_convex_corner_is_free() {
+        // The wheel die's hub recess: wall down to z = -5 mm at r = 15 mm, then the floor at
+        // z = 0 outward. A particle resting on the floor at r = 19.7 mm lies on the wall's
+        // extension; it is outside the tool (this was once taken as 4.7 mm deep).
+        let die = [[0.0, -0.005], [0.015, -0.005], [0.015, 0.0], [0.055, 0.0]];
+        assert!(pen(&die, [0.0197, 0.0], 0.005).is_none());
+        assert!(pen(&die, [0.0197, 1e-6], 0.005).is_none());
+        let p = pen(&die, [0.0197, -1e-4], 0.005).unwrap();
+        assert!((p.gap - 1e-4).abs() < 1e-12 && close(p.normal, [0.0, 1.0]), "{p:?}");
+    }
+
+    #[test]
+    fn a_point_behind_a_corner_vertex_is_pushed_to_the_vertex() {
+        // Workpiece in the quadrant x > 0, y > 0; tool wall x < 0 and floor y < 0.
         let tool = [[0.0, 1.0], [0.0, 0.0], [1.0, 0.0]];
-        let p = penetration(&tool, [-0.01, -0.02], 0.5).unwrap();
-        assert!(
-            (p.gap - 0.01).abs() < 1e-12 && p.normal == [1.0, 0.0],
-            "{p:?}"
-        );
-        let q = penetration(&tool, [-0.02, -0.01], 0.5).unwrap();
-        assert!(
-            (q.gap - 0.01).abs() < 1e-12 && q.normal == [-0.0, 1.0],
-            "{q:?}"
-        );
+        let p = pen(&tool, [-0.03, -0.04], 0.5).unwrap();
+        assert!((p.gap - 0.05).abs() < 1e-12 && close(p.normal, [0.6, 0.8]), "{p:?}");
+        // A tool corner pointing into the workpiece (tool = quadrant x < 0, y < 0).
+        let punch = [[-1.0, 0.0], [0.0, 0.0], [0.0, -1.0]];
+        assert!(pen(&punch, [0.01, 0.01], 0.5).is_none(), "outside a convex corner");
+        let q = pen(&punch, [-0.01, -0.02], 0.5).unwrap();
+        assert!((q.gap - 0.01).abs() < 1e-12 && close(q.normal, [1.0, 0.0]), "{q:?}");
+    }
+
+    #[test]
+    fn bins_list_every_segment_near_a_point() {
+        let verts: Vec<[Real; 2]> = (0..200).map(|k| {
+            let a = k as Real * 0.03;
+            [a.cos(), a.sin()]
+        }).collect();
+        let depth = 0.05;
+        let bins = SegmentBins::new(&verts, depth);
+        for k in 0..300 {
+            let x = [1.3 * (k as Real * 0.7).cos() * (k as Real * 0.011).sin(), 1.3 * (k as Real * 0.7).sin()];
+            let all: Vec<u32> = (0..199).collect();
+            let brute = penetration(&verts, &all, x, depth);
+            let binned = penetration(&verts, bins.candidates(x), x, depth);
+            assert_eq!(brute, binned, "point {x:?}");
+            assert!(bins.candidates(x).len() < 20, "few candidates: {}", bins.candidates(x).len());
+        }
     }
 
     #[test]
@@ -290,7 +396,7 @@ mod tests {
             },
             friction: 0.0,
         };
-        let mut t = Tool::new(&spec);
+        let mut t = Tool::new(&spec, 0.1);
         assert_eq!(t.velocity_at(-1.0), 0.0);
         assert_eq!(t.velocity_at(0.5), 5.0);
         assert_eq!(t.velocity_at(1.5), 0.0);

@@ -73,6 +73,7 @@ impl History {
             "plastic_J",
             "internal_J",
             "contact_J",
+            "tool_work_J",
             "balance_error_rel",
         ] {
             columns.push(format!("energy.{c}"));
@@ -117,6 +118,7 @@ impl History {
             e.plastic,
             e.internal(),
             e.contact_work,
+            e.tool_work,
             e.balance_error_rel(),
         ]);
         self.rows.push(row);
@@ -140,103 +142,87 @@ impl History {
     }
 
     /// History plots: lateral size and height over time with the scene's references
-    /// (paper Figures 5-6), tool forces against stroke, and the energy account.
+    /// (paper Figures 5-6), tool forces over time, force against stroke for the tools that
+    /// move, and the energy account.
     pub fn plots(&self, sim: &Simulation, out: &Path) -> Result<(), String> {
-        let t_us: Vec<f64> = self
-            .column("time_s")
-            .unwrap_or_default()
-            .iter()
-            .map(|t| t * 1e6)
-            .collect();
-        let end_us = sim.scene().time.end_s * 1e6;
+        let name = &sim.scene().name;
+        let rule = sim.scene().discretization.integration.name();
+        let end = sim.scene().time.end_s;
+        let (tscale, tlabel) = if end < 1e-3 { (1e6, "time (us)") } else { (1e3, "time (ms)") };
+        let t: Vec<f64> = self.column("time_s").unwrap_or_default().iter().map(|v| v * tscale).collect();
         let (lat, _) = lateral(sim, &sim.extents());
-        for (key, file, label) in [
-            (
-                lat,
-                format!("{}_history.png", lat.trim_end_matches("_m")),
-                lat.trim_end_matches("_m"),
-            ),
-            ("height_m", "height_history.png".to_string(), "height"),
-        ] {
-            let y: Vec<f64> = self
-                .column(&format!("workpiece.{key}"))
-                .unwrap_or_default()
-                .iter()
-                .map(|v| v * 1e3)
-                .collect();
+        let lat_label = lat.trim_end_matches("_m");
+        for (key, label) in [(lat, lat_label), ("height_m", "height")] {
+            let y: Vec<f64> = self.column(&format!("workpiece.{key}")).unwrap_or_default().iter().map(|v| v * 1e3).collect();
             let markers: Vec<plots::Marker> = sim
                 .scene()
                 .reference
                 .iter()
                 .filter_map(|r| {
-                    r.values
-                        .get(&format!("workpiece.{key}"))
-                        .map(|v| plots::Marker {
-                            label: r.source.clone(),
-                            x: end_us,
-                            y: v * 1e3,
-                        })
+                    r.values.get(&format!("workpiece.{key}")).map(|v| plots::Marker {
+                        label: r.source.clone(),
+                        x: end * tscale,
+                        y: v * 1e3,
+                    })
                 })
                 .collect();
             plots::line_plot(
-                &out.join(file),
-                &format!(
-                    "{}: {label} ({})",
-                    sim.scene().name,
-                    sim.scene().discretization.integration.name()
-                ),
-                "time (us)",
+                &out.join(format!("{label}_history.png")),
+                &format!("{name}: {label} ({rule})"),
+                tlabel,
                 &format!("{label} (mm)"),
-                &[plots::Series {
-                    label: format!("rkforge {}", sim.scene().discretization.integration.name()),
-                    x: t_us.clone(),
-                    y,
-                }],
+                &[plots::Series { label: format!("rkforge {rule}"), x: t.clone(), y }],
                 &markers,
             )?;
         }
-        let mut forces = Vec::new();
-        for t in sim.tools() {
-            let stroke = self
-                .column(&format!("{}.stroke_m", t.name))
-                .unwrap_or_default();
-            let f = self
-                .column(&format!("{}.force_N", t.name))
-                .unwrap_or_default();
-            let moving = stroke.iter().any(|s| *s != 0.0);
-            forces.push(plots::Series {
-                label: t.name.clone(),
-                x: if moving {
-                    stroke.iter().map(|s| s * 1e3).collect()
-                } else {
-                    t_us.clone()
-                },
-                y: f,
-            });
-        }
-        if !forces.is_empty() {
-            let moving = sim.tools().iter().any(|t| t.state.stroke != 0.0);
+        let force = |tool: &str| self.column(&format!("{tool}.force_N")).unwrap_or_default();
+        let over_time: Vec<plots::Series> = sim
+            .tools()
+            .iter()
+            .map(|tool| plots::Series { label: tool.name.clone(), x: t.clone(), y: force(&tool.name) })
+            .collect();
+        if !over_time.is_empty() {
             plots::line_plot(
                 &out.join("forces.png"),
-                &format!("{}: tool forces along their axes", sim.scene().name),
-                if moving { "stroke (mm)" } else { "time (us)" },
-                "force (N)",
-                &forces,
+                &format!("{name}: tool forces along their axes ({rule})"),
+                tlabel,
+                "force on the tool along its axis (N)",
+                &over_time,
                 &[],
             )?;
         }
-        let energy: Vec<plots::Series> = ["kinetic_J", "elastic_J", "plastic_J", "contact_J"]
+        let strokes: Vec<plots::Series> = sim
+            .tools()
+            .iter()
+            .filter(|tool| tool.is_movable())
+            .map(|tool| plots::Series {
+                label: tool.name.clone(),
+                x: self.column(&format!("{}.stroke_m", tool.name)).unwrap_or_default().iter().map(|s| s * 1e3).collect(),
+                y: force(&tool.name).iter().map(|f| -f).collect(),
+            })
+            .collect();
+        if !strokes.is_empty() {
+            plots::line_plot(
+                &out.join("force_stroke.png"),
+                &format!("{name}: force against stroke ({rule})"),
+                "stroke along the tool axis (mm)",
+                "force resisting the stroke (N)",
+                &strokes,
+                &[],
+            )?;
+        }
+        let energy: Vec<plots::Series> = ["kinetic_J", "elastic_J", "plastic_J", "contact_J", "tool_work_J"]
             .iter()
             .map(|c| plots::Series {
                 label: c.trim_end_matches("_J").replace('_', " "),
-                x: t_us.clone(),
+                x: t.clone(),
                 y: self.column(&format!("energy.{c}")).unwrap_or_default(),
             })
             .collect();
         plots::line_plot(
             &out.join("energy.png"),
-            &format!("{}: energy account", sim.scene().name),
-            "time (us)",
+            &format!("{name}: energy account ({rule})"),
+            tlabel,
             "energy (J)",
             &energy,
             &[],

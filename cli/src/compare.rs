@@ -1,0 +1,106 @@
+//! `rkforge compare`: each scene with q4 and q2, the paper's Table 5 beside ours.
+
+use crate::run;
+use rkforge_core::{IntegrationRule, Scene};
+use serde_json::Value;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// What one run of one rule gave.
+struct Outcome {
+    wall: Vec<f64>,
+    lateral: f64,
+    height: f64,
+    peak_force: f64,
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let n = s.len();
+    if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+fn reference_wall(scene: &Scene, rule: IntegrationRule) -> Option<f64> {
+    scene
+        .reference
+        .iter()
+        .filter(|r| r.integration == Some(rule))
+        .find_map(|r| r.values.get("wall_s").copied())
+}
+
+fn outcome(summary: &Value) -> Outcome {
+    let w = &summary["workpiece"];
+    let lateral = w.get("radius_m").or_else(|| w.get("width_m")).and_then(Value::as_f64).unwrap_or(f64::NAN);
+    let peak_force = summary["tools"]
+        .as_array()
+        .map(|t| t.iter().filter_map(|t| t["peak_force_N"].as_f64()).fold(0.0, f64::max))
+        .unwrap_or(0.0);
+    Outcome {
+        wall: vec![summary["wall_s"].as_f64().unwrap_or(f64::NAN)],
+        lateral,
+        height: w["height_m"].as_f64().unwrap_or(f64::NAN),
+        peak_force,
+    }
+}
+
+/// Run every scene `repeat` times with each rule (alternating), write `compare.md` into
+/// `out`, and return the table.
+pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, String> {
+    let mut table = String::new();
+    let _ = writeln!(
+        table,
+        "| scene | q4 wall (s) | q2 wall (s) | q2 / q4 | paper q4 | paper q2 | paper q2 / q4 | lateral q2 - q4 | height q2 - q4 | peak force q2 / q4 - 1 |"
+    );
+    let _ = writeln!(table, "|---|---|---|---|---|---|---|---|---|---|");
+    for path in scenes {
+        let scene = Scene::from_file(path).map_err(|e| e.to_string())?;
+        let mut results: Vec<Option<Outcome>> = vec![None, None];
+        for _ in 0..repeat {
+            for (k, rule) in [IntegrationRule::Q4, IntegrationRule::Q2].into_iter().enumerate() {
+                let s = scene.clone().with_integration(rule);
+                let opts = run::Options {
+                    out: out.join(&scene.name).join(rule.name()),
+                    progress: false,
+                    frames: false,
+                };
+                let report = run::run(&s, &opts).map_err(|e| format!("{} ({}): {e}", scene.name, rule.name()))?;
+                let o = outcome(&report.summary);
+                match &mut results[k] {
+                    Some(prev) => prev.wall.extend(o.wall),
+                    slot => *slot = Some(o),
+                }
+            }
+        }
+        let (Some(q4), Some(q2)) = (&results[0], &results[1]) else { continue };
+        let (w4, w2) = (median(&q4.wall), median(&q2.wall));
+        let paper = |r| reference_wall(&scene, r).map_or("-".to_string(), |v| format!("{v:.0}"));
+        let paper_ratio = match (reference_wall(&scene, IntegrationRule::Q4), reference_wall(&scene, IntegrationRule::Q2)) {
+            (Some(a), Some(b)) => format!("{:.3}", b / a),
+            _ => "-".into(),
+        };
+        let _ = writeln!(
+            table,
+            "| {} | {w4:.2} | {w2:.2} | {:.3} | {} | {} | {paper_ratio} | {:+.3} mm | {:+.3} mm | {:+.2} % |",
+            scene.name,
+            w2 / w4,
+            paper(IntegrationRule::Q4),
+            paper(IntegrationRule::Q2),
+            (q2.lateral - q4.lateral) * 1e3,
+            (q2.height - q4.height) * 1e3,
+            (q2.peak_force / q4.peak_force - 1.0) * 100.0,
+        );
+    }
+    let note = format!(
+        "\nWall times are medians of {repeat} run(s) per rule on {} thread(s); the paper's are CPU times on a Pentium 4 (3.2 GHz).\n",
+        rayon::current_num_threads()
+    );
+    table.push_str(&note);
+    std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
+    std::fs::write(out.join("compare.md"), &table).map_err(|e| format!("cannot write compare.md: {e}"))?;
+    Ok(table)
+}
