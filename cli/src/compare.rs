@@ -35,10 +35,18 @@ fn reference_wall(scene: &Scene, rule: IntegrationRule) -> Option<f64> {
 
 fn outcome(summary: &Value) -> Outcome {
     let w = &summary["workpiece"];
-    let lateral = w.get("radius_m").or_else(|| w.get("width_m")).and_then(Value::as_f64).unwrap_or(f64::NAN);
+    let lateral = w
+        .get("radius_m")
+        .or_else(|| w.get("width_m"))
+        .and_then(Value::as_f64)
+        .unwrap_or(f64::NAN);
     let peak_force = summary["tools"]
         .as_array()
-        .map(|t| t.iter().filter_map(|t| t["peak_force_N"].as_f64()).fold(0.0, f64::max))
+        .map(|t| {
+            t.iter()
+                .filter_map(|t| t["peak_force_N"].as_f64())
+                .fold(0.0, f64::max)
+        })
         .unwrap_or(0.0);
     Outcome {
         wall: vec![summary["wall_s"].as_f64().unwrap_or(f64::NAN)],
@@ -61,14 +69,18 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
         let scene = Scene::from_file(path).map_err(|e| e.to_string())?;
         let mut results: Vec<Option<Outcome>> = vec![None, None];
         for _ in 0..repeat {
-            for (k, rule) in [IntegrationRule::Q4, IntegrationRule::Q2].into_iter().enumerate() {
+            for (k, rule) in [IntegrationRule::Q4, IntegrationRule::Q2]
+                .into_iter()
+                .enumerate()
+            {
                 let s = scene.clone().with_integration(rule);
                 let opts = run::Options {
                     out: out.join(&scene.name).join(rule.name()),
                     progress: false,
                     frames: false,
                 };
-                let report = run::run(&s, &opts).map_err(|e| format!("{} ({}): {e}", scene.name, rule.name()))?;
+                let report = run::run(&s, &opts)
+                    .map_err(|e| format!("{} ({}): {e}", scene.name, rule.name()))?;
                 let o = outcome(&report.summary);
                 match &mut results[k] {
                     Some(prev) => prev.wall.extend(o.wall),
@@ -76,10 +88,15 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
                 }
             }
         }
-        let (Some(q4), Some(q2)) = (&results[0], &results[1]) else { continue };
+        let (Some(q4), Some(q2)) = (&results[0], &results[1]) else {
+            continue;
+        };
         let (w4, w2) = (median(&q4.wall), median(&q2.wall));
         let paper = |r| reference_wall(&scene, r).map_or("-".to_string(), |v| format!("{v:.0}"));
-        let paper_ratio = match (reference_wall(&scene, IntegrationRule::Q4), reference_wall(&scene, IntegrationRule::Q2)) {
+        let paper_ratio = match (
+            reference_wall(&scene, IntegrationRule::Q4),
+            reference_wall(&scene, IntegrationRule::Q2),
+        ) {
             (Some(a), Some(b)) => format!("{:.3}", b / a),
             _ => "-".into(),
         };
@@ -101,6 +118,7 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
     );
     table.push_str(&note);
     std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
-    std::fs::write(out.join("compare.md"), &table).map_err(|e| format!("cannot write compare.md: {e}"))?;
+    std::fs::write(out.join("compare.md"), &table)
+        .map_err(|e| format!("cannot write compare.md: {e}"))?;
     Ok(table)
 }

@@ -125,7 +125,9 @@ fn compare_command(a: CompareArgs) -> Result<(), String> {
     if a.repeat == 0 {
         return Err("--repeat must be at least 1".into());
     }
-    let out = a.out.unwrap_or_else(|| PathBuf::from("out").join("compare"));
+    let out = a
+        .out
+        .unwrap_or_else(|| PathBuf::from("out").join("compare"));
     let report = compare::compare(&a.scenes, a.repeat, &out)?;
     println!("{report}");
     println!("runs and compare.md in {}", out.display());

@@ -873,7 +873,11 @@ impl Simulation {
         }
         let mut tool_work = 0.0;
         self.f_con.iter_mut().for_each(|f| *f = [0.0; 2]);
-        let bounds: Vec<Extents> = self.tools.iter().map(|t| bounds_of(&t.vertices(), t.depth)).collect();
+        let bounds: Vec<Extents> = self
+            .tools
+            .iter()
+            .map(|t| bounds_of(&t.vertices(), t.depth))
+            .collect();
         let mut any = false;
         for &j in &self.boundary {
             let j = j as usize;

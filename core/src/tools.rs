@@ -83,7 +83,12 @@ impl Tool {
     pub fn penetration(&self, x: [Real; 2]) -> Option<Penetration> {
         let s = self.state.stroke;
         let local = [x[0] - s * self.axis[0], x[1] - s * self.axis[1]];
-        penetration(&self.points0, self.bins.candidates(local), local, self.depth)
+        penetration(
+            &self.points0,
+            self.bins.candidates(local),
+            local,
+            self.depth,
+        )
     }
 
     /// Whether the tool can move (its velocity is an input of the FMU and ROS node).
@@ -171,7 +176,9 @@ impl SegmentBins {
         let mut lists: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1]];
         for (k, s) in verts.windows(2).enumerate() {
             let range = |c: usize| {
-                let a = ((s[0][c].min(s[1][c]) - depth - lo[c]) / size).floor().max(0.0) as usize;
+                let a = ((s[0][c].min(s[1][c]) - depth - lo[c]) / size)
+                    .floor()
+                    .max(0.0) as usize;
                 let b = ((s[0][c].max(s[1][c]) + depth - lo[c]) / size).floor() as usize;
                 a..=b.min(dims[c] - 1)
             };
@@ -187,7 +194,13 @@ impl SegmentBins {
             items.extend(l);
             offsets.push(items.len() as u32);
         }
-        SegmentBins { origin: lo, size, dims, offsets, items }
+        SegmentBins {
+            origin: lo,
+            size,
+            dims,
+            offsets,
+            items,
+        }
     }
 
     /// Segments that may lie within the search depth of the point `x` (tool coordinates).
@@ -209,7 +222,12 @@ impl SegmentBins {
 /// the side; at a vertex, the pseudo-normal (sum of the adjacent segments' normals) does, which
 /// is right at convex and concave corners alike. The push direction points from `x` to the
 /// closest point, so a particle is carried smoothly round a corner.
-pub fn penetration(verts: &[[Real; 2]], candidates: &[u32], x: [Real; 2], depth: Real) -> Option<Penetration> {
+pub fn penetration(
+    verts: &[[Real; 2]],
+    candidates: &[u32],
+    x: [Real; 2],
+    depth: Real,
+) -> Option<Penetration> {
     let normal = |k: usize| {
         let (a, b) = (verts[k], verts[k + 1]);
         let len = (b[0] - a[0]).hypot(b[1] - a[1]);
@@ -228,7 +246,11 @@ pub fn penetration(verts: &[[Real; 2]], candidates: &[u32], x: [Real; 2], depth:
             (a, [n[0] + m[0], n[1] + m[1]], false)
         } else if s >= 1.0 {
             let n = normal(k);
-            let m = if k + 2 < verts.len() { normal(k + 1) } else { n };
+            let m = if k + 2 < verts.len() {
+                normal(k + 1)
+            } else {
+                n
+            };
             (b, [n[0] + m[0], n[1] + m[1]], false)
         } else {
             ([a[0] + s * t[0], a[1] + s * t[1]], normal(k), true)
@@ -239,7 +261,11 @@ pub fn penetration(verts: &[[Real; 2]], candidates: &[u32], x: [Real; 2], depth:
             (x[0] - a[0]) * side[0] + (x[1] - a[1]) * side[1]
         } else {
             let d = (c[0] - x[0]).hypot(c[1] - x[1]);
-            if (x[0] - c[0]) * side[0] + (x[1] - c[1]) * side[1] < 0.0 { -d } else { d }
+            if (x[0] - c[0]) * side[0] + (x[1] - c[1]) * side[1] < 0.0 {
+                -d
+            } else {
+                d
+            }
         };
         if best.is_none_or(|(d, ..)| signed.abs() < d.abs()) {
             best = Some((signed, c, side, face));
@@ -249,7 +275,11 @@ pub fn penetration(verts: &[[Real; 2]], candidates: &[u32], x: [Real; 2], depth:
     let gap = -signed;
     (gap > 0.0 && gap <= depth).then(|| Penetration {
         gap,
-        normal: if face { side } else { [(c[0] - x[0]) / gap, (c[1] - x[1]) / gap] },
+        normal: if face {
+            side
+        } else {
+            [(c[0] - x[0]) / gap, (c[1] - x[1]) / gap]
+        },
     })
 }
 
@@ -301,7 +331,10 @@ mod tests {
         assert!((p.gap - 0.01).abs() < 1e-15 && close(p.normal, [0.0, 1.0]));
         assert!(pen(&wall, [0.5, 0.01], 0.1).is_none());
         assert!(pen(&wall, [0.5, -0.2], 0.1).is_none());
-        assert!(pen(&wall, [0.5, 0.0], 0.1).is_none(), "on the surface is not inside");
+        assert!(
+            pen(&wall, [0.5, 0.0], 0.1).is_none(),
+            "on the surface is not inside"
+        );
     }
 
     #[test]
@@ -309,14 +342,23 @@ mod tests {
         // A die: floor then a wall going up at x = 1 (workpiece above and left).
         let die = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]];
         let p = pen(&die, [1.01, 0.3], 0.5).unwrap();
-        assert!((p.gap - 0.01).abs() < 1e-12 && close(p.normal, [-1.0, 0.0]), "{p:?}");
+        assert!(
+            (p.gap - 0.01).abs() < 1e-12 && close(p.normal, [-1.0, 0.0]),
+            "{p:?}"
+        );
         let q = pen(&die, [0.3, -0.02], 0.5).unwrap();
-        assert!((q.gap - 0.02).abs() < 1e-12 && close(q.normal, [0.0, 1.0]), "{q:?}");
+        assert!(
+            (q.gap - 0.02).abs() < 1e-12 && close(q.normal, [0.0, 1.0]),
+            "{q:?}"
+        );
         // In the die's solid corner, past the ends of both faces: the corner vertex is the
         // nearest surface point.
         let r = pen(&die, [1.01, -0.03], 0.5).unwrap();
         let d = 0.01_f64.hypot(0.03);
-        assert!((r.gap - d).abs() < 1e-12 && close(r.normal, [-0.01 / d, 0.03 / d]), "{r:?}");
+        assert!(
+            (r.gap - d).abs() < 1e-12 && close(r.normal, [-0.01 / d, 0.03 / d]),
+            "{r:?}"
+        );
         // Outside the corner (beyond the floor's end, below the wall): free.
         assert!(pen(&die, [0.5, 0.5], 0.5).is_none());
     }
@@ -330,7 +372,10 @@ mod tests {
         assert!(pen(&die, [0.0197, 0.0], 0.005).is_none());
         assert!(pen(&die, [0.0197, 1e-6], 0.005).is_none());
         let p = pen(&die, [0.0197, -1e-4], 0.005).unwrap();
-        assert!((p.gap - 1e-4).abs() < 1e-12 && close(p.normal, [0.0, 1.0]), "{p:?}");
+        assert!(
+            (p.gap - 1e-4).abs() < 1e-12 && close(p.normal, [0.0, 1.0]),
+            "{p:?}"
+        );
     }
 
     #[test]
@@ -338,29 +383,47 @@ mod tests {
         // Workpiece in the quadrant x > 0, y > 0; tool wall x < 0 and floor y < 0.
         let tool = [[0.0, 1.0], [0.0, 0.0], [1.0, 0.0]];
         let p = pen(&tool, [-0.03, -0.04], 0.5).unwrap();
-        assert!((p.gap - 0.05).abs() < 1e-12 && close(p.normal, [0.6, 0.8]), "{p:?}");
+        assert!(
+            (p.gap - 0.05).abs() < 1e-12 && close(p.normal, [0.6, 0.8]),
+            "{p:?}"
+        );
         // A tool corner pointing into the workpiece (tool = quadrant x < 0, y < 0).
         let punch = [[-1.0, 0.0], [0.0, 0.0], [0.0, -1.0]];
-        assert!(pen(&punch, [0.01, 0.01], 0.5).is_none(), "outside a convex corner");
+        assert!(
+            pen(&punch, [0.01, 0.01], 0.5).is_none(),
+            "outside a convex corner"
+        );
         let q = pen(&punch, [-0.01, -0.02], 0.5).unwrap();
-        assert!((q.gap - 0.01).abs() < 1e-12 && close(q.normal, [1.0, 0.0]), "{q:?}");
+        assert!(
+            (q.gap - 0.01).abs() < 1e-12 && close(q.normal, [1.0, 0.0]),
+            "{q:?}"
+        );
     }
 
     #[test]
     fn bins_list_every_segment_near_a_point() {
-        let verts: Vec<[Real; 2]> = (0..200).map(|k| {
-            let a = k as Real * 0.03;
-            [a.cos(), a.sin()]
-        }).collect();
+        let verts: Vec<[Real; 2]> = (0..200)
+            .map(|k| {
+                let a = k as Real * 0.03;
+                [a.cos(), a.sin()]
+            })
+            .collect();
         let depth = 0.05;
         let bins = SegmentBins::new(&verts, depth);
         for k in 0..300 {
-            let x = [1.3 * (k as Real * 0.7).cos() * (k as Real * 0.011).sin(), 1.3 * (k as Real * 0.7).sin()];
+            let x = [
+                1.3 * (k as Real * 0.7).cos() * (k as Real * 0.011).sin(),
+                1.3 * (k as Real * 0.7).sin(),
+            ];
             let all: Vec<u32> = (0..199).collect();
             let brute = penetration(&verts, &all, x, depth);
             let binned = penetration(&verts, bins.candidates(x), x, depth);
             assert_eq!(brute, binned, "point {x:?}");
-            assert!(bins.candidates(x).len() < 20, "few candidates: {}", bins.candidates(x).len());
+            assert!(
+                bins.candidates(x).len() < 20,
+                "few candidates: {}",
+                bins.candidates(x).len()
+            );
         }
     }
 

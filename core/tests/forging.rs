@@ -14,14 +14,19 @@ use rkforge_core::Simulation;
 fn friction_scene(mu: f64, plate: Motion, hold_x: bool) -> Scene {
     let mut s = common::patch(Kinematics::PlaneStrain, 9, IntegrationRule::Q4, 2.0);
     s.workpiece.origin_m = [0.0, 0.0];
-    s.material.hardening = Hardening::Linear { yield_stress_pa: 1e12, modulus_pa: 0.0 };
+    s.material.hardening = Hardening::Linear {
+        yield_stress_pa: 1e12,
+        modulus_pa: 0.0,
+    };
     s.time.end_s = 1.0e-3;
     s.tools = vec![
         ToolSpec {
             name: "top".into(),
             points_m: vec![[1.0, 0.01], [-1.0, 0.01]],
             axis: [0.0, -1.0],
-            motion: Motion::Table { points: vec![[0.0, 0.2], [0.1e-3, 0.2], [0.1e-3 + 1e-12, 0.0]] },
+            motion: Motion::Table {
+                points: vec![[0.0, 0.2], [0.1e-3, 0.2], [0.1e-3 + 1e-12, 0.0]],
+            },
             friction: 0.0,
         },
         ToolSpec {
@@ -34,8 +39,14 @@ fn friction_scene(mu: f64, plate: Motion, hold_x: bool) -> Scene {
     ];
     if hold_x {
         s.constraints = vec![
-            ConstraintSpec { edge: Edge::XMin, fix: vec![Component::X] },
-            ConstraintSpec { edge: Edge::YMax, fix: vec![Component::X] },
+            ConstraintSpec {
+                edge: Edge::XMin,
+                fix: vec![Component::X],
+            },
+            ConstraintSpec {
+                edge: Edge::YMax,
+                fix: vec![Component::X],
+            },
         ];
     }
     s
@@ -49,11 +60,20 @@ fn friction_scene(mu: f64, plate: Motion, hold_x: bool) -> Scene {
 #[test]
 fn sliding_friction_is_mu_times_the_normal_force() {
     let (mu, speed, t0) = (0.3, 50.0, 0.1e-3);
-    let plate = Motion::Table { points: vec![[0.0, 0.0], [t0, 0.0], [t0 + 1e-12, speed]] };
+    let plate = Motion::Table {
+        points: vec![[0.0, 0.0], [t0, 0.0], [t0 + 1e-12, speed]],
+    };
     let scene = friction_scene(mu, plate, false);
     let mut sim = Simulation::new(&scene).unwrap();
     let mass: f64 = sim.masses().iter().sum();
-    let momentum = |s: &Simulation| s.state().v.iter().zip(s.masses()).map(|(v, m)| v[0] * m).sum::<f64>();
+    let momentum = |s: &Simulation| {
+        s.state()
+            .v
+            .iter()
+            .zip(s.masses())
+            .map(|(v, m)| v[0] * m)
+            .sum::<f64>()
+    };
     let mut impulse = 0.0;
     let mut sliding_checks = 0;
     let mut stuck_at = None;
@@ -66,11 +86,19 @@ fn sliding_friction_is_mu_times_the_normal_force() {
         let v = momentum(&sim) / mass;
         if sim.time() > t0 && f[1] != 0.0 {
             // Coulomb: never more than mu N.
-            assert!(f[0].abs() <= mu * f[1].abs() * (1.0 + 1e-12), "t = {}: {f:?}", sim.time());
+            assert!(
+                f[0].abs() <= mu * f[1].abs() * (1.0 + 1e-12),
+                "t = {}: {f:?}",
+                sim.time()
+            );
         }
         if sim.time() > t0 && sim.time() < t0 + 20e-6 {
             // Every contact still slides fast: the block drags the plate back with mu N.
-            assert!((f[0] / f[1].abs() + mu).abs() < 1e-9, "t = {}: {f:?}", sim.time());
+            assert!(
+                (f[0] / f[1].abs() + mu).abs() < 1e-9,
+                "t = {}: {f:?}",
+                sim.time()
+            );
             assert!(v < 0.8 * speed);
             sliding_checks += 1;
         }
@@ -80,12 +108,21 @@ fn sliding_friction_is_mu_times_the_normal_force() {
     }
     assert!(sliding_checks > 50, "{sliding_checks}");
     let p = momentum(&sim);
-    assert!((p - impulse).abs() < 1e-9 * impulse.abs(), "momentum {p} vs friction impulse {impulse}");
+    assert!(
+        (p - impulse).abs() < 1e-9 * impulse.abs(),
+        "momentum {p} vs friction impulse {impulse}"
+    );
     let t_stick = stuck_at.expect("the block caught up with the plate");
     let v_end = p / mass;
     // After catching up the block rings elastically in x about the plate speed.
-    assert!((v_end - speed).abs() < 0.02 * speed, "rides along at {v_end} m/s");
-    println!("block caught the plate {:.1} us after it started", (t_stick - t0) * 1e6);
+    assert!(
+        (v_end - speed).abs() < 0.02 * speed,
+        "rides along at {v_end} m/s"
+    );
+    println!(
+        "block caught the plate {:.1} us after it started",
+        (t_stick - t0) * 1e6
+    );
 }
 
 /// Sticking: the free block on a plate that accelerates at a = 20 m/s^2 needs M a of
@@ -94,7 +131,13 @@ fn sliding_friction_is_mu_times_the_normal_force() {
 fn block_sticks_when_the_demand_is_below_mu_n() {
     let (mu, a) = (0.3, 20.0);
     let end = 1.0e-3;
-    let scene = friction_scene(mu, Motion::Table { points: vec![[0.0, 0.0], [end, a * end]] }, false);
+    let scene = friction_scene(
+        mu,
+        Motion::Table {
+            points: vec![[0.0, 0.0], [end, a * end]],
+        },
+        false,
+    );
     let mut sim = Simulation::new(&scene).unwrap();
     let mass: f64 = sim.masses().iter().sum();
     let mut peak_ratio: f64 = 0.0;
@@ -106,13 +149,29 @@ fn block_sticks_when_the_demand_is_below_mu_n() {
         }
     }
     // Block velocity: mass-weighted mean of the coefficient velocities.
-    let v: f64 = sim.state().v.iter().zip(sim.masses()).map(|(v, m)| v[0] * m).sum::<f64>() / mass;
+    let v: f64 = sim
+        .state()
+        .v
+        .iter()
+        .zip(sim.masses())
+        .map(|(v, m)| v[0] * m)
+        .sum::<f64>()
+        / mass;
     let plate_v = a * end;
-    assert!((v - plate_v).abs() < 0.02 * plate_v, "block {v} m/s, plate {plate_v} m/s");
+    assert!(
+        (v - plate_v).abs() < 0.02 * plate_v,
+        "block {v} m/s, plate {plate_v} m/s"
+    );
     let x = sim.positions();
     let slip = x[0][0] - 0.5 * a * end * end;
-    assert!(slip.abs() < 1e-3 * 0.01, "the bottom corner moved with the plate (slip {slip} m)");
-    assert!(peak_ratio < mu, "tangential demand {peak_ratio} of N stays below mu");
+    assert!(
+        slip.abs() < 1e-3 * 0.01,
+        "the bottom corner moved with the plate (slip {slip} m)"
+    );
+    assert!(
+        peak_ratio < mu,
+        "tangential demand {peak_ratio} of N stays below mu"
+    );
 }
 
 /// Separation: a tool presses 0.5 mm into a block, reverses at 5 m/s and leaves. The
@@ -122,8 +181,13 @@ fn block_sticks_when_the_demand_is_below_mu_n() {
 #[test]
 fn a_reversing_tool_leaves_with_no_force_and_no_sticking() {
     let mut s = friction_scene(0.5, Motion::Fixed, false);
-    s.material.hardening = Hardening::Linear { yield_stress_pa: 200e6, modulus_pa: 0.0 };
-    s.tools[0].motion = Motion::Table { points: vec![[0.0, 5.0], [0.1e-3, 5.0], [0.1e-3 + 1e-12, -5.0]] };
+    s.material.hardening = Hardening::Linear {
+        yield_stress_pa: 200e6,
+        modulus_pa: 0.0,
+    };
+    s.tools[0].motion = Motion::Table {
+        points: vec![[0.0, 5.0], [0.1e-3, 5.0], [0.1e-3 + 1e-12, -5.0]],
+    };
     s.tools[0].friction = 0.5;
     let mut sim = Simulation::new(&s).unwrap();
     let mut pressed = false;
@@ -131,23 +195,46 @@ fn a_reversing_tool_leaves_with_no_force_and_no_sticking() {
     for k in 1..=80 {
         sim.run_to(k as f64 * 5e-6, |s| {
             // The tool axis points down: the workpiece pushes it up, never down.
-            assert!(s.tools()[0].state.force[1] >= 0.0, "the contact pulled the tool");
+            assert!(
+                s.tools()[0].state.force[1] >= 0.0,
+                "the contact pulled the tool"
+            );
         })
         .unwrap();
         let top = &sim.tools()[0];
         pressed |= top.state.force[1] > 1e5;
-        let highest = sim.positions().iter().map(|p| p[1]).fold(f64::MIN, f64::max);
+        let highest = sim
+            .positions()
+            .iter()
+            .map(|p| p[1])
+            .fold(f64::MIN, f64::max);
         let gap = 0.01 - top.state.stroke - highest;
         if gap > 0.0 {
-            assert_eq!(top.state.force, [0.0, 0.0], "t = {}: force while clear", sim.time());
+            assert_eq!(
+                top.state.force,
+                [0.0, 0.0],
+                "t = {}: force while clear",
+                sim.time()
+            );
         }
         gaps.push(gap);
     }
     assert!(pressed, "the tool did press");
     let n = gaps.len();
-    assert!(gaps[n - 1] > 0.2e-3 && gaps[n - 1] > gaps[n - 10], "the gap keeps opening: {:?}", &gaps[n - 10..]);
+    assert!(
+        gaps[n - 1] > 0.2e-3 && gaps[n - 1] > gaps[n - 10],
+        "the gap keeps opening: {:?}",
+        &gaps[n - 10..]
+    );
     let mass: f64 = sim.masses().iter().sum();
-    let vy = sim.state().v.iter().zip(sim.masses()).map(|(v, m)| v[1] * m).sum::<f64>() / mass;
+    let vy = sim
+        .state()
+        .v
+        .iter()
+        .zip(sim.masses())
+        .map(|(v, m)| v[1] * m)
+        .sum::<f64>()
+        / mass;
     assert!(vy < 5.0, "the block does not follow the tool: {vy} m/s");
     assert!(sim.energy().interface_gain() <= 0.0);
 }
@@ -175,16 +262,26 @@ fn block_forging_paper_settings() {
     let mut worst_force_err: f64 = 0.0;
     for k in 1..=100 {
         let t = k as f64 * scene.time.end_s / 100.0;
-        sim.run_to(t, |s| assert!(s.energy().kinetic.is_finite())).unwrap();
+        sim.run_to(t, |s| assert!(s.energy().kinetic.is_finite()))
+            .unwrap();
         let pen = sim.measure_penetration();
         assert!(pen < 0.1 * h, "t = {t}: penetration {pen} m");
         let e = sim.extents();
         let width = e.x[1] - e.x[0];
-        assert!((e.x[1] + e.x[0]).abs() < 0.01 * width, "t = {t}: left-right {e:?}");
-        assert!((e.y[1] + e.y[0]).abs() < 0.01 * width, "t = {t}: top-bottom {e:?}");
+        assert!(
+            (e.x[1] + e.x[0]).abs() < 0.01 * width,
+            "t = {t}: left-right {e:?}"
+        );
+        assert!(
+            (e.y[1] + e.y[0]).abs() < 0.01 * width,
+            "t = {t}: top-bottom {e:?}"
+        );
         let (top, bottom) = (sim.tools()[0].state.force, sim.tools()[1].state.force);
         if t > 1e-3 {
-            assert!((top[1] + bottom[1]).abs() < 0.02 * top[1].abs(), "t = {t}: {top:?} {bottom:?}");
+            assert!(
+                (top[1] + bottom[1]).abs() < 0.02 * top[1].abs(),
+                "t = {t}: {top:?} {bottom:?}"
+            );
         }
         let stroke = sim.tools()[0].state.stroke + sim.tools()[1].state.stroke;
         if stroke >= 0.03 {
@@ -193,17 +290,37 @@ fn block_forging_paper_settings() {
             worst_force_err = worst_force_err.max(err.abs());
         }
     }
-    println!("largest deviation from the slab estimate over 30-300 mm stroke: {:.1} %", worst_force_err * 100.0);
-    assert!(worst_force_err < 0.3, "force vs slab estimate: {worst_force_err}");
+    println!(
+        "largest deviation from the slab estimate over 30-300 mm stroke: {:.1} %",
+        worst_force_err * 100.0
+    );
+    assert!(
+        worst_force_err < 0.3,
+        "force vs slab estimate: {worst_force_err}"
+    );
     let e = sim.extents();
-    assert!(((e.y[1] - e.y[0]) - 0.2).abs() < 0.005, "final height {}", e.y[1] - e.y[0]);
+    assert!(
+        ((e.y[1] - e.y[0]) - 0.2).abs() < 0.005,
+        "final height {}",
+        e.y[1] - e.y[0]
+    );
     let vol = sim.volume() / sim.reference_volume() - 1.0;
     assert!(vol.abs() < 0.01, "volume change {vol}");
     // Barrelling: the mid-height of the free side bulges beyond its ends (top and bottom rows).
     let (nx, ny) = sim.grid();
     let x = sim.positions();
     let side = |j: usize| x[j * nx + nx - 1][0];
-    assert!(side(ny / 2) > side(0) + 0.01 && side(ny / 2) > side(ny - 1) + 0.01, "barrelling: {} {} {}", side(0), side(ny / 2), side(ny - 1));
+    assert!(
+        side(ny / 2) > side(0) + 0.01 && side(ny / 2) > side(ny - 1) + 0.01,
+        "barrelling: {} {} {}",
+        side(0),
+        side(ny / 2),
+        side(ny - 1)
+    );
     let energy = sim.energy();
-    assert!(energy.balance_error_rel() < 0.01, "balance {}", energy.balance_error_rel());
+    assert!(
+        energy.balance_error_rel() < 0.01,
+        "balance {}",
+        energy.balance_error_rel()
+    );
 }

@@ -148,22 +148,38 @@ impl History {
         let name = &sim.scene().name;
         let rule = sim.scene().discretization.integration.name();
         let end = sim.scene().time.end_s;
-        let (tscale, tlabel) = if end < 1e-3 { (1e6, "time (us)") } else { (1e3, "time (ms)") };
-        let t: Vec<f64> = self.column("time_s").unwrap_or_default().iter().map(|v| v * tscale).collect();
+        let (tscale, tlabel) = if end < 1e-3 {
+            (1e6, "time (us)")
+        } else {
+            (1e3, "time (ms)")
+        };
+        let t: Vec<f64> = self
+            .column("time_s")
+            .unwrap_or_default()
+            .iter()
+            .map(|v| v * tscale)
+            .collect();
         let (lat, _) = lateral(sim, &sim.extents());
         let lat_label = lat.trim_end_matches("_m");
         for (key, label) in [(lat, lat_label), ("height_m", "height")] {
-            let y: Vec<f64> = self.column(&format!("workpiece.{key}")).unwrap_or_default().iter().map(|v| v * 1e3).collect();
+            let y: Vec<f64> = self
+                .column(&format!("workpiece.{key}"))
+                .unwrap_or_default()
+                .iter()
+                .map(|v| v * 1e3)
+                .collect();
             let markers: Vec<plots::Marker> = sim
                 .scene()
                 .reference
                 .iter()
                 .filter_map(|r| {
-                    r.values.get(&format!("workpiece.{key}")).map(|v| plots::Marker {
-                        label: r.source.clone(),
-                        x: end * tscale,
-                        y: v * 1e3,
-                    })
+                    r.values
+                        .get(&format!("workpiece.{key}"))
+                        .map(|v| plots::Marker {
+                            label: r.source.clone(),
+                            x: end * tscale,
+                            y: v * 1e3,
+                        })
                 })
                 .collect();
             plots::line_plot(
@@ -171,7 +187,11 @@ impl History {
                 &format!("{name}: {label} ({rule})"),
                 tlabel,
                 &format!("{label} (mm)"),
-                &[plots::Series { label: format!("rkforge {rule}"), x: t.clone(), y }],
+                &[plots::Series {
+                    label: format!("rkforge {rule}"),
+                    x: t.clone(),
+                    y,
+                }],
                 &markers,
             )?;
         }
@@ -179,7 +199,11 @@ impl History {
         let over_time: Vec<plots::Series> = sim
             .tools()
             .iter()
-            .map(|tool| plots::Series { label: tool.name.clone(), x: t.clone(), y: force(&tool.name) })
+            .map(|tool| plots::Series {
+                label: tool.name.clone(),
+                x: t.clone(),
+                y: force(&tool.name),
+            })
             .collect();
         if !over_time.is_empty() {
             plots::line_plot(
@@ -197,7 +221,12 @@ impl History {
             .filter(|tool| tool.is_movable())
             .map(|tool| plots::Series {
                 label: tool.name.clone(),
-                x: self.column(&format!("{}.stroke_m", tool.name)).unwrap_or_default().iter().map(|s| s * 1e3).collect(),
+                x: self
+                    .column(&format!("{}.stroke_m", tool.name))
+                    .unwrap_or_default()
+                    .iter()
+                    .map(|s| s * 1e3)
+                    .collect(),
                 y: force(&tool.name).iter().map(|f| -f).collect(),
             })
             .collect();
@@ -211,14 +240,20 @@ impl History {
                 &[],
             )?;
         }
-        let energy: Vec<plots::Series> = ["kinetic_J", "elastic_J", "plastic_J", "contact_J", "tool_work_J"]
-            .iter()
-            .map(|c| plots::Series {
-                label: c.trim_end_matches("_J").replace('_', " "),
-                x: t.clone(),
-                y: self.column(&format!("energy.{c}")).unwrap_or_default(),
-            })
-            .collect();
+        let energy: Vec<plots::Series> = [
+            "kinetic_J",
+            "elastic_J",
+            "plastic_J",
+            "contact_J",
+            "tool_work_J",
+        ]
+        .iter()
+        .map(|c| plots::Series {
+            label: c.trim_end_matches("_J").replace('_', " "),
+            x: t.clone(),
+            y: self.column(&format!("energy.{c}")).unwrap_or_default(),
+        })
+        .collect();
         plots::line_plot(
             &out.join("energy.png"),
             &format!("{name}: energy account ({rule})"),
