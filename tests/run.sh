@@ -12,7 +12,7 @@ cargo clippy --workspace --all-targets --release -- -D warnings
 
 echo "== cargo test"
 cargo test --workspace --release
-cargo build --release --workspace --bins
+cargo build --release --workspace
 
 echo "== python environment"
 if [ ! -x .venv/bin/python ]; then

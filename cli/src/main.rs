@@ -4,6 +4,7 @@
 //! two-point rule and prints its radius and height beside the paper's Table 3.
 
 mod compare;
+mod fmu;
 mod output;
 mod run;
 
@@ -32,6 +33,17 @@ enum Command {
     Run(RunArgs),
     /// Run scenes with q4 and q2 and print the paper's Table 5 beside ours.
     Compare(CompareArgs),
+    /// Pack a scene as an FMI 2.0 Co-Simulation FMU.
+    Fmu(FmuArgs),
+}
+
+#[derive(clap::Args)]
+struct FmuArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// The .fmu file to write.
+    #[arg(long)]
+    out: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -77,6 +89,8 @@ fn main() -> ExitCode {
         None => default_run(),
         Some(Command::Run(a)) => run_command(a),
         Some(Command::Compare(a)) => compare_command(a),
+        Some(Command::Fmu(a)) => fmu::pack(&a.scene, &a.out)
+            .map(|id| println!("wrote {} (model identifier {id})", a.out.display())),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,138 +1,503 @@
-//! The safe co-simulation layer of the rkforge FMU: an instance that owns one simulation,
-//! reads and writes variables through the scene's variable table, and advances between
-//! communication points, sub-cycling at the solver's stable step.
+//! The rkforge FMU: FMI 2.0 Co-Simulation of any scene.
+//!
+//! Two layers: [`Instance`] is safe Rust over an explicit FMI state machine, reading and
+//! writing variables through the scene's variable table; [`ffi`] holds the exported C
+//! functions, every one wrapped in `catch_unwind`, with all `unsafe` pointer handling in one
+//! place.
 
-use rkforge_core::{Error, Kinematics, Result, Scene, Simulation};
-use rkforge_model_description::{variable_table, Binding, Causality, Variable};
+pub mod ffi;
+
+use rkforge_core::{Error, IntegrationRule, Kinematics, Result, Scene, Simulation, State};
+use rkforge_model_description::{variable_table, xml, Binding, Causality, Kind, Variable};
+use serde::{Deserialize, Serialize};
+
+/// Where an instance is in the FMI 2.0 Co-Simulation state machine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Phase {
+    /// After `fmi2Instantiate`: parameters and inputs may be set.
+    Instantiated,
+    /// Between `fmi2EnterInitializationMode` and `fmi2ExitInitializationMode`.
+    Initialization,
+    /// Stepping (`slaveInitialized`).
+    Stepping,
+    /// After `fmi2Terminate`.
+    Terminated,
+    /// After a failed step: only reading, `fmi2Reset` and freeing are allowed.
+    Failed,
+}
+
+/// The speed/accuracy knobs, settable before initialisation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Params {
+    /// Integration rule.
+    pub integration: IntegrationRule,
+    /// Particles along x and y.
+    pub particles: [usize; 2],
+    /// Fraction of the stable step.
+    pub dt_safety: f64,
+    /// Fixed step (s), 0 for adaptive.
+    pub dt_fixed: f64,
+    /// Coulomb coefficient of each tool.
+    pub friction: Vec<f64>,
+}
+
+/// A saved FMU state: everything needed to continue bit for bit, also in a fresh instance.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Snapshot {
+    guid: String,
+    phase: Phase,
+    params: Params,
+    start_time: f64,
+    commands: Vec<Option<f64>>,
+    state: Option<State>,
+}
 
 /// One co-simulation instance.
 pub struct Instance {
+    scene: Scene,
+    guid: String,
     table: Vec<Variable>,
-    sim: Simulation,
+    params: Params,
+    commands: Vec<Option<f64>>,
+    sim: Option<Simulation>,
+    phase: Phase,
+    start_time: f64,
+}
+
+fn request(msg: String) -> Error {
+    Error::Request(msg)
 }
 
 impl Instance {
-    /// Set up the simulation of a validated scene.
-    pub fn new(scene: &Scene) -> Result<Instance> {
+    /// An instance of the scene given as TOML text; `label` names it in errors.
+    pub fn new(scene_text: &str, label: &str) -> Result<Instance> {
+        let scene = Scene::from_str_named(scene_text, label)?;
+        let params = Params {
+            integration: scene.discretization.integration,
+            particles: scene.workpiece.particles,
+            dt_safety: scene.time.dt_safety,
+            dt_fixed: scene.time.dt_s.unwrap_or(0.0),
+            friction: scene.tools.iter().map(|t| t.friction).collect(),
+        };
         Ok(Instance {
-            table: variable_table(scene),
-            sim: Simulation::new(scene)?,
+            table: variable_table(&scene),
+            guid: xml::guid(scene_text),
+            commands: vec![None; scene.tools.len()],
+            scene,
+            params,
+            sim: None,
+            phase: Phase::Instantiated,
+            start_time: 0.0,
         })
     }
 
+    /// The scene's GUID (digest of its text).
+    pub fn guid(&self) -> &str {
+        &self.guid
+    }
     /// The variable table.
     pub fn variables(&self) -> &[Variable] {
         &self.table
     }
-
+    /// Where the instance is in the state machine.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
     /// Current time (s).
     pub fn time(&self) -> f64 {
-        self.sim.time()
+        self.start_time + self.sim.as_ref().map_or(0.0, Simulation::time)
     }
-
-    /// The simulation.
-    pub fn simulation(&self) -> &Simulation {
-        &self.sim
+    /// The simulation, once initialised.
+    pub fn simulation(&self) -> Option<&Simulation> {
+        self.sim.as_ref()
     }
 
     fn variable(&self, vr: u32) -> Result<&Variable> {
         self.table
             .get(vr as usize)
-            .ok_or_else(|| Error::Request(format!("unknown value reference {vr}")))
+            .ok_or_else(|| request(format!("unknown value reference {vr}")))
     }
 
-    /// Read a real variable.
-    pub fn get_real(&self, vr: u32) -> Result<f64> {
-        let v = self.variable(vr)?;
-        let tools = self.sim.tools();
-        Ok(match v.binding {
-            Binding::ToolVelocity(k) => tools[k].velocity_at(self.sim.time()),
+    /// The scene with the current parameters applied and validated.
+    fn configured_scene(&self) -> Result<Scene> {
+        let mut s = self.scene.clone();
+        s.discretization.integration = self.params.integration;
+        s.workpiece.particles = self.params.particles;
+        s.time.dt_safety = self.params.dt_safety;
+        s.time.dt_s = (self.params.dt_fixed > 0.0).then_some(self.params.dt_fixed);
+        for (t, f) in s.tools.iter_mut().zip(&self.params.friction) {
+            t.friction = *f;
+        }
+        if let Some((key, msg)) = s.validate().into_iter().next() {
+            return Err(request(format!(
+                "parameters give an invalid scene: `{key}`: {msg}"
+            )));
+        }
+        Ok(s)
+    }
+
+    fn build(&mut self) -> Result<()> {
+        let mut sim = Simulation::new(&self.configured_scene()?)?;
+        for (k, c) in self.commands.iter().enumerate() {
+            if let Some(v) = c {
+                sim.set_tool_velocity(k, *v)?;
+            }
+        }
+        self.sim = Some(sim);
+        Ok(())
+    }
+
+    fn expect(&self, allowed: &[Phase], what: &str) -> Result<()> {
+        if allowed.contains(&self.phase) {
+            Ok(())
+        } else {
+            Err(request(format!(
+                "{what} is not allowed in phase {:?}",
+                self.phase
+            )))
+        }
+    }
+
+    /// `fmi2SetupExperiment`: the start time (s); stop time and tolerance are not used.
+    pub fn setup_experiment(&mut self, start_time: f64) -> Result<()> {
+        self.expect(&[Phase::Instantiated], "fmi2SetupExperiment")?;
+        if !start_time.is_finite() {
+            return Err(request(format!("start time {start_time} is not finite")));
+        }
+        self.start_time = start_time;
+        Ok(())
+    }
+
+    /// `fmi2EnterInitializationMode`.
+    pub fn enter_initialization(&mut self) -> Result<()> {
+        self.expect(&[Phase::Instantiated], "fmi2EnterInitializationMode")?;
+        self.phase = Phase::Initialization;
+        Ok(())
+    }
+
+    /// `fmi2ExitInitializationMode`: builds the discretisation with the parameters set.
+    pub fn exit_initialization(&mut self) -> Result<()> {
+        self.expect(&[Phase::Initialization], "fmi2ExitInitializationMode")?;
+        if self.sim.is_none() {
+            self.build()?;
+        }
+        self.phase = Phase::Stepping;
+        Ok(())
+    }
+
+    /// `fmi2Terminate`.
+    pub fn terminate(&mut self) -> Result<()> {
+        self.expect(&[Phase::Stepping, Phase::Failed], "fmi2Terminate")?;
+        self.phase = Phase::Terminated;
+        Ok(())
+    }
+
+    /// `fmi2Reset`: back to the freshly instantiated state with the scene's own values.
+    pub fn reset(&mut self) {
+        let scene = self.scene.clone();
+        self.params = Params {
+            integration: scene.discretization.integration,
+            particles: scene.workpiece.particles,
+            dt_safety: scene.time.dt_safety,
+            dt_fixed: scene.time.dt_s.unwrap_or(0.0),
+            friction: scene.tools.iter().map(|t| t.friction).collect(),
+        };
+        self.commands = vec![None; scene.tools.len()];
+        self.sim = None;
+        self.phase = Phase::Instantiated;
+        self.start_time = 0.0;
+    }
+
+    /// Outputs are read from a simulation; during initialisation one is built on demand.
+    fn readable_sim(&mut self) -> Result<&Simulation> {
+        self.expect(
+            &[
+                Phase::Initialization,
+                Phase::Stepping,
+                Phase::Terminated,
+                Phase::Failed,
+            ],
+            "reading a variable",
+        )?;
+        if self.sim.is_none() {
+            self.build()?;
+        }
+        self.sim
+            .as_ref()
+            .ok_or_else(|| request("no simulation".into()))
+    }
+
+    /// `fmi2GetReal`.
+    pub fn get_real(&mut self, vr: u32) -> Result<f64> {
+        let binding = self.variable(vr)?.binding;
+        let (params, commands) = (self.params.clone(), self.commands.clone());
+        let sim = self.readable_sim()?;
+        let tools = sim.tools();
+        let lateral = |e: rkforge_core::Extents| match sim.scene().model.kinematics {
+            Kinematics::Axisymmetric => e.x[1],
+            Kinematics::PlaneStrain => e.x[1] - e.x[0],
+        };
+        Ok(match binding {
+            Binding::ToolVelocity(k) => {
+                commands[k].unwrap_or_else(|| tools[k].velocity_at(sim.time()))
+            }
             Binding::ToolForce(k) => tools[k].axial_force(),
             Binding::ToolStroke(k) => tools[k].state.stroke,
-            Binding::WorkpieceLateral => {
-                let e = self.sim.extents();
-                match self.sim.scene().model.kinematics {
-                    Kinematics::Axisymmetric => e.x[1],
-                    Kinematics::PlaneStrain => e.x[1] - e.x[0],
-                }
-            }
+            Binding::WorkpieceLateral => lateral(sim.extents()),
             Binding::WorkpieceHeight => {
-                let e = self.sim.extents();
+                let e = sim.extents();
                 e.y[1] - e.y[0]
             }
-            Binding::MaxPlasticStrain => self.sim.max_plastic_strain(),
-            Binding::KineticEnergy => self.sim.energy().kinetic,
-            Binding::PlasticEnergy => self.sim.energy().plastic,
-            Binding::DtSafety => self.sim.scene().time.dt_safety,
-            Binding::Friction(k) => tools[k].friction,
+            Binding::MaxPlasticStrain => sim.max_plastic_strain(),
+            Binding::KineticEnergy => sim.energy().kinetic,
+            Binding::PlasticEnergy => sim.energy().plastic,
+            Binding::DtSafety => params.dt_safety,
+            Binding::DtFixed => params.dt_fixed,
+            Binding::Friction(k) => params.friction[k],
             Binding::Integration | Binding::ParticlesX | Binding::ParticlesY => {
-                return Err(Error::Request(format!(
-                    "`{}` is not a Real variable",
-                    v.name
+                return Err(request(format!(
+                    "value reference {vr} is not a Real variable"
                 )))
             }
         })
     }
 
-    /// Write a real input: a tool velocity (m/s). Parameters are fixed once the instance exists.
-    pub fn set_real(&mut self, vr: u32, value: f64) -> Result<()> {
-        let v = self.variable(vr)?;
-        match (v.causality, v.binding) {
-            (Causality::Input, Binding::ToolVelocity(k)) => self.sim.set_tool_velocity(k, value),
-            _ => Err(Error::Request(format!(
-                "`{}` cannot be set during the simulation",
-                v.name
+    /// `fmi2GetInteger`.
+    pub fn get_integer(&mut self, vr: u32) -> Result<i32> {
+        match self.variable(vr)?.binding {
+            Binding::ParticlesX => Ok(self.params.particles[0] as i32),
+            Binding::ParticlesY => Ok(self.params.particles[1] as i32),
+            _ => Err(request(format!(
+                "value reference {vr} is not an Integer variable"
             ))),
         }
     }
 
-    /// Advance from the communication point `t` (s) by `h` (s).
+    /// `fmi2GetString`.
+    pub fn get_string(&mut self, vr: u32) -> Result<String> {
+        match self.variable(vr)?.binding {
+            Binding::Integration => Ok(self.params.integration.name().to_string()),
+            _ => Err(request(format!(
+                "value reference {vr} is not a String variable"
+            ))),
+        }
+    }
+
+    fn settable(&self, v: &Variable) -> Result<()> {
+        let allowed: &[Phase] = match v.causality {
+            Causality::Parameter => &[Phase::Instantiated, Phase::Initialization],
+            Causality::Input => &[Phase::Instantiated, Phase::Initialization, Phase::Stepping],
+            Causality::Output => {
+                return Err(request(format!(
+                    "`{}` is an output and cannot be set",
+                    v.name
+                )))
+            }
+        };
+        if allowed.contains(&self.phase) {
+            Ok(())
+        } else {
+            Err(request(format!(
+                "`{}` cannot be set in phase {:?}",
+                v.name, self.phase
+            )))
+        }
+    }
+
+    /// `fmi2SetReal`: a tool velocity (m/s) or a Real parameter.
+    pub fn set_real(&mut self, vr: u32, value: f64) -> Result<()> {
+        let v = self.variable(vr)?.clone();
+        self.settable(&v)?;
+        if !value.is_finite() {
+            return Err(request(format!(
+                "`{}` = {value} is not finite; ignored",
+                v.name
+            )));
+        }
+        match v.binding {
+            Binding::ToolVelocity(k) => {
+                self.commands[k] = Some(value);
+                if let Some(sim) = self.sim.as_mut() {
+                    sim.set_tool_velocity(k, value)?;
+                }
+                return Ok(());
+            }
+            Binding::DtSafety if value > 0.0 && value <= 1.0 => self.params.dt_safety = value,
+            Binding::DtFixed if value >= 0.0 => self.params.dt_fixed = value,
+            Binding::Friction(k) if value >= 0.0 => self.params.friction[k] = value,
+            Binding::DtSafety | Binding::DtFixed | Binding::Friction(_) => {
+                return Err(request(format!("`{}` = {value} is out of range", v.name)))
+            }
+            _ => return Err(request(format!("`{}` is not a Real variable", v.name))),
+        }
+        self.sim = None;
+        Ok(())
+    }
+
+    /// `fmi2SetInteger`: the resolution parameters.
+    pub fn set_integer(&mut self, vr: u32, value: i32) -> Result<()> {
+        let v = self.variable(vr)?.clone();
+        self.settable(&v)?;
+        let k = match v.binding {
+            Binding::ParticlesX => 0,
+            Binding::ParticlesY => 1,
+            _ => return Err(request(format!("`{}` is not an Integer variable", v.name))),
+        };
+        if !(2..=4000).contains(&value) {
+            return Err(request(format!(
+                "`{}` = {value} must lie in [2, 4000]",
+                v.name
+            )));
+        }
+        self.params.particles[k] = value as usize;
+        self.sim = None;
+        Ok(())
+    }
+
+    /// `fmi2SetString`: the integration rule.
+    pub fn set_string(&mut self, vr: u32, value: &str) -> Result<()> {
+        let v = self.variable(vr)?.clone();
+        self.settable(&v)?;
+        if v.binding != Binding::Integration {
+            return Err(request(format!("`{}` is not a String variable", v.name)));
+        }
+        self.params.integration = IntegrationRule::parse(value).ok_or_else(|| {
+            request(format!(
+                "`{}` = \"{value}\": expected \"q4\" or \"q2\"",
+                v.name
+            ))
+        })?;
+        self.sim = None;
+        Ok(())
+    }
+
+    /// `fmi2DoStep` from the communication point `t` (s) by `h` (s), sub-cycled at the
+    /// solver's step. A failed step leaves the instance in [`Phase::Failed`].
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<()> {
+        self.expect(&[Phase::Stepping], "fmi2DoStep")?;
         if !(h > 0.0 && h.is_finite()) {
-            return Err(Error::Request(format!(
-                "communication step {h} s must be positive and finite"
+            return Err(request(format!(
+                "communication step size {h} s must be positive and finite"
             )));
         }
-        let now = self.sim.time();
-        if (t - now).abs() > 1e-9 * h.max(now.abs()) {
-            return Err(Error::Request(format!(
-                "communication point {t} s does not match the instance time {now} s"
+        let now = self.time();
+        if !t.is_finite() || (t - now).abs() > 1e-9 * h.max(now.abs()).max(1e-300) {
+            return Err(request(format!(
+                "communication point {t} s does not match the FMU time {now} s"
             )));
         }
-        self.sim.run_to(now + h, |_| {})
+        let target = now - self.start_time + h;
+        let sim = self
+            .sim
+            .as_mut()
+            .ok_or_else(|| request("not initialised".into()))?;
+        if let Err(e) = sim.run_to(target, |_| {}) {
+            self.phase = Phase::Failed;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// `fmi2GetFMUstate`.
+    pub fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            guid: self.guid.clone(),
+            phase: self.phase,
+            params: self.params.clone(),
+            start_time: self.start_time,
+            commands: self.commands.clone(),
+            state: self.sim.as_ref().map(|s| s.state().clone()),
+        }
+    }
+
+    /// `fmi2SetFMUstate`: restores a snapshot of an instance of the same scene.
+    pub fn restore(&mut self, s: &Snapshot) -> Result<()> {
+        if s.guid != self.guid {
+            return Err(request(
+                "the FMU state belongs to another scene (GUID differs)".into(),
+            ));
+        }
+        self.params = s.params.clone();
+        self.commands = s.commands.clone();
+        self.start_time = s.start_time;
+        match &s.state {
+            Some(state) => {
+                if self
+                    .sim
+                    .as_ref()
+                    .is_none_or(|sim| sim.state().d.len() != state.d.len())
+                {
+                    self.sim = None;
+                    self.build()?;
+                }
+                if let Some(sim) = self.sim.as_mut() {
+                    sim.restore(state.clone())?;
+                }
+            }
+            None => self.sim = None,
+        }
+        self.phase = s.phase;
+        Ok(())
+    }
+}
+
+impl Snapshot {
+    /// Serialized bytes (JSON; floats round-trip exactly).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        serde_json::to_vec(self).unwrap_or_default()
+    }
+    /// From serialized bytes.
+    pub fn from_bytes(b: &[u8]) -> Result<Snapshot> {
+        serde_json::from_slice(b)
+            .map_err(|e| Error::State(format!("cannot read the serialized FMU state: {e}")))
+    }
+}
+
+/// The value of a variable's start attribute as text, for logs and documentation.
+pub fn start_text(v: &Variable) -> String {
+    match &v.kind {
+        Kind::Real(s) => s.map_or(String::new(), |x| x.to_string()),
+        Kind::Integer(s) => s.map_or(String::new(), |x| x.to_string()),
+        Kind::String(s) => s.clone().unwrap_or_default(),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rkforge_core::scene::Motion;
 
-    fn scene() -> Scene {
-        let mut s = Scene::from_str_named(
-            include_str!("../../scenes/taylor_bar.toml"),
-            "taylor_bar.toml",
-        )
-        .unwrap();
-        s.workpiece.particles = [7, 15];
-        s.time.dt_s = None;
-        s.tools[0].motion = Motion::External {
-            initial_velocity_m_per_s: 0.0,
-        };
-        s
+    fn scene_text() -> String {
+        include_str!("../../scenes/taylor_bar.toml")
+            .replace("particles = [21, 51]", "particles = [7, 15]")
+            .replace(
+                "motion = { kind = \"fixed\" }",
+                "motion = { kind = \"external\" }",
+            )
+    }
+
+    fn ready() -> Instance {
+        let mut i = Instance::new(&scene_text(), "t").unwrap();
+        i.enter_initialization().unwrap();
+        i.exit_initialization().unwrap();
+        i
+    }
+
+    fn vr(i: &Instance, n: &str) -> u32 {
+        i.variables()
+            .iter()
+            .find(|v| v.name == n)
+            .unwrap()
+            .value_reference
     }
 
     #[test]
     fn stroke_follows_the_velocity_input_and_force_appears() {
-        let mut inst = Instance::new(&scene()).unwrap();
-        let vr = |n: &str| {
-            inst.variables()
-                .iter()
-                .find(|v| v.name == n)
-                .unwrap()
-                .value_reference
-        };
-        let (vel, stroke, force) = (vr("wall.velocity"), vr("wall.stroke"), vr("wall.force"));
+        let mut inst = ready();
+        let (vel, stroke, force) = (
+            vr(&inst, "wall.velocity"),
+            vr(&inst, "wall.stroke"),
+            vr(&inst, "wall.force"),
+        );
         inst.set_real(vel, 2.0).unwrap();
         let h = 1e-6;
         for k in 0..5 {
@@ -146,24 +511,44 @@ mod tests {
     }
 
     #[test]
-    fn bad_requests_are_errors() {
-        let mut inst = Instance::new(&scene()).unwrap();
+    fn bad_requests_are_errors_and_leave_the_instance_usable() {
+        let mut inst = ready();
         assert!(inst.do_step(0.0, 0.0).is_err());
         assert!(inst.do_step(1.0, 1e-6).is_err());
         assert!(inst.get_real(9999).is_err());
-        let vel = inst
-            .variables()
-            .iter()
-            .find(|v| v.name == "wall.velocity")
-            .unwrap()
-            .value_reference;
+        let vel = vr(&inst, "wall.velocity");
         assert!(inst.set_real(vel, f64::NAN).is_err());
-        let f = inst
-            .variables()
-            .iter()
-            .find(|v| v.name == "wall.force")
-            .unwrap()
-            .value_reference;
-        assert!(inst.set_real(f, 1.0).is_err());
+        assert!(inst.set_real(vr(&inst, "wall.force"), 1.0).is_err());
+        assert!(
+            inst.set_integer(vr(&inst, "resolution.nx"), 9).is_err(),
+            "parameter after initialisation"
+        );
+        inst.do_step(0.0, 1e-6).unwrap();
+    }
+
+    #[test]
+    fn snapshot_round_trip_continues_bit_for_bit() {
+        let mut a = ready();
+        let h = 1e-6;
+        a.do_step(0.0, h).unwrap();
+        let bytes = a.snapshot().to_bytes();
+        a.do_step(h, h).unwrap();
+        let mut b = Instance::new(&scene_text(), "t").unwrap();
+        b.restore(&Snapshot::from_bytes(&bytes).unwrap()).unwrap();
+        b.do_step(h, h).unwrap();
+        assert_eq!(a.snapshot(), b.snapshot());
+    }
+
+    #[test]
+    fn parameters_change_the_discretisation() {
+        let mut i = Instance::new(&scene_text(), "t").unwrap();
+        i.set_integer(vr(&i, "resolution.nx"), 5).unwrap();
+        i.set_string(vr(&i, "integration"), "q4").unwrap();
+        assert!(i.set_string(vr(&i, "integration"), "q3").is_err());
+        i.enter_initialization().unwrap();
+        i.exit_initialization().unwrap();
+        let sim = i.simulation().unwrap();
+        assert_eq!(sim.grid(), (5, 15));
+        assert_eq!(sim.point_count(), 4 * 4 * 14);
     }
 }

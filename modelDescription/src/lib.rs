@@ -7,6 +7,8 @@
 //! the same table. The same table is meant to drive `modelDescription.xml` and the FMU's
 //! getters and setters, so the two cannot drift.
 
+pub mod xml;
+
 use rkforge_core::scene::{Kinematics, Motion, Scene};
 
 /// FMI 2.0 causality.
@@ -67,6 +69,8 @@ pub enum Binding {
     ParticlesY,
     /// Time-step safety factor (-).
     DtSafety,
+    /// Fixed time step (s); 0 for `dt_safety` times the stable step.
+    DtFixed,
     /// Coulomb coefficient of tool `k` (-).
     Friction(usize),
 }
@@ -232,6 +236,15 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
         "fraction of the stable time step".into(),
         Binding::DtSafety,
     );
+    push(
+        "dt_fixed".into(),
+        Parameter,
+        Fixed,
+        Kind::Real(Some(scene.time.dt_s.unwrap_or(0.0))),
+        Some("s"),
+        "fixed time step; 0 for dt_safety times the stable step".into(),
+        Binding::DtFixed,
+    );
     for (k, tool) in scene.tools.iter().enumerate() {
         push(
             format!("{}.friction", tool.name),
@@ -287,6 +300,55 @@ mod tests {
             (v.causality, v.kind.clone()),
             (Causality::Input, Kind::Real(Some(10.0)))
         );
+    }
+
+    #[test]
+    fn xml_round_trip_matches_the_table() {
+        let s = scene();
+        let t = variable_table(&s);
+        let header = xml::Header {
+            model_name: s.name.clone(),
+            model_identifier: s.name.clone(),
+            guid: xml::guid("scene text"),
+            description: s.description.clone(),
+            stop_time: s.time.end_s,
+            step_size: 1e-6,
+        };
+        let text = xml::write(&header, &t).unwrap();
+        let back = xml::read(&text).unwrap();
+        assert_eq!(back.fmi_version, "2.0");
+        assert_eq!(back.guid, header.guid);
+        assert_eq!(back.model_identifier, "taylor_bar");
+        assert_eq!(back.variables.len(), t.len());
+        for (r, v) in back.variables.iter().zip(&t) {
+            assert_eq!(r.name, v.name);
+            assert_eq!(r.value_reference, v.value_reference);
+            assert_eq!(r.unit.as_deref(), v.unit);
+            let kind = match &v.kind {
+                Kind::Real(_) => "Real",
+                Kind::Integer(_) => "Integer",
+                Kind::String(_) => "String",
+            };
+            assert_eq!(r.kind, kind);
+        }
+        let outputs: Vec<usize> = t
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.causality == Causality::Output)
+            .map(|(i, _)| i + 1)
+            .collect();
+        assert_eq!(back.outputs, outputs);
+        for u in ["m", "N", "J"] {
+            assert!(back.units.iter().any(|x| x == u), "unit {u}");
+        }
+        assert_eq!(back.log_categories.len(), 3);
+    }
+
+    #[test]
+    fn guid_is_stable_and_content_sensitive() {
+        assert_eq!(xml::guid("abc"), xml::guid("abc"));
+        assert_ne!(xml::guid("abc"), xml::guid("abd"));
+        assert_eq!(xml::guid("abc").len(), 38);
     }
 
     #[test]

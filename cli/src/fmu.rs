@@ -1,0 +1,137 @@
+//! `rkforge fmu SCENE --out FILE.fmu`: one FMI 2.0 Co-Simulation FMU per scene.
+//!
+//! The archive holds `modelDescription.xml` (written from the scene's variable table),
+//! `binaries/linux64/<modelIdentifier>.so` (the `rkforge-fmu` shared library), the scene in
+//! `resources/scene.toml` and `documentation/index.html`.
+
+use rkforge_core::Scene;
+use rkforge_model_description::{variable_table, xml};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+const LIBRARY: &str = "librkforge_fmu.so";
+
+/// The shared library: next to this executable, or built from the checkout this binary was
+/// built from.
+fn shared_library() -> Result<PathBuf, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot locate rkforge: {e}"))?;
+    if let Some(dir) = exe.parent() {
+        let candidate = dir.join(LIBRARY);
+        if candidate.is_file() {
+            return Ok(candidate);
+        }
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    eprintln!("building {LIBRARY} (cargo build --release -p rkforge-fmu) ...");
+    let status = std::process::Command::new("cargo")
+        .args(["build", "--release", "-p", "rkforge-fmu"])
+        .current_dir(&root)
+        .status()
+        .map_err(|e| {
+            format!("{LIBRARY} is not next to rkforge and cargo could not be run to build it: {e}")
+        })?;
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("target"));
+    let built = target.join("release").join(LIBRARY);
+    if status.success() && built.is_file() {
+        Ok(built)
+    } else {
+        Err(format!(
+            "building {LIBRARY} failed; run `cargo build --release -p rkforge-fmu`"
+        ))
+    }
+}
+
+fn documentation(scene: &Scene, vars: &[rkforge_model_description::Variable]) -> String {
+    let rows: String = vars
+        .iter()
+        .map(|v| {
+            format!(
+                "<tr><td>{}</td><td>{:?}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                v.name,
+                v.causality,
+                v.unit.unwrap_or(""),
+                rkforge_fmu_start(v),
+                v.description
+            )
+        })
+        .collect();
+    format!(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{name}</title></head><body>\n\
+         <h1>{name}: rkforge FMU</h1>\n<p>{desc}</p>\n\
+         <p>FMI 2.0 Co-Simulation of an RKPM forging/impact scene. Inputs are tool velocities along\n\
+         each tool's axis (m/s); outputs are tool forces along the axis (N, exerted by the workpiece,\n\
+         positive along +axis) and strokes (m). Any communication step is accepted and sub-cycled at\n\
+         the solver's stable step. The scene is in resources/scene.toml.</p>\n\
+         <table border=\"1\"><tr><th>variable</th><th>causality</th><th>unit</th><th>start</th><th>description</th></tr>\n{rows}</table>\n\
+         </body></html>\n",
+        name = scene.name,
+        desc = scene.description
+    )
+}
+
+fn rkforge_fmu_start(v: &rkforge_model_description::Variable) -> String {
+    match &v.kind {
+        rkforge_model_description::Kind::Real(s) => s.map_or(String::new(), |x| x.to_string()),
+        rkforge_model_description::Kind::Integer(s) => s.map_or(String::new(), |x| x.to_string()),
+        rkforge_model_description::Kind::String(s) => s.clone().unwrap_or_default(),
+    }
+}
+
+/// Write the FMU of the scene file `scene_path` to `out`; returns the model identifier.
+pub fn pack(scene_path: &Path, out: &Path) -> Result<String, String> {
+    let text = std::fs::read_to_string(scene_path)
+        .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
+    let scene = Scene::from_str_named(&text, &scene_path.display().to_string())
+        .map_err(|e| e.to_string())?;
+    let vars = variable_table(&scene);
+    let id: String = scene
+        .name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    let id = if id.starts_with(|c: char| c.is_ascii_digit()) {
+        format!("m_{id}")
+    } else {
+        id
+    };
+    let header = xml::Header {
+        model_name: scene.name.clone(),
+        model_identifier: id.clone(),
+        guid: xml::guid(&text),
+        description: scene.description.clone(),
+        stop_time: scene.time.end_s,
+        step_size: scene
+            .output
+            .history_interval_s
+            .unwrap_or(scene.time.end_s / 200.0),
+    };
+    let md = xml::write(&header, &vars)?;
+    let lib =
+        std::fs::read(shared_library()?).map_err(|e| format!("cannot read {LIBRARY}: {e}"))?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    let file =
+        std::fs::File::create(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let opts = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    let doc = documentation(&scene, &vars);
+    let entries: [(String, &[u8]); 4] = [
+        ("modelDescription.xml".into(), md.as_bytes()),
+        (format!("binaries/linux64/{id}.so"), &lib),
+        ("resources/scene.toml".into(), text.as_bytes()),
+        ("documentation/index.html".into(), doc.as_bytes()),
+    ];
+    for (name, data) in entries {
+        zip.start_file(name.as_str(), opts)
+            .map_err(|e| format!("zip {name}: {e}"))?;
+        zip.write_all(data)
+            .map_err(|e| format!("zip {name}: {e}"))?;
+    }
+    zip.finish().map_err(|e| format!("zip: {e}"))?;
+    Ok(id)
+}
