@@ -132,7 +132,8 @@ def test_compare_prints_table_5_beside_ours(rkforge_bin, tmp_path):
     row = next(line for line in table.splitlines() if line.startswith("| taylor_bar"))
     cells = [c.strip() for c in row.strip("|").split("|")]
     q4, q2, ratio = float(cells[1]), float(cells[2]), float(cells[3])
-    assert q4 > 0 and q2 > 0 and abs(ratio - q2 / q4) < 0.01
+    # Wall times are printed to 1 ms: the ratio agrees within that rounding.
+    assert q4 > 0 and q2 > 0 and abs(ratio - q2 / q4) < 0.0011 / q4 + 0.001
     assert cells[4] == "1238" and cells[5] == "644" and cells[6] == "0.520"
     for rule in ("q4", "q2"):
         s = json.loads((out / "taylor_bar" / rule / "summary.json").read_text())

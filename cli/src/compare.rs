@@ -102,7 +102,7 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
         };
         let _ = writeln!(
             table,
-            "| {} | {w4:.2} | {w2:.2} | {:.3} | {} | {} | {paper_ratio} | {:+.3} mm | {:+.3} mm | {:+.2} % |",
+            "| {} | {w4:.3} | {w2:.3} | {:.3} | {} | {} | {paper_ratio} | {:+.3} mm | {:+.3} mm | {:+.2} % |",
             scene.name,
             w2 / w4,
             paper(IntegrationRule::Q4),
