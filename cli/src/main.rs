@@ -67,7 +67,7 @@ struct RunArgs {
     /// Scene file (TOML).
     scene: PathBuf,
     /// Integration rule, overriding the scene's.
-    #[arg(long, value_parser = ["q2", "q4"])]
+    #[arg(long, value_parser = ["q2", "q4", "scni"])]
     integration: Option<String>,
     /// Output folder (default: out/<scene name>/).
     #[arg(long)]

@@ -7,6 +7,11 @@
 //!   eta^2` exactly (the bilinear `xi eta` term is not: it is the price of the rule). Because
 //!   RK shape functions span several cells, the assembled stiffness keeps full rank; the
 //!   spurious-mode test in `tests/` checks that.
+//! - `scni`: stabilized conforming nodal integration (Chen, Wu, Yoon, You 2001, IJNME 50):
+//!   one point per particle over its domain (the rectangle of half spacings around it, cut at
+//!   the workpiece edges); the gradient is smoothed over the domain,
+//!   `B_I = (1 / A_L) int_{dA_L} N_I n dG`, which satisfies the integration constraint exactly
+//!   (the linear patch test passes to round-off, also next to the boundary).
 
 use crate::math::Real;
 use crate::scene::IntegrationRule;
@@ -22,13 +27,63 @@ pub struct PointSet {
     pub cells: Vec<u32>,
 }
 
-/// Gauss points `(xi, eta, weight)` of a rule on the reference square `[-1, 1]^2`.
+/// Gauss points `(xi, eta, weight)` of a cell rule on the reference square `[-1, 1]^2`
+/// (none for the nodal rule).
 pub fn rule_points(rule: IntegrationRule) -> Vec<(Real, Real, Real)> {
     let a = 1.0 / 3.0_f64.sqrt();
     match rule {
         IntegrationRule::Q4 => vec![(-a, -a, 1.0), (a, -a, 1.0), (a, a, 1.0), (-a, a, 1.0)],
         IntegrationRule::Q2 => vec![(-a, -a, 2.0), (a, a, 2.0)],
+        IntegrationRule::Scni => vec![],
     }
+}
+
+/// Edge quadrature points per nodal domain: 3-point Gauss on each of 4 edges.
+pub const SCNI_EDGE_POINTS: usize = 12;
+
+/// The nodal domains of SCNI: one point per particle at its domain's centroid with the
+/// domain's area, and for each domain [`SCNI_EDGE_POINTS`] boundary points with their
+/// outward normal times the quadrature weight (m).
+pub fn nodal_domains(
+    origin: [Real; 2],
+    h: [Real; 2],
+    nx: usize,
+    ny: usize,
+) -> (PointSet, Vec<[Real; 2]>, Vec<[Real; 2]>) {
+    let g = (0.6_f64).sqrt() / 2.0;
+    let gauss = [
+        (0.5 - g, 5.0 / 18.0),
+        (0.5, 8.0 / 18.0),
+        (0.5 + g, 5.0 / 18.0),
+    ];
+    let mut s = PointSet::default();
+    let (mut edge_points, mut edge_nw) = (Vec::new(), Vec::new());
+    let lo = |k: usize, i: usize| origin[k] + (i as Real - 0.5).max(0.0) * h[k];
+    let hi =
+        |k: usize, i: usize, n: usize| origin[k] + (i as Real + 0.5).min((n - 1) as Real) * h[k];
+    for j in 0..ny {
+        for i in 0..nx {
+            let (x0, x1, y0, y1) = (lo(0, i), hi(0, i, nx), lo(1, j), hi(1, j, ny));
+            s.positions.push([0.5 * (x0 + x1), 0.5 * (y0 + y1)]);
+            s.areas.push((x1 - x0) * (y1 - y0));
+            s.cells.push((j * nx + i) as u32);
+            // Counter-clockwise edges: bottom, right, top, left, with outward normals.
+            let edges = [
+                ([x0, y0], [x1, y0], [0.0, -1.0]),
+                ([x1, y0], [x1, y1], [1.0, 0.0]),
+                ([x1, y1], [x0, y1], [0.0, 1.0]),
+                ([x0, y1], [x0, y0], [-1.0, 0.0]),
+            ];
+            for (a, b, n) in edges {
+                let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+                for &(t, w) in &gauss {
+                    edge_points.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+                    edge_nw.push([n[0] * w * len, n[1] * w * len]);
+                }
+            }
+        }
+    }
+    (s, edge_points, edge_nw)
 }
 
 /// Points of `rule` in every cell of the `nx x ny` grid with lower-left `origin` and
@@ -95,6 +150,16 @@ mod tests {
             let s = grid_points(rule, [0.0, 0.0], [0.5, 0.25], 5, 9);
             let a: Real = s.areas.iter().sum();
             assert!((a - 2.0 * 2.0).abs() < 1e-12);
+        }
+        let (s, e, nw) = nodal_domains([0.0, 0.0], [0.5, 0.25], 5, 9);
+        let a: Real = s.areas.iter().sum();
+        assert!((a - 2.0 * 2.0).abs() < 1e-12);
+        assert_eq!(e.len(), 45 * SCNI_EDGE_POINTS);
+        // Each closed domain boundary: sum of n dG vanishes.
+        for d in nw.chunks(SCNI_EDGE_POINTS) {
+            let sx: Real = d.iter().map(|v| v[0]).sum();
+            let sy: Real = d.iter().map(|v| v[1]).sum();
+            assert!(sx.abs() < 1e-15 && sy.abs() < 1e-15);
         }
     }
 }

@@ -111,6 +111,9 @@ pub enum IntegrationRule {
     /// The paper's two-point rule: points at +-(1/sqrt3, 1/sqrt3) on a cell diagonal, weight 2.
     #[default]
     Q2,
+    /// Stabilized conforming nodal integration (Chen, Wu, Yoon, You 2001): one point per
+    /// particle, gradients smoothed over the particle's domain.
+    Scni,
 }
 
 impl IntegrationRule {
@@ -119,6 +122,7 @@ impl IntegrationRule {
         match self {
             IntegrationRule::Q4 => "q4",
             IntegrationRule::Q2 => "q2",
+            IntegrationRule::Scni => "scni",
         }
     }
     /// Parse a scene/CLI name.
@@ -126,6 +130,7 @@ impl IntegrationRule {
         match s {
             "q4" => Some(IntegrationRule::Q4),
             "q2" => Some(IntegrationRule::Q2),
+            "scni" => Some(IntegrationRule::Scni),
             _ => None,
         }
     }

@@ -24,11 +24,11 @@
 
 use crate::constraints::Constraints;
 use crate::error::{Error, Result};
-use crate::integration::{grid_points, PointSet};
+use crate::integration::{grid_points, nodal_domains, PointSet, SCNI_EDGE_POINTS};
 use crate::material::{HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::{KernelCloud, ShapeTable};
-use crate::scene::{Component, Edge, Kinematics, Scene};
+use crate::scene::{Component, Edge, IntegrationRule, Kinematics, Scene};
 use crate::tools::{penalty_force, Tool, ToolState, SEARCH_DEPTH_SPACINGS};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -296,10 +296,20 @@ impl Simulation {
             scene.discretization.support[1] * h[1],
         ];
         let cloud = KernelCloud::new(ref_pos.clone(), volumes, support);
-        let points = grid_points(scene.discretization.integration, w.origin_m, h, nx, ny);
-        let pt = cloud.shape_table(&points.positions, &|p| {
-            format!("integration point {p} (cell {})", points.cells[p])
-        })?;
+        let (points, pt) = match scene.discretization.integration {
+            IntegrationRule::Scni => {
+                let (points, edges, nw) = nodal_domains(w.origin_m, h, nx, ny);
+                let pt = smoothed_shape_table(&cloud, &points, &edges, &nw)?;
+                (points, pt)
+            }
+            rule => {
+                let points = grid_points(rule, w.origin_m, h, nx, ny);
+                let pt = cloud.shape_table(&points.positions, &|p| {
+                    format!("integration point {p} (cell {})", points.cells[p])
+                })?;
+                (points, pt)
+            }
+        };
         let nodal = cloud.shape_table(&ref_pos, &|j| format!("particle {j}"))?;
         let (weights, radius): (Vec<Real>, Vec<Real>) = points
             .positions
@@ -1138,6 +1148,53 @@ impl Simulation {
             .as_ref()
             .map_or(0.0, |c| c.residual(&self.st.v))
     }
+}
+
+/// SCNI shape table (Chen, Wu, Yoon, You 2001): per nodal domain `L`, `N_I` at its centroid
+/// and the smoothed gradient `B_I = (1 / A_L) sum_edges N_I(x_g) n w_g` from the boundary
+/// quadrature points of the domain.
+fn smoothed_shape_table(
+    cloud: &KernelCloud,
+    points: &PointSet,
+    edges: &[[Real; 2]],
+    nw: &[[Real; 2]],
+) -> Result<ShapeTable> {
+    let at_centre = cloud.shape_table(&points.positions, &|p| {
+        format!("nodal integration point {p}")
+    })?;
+    let on_edges = cloud.shape_table(edges, &|q| {
+        format!(
+            "boundary point {q} of nodal domain {}",
+            q / SCNI_EDGE_POINTS
+        )
+    })?;
+    let mut t = ShapeTable {
+        offsets: vec![0],
+        ..Default::default()
+    };
+    let mut row: std::collections::BTreeMap<u32, [Real; 3]> = Default::default();
+    for (p, area) in points.areas.iter().enumerate() {
+        row.clear();
+        for e in at_centre.row(p) {
+            row.entry(at_centre.index[e]).or_default()[0] = at_centre.n[e];
+        }
+        let first = p * SCNI_EDGE_POINTS;
+        for (q, w) in nw.iter().enumerate().skip(first).take(SCNI_EDGE_POINTS) {
+            for e in on_edges.row(q) {
+                let v = row.entry(on_edges.index[e]).or_default();
+                v[1] += on_edges.n[e] * w[0] / area;
+                v[2] += on_edges.n[e] * w[1] / area;
+            }
+        }
+        for (&i, v) in &row {
+            t.index.push(i);
+            t.n.push(v[0]);
+            t.dx.push(v[1]);
+            t.dy.push(v[2]);
+        }
+        t.offsets.push(t.index.len() as u32);
+    }
+    Ok(t)
 }
 
 /// Length of the next step: the full step `dt_full`, or, when `max_dt` (the time left to a

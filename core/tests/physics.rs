@@ -7,7 +7,11 @@ mod common;
 use rkforge_core::rk_shape::KernelCloud;
 use rkforge_core::{IntegrationRule, Kinematics, Simulation};
 
-const RULES: [IntegrationRule; 2] = [IntegrationRule::Q4, IntegrationRule::Q2];
+const RULES: [IntegrationRule; 3] = [
+    IntegrationRule::Q4,
+    IntegrationRule::Q2,
+    IntegrationRule::Scni,
+];
 
 /// Linear displacement `u = A X` on a free plane-strain patch (9 x 9 particles).
 fn linear_patch(rule: IntegrationRule) -> (Simulation, [[f64; 2]; 2], Vec<[f64; 2]>) {
@@ -74,7 +78,8 @@ fn patch_test_linear_field_constant_strain_and_balance() {
         }
         // Residual against the consistent boundary load int_G N_I (sigma n) dG, with the
         // Cauchy stress of the (uniform) deformation recovered from one point's forces.
-        // Measured: q4 1.35 %, q2 9.2 % (the diagonal rule's xi*eta error is systematic).
+        // Measured: q4 1.35 %, q2 9.2 % (the diagonal rule's xi*eta error is systematic),
+        // scni 0.04 %.
         let residual = boundary_residual(&sim, &f);
         println!(
             "{rule:?}: largest out-of-balance near the boundary {:.2} % of the largest nodal force",
@@ -83,6 +88,10 @@ fn patch_test_linear_field_constant_strain_and_balance() {
         let bound = match rule {
             IntegrationRule::Q4 => 0.02,
             IntegrationRule::Q2 => 0.10,
+            // SCNI satisfies the integration constraint with its own boundary quadrature
+            // (interior edges cancel exactly); what remains, measured 0.04 %, is the gap
+            // between its 3-point edge rule and this test's 8-point boundary integral.
+            IntegrationRule::Scni => 0.002,
         };
         assert!(residual < bound * fmax, "{rule:?}: {residual} vs {fmax}");
     }

@@ -363,7 +363,7 @@ impl Instance {
         }
         self.params.integration = IntegrationRule::parse(value).ok_or_else(|| {
             request(format!(
-                "`{}` = \"{value}\": expected \"q4\" or \"q2\"",
+                "`{}` = \"{value}\": expected \"q4\", \"q2\" or \"scni\"",
                 v.name
             ))
         })?;

@@ -205,7 +205,7 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
         Fixed,
         Kind::String(Some(scene.discretization.integration.name().into())),
         None,
-        "integration rule: q4 (2x2 Gauss) or q2 (two-point)".into(),
+        "integration rule: q4 (2x2 Gauss), q2 (two-point) or scni (nodal)".into(),
         Binding::Integration,
     );
     let [nx, ny] = scene.workpiece.particles;
