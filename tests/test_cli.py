@@ -138,3 +138,27 @@ def test_compare_prints_table_5_beside_ours(rkforge_bin, tmp_path):
     for rule in ("q4", "q2"):
         s = json.loads((out / "taylor_bar" / rule / "summary.json").read_text())
         assert s["integration"] == rule and s["status"] == "ok"
+
+
+def test_sweep_writes_csv_markdown_and_the_pareto_plot(rkforge_bin, tmp_path):
+    scene = tmp_path / "taylor_short.toml"
+    scene.write_text(scene_variant("taylor_bar.toml", {**COARSE, "end_s = 80.0e-6": "end_s = 10.0e-6"}))
+    out = tmp_path / "sweep"
+    proc = subprocess.run([rkforge_bin, "sweep", str(scene), "--resolution", "4x9,6x16,11x26",
+                           "--integration", "q2,scni", "--dt-safety", "0.5,0.9", "--out", str(out)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    with open(out / "sweep.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 2 * 3 * 2
+    assert {r["integration"] for r in rows} == {"q2", "scni"}
+    for r in rows:
+        assert float(r["wall_s"]) > 0 and float(r["memory_MB"]) > 0 and float(r["error_rel"]) >= 0
+    assert any(r["pareto"] == "true" for r in rows)
+    # Memory grows with the grid.
+    q2 = [r for r in rows if r["integration"] == "q2" and r["dt_safety"] == "0.5"]
+    assert float(q2[0]["memory_MB"]) < float(q2[-1]["memory_MB"])
+    assert "Reference (extrapolated" in (out / "sweep.md").read_text()
+    assert (out / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = subprocess.run([rkforge_bin, "sweep", str(scene), "--resolution", "11by26"], capture_output=True, text=True)
+    assert bad.returncode == 1 and "--resolution `11by26`" in bad.stderr

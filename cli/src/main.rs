@@ -7,6 +7,7 @@ mod compare;
 mod fmu;
 mod output;
 mod run;
+mod sweep;
 
 use clap::{Parser, Subcommand};
 use rkforge_core::{IntegrationRule, Scene};
@@ -35,6 +36,29 @@ enum Command {
     Compare(CompareArgs),
     /// Pack a scene as an FMI 2.0 Co-Simulation FMU.
     Fmu(FmuArgs),
+    /// Run a grid of resolutions, rules and time-step safety factors; error against wall time.
+    Sweep(SweepArgs),
+}
+
+#[derive(clap::Args)]
+struct SweepArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Particle grids, e.g. 11x26,21x51,41x101.
+    #[arg(long, value_delimiter = ',', required = true)]
+    resolution: Vec<String>,
+    /// Integration rules, e.g. q4,q2,scni.
+    #[arg(long, value_delimiter = ',', default_values_t = ["q4".to_string(), "q2".to_string(), "scni".to_string()])]
+    integration: Vec<String>,
+    /// Time-step safety factors (the scene's fixed step is replaced by these), e.g. 0.5,0.9.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.5])]
+    dt_safety: Vec<f64>,
+    /// Output folder (default: out/sweep_<scene name>/).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 #[derive(clap::Args)]
@@ -89,6 +113,7 @@ fn main() -> ExitCode {
         None => default_run(),
         Some(Command::Run(a)) => run_command(a),
         Some(Command::Compare(a)) => compare_command(a),
+        Some(Command::Sweep(a)) => sweep_command(a),
         Some(Command::Fmu(a)) => fmu::pack(&a.scene, &a.out)
             .map(|id| println!("wrote {} (model identifier {id})", a.out.display())),
     };
@@ -145,6 +170,45 @@ fn compare_command(a: CompareArgs) -> Result<(), String> {
     let report = compare::compare(&a.scenes, a.repeat, &out)?;
     println!("{report}");
     println!("runs and compare.md in {}", out.display());
+    Ok(())
+}
+
+fn sweep_command(a: SweepArgs) -> Result<(), String> {
+    set_threads(a.threads)?;
+    let scene = Scene::from_file(&a.scene).map_err(|e| e.to_string())?;
+    let mut grids = Vec::new();
+    for r in &a.resolution {
+        let parsed = r.split_once('x').and_then(|(x, y)| {
+            Some([
+                x.trim().parse::<usize>().ok()?,
+                y.trim().parse::<usize>().ok()?,
+            ])
+        });
+        match parsed {
+            Some(g) if g[0] >= 2 && g[1] >= 2 => grids.push(g),
+            _ => {
+                return Err(format!(
+                    "--resolution `{r}`: expected NXxNY with both at least 2, e.g. 21x51"
+                ))
+            }
+        }
+    }
+    let mut rules = Vec::new();
+    for r in &a.integration {
+        rules.push(
+            IntegrationRule::parse(r)
+                .ok_or_else(|| format!("--integration `{r}`: expected q4, q2 or scni"))?,
+        );
+    }
+    if let Some(s) = a.dt_safety.iter().find(|s| !(**s > 0.0 && **s <= 1.0)) {
+        return Err(format!("--dt-safety {s}: must lie in (0, 1]"));
+    }
+    let out = a
+        .out
+        .unwrap_or_else(|| PathBuf::from("out").join(format!("sweep_{}", scene.name)));
+    let table = sweep::sweep(&scene, &grids, &rules, &a.dt_safety, &out)?;
+    println!("{table}");
+    println!("sweep.csv, sweep.md and sweep.png in {}", out.display());
     Ok(())
 }
 

@@ -997,6 +997,27 @@ impl Simulation {
         Ok(2.0 / lambda.sqrt())
     }
 
+    /// Bytes held by the discretisation and the state: shape tables, scatter buffers,
+    /// particle and point arrays (the heap data this simulation owns, counted from the lengths
+    /// of its arrays).
+    pub fn memory_bytes(&self) -> usize {
+        let table = |t: &ShapeTable| {
+            t.offsets.len() * 4 + t.index.len() * 4 + (t.n.len() + t.dx.len() + t.dy.len()) * 8
+        };
+        let r2 = std::mem::size_of::<[Real; 2]>();
+        let np = self.ref_pos.len();
+        let npts = self.points.positions.len();
+        table(&self.pt)
+            + table(&self.nodal)
+            + self.scatter.buf.len() * r2
+            + (self.scatter.cover.len() + self.scatter.cover_offsets.len() + self.scatter.lo.len())
+                * 4
+            + np * (5 * r2 + 8)
+            + npts
+                * (r2 + 3 * 8 + std::mem::size_of::<PointState>() + std::mem::size_of::<PointOut>())
+            + self.boundary.len() * 4
+    }
+
     /// Critical step measured on the undeformed discretisation (s).
     pub fn critical_dt0(&self) -> Real {
         self.critical_dt0

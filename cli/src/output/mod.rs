@@ -300,6 +300,7 @@ pub fn summary(sim: &Simulation, wall_s: f64, error: Option<&str>) -> Value {
         "end_time_s": sim.time(),
         "wall_s": wall_s,
         "threads": rayon::current_num_threads(),
+        "memory_bytes": sim.memory_bytes(),
         "time_step": {
             "fixed_s": scene.time.dt_s,
             "dt_safety": scene.time.dt_safety,
