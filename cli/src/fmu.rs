@@ -52,7 +52,7 @@ fn documentation(scene: &Scene, vars: &[rkforge_model_description::Variable]) ->
                 v.name,
                 v.causality,
                 v.unit.unwrap_or(""),
-                rkforge_fmu_start(v),
+                v.start_text(),
                 v.description
             )
         })
@@ -69,14 +69,6 @@ fn documentation(scene: &Scene, vars: &[rkforge_model_description::Variable]) ->
         name = scene.name,
         desc = scene.description
     )
-}
-
-fn rkforge_fmu_start(v: &rkforge_model_description::Variable) -> String {
-    match &v.kind {
-        rkforge_model_description::Kind::Real(s) => s.map_or(String::new(), |x| x.to_string()),
-        rkforge_model_description::Kind::Integer(s) => s.map_or(String::new(), |x| x.to_string()),
-        rkforge_model_description::Kind::String(s) => s.clone().unwrap_or_default(),
-    }
 }
 
 /// Write the FMU of the scene file `scene_path` to `out`; returns the model identifier.

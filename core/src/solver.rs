@@ -548,6 +548,18 @@ impl Simulation {
         t.state.command = Some(v);
         Ok(())
     }
+    /// Total mass of the workpiece (kg; whole ring or per depth).
+    pub fn total_mass(&self) -> Real {
+        self.mass.iter().sum()
+    }
+    /// Momentum `sum m_I v_I` (kg m/s) at the last half step.
+    pub fn momentum(&self) -> [Real; 2] {
+        self.st
+            .v
+            .iter()
+            .zip(&self.mass)
+            .fold([0.0; 2], |a, (v, m)| [a[0] + m * v[0], a[1] + m * v[1]])
+    }
     /// Largest equivalent plastic strain over the integration points.
     pub fn max_plastic_strain(&self) -> Real {
         self.st.points.iter().map(|s| s.eps_p).fold(0.0, Real::max)

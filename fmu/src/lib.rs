@@ -8,7 +8,7 @@
 pub mod ffi;
 
 use rkforge_core::{Error, IntegrationRule, Kinematics, Result, Scene, Simulation, State};
-use rkforge_model_description::{variable_table, xml, Binding, Causality, Kind, Variable};
+use rkforge_model_description::{variable_table, xml, Binding, Causality, Variable};
 use serde::{Deserialize, Serialize};
 
 /// Where an instance is in the FMI 2.0 Co-Simulation state machine.
@@ -450,15 +450,6 @@ impl Snapshot {
     pub fn from_bytes(b: &[u8]) -> Result<Snapshot> {
         serde_json::from_slice(b)
             .map_err(|e| Error::State(format!("cannot read the serialized FMU state: {e}")))
-    }
-}
-
-/// The value of a variable's start attribute as text, for logs and documentation.
-pub fn start_text(v: &Variable) -> String {
-    match &v.kind {
-        Kind::Real(s) => s.map_or(String::new(), |x| x.to_string()),
-        Kind::Integer(s) => s.map_or(String::new(), |x| x.to_string()),
-        Kind::String(s) => s.clone().unwrap_or_default(),
     }
 }
 

@@ -96,6 +96,17 @@ pub struct Variable {
     pub binding: Binding,
 }
 
+impl Variable {
+    /// The start value as text (empty when there is none).
+    pub fn start_text(&self) -> String {
+        match &self.kind {
+            Kind::Real(s) => s.map_or(String::new(), |x| x.to_string()),
+            Kind::Integer(s) => s.map_or(String::new(), |x| x.to_string()),
+            Kind::String(s) => s.clone().unwrap_or_default(),
+        }
+    }
+}
+
 /// The variable table of a scene.
 pub fn variable_table(scene: &Scene) -> Vec<Variable> {
     let mut t = Vec::new();
