@@ -1,5 +1,8 @@
 //! The ROS 2 interface of an rkforge scene: which topics a run publishes and subscribes to,
-//! with their standard message types, under a namespace validated by the ROS 2 naming rules.
+//! with their standard message types, under a namespace validated by the ROS 2 naming rules;
+//! [`msgs`] holds the standard message definitions (schema texts) and their CDR encoding.
+
+pub mod msgs;
 
 use rkforge_core::scene::{Motion, Scene};
 
