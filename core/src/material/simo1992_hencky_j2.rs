@@ -22,8 +22,11 @@
 //! stretch `r / R` in axisymmetry; `b_e` stays block diagonal (in-plane 2x2 and `33`).
 
 use super::Hardening;
-use crate::math::{sym_eigen2, Real};
+use crate::math::{sym_spectral2, Real};
 use serde::{Deserialize, Serialize};
+
+/// `sqrt(6)`: the Mises stress of a deviatoric logarithmic strain `e` is `sqrt(6) G |e|`.
+const SQRT_6: Real = 2.449_489_742_783_178;
 
 /// Elastic constants and hardening law of a Hencky J2 material.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -93,6 +96,21 @@ impl HenckyJ2 {
         f33: Real,
         state: &mut PointState,
     ) -> Result<StressUpdate, String> {
+        self.update_with_yield(f, f33, state, self.hardening.flow_stress(state.eps_p))
+    }
+
+    /// [`HenckyJ2::update`] with the current flow stress `sigma_y(eps_p)` (Pa) supplied by
+    /// the caller, who caches it per point so an elastic step never evaluates the hardening
+    /// law (a `powf` for the power law). Written for latency: three divisions and two square
+    /// roots per point, three logarithms, and three exponentials only when yielding.
+    #[inline]
+    pub fn update_with_yield(
+        &self,
+        f: [Real; 4],
+        f33: Real,
+        state: &mut PointState,
+        flow_stress: Real,
+    ) -> Result<StressUpdate, String> {
         let (k, g) = (self.bulk, self.shear);
         let det2 = f[0] * f[3] - f[1] * f[2];
         let jac = det2 * f33;
@@ -101,6 +119,15 @@ impl HenckyJ2 {
                 "deformation gradient inverted or non-finite (det F = {jac:.3e}, F33 = {f33:.3e})"
             ));
         }
+        let inv_det2 = 1.0 / det2;
+        let inv33 = 1.0 / f33;
+        // F^{-1} = [[F22, -F12], [-F21, F11]] / det2.
+        let (i11, i12, i21, i22) = (
+            f[3] * inv_det2,
+            -f[1] * inv_det2,
+            -f[2] * inv_det2,
+            f[0] * inv_det2,
+        );
         let [c11, c12, c22, c33] = state.cp_inv;
         // Trial b_e = F C_p^{-1} F^T (in-plane block) and its 33 entry.
         let fc11 = f[0] * c11 + f[1] * c12;
@@ -111,7 +138,7 @@ impl HenckyJ2 {
         let b12 = fc11 * f[2] + fc12 * f[3];
         let b22 = fc21 * f[2] + fc22 * f[3];
         let b33 = f33 * f33 * c33;
-        let (l1, l2, ct, st) = sym_eigen2(b11, b12, b22);
+        let (l1, l2, [p11, p12, p22]) = sym_spectral2(b11, b12, b22);
         if !(l2 > 0.0 && b33 > 0.0) {
             return Err(format!(
                 "elastic stretch not positive (b_e eigenvalues {l1:.3e}, {l2:.3e}, {b33:.3e})"
@@ -119,17 +146,13 @@ impl HenckyJ2 {
         }
         let eps = [0.5 * l1.ln(), 0.5 * l2.ln(), 0.5 * b33.ln()];
         let theta = eps[0] + eps[1] + eps[2];
-        let mut e = [
-            eps[0] - theta / 3.0,
-            eps[1] - theta / 3.0,
-            eps[2] - theta / 3.0,
-        ];
-        let enorm = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
-        let q_trial = 6.0_f64.sqrt() * g * enorm;
-        let sy = self.hardening.flow_stress(state.eps_p);
+        let mean = theta * (1.0 / 3.0);
+        let mut e = [eps[0] - mean, eps[1] - mean, eps[2] - mean];
+        let e2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+        let q_trial = SQRT_6 * g * e2.sqrt();
         let mut q = q_trial;
-        if q_trial > sy {
-            let dgamma = self.return_map(q_trial, state.eps_p)?;
+        if q_trial > flow_stress {
+            let dgamma = self.return_map(q_trial, state.eps_p, flow_stress)?;
             let scale = 1.0 - 3.0 * g * dgamma / q_trial;
             for ei in e.iter_mut() {
                 *ei *= scale;
@@ -137,14 +160,12 @@ impl HenckyJ2 {
             q = q_trial * scale;
             state.eps_p += dgamma;
             // b_e = sum exp(2 eps_i) n_i n_i^T, then C_p^{-1} = F^{-1} b_e F^{-T}.
-            let be1 = (2.0 * (theta / 3.0 + e[0])).exp();
-            let be2 = (2.0 * (theta / 3.0 + e[1])).exp();
-            let be3 = (2.0 * (theta / 3.0 + e[2])).exp();
-            let n11 = be1 * ct * ct + be2 * st * st;
-            let n12 = (be1 - be2) * ct * st;
-            let n22 = be1 * st * st + be2 * ct * ct;
-            let inv = 1.0 / det2;
-            let (i11, i12, i21, i22) = (f[3] * inv, -f[1] * inv, -f[2] * inv, f[0] * inv);
+            let be1 = (2.0 * (mean + e[0])).exp();
+            let be2 = (2.0 * (mean + e[1])).exp();
+            let be3 = (2.0 * (mean + e[2])).exp();
+            let n11 = be1 * p11 + be2 * p22;
+            let n12 = (be1 - be2) * p12;
+            let n22 = be1 * p22 + be2 * p11;
             let a11 = i11 * n11 + i12 * n12;
             let a12 = i11 * n12 + i12 * n22;
             let a21 = i21 * n11 + i22 * n12;
@@ -153,48 +174,45 @@ impl HenckyJ2 {
                 a11 * i11 + a12 * i12,
                 a11 * i21 + a12 * i22,
                 a21 * i21 + a22 * i22,
-                be3 / (f33 * f33),
+                be3 * inv33 * inv33,
             ];
         }
-        let tau1 = k * theta + 2.0 * g * e[0];
-        let tau2 = k * theta + 2.0 * g * e[1];
-        let tau33 = k * theta + 2.0 * g * e[2];
-        let t11 = tau1 * ct * ct + tau2 * st * st;
-        let t12 = (tau1 - tau2) * ct * st;
-        let t22 = tau1 * st * st + tau2 * ct * ct;
-        // P = tau F^{-T}; F^{-T} = [[F22, -F21], [-F12, F11]] / det.
-        let inv = 1.0 / det2;
-        let (it11, it12, it21, it22) = (f[3] * inv, -f[2] * inv, -f[1] * inv, f[0] * inv);
+        let kt = k * theta;
+        let tau1 = kt + 2.0 * g * e[0];
+        let tau2 = kt + 2.0 * g * e[1];
+        let tau33 = kt + 2.0 * g * e[2];
+        let t11 = tau1 * p11 + tau2 * p22;
+        let t12 = (tau1 - tau2) * p12;
+        let t22 = tau1 * p22 + tau2 * p11;
+        // P = tau F^{-T}, F^{-T} = (F^{-1})^T.
         let piola = [
-            t11 * it11 + t12 * it21,
-            t11 * it12 + t12 * it22,
-            t12 * it11 + t22 * it21,
-            t12 * it12 + t22 * it22,
-            tau33 / f33,
+            t11 * i11 + t12 * i12,
+            t11 * i21 + t12 * i22,
+            t12 * i11 + t22 * i12,
+            t12 * i21 + t22 * i22,
+            tau33 * inv33,
         ];
         Ok(StressUpdate {
             piola,
             kirchhoff: [t11, t12, t22, tau33],
             jacobian: jac,
-            von_mises: q / jac,
-            elastic_energy: 0.5 * k * theta * theta + g * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]),
+            von_mises: q * inv_det2 * inv33,
+            elastic_energy: 0.5 * kt * theta + g * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]),
         })
     }
 
     /// Plastic multiplier `dgamma >= 0` from `q_trial - 3 G dgamma - sigma_y(eps_p + dgamma) = 0`:
     /// closed form for linear hardening, safeguarded Newton for the power law.
-    fn return_map(&self, q_trial: Real, eps_p: Real) -> Result<Real, String> {
+    /// `sy` is the flow stress at `eps_p` (Pa).
+    fn return_map(&self, q_trial: Real, eps_p: Real, sy: Real) -> Result<Real, String> {
         let g3 = 3.0 * self.shear;
         match self.hardening {
-            Hardening::Linear { modulus_pa, .. } => {
-                Ok((q_trial - self.hardening.flow_stress(eps_p)) / (g3 + modulus_pa))
-            }
+            Hardening::Linear { modulus_pa, .. } => Ok((q_trial - sy) / (g3 + modulus_pa)),
             Hardening::Power { .. } => {
                 // The residual is decreasing and concave in dgamma; Newton from below
                 // converges monotonically. Bracket [0, q_trial / 3G] for safety.
                 let (mut lo, mut hi) = (0.0, q_trial / g3);
-                let mut x = (q_trial - self.hardening.flow_stress(eps_p))
-                    / (g3 + self.hardening.slope(eps_p));
+                let mut x = (q_trial - sy) / (g3 + self.hardening.slope(eps_p));
                 for _ in 0..50 {
                     let r = q_trial - g3 * x - self.hardening.flow_stress(eps_p + x);
                     if r > 0.0 {
