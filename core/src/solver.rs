@@ -109,8 +109,10 @@ impl Energy {
 /// Wall time spent in each stage.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StageTimes {
-    /// Neighbours, shape functions, masses, constraints.
+    /// Whole setup: particles, shape functions, masses, constraints, critical step.
     pub setup: Duration,
+    /// Part of `setup`: neighbour search and RK shape functions (and SCNI smoothing).
+    pub shape_functions: Duration,
     /// Deformation gradient and stress update at the points.
     pub stress: Duration,
     /// Internal force gather.
@@ -458,6 +460,7 @@ impl Simulation {
             scene.discretization.support[0] * h[0],
             scene.discretization.support[1] * h[1],
         ];
+        let t_shapes = Instant::now();
         let cloud = KernelCloud::new(ref_pos.clone(), volumes, support);
         let (points, pt) = match scene.discretization.integration {
             IntegrationRule::Scni => {
@@ -474,6 +477,7 @@ impl Simulation {
             }
         };
         let nodal = cloud.shape_table(&ref_pos, &|j| format!("particle {j}"))?;
+        let shape_functions = t_shapes.elapsed();
         let (weights, inv_radius): (Vec<Real>, Vec<Real>) = points
             .positions
             .iter()
@@ -608,6 +612,7 @@ impl Simulation {
         sim.stress_stage()?;
         sim.times = StageTimes {
             setup: t0.elapsed(),
+            shape_functions,
             ..Default::default()
         };
         if let Some(dt) = scene.time.dt_s {

@@ -327,6 +327,7 @@ pub fn summary(sim: &Simulation, wall_s: f64, error: Option<&str>) -> Value {
         },
         "stage_seconds": {
             "setup": times.setup.as_secs_f64(),
+            "shape_functions": times.shape_functions.as_secs_f64(),
             "stress": times.stress.as_secs_f64(),
             "internal_force": times.internal_force.as_secs_f64(),
             "contact": times.contact.as_secs_f64(),
