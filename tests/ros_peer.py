@@ -11,6 +11,7 @@ import cyclonedds.idl.types as t
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
+from cyclonedds.internal import InvalidSample
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
@@ -109,6 +110,12 @@ class Peer:
 
     def writer(self, topic, cls):
         return DataWriter(self.dp, Topic(self.dp, "rt" + topic, cls), qos=qos(True))
+
+
+def take(reader, n=50):
+    """Valid samples only: Cyclone also hands over "invalid samples" that carry no data, only
+    an instance state change (e.g. when the writer of the node goes away)."""
+    return [s for s in reader.take(N=n) if not isinstance(s, InvalidSample)]
 
 
 def stamp_ns(header):

@@ -166,7 +166,10 @@ fn main() -> Result<(), String> {
                 eprintln!("warning: command {v} m/s not sent (send window full)");
             }
         }
-        println!("t {t:e} s stroke {stroke:e} m force {:e} N -> {v:e} m/s", -effort);
+        println!(
+            "t {t:e} s stroke {stroke:e} m force {:e} N -> {v:e} m/s",
+            -effort
+        );
         last = Some((stamp, t));
     }
     Ok(())

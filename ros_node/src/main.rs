@@ -18,6 +18,10 @@ use std::time::{Duration, Instant};
 /// How often the main thread looks for commands and signals while it waits.
 const POLL: Duration = Duration::from_millis(1);
 
+/// How long the node stays up after its last sample, so that DDS can deliver (and repeat, for
+/// reliable readers) the last messages before the participant goes away.
+const LINGER: Duration = Duration::from_millis(300);
+
 /// In lockstep, how often the current sample is published again while the node waits for
 /// commands (a controller that joined late then still sees it; controllers answer each
 /// stamp once).
@@ -155,6 +159,7 @@ fn run(a: &Args) -> Result<(), String> {
         let _ = to_sim.send(ToSim::Stop);
         r
     });
+    std::thread::sleep(LINGER);
     let finished = match recorder.map(Recorder::finish).transpose() {
         Ok(p) => p,
         Err(e) => return Err(outcome.err().map_or(e.clone(), |o| format!("{o}; {e}"))),
