@@ -5,7 +5,8 @@
 //! The force resisting the stroke is minus the effort (the effort is the force of the
 //! workpiece along the tool's axis, negative while the tool presses). The command is a PI law
 //! on the relative force error, clamped to `[0, max velocity]`:
-//! `v = v_max * clamp(kp * e + ki * integral(e dt), 0, 1)` with `e = (F_set - F) / F_set`.
+//! `v = v_max * clamp(kp * e + ki * integral(e dt), 0, 1)` with `e = (F_set - F) / F_set`,
+//! the integral frozen while the output is at a limit.
 //! It answers each joint state (each stamp) once, so it works with `rkforge-ros --lockstep`,
 //! which republishes a sample while it waits for the command.
 //!
@@ -159,7 +160,12 @@ fn main() -> Result<(), String> {
         let t = f64::from(stamp.sec) + 1e-9 * f64::from(stamp.nanosec);
         let dt = last.map_or(0.0, |(_, t0)| t - t0);
         let error = (a.force + effort) / a.force;
-        integral += error * dt;
+        // Conditional integration (anti-windup): integrate only while the output is not
+        // held at a limit.
+        let trial = a.kp * error + a.ki * (integral + error * dt);
+        if (0.0..=1.0).contains(&trial) {
+            integral += error * dt;
+        }
         let v = a.max_velocity * (a.kp * error + a.ki * integral).clamp(0.0, 1.0);
         for p in &commands {
             if p.publish(Float64Wire { data: v }).is_err() {
