@@ -116,10 +116,10 @@ fn run(a: &Args) -> Result<(), String> {
         Some(r) => 1.0 / r,
         None => scene.output.history_interval_s.unwrap_or(end / 200.0),
     };
-    let samples = ((end / interval).round() as u64).max(1);
-    let schedule: Vec<f64> = (1..=samples)
-        .map(|k| (k as f64 * interval).min(end))
-        .collect();
+    let schedule = schedule(end, interval)?;
+    let samples = schedule.len();
+    // Wall time from scene setup on, as `rkforge run` counts it in summary.json.
+    let wall = Instant::now();
     let mut sim = Simulation::new(&scene).map_err(|e| e.to_string())?;
     let mut node = Node::new(domain, &a.namespace, &scene)?;
     let mut recorder = match &a.record {
@@ -139,7 +139,6 @@ fn run(a: &Args) -> Result<(), String> {
     );
     let (to_sim, sim_rx) = mpsc::channel();
     let (sim_tx, from_sim) = mpsc::channel();
-    let wall = Instant::now();
     let outcome = std::thread::scope(|s| {
         let sim = &mut sim;
         let schedule = &schedule;
@@ -159,6 +158,7 @@ fn run(a: &Args) -> Result<(), String> {
         let _ = to_sim.send(ToSim::Stop);
         r
     });
+    let loop_wall = wall.elapsed().as_secs_f64();
     std::thread::sleep(LINGER);
     let finished = match recorder.map(Recorder::finish).transpose() {
         Ok(p) => p,
@@ -167,9 +167,9 @@ fn run(a: &Args) -> Result<(), String> {
     let published = outcome?;
     let dropped = node.dropped();
     eprintln!(
-        "rkforge-ros: published {published} samples up to t = {:e} s in {:.2} s wall{}{}",
+        "rkforge-ros: published {published} samples up to t = {:e} s in {:.3} s wall{}{}",
         sim.time(),
-        wall.elapsed().as_secs_f64(),
+        loop_wall,
         if dropped > 0 {
             format!(", {dropped} messages dropped (send window full)")
         } else {
@@ -186,6 +186,35 @@ fn run(a: &Args) -> Result<(), String> {
         eprintln!("rkforge-ros: stopped by a signal");
     }
     Ok(())
+}
+
+/// Most samples a run publishes.
+const MAX_SAMPLES: f64 = 1e7;
+
+/// Sample times after t = 0: `k * interval` as `rkforge run` samples its history (the count
+/// rounded when `end / interval` is a whole number up to rounding errors), then `end` if the
+/// last one falls short of it.
+fn schedule(end: f64, interval: f64) -> Result<Vec<f64>, String> {
+    let ratio = end / interval;
+    let n = if (ratio - ratio.round()).abs() < 1e-9 * ratio.max(1.0) {
+        ratio.round()
+    } else {
+        ratio.floor()
+    };
+    if n > MAX_SAMPLES {
+        return Err(format!(
+            "--publish-rate {:e} Hz gives {n:e} samples over {end:e} s; at most {MAX_SAMPLES:e}",
+            1.0 / interval
+        ));
+    }
+    // n is a whole number in [0, 1e7]: the cast is exact.
+    let mut times: Vec<f64> = (1..=n as u64)
+        .map(|k| (k as f64 * interval).min(end))
+        .collect();
+    if times.last().is_none_or(|&t| t < end * (1.0 - 1e-12)) {
+        times.push(end);
+    }
+    Ok(times)
 }
 
 /// The simulation thread: a sample at t = 0 and at each time of `schedule`, stepping as
@@ -355,5 +384,24 @@ impl MainLoop<'_> {
             }
         }
         Ok(true)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::schedule;
+
+    #[test]
+    fn samples_fall_on_history_rows_and_reach_the_end() {
+        let s = schedule(0.003, 0.15e-3).unwrap();
+        assert_eq!(s.len(), 20);
+        assert_eq!(s[0], 0.15e-3);
+        // 20 * 0.15e-3 as history.csv's last row has it, one rounding below 0.003.
+        assert_eq!(*s.last().unwrap(), 20.0 * 0.15e-3);
+        assert!(0.003 - s.last().unwrap() < 1e-18);
+        assert_eq!(schedule(1.0, 0.4).unwrap(), [0.4, 0.8, 1.0]);
+        assert_eq!(schedule(1.0, 2.0).unwrap(), [1.0]);
+        let e = schedule(1.0, 1e-9).unwrap_err();
+        assert!(e.contains("at most 1e7"), "{e}");
     }
 }
