@@ -12,9 +12,11 @@ Variants, alternated over N rounds so that drifts in machine load hit all of the
   ros-end   rkforge-ros SCENE --publish-rate 1/end_s: the same node publishing only at t = 0
             and at the end, which isolates the cost of publishing from the node's other costs
 
-Two figures per run: the process's wall time (includes DDS start-up and the node's 300 ms
-linger after the last sample), and the simulation loop's wall time (summary.json's wall_s
-for rkforge run; the "in X s wall" the node prints, from scene setup to the last sample).
+Three figures per run: the process's wall time (includes DDS start-up and the node's 300 ms
+linger after the last sample), the simulation loop's wall time (summary.json's wall_s for
+rkforge run; the "in X s wall" the node prints, from scene setup to the last sample), and the
+process's CPU time (user + system over all its threads, from wait4), which a busy machine
+disturbs least. Ratios are to the median of `run`.
 
   scripts/bench_ros.py [--runs 5] [--scene scenes/taylor_bar.toml] [--peer] [--threads N]
 """
@@ -53,12 +55,18 @@ while True:
 
 
 def timed(cmd, env=None):
+    """Run `cmd`: its wall time, CPU time (user + system, all threads) and stderr."""
     t0 = time.perf_counter()
-    p = subprocess.run(cmd, env=env, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
+    with tempfile.TemporaryFile("w+") as err:
+        p = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=err, text=True)
+        _, status, usage = os.wait4(p.pid, 0)
+        p.returncode = os.waitstatus_to_exitcode(status)
+        wall = time.perf_counter() - t0
+        err.seek(0)
+        text = err.read()
     if p.returncode != 0:
-        sys.exit(f"{' '.join(map(str, cmd))} failed:\n{p.stderr}")
-    return wall, p
+        sys.exit(f"{' '.join(map(str, cmd))} failed:\n{text}")
+    return wall, usage.ru_utime + usage.ru_stime, text
 
 
 def main():
@@ -83,30 +91,35 @@ def main():
     variants = ["run", "mcap", "ros-end", "ros+peer" if a.peer else "ros"]
     proc = {v: [] for v in variants}
     loop = {v: [] for v in variants}
+    cpu = {v: [] for v in variants}
     try:
         for _ in range(a.runs):
             for v in variants:
                 if v in ("run", "mcap"):
                     extra = ["--mcap", str(out / "b.mcap")] if v == "mcap" else []
-                    w, _ = timed([BIN / "rkforge", "run", a.scene, "--no-frames", "--quiet",
-                                  "--out", str(out / v), *threads, *extra])
+                    w, c, _ = timed([BIN / "rkforge", "run", a.scene, "--no-frames", "--quiet",
+                                     "--out", str(out / v), *threads, *extra])
                     s = json.loads((out / v / "summary.json").read_text())
                     loop[v].append(s["wall_s"])
                 else:
                     rate = ["--publish-rate", repr(1.0 / end)] if v == "ros-end" else []
-                    w, p = timed([BIN / "rkforge-ros", a.scene, *threads, *rate], env=env)
-                    loop[v].append(float(re.search(r" in ([0-9.]+) s wall", p.stderr)[1]))
+                    w, c, err = timed([BIN / "rkforge-ros", a.scene, *threads, *rate], env=env)
+                    loop[v].append(float(re.search(r" in ([0-9.]+) s wall", err)[1]))
                 proc[v].append(w)
+                cpu[v].append(c)
     finally:
         if peer:
             peer.kill()
     print(f"scene {a.scene}, {a.runs} rounds, threads {a.threads or 'all'}, medians (min-max):")
-    base_p, base_l = statistics.median(proc["run"]), statistics.median(loop["run"])
+    base = {k: statistics.median(d["run"]) for k, d in
+            (("proc", proc), ("loop", loop), ("cpu", cpu))}
     for v in variants:
-        mp, ml = statistics.median(proc[v]), statistics.median(loop[v])
-        print(f"  {v:9s} process {mp:7.3f} s ({min(proc[v]):.3f}-{max(proc[v]):.3f}), ratio "
-              f"{mp / base_p:.3f} | loop {ml:7.3f} s ({min(loop[v]):.3f}-{max(loop[v]):.3f}), "
-              f"ratio {ml / base_l:.3f}")
+        parts = []
+        for k, d in (("process wall", proc), ("loop wall", loop), ("process CPU", cpu)):
+            m = statistics.median(d[v])
+            key = {"process wall": "proc", "loop wall": "loop", "process CPU": "cpu"}[k]
+            parts.append(f"{k} {m:6.3f} s ({min(d[v]):.3f}-{max(d[v]):.3f}) x{m / base[key]:.3f}")
+        print(f"  {v:9s} " + " | ".join(parts))
 
 
 if __name__ == "__main__":
