@@ -118,6 +118,12 @@ def take(reader, n=50):
     return [s for s in reader.take(N=n) if not isinstance(s, InvalidSample)]
 
 
+def wait_matched(writer, timeout=20):
+    """Wait until the writer has found the node's reader: DDS topics are volatile, so what is
+    written before that is lost."""
+    wait_until(lambda: writer.get_matched_subscriptions(), timeout, "the node's command reader")
+
+
 def stamp_ns(header):
     return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
 

@@ -147,17 +147,21 @@ def test_the_node_records_the_same_bytes_as_rkforge_run(recorded, rkforge_ros_bi
 
 
 def test_sigint_finishes_the_file_of_rkforge_run(rkforge_bin, tmp_path):
-    scene = small_block(tmp_path, end="0.015", particles="[21, 21]")
+    scene = small_block(tmp_path, end="0.03", particles="[21, 21]")
     path = tmp_path / "int.mcap"
     p = subprocess.Popen([rkforge_bin, "run", str(scene), "--no-frames", "--quiet",
                           "--out", str(tmp_path / "out"), "--mcap", str(path)],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(1.0)
+    # Interrupt once the run is under way (the whole file is about 2 MB).
+    t0 = time.monotonic()
+    while (not path.exists() or path.stat().st_size < 200_000) and time.monotonic() - t0 < 30:
+        assert p.poll() is None, "the run ended before it could be interrupted"
+        time.sleep(0.01)
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=30)
     assert p.returncode == 1 and "interrupted by a signal" in err, err
     rows = history(tmp_path / "out" / "history.csv")
-    assert 1 < len(rows) < 101, "stopped midway"
+    assert 1 < len(rows) < 201, "stopped midway"
     with open(path, "rb") as f:
         summary = make_reader(f).get_summary()
     assert summary.statistics.message_count == len(rows) * len(TOPICS)

@@ -8,7 +8,8 @@ import time
 import pytest
 
 from ros_peer import (Clock, Float64, JointState, Peer, PointCloud2, WrenchStamped, run_history,
-                      small_block, stamp_ns, start_node, take, wait_until)
+                      small_block, stamp_ns, start_node, take, wait_matched,
+                      wait_until)
 
 NS = "/rkforge"
 
@@ -42,6 +43,7 @@ class LockstepController:
                     continue  # republished while the node waits
                 self.states[s] = js
                 for name, v in zip(["top", "bottom"], self.command(len(self.states) - 1, js)):
+                    wait_matched(self.cmd[name])
                     self.cmd[name].write(Float64(v))
             for n, r in self.wrenches.items():
                 for w in take(r, 50):
@@ -145,10 +147,12 @@ def test_bad_commands_are_ignored_and_a_burst_does_not_stall(rkforge_ros_bin, tm
     t0 = time.monotonic()
     wait_until(lambda: take(tools, 10) or node.poll() is not None, 20, "a joint state")
     assert node.poll() is None, "the run ended before the peer could join"
-    for v in [math.nan, math.inf, -math.inf]:
-        cmd.write(Float64(v))
+    wait_matched(cmd)
     for _ in range(2000):
         cmd.write(Float64(3.0))
+    # Last, so that they are among the samples a reliable writer keeps (keep last 10).
+    for v in [math.nan, math.inf, -math.inf]:
+        cmd.write(Float64(v))
     # The peer goes away in the middle of the run.
     del cmd, tools, peer
     _, err = node.communicate(timeout=30)
@@ -169,6 +173,7 @@ def test_the_stroke_of_a_paced_run_follows_a_command(rkforge_ros_bin, tmp_path):
     got = []
     wait_until(lambda: got.extend(take(tools, 10)) or got or node.poll() is not None, 20,
                "a joint state")
+    wait_matched(cmd)
     cmd.write(Float64(2.5))
     while node.poll() is None:
         got.extend(take(tools, 10))
