@@ -7,8 +7,8 @@
 //! on the relative force error, clamped to `[0, max velocity]`:
 //! `v = v_max * clamp(kp * e + ki * integral(e dt), 0, 1)` with `e = (F_set - F) / F_set`,
 //! the integral frozen while the output is at a limit.
-//! It answers each joint state (each stamp) once, so it works with `rkforge-ros --lockstep`,
-//! which republishes a sample while it waits for the command.
+//! It answers each joint state (each stamp) once, so it works with `rkforge-ros --lockstep`;
+//! a sample the node republishes (no answer came within 250 ms) gets the same answer again.
 //!
 //! ```text
 //! ROS_DOMAIN_ID=7 rkforge-ros scenes/block_forging.toml --lockstep &
@@ -18,7 +18,7 @@
 
 use clap::Parser;
 use rkforge_ros::dds::{domain_id_from_env, Float64Wire};
-use ros2_client::dds::Context;
+use ros2_client::dds::{Context, Publisher};
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{ContextOptions, MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 use serde::Deserialize;
@@ -80,6 +80,15 @@ struct JointState {
     effort: Vec<f64>,
 }
 
+/// Publish velocity `v` (m/s) on every command topic.
+fn send(commands: &[Publisher<Float64Wire>], v: f64) {
+    for p in commands {
+        if p.publish(Float64Wire { data: v }).is_err() {
+            eprintln!("warning: command {v} m/s not sent (send window full)");
+        }
+    }
+}
+
 fn main() -> Result<(), String> {
     let a = Args::parse();
     if !(a.force.is_finite() && a.force > 0.0) {
@@ -135,7 +144,7 @@ fn main() -> Result<(), String> {
         "force_controller: holding {} N on {}/{} (domain {domain})",
         a.force, a.namespace, a.tool
     );
-    let mut last: Option<(Time, f64)> = None;
+    let mut last: Option<(Time, f64, f64)> = None;
     let mut integral = 0.0;
     let mut seen = Instant::now();
     while !stop.load(Ordering::SeqCst) {
@@ -148,8 +157,14 @@ fn main() -> Result<(), String> {
         };
         seen = Instant::now();
         let stamp = js.header.stamp;
-        if last.is_some_and(|(s, _)| s == stamp) {
-            continue; // a republished sample: already answered
+        if let Some((s, _, v)) = last {
+            if s == stamp {
+                // The node republishes a sample only when no answer came within 250 ms: the
+                // answer was lost (e.g. sent before discovery finished). Send it again; the
+                // law's state does not advance.
+                send(&commands, v);
+                continue;
+            }
         }
         let Some(k) = js.name.iter().position(|n| *n == a.tool) else {
             return Err(format!("no tool `{}` in {}/tools", a.tool, a.namespace));
@@ -158,7 +173,7 @@ fn main() -> Result<(), String> {
             return Err(format!("joint state without effort for `{}`", a.tool));
         };
         let t = f64::from(stamp.sec) + 1e-9 * f64::from(stamp.nanosec);
-        let dt = last.map_or(0.0, |(_, t0)| t - t0);
+        let dt = last.map_or(0.0, |(_, t0, _)| t - t0);
         let error = (a.force + effort) / a.force;
         // Conditional integration (anti-windup): integrate only while the output is not
         // held at a limit.
@@ -167,16 +182,12 @@ fn main() -> Result<(), String> {
             integral += error * dt;
         }
         let v = a.max_velocity * (a.kp * error + a.ki * integral).clamp(0.0, 1.0);
-        for p in &commands {
-            if p.publish(Float64Wire { data: v }).is_err() {
-                eprintln!("warning: command {v} m/s not sent (send window full)");
-            }
-        }
+        send(&commands, v);
         println!(
             "t {t:e} s stroke {stroke:e} m force {:e} N -> {v:e} m/s",
             -effort
         );
-        last = Some((stamp, t));
+        last = Some((stamp, t, v));
     }
     Ok(())
 }
