@@ -25,3 +25,24 @@ def scene_variant(src: str, replacements: dict) -> str:
         assert text.count(old) == 1, f"{old!r} not found exactly once in {src}"
         text = text.replace(old, new)
     return text
+
+
+@pytest.fixture(scope="session")
+def rkforge_ros_bin():
+    """Path to the release `rkforge-ros` binary (built by tests/run.sh, or here if missing)."""
+    path = os.environ.get("RKFORGE_ROS_BIN")
+    if path and pathlib.Path(path).is_file():
+        return path
+    subprocess.run(["cargo", "build", "--release", "-p", "rkforge-ros", "--bins", "--examples"],
+                   cwd=ROOT, check=True)
+    return str(ROOT / "target" / "release" / "rkforge-ros")
+
+
+@pytest.fixture(scope="session")
+def force_controller_bin(rkforge_ros_bin):
+    """Path to the release build of the example `force_controller`."""
+    path = pathlib.Path(rkforge_ros_bin).parent / "examples" / "force_controller"
+    if not path.is_file():
+        subprocess.run(["cargo", "build", "--release", "-p", "rkforge-ros", "--examples"],
+                       cwd=ROOT, check=True)
+    return str(path)

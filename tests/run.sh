@@ -13,6 +13,7 @@ cargo clippy --workspace --all-targets --release -- -D warnings
 echo "== cargo test"
 cargo test --workspace --release
 cargo build --release --workspace
+cargo build --release -p rkforge-ros --examples
 
 echo "== python environment"
 if [ ! -x .venv/bin/python ]; then
@@ -25,4 +26,5 @@ fi
 
 echo "== pytest"
 export RKFORGE_BIN="$PWD/target/release/rkforge"
+export RKFORGE_ROS_BIN="$PWD/target/release/rkforge-ros"
 .venv/bin/python -m pytest -q tests

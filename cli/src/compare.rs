@@ -78,6 +78,7 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
                     out: out.join(&scene.name).join(rule.name()),
                     progress: false,
                     frames: false,
+                    mcap: None,
                 };
                 let report = run::run(&s, &opts)
                     .map_err(|e| format!("{} ({}): {e}", scene.name, rule.name()))?;

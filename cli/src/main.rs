@@ -105,6 +105,10 @@ struct RunArgs {
     /// Skip VTK frames and PNG plots (summary and history only).
     #[arg(long)]
     no_frames: bool,
+    /// Record the ROS 2 topics of `rkforge-ros` (namespace /rkforge) at every history
+    /// sample to this MCAP file, without DDS.
+    #[arg(long)]
+    mcap: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -152,6 +156,7 @@ fn run_command(a: RunArgs) -> Result<(), String> {
         out,
         progress: !a.quiet,
         frames: !a.no_frames,
+        mcap: a.mcap,
     };
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
@@ -220,6 +225,7 @@ fn default_run() -> Result<(), String> {
         out: PathBuf::from("out").join(&scene.name),
         progress: true,
         frames: true,
+        mcap: None,
     };
     println!(
         "rkforge: {} ({}), the paper's Table 3 setting",

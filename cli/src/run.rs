@@ -3,8 +3,11 @@
 use crate::output::{self, plots, vtu, History};
 use indicatif::{ProgressBar, ProgressStyle};
 use rkforge_core::{Kinematics, Scene, Simulation};
+use rkforge_ros::record::Recorder;
 use serde_json::{json, Value};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A frame kept for the stage plot: time (s), particle positions (m), plastic strain, tool outlines.
@@ -18,6 +21,9 @@ pub struct Options {
     pub progress: bool,
     /// Write VTK frames and PNG plots.
     pub frames: bool,
+    /// Record the ROS 2 topics of `rkforge-ros` (namespace `/rkforge`) at every history
+    /// sample to this MCAP file; SIGINT and SIGTERM then stop the run and finish the files.
+    pub mcap: Option<PathBuf>,
 }
 
 /// What a finished run produced.
@@ -55,12 +61,23 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     let mut history = History::new(&sim);
     let mut frame_list = Vec::new();
     let mut stage_shapes = Vec::new();
+    let mut mcap = match &opts.mcap {
+        Some(path) => Some(Mcap::start(path, scene)?),
+        None => None,
+    };
     history.record(&mut sim);
+    if let Some(m) = &mut mcap {
+        m.record(&sim)?;
+    }
     if frames > 0 {
         write_frame(&sim, opts, &mut frame_list, &mut stage_shapes)?;
     }
     let mut failure = None;
     for (t, sample, frame) in schedule {
+        if let Some(e) = mcap.as_ref().and_then(|m| m.interrupted(&sim)) {
+            failure = Some(e);
+            break;
+        }
         if t > sim.time() + 1e-12 * end {
             if let Err(e) = sim.run_to(t, |_| {}) {
                 failure = Some(e.to_string());
@@ -69,6 +86,9 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
         }
         if sample {
             history.record(&mut sim);
+            if let Some(m) = &mut mcap {
+                m.record(&sim)?;
+            }
         }
         if frame {
             write_frame(&sim, opts, &mut frame_list, &mut stage_shapes)?;
@@ -78,6 +98,12 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     bar.finish_and_clear();
     if failure.is_some() {
         history.record(&mut sim);
+        if let Some(m) = &mut mcap {
+            m.record(&sim)?;
+        }
+    }
+    if let Some(m) = mcap {
+        m.recorder.finish()?;
     }
     history.write(&opts.out.join("history.csv"))?;
     if frames > 0 {
@@ -100,6 +126,33 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
             summary,
             scene: scene.clone(),
         }),
+    }
+}
+
+/// The MCAP recording of a run and the signal flag that stops it.
+struct Mcap {
+    recorder: Recorder,
+    stop: Arc<AtomicBool>,
+}
+
+impl Mcap {
+    fn start(path: &Path, scene: &Scene) -> Result<Mcap, String> {
+        let topics = rkforge_ros::topics(scene, "/rkforge")?;
+        Ok(Mcap {
+            recorder: Recorder::create(path, &topics)?,
+            stop: rkforge_ros::signals::stop_flag()?,
+        })
+    }
+
+    fn record(&mut self, sim: &Simulation) -> Result<(), String> {
+        self.recorder.write(&rkforge_ros::frame::sample(sim))
+    }
+
+    /// The failure to report if a signal asked the run to stop.
+    fn interrupted(&self, sim: &Simulation) -> Option<String> {
+        self.stop
+            .load(Ordering::SeqCst)
+            .then(|| format!("interrupted by a signal at t = {:e} s", sim.time()))
     }
 }
 

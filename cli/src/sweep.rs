@@ -95,6 +95,7 @@ pub fn sweep(
                     out: out.join(&label),
                     progress: false,
                     frames: false,
+                    mcap: None,
                 };
                 let report = run::run(&s, &opts).map_err(|e| format!("{label}: {e}"))?;
                 let (n, values) = quantities(&report.summary);

@@ -1,8 +1,18 @@
 //! The ROS 2 interface of an rkforge scene: which topics a run publishes and subscribes to,
-//! with their standard message types, under a namespace validated by the ROS 2 naming rules;
-//! [`msgs`] holds the standard message definitions (schema texts) and their CDR encoding.
+//! with their standard message types, under a namespace validated by the ROS 2 naming rules.
+//!
+//! - [`msgs`]: the standard message definitions (schema texts) and their CDR encoding;
+//! - [`frame`]: the messages of one sample of a [`Simulation`](rkforge_core::Simulation);
+//! - [`record`]: the MCAP recorder (used by `rkforge-ros --record` and `rkforge run --mcap`);
+//! - [`signals`]: SIGINT and SIGTERM as a flag, so that a run stops and finishes its files;
+//! - `dds` (feature `dds`, on by default): the ROS 2 node over DDS (`ros2-client`).
 
+#[cfg(feature = "dds")]
+pub mod dds;
+pub mod frame;
 pub mod msgs;
+pub mod record;
+pub mod signals;
 
 use rkforge_core::scene::{Motion, Scene};
 
@@ -13,8 +23,12 @@ pub struct Topic {
     pub name: String,
     /// Message type, e.g. `geometry_msgs/msg/WrenchStamped`.
     pub message: &'static str,
+    /// The `ros2msg` definition of the message type, as rosbag2 writes it in MCAP.
+    pub schema: &'static str,
     /// Whether the node publishes (true) or subscribes (false).
     pub publish: bool,
+    /// Reliable (true) or best-effort (false) quality of service.
+    pub reliable: bool,
 }
 
 /// Check a namespace against the ROS 2 rules: absolute, tokens of letters, digits and
@@ -44,37 +58,57 @@ pub fn validate_namespace(ns: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// The topics of a scene under namespace `ns`.
+/// The topics of a scene under namespace `ns`: first the published ones in the order of the
+/// messages of a [`frame::Sample`] (one wrench per tool in scene order, `tools`, `workpiece`,
+/// `tool_markers`, `/clock`), then one `velocity_cmd` subscription per movable tool.
+///
+/// # Errors
+///
+/// The namespace breaks the ROS 2 naming rules, or a tool name is not a valid topic token.
 pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
     validate_namespace(ns)?;
     let base = ns.trim_end_matches('/');
+    for tool in &scene.tools {
+        validate_namespace(&format!("/{}", tool.name))
+            .map_err(|e| format!("tool `{}` cannot name a ROS 2 topic: {e}", tool.name))?;
+    }
     let mut t = Vec::new();
     for tool in &scene.tools {
         t.push(Topic {
             name: format!("{base}/{}/wrench", tool.name),
-            message: "geometry_msgs/msg/WrenchStamped",
+            message: msgs::WRENCH_STAMPED_TYPE,
+            schema: msgs::WRENCH_STAMPED_SCHEMA,
             publish: true,
+            reliable: true,
         });
     }
     t.push(Topic {
         name: format!("{base}/tools"),
-        message: "sensor_msgs/msg/JointState",
+        message: msgs::JOINT_STATE_TYPE,
+        schema: msgs::JOINT_STATE_SCHEMA,
         publish: true,
+        reliable: true,
     });
     t.push(Topic {
         name: format!("{base}/workpiece"),
-        message: "sensor_msgs/msg/PointCloud2",
+        message: msgs::POINT_CLOUD2_TYPE,
+        schema: msgs::POINT_CLOUD2_SCHEMA,
         publish: true,
+        reliable: false,
     });
     t.push(Topic {
         name: format!("{base}/tool_markers"),
-        message: "visualization_msgs/msg/MarkerArray",
+        message: msgs::MARKER_ARRAY_TYPE,
+        schema: msgs::MARKER_ARRAY_SCHEMA,
         publish: true,
+        reliable: true,
     });
     t.push(Topic {
         name: "/clock".into(),
-        message: "rosgraph_msgs/msg/Clock",
+        message: msgs::CLOCK_TYPE,
+        schema: msgs::CLOCK_SCHEMA,
         publish: true,
+        reliable: true,
     });
     for tool in scene
         .tools
@@ -83,8 +117,10 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
     {
         t.push(Topic {
             name: format!("{base}/{}/velocity_cmd", tool.name),
-            message: "std_msgs/msg/Float64",
+            message: msgs::FLOAT64_TYPE,
+            schema: msgs::FLOAT64_SCHEMA,
             publish: false,
+            reliable: true,
         });
     }
     Ok(t)

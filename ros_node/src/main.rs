@@ -1,0 +1,407 @@
+//! `rkforge-ros`: run a scene as a ROS 2 node. See the README's ROS 2 section.
+//!
+//! Two threads: the simulation steps on a rayon worker and hands a [`Sample`] over at every
+//! publish instant; the main thread publishes it over DDS, records it to MCAP, paces the run
+//! and forwards velocity commands, which the simulation applies before its next step.
+
+use clap::Parser;
+use rkforge_core::{Scene, Simulation};
+use rkforge_ros::dds::{domain_id_from_env, Command, Node};
+use rkforge_ros::frame::{sample, Sample};
+use rkforge_ros::record::Recorder;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::time::{Duration, Instant};
+
+/// How often the main thread looks for commands and signals while it waits.
+const POLL: Duration = Duration::from_millis(1);
+
+/// How long the node stays up after its last sample, so that DDS can deliver (and repeat, for
+/// reliable readers) the last messages before the participant goes away.
+const LINGER: Duration = Duration::from_millis(300);
+
+/// In lockstep, how often the current sample is published again while the node waits for
+/// commands (a controller that joined late then still sees it; controllers answer each
+/// stamp once).
+const REPUBLISH: Duration = Duration::from_millis(250);
+
+#[derive(Parser)]
+#[command(
+    name = "rkforge-ros",
+    version,
+    about = "Run an rkforge scene as a ROS 2 node: tool wrenches, joint states, the workpiece as a point cloud, tool markers and /clock; velocity commands per movable tool"
+)]
+struct Args {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Namespace of the topics.
+    #[arg(long, default_value = "/rkforge")]
+    namespace: String,
+    /// Also record every published message to this MCAP file.
+    #[arg(long)]
+    record: Option<PathBuf>,
+    /// Pace the run: simulated seconds per wall-clock second (default: as fast as possible).
+    #[arg(long)]
+    real_time_factor: Option<f64>,
+    /// Samples per second of simulation time (default: one per history interval of the
+    /// scene, so the samples fall at history.csv's times).
+    #[arg(long)]
+    publish_rate: Option<f64>,
+    /// Wait at every sample until each movable tool has received a command, then apply it:
+    /// closed loops are reproducible.
+    #[arg(long)]
+    lockstep: bool,
+    /// Worker threads (default: all cores); results are identical for any count.
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+/// From the main thread to the simulation.
+enum ToSim {
+    /// Apply a velocity command before the next step.
+    Command(Command),
+    /// Go on to the next sample.
+    Continue,
+    /// Stop now (a signal arrived).
+    Stop,
+}
+
+/// From the simulation to the main thread.
+enum FromSim {
+    /// The state at a sample time; the simulation waits for [`ToSim::Continue`].
+    Sample(Sample),
+    /// The step failed; the last sample is the state reached.
+    Failed(String, Box<Sample>),
+}
+
+fn main() -> ExitCode {
+    match run(&Args::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Check that an optional rate is positive and finite.
+fn positive(name: &str, v: Option<f64>) -> Result<(), String> {
+    match v {
+        Some(x) if !(x.is_finite() && x > 0.0) => {
+            Err(format!("{name} {x}: must be positive and finite"))
+        }
+        _ => Ok(()),
+    }
+}
+
+fn run(a: &Args) -> Result<(), String> {
+    positive("--real-time-factor", a.real_time_factor)?;
+    positive("--publish-rate", a.publish_rate)?;
+    if let Some(n) = a.threads {
+        if n == 0 {
+            return Err("--threads must be at least 1".into());
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| format!("cannot start {n} threads: {e}"))?;
+    }
+    let scene = Scene::from_file(&a.scene).map_err(|e| e.to_string())?;
+    let topics = rkforge_ros::topics(&scene, &a.namespace)?;
+    let domain = domain_id_from_env()?;
+    let end = scene.time.end_s;
+    let interval = match a.publish_rate {
+        Some(r) => 1.0 / r,
+        None => scene.output.history_interval_s.unwrap_or(end / 200.0),
+    };
+    let schedule = schedule(end, interval)?;
+    let samples = schedule.len();
+    // Wall time from scene setup on, as `rkforge run` counts it in summary.json.
+    let wall = Instant::now();
+    let mut sim = Simulation::new(&scene).map_err(|e| e.to_string())?;
+    let mut node = Node::new(domain, &a.namespace, &scene)?;
+    let mut recorder = match &a.record {
+        Some(p) => Some(Recorder::create(p, &topics)?),
+        None => None,
+    };
+    let stop = rkforge_ros::signals::stop_flag()?;
+    if a.lockstep && node.commanded_tools().is_empty() {
+        eprintln!("warning: --lockstep has no effect: every tool of the scene is fixed");
+    }
+    eprintln!(
+        "rkforge-ros: scene {} on ROS domain {domain}, namespace {}, {} samples every {interval:e} s of simulation time{}",
+        scene.name,
+        a.namespace,
+        samples + 1,
+        if a.lockstep { ", lockstep" } else { "" }
+    );
+    let (to_sim, sim_rx) = mpsc::channel();
+    let (sim_tx, from_sim) = mpsc::channel();
+    let outcome = std::thread::scope(|s| {
+        let sim = &mut sim;
+        let schedule = &schedule;
+        s.spawn(move || rayon::scope(move |_| simulate(sim, schedule, &sim_rx, &sim_tx)));
+        let mut main = MainLoop {
+            node: &mut node,
+            recorder: recorder.as_mut(),
+            to_sim: &to_sim,
+            stop: &stop,
+            lockstep: a.lockstep,
+            real_time_factor: a.real_time_factor,
+            start: Instant::now(),
+            end,
+        };
+        let r = main.serve(&from_sim);
+        // Unblock the simulation whatever happened (it may be gone already).
+        let _ = to_sim.send(ToSim::Stop);
+        r
+    });
+    let loop_wall = wall.elapsed().as_secs_f64();
+    std::thread::sleep(LINGER);
+    let finished = match recorder.map(Recorder::finish).transpose() {
+        Ok(p) => p,
+        Err(e) => return Err(outcome.err().map_or(e.clone(), |o| format!("{o}; {e}"))),
+    };
+    let published = outcome?;
+    let dropped = node.dropped();
+    eprintln!(
+        "rkforge-ros: published {published} samples up to t = {:e} s in {:.3} s wall{}{}",
+        sim.time(),
+        loop_wall,
+        if dropped > 0 {
+            format!(", {dropped} messages dropped (send window full)")
+        } else {
+            String::new()
+        },
+        finished.map_or(String::new(), |p| format!(", recorded {}", p.display()))
+    );
+    for (topic, n) in node.rejected() {
+        if n > 0 {
+            eprintln!("rkforge-ros: {n} commands ignored on {topic}");
+        }
+    }
+    if stop.load(Ordering::SeqCst) {
+        eprintln!("rkforge-ros: stopped by a signal");
+    }
+    Ok(())
+}
+
+/// Most samples a run publishes.
+const MAX_SAMPLES: f64 = 1e7;
+
+/// Sample times after t = 0: `k * interval` as `rkforge run` samples its history (the count
+/// rounded when `end / interval` is a whole number up to rounding errors), then `end` if the
+/// last one falls short of it.
+fn schedule(end: f64, interval: f64) -> Result<Vec<f64>, String> {
+    let ratio = end / interval;
+    let n = if (ratio - ratio.round()).abs() < 1e-9 * ratio.max(1.0) {
+        ratio.round()
+    } else {
+        ratio.floor()
+    };
+    if n > MAX_SAMPLES {
+        return Err(format!(
+            "--publish-rate {:e} Hz gives {n:e} samples over {end:e} s; at most {MAX_SAMPLES:e}",
+            1.0 / interval
+        ));
+    }
+    // n is a whole number in [0, 1e7]: the cast is exact.
+    let mut times: Vec<f64> = (1..=n as u64)
+        .map(|k| (k as f64 * interval).min(end))
+        .collect();
+    if times.last().is_none_or(|&t| t < end * (1.0 - 1e-12)) {
+        times.push(end);
+    }
+    Ok(times)
+}
+
+/// The simulation thread: a sample at t = 0 and at each time of `schedule`, stepping as
+/// `Simulation::run_to` does (the last step of each interval shortened to land on it), and
+/// commands applied between steps as they come.
+fn simulate(sim: &mut Simulation, schedule: &[f64], rx: &Receiver<ToSim>, tx: &Sender<FromSim>) {
+    // Apply the pending messages; false once told to stop or the main thread is gone.
+    let apply = |sim: &mut Simulation, msg: ToSim| -> Option<bool> {
+        match msg {
+            ToSim::Command(c) => {
+                if let Err(e) = sim.set_tool_velocity(c.tool, c.velocity) {
+                    eprintln!("warning: command ignored: {e}");
+                }
+                None
+            }
+            ToSim::Continue => Some(true),
+            ToSim::Stop => Some(false),
+        }
+    };
+    // Hand a sample over and wait for the go-ahead.
+    let handover = |sim: &mut Simulation| -> bool {
+        if tx.send(FromSim::Sample(sample(sim))).is_err() {
+            return false;
+        }
+        loop {
+            match rx.recv() {
+                Ok(msg) => {
+                    if let Some(go) = apply(sim, msg) {
+                        return go;
+                    }
+                }
+                Err(_) => return false,
+            }
+        }
+    };
+    if !handover(sim) {
+        return;
+    }
+    for &t in schedule {
+        while sim.time() < t - 1e-12 * t.abs() {
+            while let Ok(msg) = rx.try_recv() {
+                if apply(sim, msg) == Some(false) {
+                    return;
+                }
+            }
+            let dt = t - sim.time();
+            if let Err(e) = sim.step(Some(dt)) {
+                let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
+                return;
+            }
+        }
+        if !handover(sim) {
+            return;
+        }
+    }
+}
+
+/// The main thread's side: DDS, MCAP, pacing and commands.
+struct MainLoop<'a> {
+    node: &'a mut Node,
+    recorder: Option<&'a mut Recorder>,
+    to_sim: &'a Sender<ToSim>,
+    stop: &'a AtomicBool,
+    lockstep: bool,
+    real_time_factor: Option<f64>,
+    start: Instant,
+    end: f64,
+}
+
+impl MainLoop<'_> {
+    /// Serve samples until the simulation ends; the number of samples published.
+    fn serve(&mut self, from_sim: &Receiver<FromSim>) -> Result<u64, String> {
+        let mut published = 0;
+        loop {
+            let msg = match from_sim.recv_timeout(POLL) {
+                Ok(m) => m,
+                Err(RecvTimeoutError::Timeout) => {
+                    if self.stop.load(Ordering::SeqCst) {
+                        return Ok(published);
+                    }
+                    if !self.lockstep {
+                        self.forward_commands()?;
+                    }
+                    continue;
+                }
+                Err(RecvTimeoutError::Disconnected) => return Ok(published),
+            };
+            match msg {
+                FromSim::Sample(s) => {
+                    self.emit(&s)?;
+                    published += 1;
+                    if !self.wait(&s)? {
+                        return Ok(published);
+                    }
+                    self.send(ToSim::Continue)?;
+                }
+                FromSim::Failed(e, s) => {
+                    self.emit(&s)?;
+                    return Err(format!("the simulation failed: {e}"));
+                }
+            }
+        }
+    }
+
+    fn send(&self, m: ToSim) -> Result<(), String> {
+        self.to_sim
+            .send(m)
+            .map_err(|_| "the simulation thread ended unexpectedly".to_string())
+    }
+
+    fn emit(&mut self, s: &Sample) -> Result<(), String> {
+        self.node.publish(s)?;
+        if let Some(r) = self.recorder.as_deref_mut() {
+            r.write(s)?;
+        }
+        Ok(())
+    }
+
+    fn forward_commands(&mut self) -> Result<(), String> {
+        for c in self.node.take_commands() {
+            self.send(ToSim::Command(c))?;
+        }
+        Ok(())
+    }
+
+    /// After a sample: keep to the real-time factor, and in lockstep wait for a command for
+    /// every movable tool (the last one of each tool applies). False if a signal arrived.
+    fn wait(&mut self, s: &Sample) -> Result<bool, String> {
+        if let Some(r) = self.real_time_factor {
+            let due = self.start + Duration::from_secs_f64(s.time / r);
+            while Instant::now() < due {
+                if self.stop.load(Ordering::SeqCst) {
+                    return Ok(false);
+                }
+                if !self.lockstep {
+                    self.forward_commands()?;
+                }
+                std::thread::sleep(POLL.min(due.saturating_duration_since(Instant::now())));
+            }
+        }
+        // After the last sample there is no period left to command.
+        if !self.lockstep || s.time >= self.end * (1.0 - 1e-12) {
+            self.forward_commands()?;
+            return Ok(!self.stop.load(Ordering::SeqCst));
+        }
+        let tools = self.node.commanded_tools();
+        let mut latest: Vec<Option<f64>> = vec![None; tools.len()];
+        let mut last_publish = Instant::now();
+        while latest.iter().any(Option::is_none) {
+            if self.stop.load(Ordering::SeqCst) {
+                return Ok(false);
+            }
+            for c in self.node.take_commands() {
+                if let Some(k) = tools.iter().position(|&t| t == c.tool) {
+                    latest[k] = Some(c.velocity);
+                }
+            }
+            if last_publish.elapsed() >= REPUBLISH {
+                self.node.publish(s)?;
+                last_publish = Instant::now();
+            }
+            std::thread::sleep(POLL);
+        }
+        for (&tool, v) in tools.iter().zip(latest) {
+            if let Some(velocity) = v {
+                self.send(ToSim::Command(Command { tool, velocity }))?;
+            }
+        }
+        Ok(true)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::schedule;
+
+    #[test]
+    fn samples_fall_on_history_rows_and_reach_the_end() {
+        let s = schedule(0.003, 0.15e-3).unwrap();
+        assert_eq!(s.len(), 20);
+        assert_eq!(s[0], 0.15e-3);
+        // 20 * 0.15e-3 as history.csv's last row has it, one rounding below 0.003.
+        assert_eq!(*s.last().unwrap(), 20.0 * 0.15e-3);
+        assert!(0.003 - s.last().unwrap() < 1e-18);
+        assert_eq!(schedule(1.0, 0.4).unwrap(), [0.4, 0.8, 1.0]);
+        assert_eq!(schedule(1.0, 2.0).unwrap(), [1.0]);
+        let e = schedule(1.0, 1e-9).unwrap_err();
+        assert!(e.contains("at most 1e7"), "{e}");
+    }
+}

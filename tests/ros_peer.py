@@ -1,0 +1,169 @@
+"""An independent ROS 2 peer for the tests: the standard messages as Cyclone DDS IDL types with
+the DDS type names ROS 2 uses (`pkg::msg::dds_::Type_`), QoS as rclcpp's defaults, and helpers
+to read history.csv and to derive small scenes."""
+import csv
+import os
+import subprocess
+import time
+from dataclasses import dataclass
+
+import cyclonedds.idl.types as t
+from cyclonedds.core import Policy, Qos
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.idl import IdlStruct
+from cyclonedds.internal import InvalidSample
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+
+from conftest import ROOT, scene_variant
+
+
+@dataclass
+class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
+    sec: t.int32
+    nanosec: t.uint32
+
+
+@dataclass
+class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
+    stamp: Time
+    frame_id: str
+
+
+@dataclass
+class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
+    x: t.float64
+    y: t.float64
+    z: t.float64
+
+
+@dataclass
+class Wrench(IdlStruct, typename="geometry_msgs::msg::dds_::Wrench_"):
+    force: Vector3
+    torque: Vector3
+
+
+@dataclass
+class WrenchStamped(IdlStruct, typename="geometry_msgs::msg::dds_::WrenchStamped_"):
+    header: Header
+    wrench: Wrench
+
+
+@dataclass
+class JointState(IdlStruct, typename="sensor_msgs::msg::dds_::JointState_"):
+    header: Header
+    name: t.sequence[str]
+    position: t.sequence[t.float64]
+    velocity: t.sequence[t.float64]
+    effort: t.sequence[t.float64]
+
+
+@dataclass
+class PointField(IdlStruct, typename="sensor_msgs::msg::dds_::PointField_"):
+    name: str
+    offset: t.uint32
+    datatype: t.uint8
+    count: t.uint32
+
+
+@dataclass
+class PointCloud2(IdlStruct, typename="sensor_msgs::msg::dds_::PointCloud2_"):
+    header: Header
+    height: t.uint32
+    width: t.uint32
+    fields: t.sequence[PointField]
+    is_bigendian: bool
+    point_step: t.uint32
+    row_step: t.uint32
+    data: t.sequence[t.uint8]
+    is_dense: bool
+
+
+@dataclass
+class Clock(IdlStruct, typename="rosgraph_msgs::msg::dds_::Clock_"):
+    clock: Time
+
+
+@dataclass
+class Float64(IdlStruct, typename="std_msgs::msg::dds_::Float64_"):
+    data: t.float64
+
+
+def qos(reliable=True):
+    """rclcpp's default (reliable, keep last 10, volatile) or best effort; plain CDR (XCDR1)
+    as rmw_cyclonedds_cpp writes it."""
+    r = (Policy.Reliability.Reliable(max_blocking_time=1_000_000_000) if reliable
+         else Policy.Reliability.BestEffort)
+    return Qos(r, Policy.History.KeepLast(10), Policy.Durability.Volatile,
+               Policy.DataRepresentation(use_cdrv0_representation=True))
+
+
+class Peer:
+    """A DDS participant on `domain` with readers and writers on ROS 2 topics (`rt/...`)."""
+
+    def __init__(self, domain):
+        self.dp = DomainParticipant(domain)
+
+    def reader(self, topic, cls, reliable=True):
+        return DataReader(self.dp, Topic(self.dp, "rt" + topic, cls), qos=qos(reliable))
+
+    def writer(self, topic, cls):
+        return DataWriter(self.dp, Topic(self.dp, "rt" + topic, cls), qos=qos(True))
+
+
+def take(reader, n=50):
+    """Valid samples only: Cyclone also hands over "invalid samples" that carry no data, only
+    an instance state change (e.g. when the writer of the node goes away)."""
+    return [s for s in reader.take(N=n) if not isinstance(s, InvalidSample)]
+
+
+def wait_matched(writer, timeout=20):
+    """Wait until the writer has found the node's reader: DDS topics are volatile, so what is
+    written before that is lost."""
+    wait_until(lambda: writer.get_matched_subscriptions(), timeout, "the node's command reader")
+
+
+def stamp_ns(header):
+    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+
+
+def history(path):
+    """history.csv as a list of dicts of floats."""
+    with open(path) as f:
+        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+def small_block(tmp_path, end="0.003", particles="[8, 8]", name="block_small.toml"):
+    """The block forging scene, coarse and short."""
+    p = tmp_path / name
+    p.write_text(scene_variant("block_forging.toml", {
+        "particles = [21, 21]": f"particles = {particles}",
+        "end_s = 0.015": f"end_s = {end}",
+    }))
+    return p
+
+
+def run_history(rkforge_bin, scene, out, *extra):
+    """`rkforge run SCENE --no-frames` and its history rows."""
+    subprocess.run([rkforge_bin, "run", str(scene), "--no-frames", "--quiet", "--out", str(out),
+                    *extra], check=True, capture_output=True, text=True)
+    return history(out / "history.csv")
+
+
+def start_node(rkforge_ros_bin, scene, domain, *args):
+    """Start `rkforge-ros` on `domain`; stdout and stderr are captured as text."""
+    env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
+    return subprocess.Popen([rkforge_ros_bin, str(scene), *args], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def wait_until(cond, timeout, what):
+    t0 = time.monotonic()
+    while not cond():
+        if time.monotonic() - t0 > timeout:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        time.sleep(0.002)
+
+
+__all__ = ["ROOT"]

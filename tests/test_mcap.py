@@ -1,0 +1,231 @@
+"""MCAP recordings (`rkforge run --mcap`, `rkforge-ros --record`) read back by two independent
+readers, `mcap` + `mcap-ros2-support` and `rosbags`: every message decodes and the values match
+history.csv; SIGINT/SIGTERM finish the file; a killed process leaves a file readable up to its
+last chunk."""
+import math
+import signal
+import struct
+import subprocess
+import time
+
+import pytest
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
+from mcap.stream_reader import StreamReader
+from mcap.records import Message, Channel, Schema
+from mcap_ros2.decoder import DecoderFactory
+from rosbags.highlevel import AnyReader
+
+from ros_peer import history, run_history, small_block, start_node
+
+TOPICS = {
+    "/rkforge/top/wrench": "geometry_msgs/msg/WrenchStamped",
+    "/rkforge/bottom/wrench": "geometry_msgs/msg/WrenchStamped",
+    "/rkforge/tools": "sensor_msgs/msg/JointState",
+    "/rkforge/workpiece": "sensor_msgs/msg/PointCloud2",
+    "/rkforge/tool_markers": "visualization_msgs/msg/MarkerArray",
+    "/clock": "rosgraph_msgs/msg/Clock",
+}
+
+
+@pytest.fixture(scope="module")
+def recorded(rkforge_bin, tmp_path_factory):
+    """A short block forging run with --mcap: (history rows, path of the MCAP file)."""
+    d = tmp_path_factory.mktemp("mcap")
+    scene = small_block(d)
+    path = d / "run.mcap"
+    rows = run_history(rkforge_bin, scene, d / "out", "--mcap", str(path))
+    return rows, path
+
+
+def decoded(path):
+    """Every message decoded by mcap-ros2-support: list of (topic, log_time, message)."""
+    with open(path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        return [(c.topic, m.log_time, d) for _, c, m, d in reader.iter_decoded_messages()]
+
+
+def ns(t):
+    return round(t * 1e9)
+
+
+def cloud_xy(cloud):
+    """x and y of each point of a PointCloud2 of five float32 fields."""
+    step = cloud.point_step
+    data = bytes(cloud.data)
+    return [struct.unpack_from("<2f", data, k * step) for k in range(cloud.width)]
+
+
+def check_against_history(msgs, rows, particles=64):
+    """The messages of each topic, in order, match the history rows at the same times."""
+    by_topic = {}
+    for topic, log_time, m in msgs:
+        by_topic.setdefault(topic, []).append((log_time, m))
+    assert set(by_topic) == set(TOPICS)
+    for topic, seq in by_topic.items():
+        assert len(seq) == len(rows), topic
+        for (log_time, m), row in zip(seq, rows):
+            assert log_time == ns(row["time_s"]), topic
+            header = getattr(m, "header", None)
+            if header is not None:
+                assert header.stamp.sec * 10**9 + header.stamp.nanosec == log_time
+                assert header.frame_id == "rkforge"
+    for (_, js), row in zip(by_topic["/rkforge/tools"], rows):
+        assert list(js.name) == ["top", "bottom"]
+        for k, tool in enumerate(js.name):
+            assert js.position[k] == row[f"{tool}.stroke_m"]
+            assert js.velocity[k] == row[f"{tool}.velocity_m_per_s"]
+            assert js.effort[k] == row[f"{tool}.force_N"]
+    for tool in ["top", "bottom"]:
+        for (_, w), row in zip(by_topic[f"/rkforge/{tool}/wrench"], rows):
+            assert w.wrench.force.x == row[f"{tool}.force_x_N"]
+            assert w.wrench.force.y == row[f"{tool}.force_y_N"]
+            assert (w.wrench.torque.x, w.wrench.torque.y, w.wrench.torque.z) == (0, 0, 0)
+    for (_, c), row in zip(by_topic["/rkforge/workpiece"], rows):
+        assert [f.name for f in c.fields] == ["x", "y", "z", "plastic_strain", "von_mises"]
+        assert all(f.datatype == 7 and f.count == 1 for f in c.fields)
+        assert (c.height, c.width, c.point_step) == (1, particles, 20)
+        xy = cloud_xy(c)
+        for k, (col, fn) in enumerate([("x_min_m", min), ("x_max_m", max)]):
+            assert fn(p[0] for p in xy) == pytest.approx(row[f"workpiece.{col}"], abs=1e-7)
+        for col, fn in [("y_min_m", min), ("y_max_m", max)]:
+            assert fn(p[1] for p in xy) == pytest.approx(row[f"workpiece.{col}"], abs=1e-7)
+    for (_, m), row in zip(by_topic["/rkforge/tool_markers"], rows):
+        assert [mk.text for mk in m.markers] == ["top", "bottom"]
+        top = m.markers[0]
+        # The top tool starts at y = 0.25 and moves down by its stroke.
+        assert top.points[0].y == pytest.approx(0.25 - row["top.stroke_m"], abs=1e-12)
+    for (_, c), row in zip(by_topic["/clock"], rows):
+        assert c.clock.sec * 10**9 + c.clock.nanosec == ns(row["time_s"])
+
+
+def test_mcap_reader_decodes_every_message_and_matches_history(recorded):
+    rows, path = recorded
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        assert reader.get_header().profile == "ros2"
+        summary = reader.get_summary()
+        assert summary.statistics.message_count == len(rows) * len(TOPICS)
+        assert summary.chunk_indexes, "the file is chunked and indexed"
+        assert all(ci.compression == "" for ci in summary.chunk_indexes)
+        assert {c.topic: summary.schemas[c.schema_id].name
+                for c in summary.channels.values()} == TOPICS
+        assert {c.message_encoding for c in summary.channels.values()} == {"cdr"}
+        assert {s.encoding for s in summary.schemas.values()} == {"ros2msg"}
+        wrench = next(s for s in summary.schemas.values()
+                      if s.name == "geometry_msgs/msg/WrenchStamped").data.decode()
+        assert wrench.startswith("# A wrench with reference coordinate frame and timestamp\n")
+        assert "\n" + "=" * 80 + "\nMSG: geometry_msgs/Vector3\n" in wrench
+    check_against_history(decoded(path), rows)
+
+
+def test_rosbags_decodes_every_message_and_matches_history(recorded):
+    rows, path = recorded
+    msgs = []
+    with AnyReader([path]) as reader:
+        assert {c.topic: c.msgtype for c in reader.connections} == TOPICS
+        for c, log_time, raw in reader.messages():
+            msgs.append((c.topic, log_time, reader.deserialize(raw, c.msgtype)))
+    msgs.sort(key=lambda m: (m[1], list(TOPICS).index(m[0])))
+    check_against_history(msgs, rows)
+
+
+def test_the_node_records_the_same_bytes_as_rkforge_run(recorded, rkforge_ros_bin, tmp_path):
+    rows, path = recorded
+    scene = small_block(tmp_path)
+    out = tmp_path / "node.mcap"
+    p = start_node(rkforge_ros_bin, scene, 151, "--record", str(out))
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 0, err
+    assert f"recorded {out}" in err
+
+    def raw(f):
+        with open(f, "rb") as fh:
+            return [(c.topic, m.log_time, m.data) for _, c, m in make_reader(fh).iter_messages()]
+
+    assert raw(out) == raw(path)
+
+
+def test_sigint_finishes_the_file_of_rkforge_run(rkforge_bin, tmp_path):
+    scene = small_block(tmp_path, end="0.03", particles="[21, 21]")
+    path = tmp_path / "int.mcap"
+    p = subprocess.Popen([rkforge_bin, "run", str(scene), "--no-frames", "--quiet",
+                          "--out", str(tmp_path / "out"), "--mcap", str(path)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # Interrupt once the run is under way (the whole file is about 2 MB).
+    t0 = time.monotonic()
+    while (not path.exists() or path.stat().st_size < 200_000) and time.monotonic() - t0 < 30:
+        assert p.poll() is None, "the run ended before it could be interrupted"
+        time.sleep(0.01)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=30)
+    assert p.returncode == 1 and "interrupted by a signal" in err, err
+    rows = history(tmp_path / "out" / "history.csv")
+    assert 1 < len(rows) < 201, "stopped midway"
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary.statistics.message_count == len(rows) * len(TOPICS)
+    with AnyReader([path]) as reader:
+        assert sum(1 for _ in reader.messages()) == len(rows) * len(TOPICS)
+
+
+def test_sigterm_finishes_the_file_of_the_node(rkforge_ros_bin, tmp_path):
+    scene = small_block(tmp_path, end="0.015")
+    path = tmp_path / "term.mcap"
+    # 0.015 s of simulation at 0.003 simulated seconds per second: about 5 s of wall time.
+    p = start_node(rkforge_ros_bin, scene, 152, "--record", str(path),
+                   "--real-time-factor", "0.003")
+    time.sleep(1.5)
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=30)
+    assert p.returncode == 0, err
+    assert "stopped by a signal" in err
+    msgs = decoded(path)
+    clocks = [m for topic, _, m in msgs if topic == "/clock"]
+    assert 3 <= len(clocks) < 101
+    assert len(msgs) == len(clocks) * len(TOPICS)
+
+
+def test_a_killed_process_leaves_a_file_readable_to_its_last_chunk(rkforge_bin, tmp_path):
+    scene = small_block(tmp_path, end="0.03", particles="[21, 21]")
+    path = tmp_path / "killed.mcap"
+    p = subprocess.Popen([rkforge_bin, "run", str(scene), "--no-frames", "--quiet",
+                          "--out", str(tmp_path / "out"), "--mcap", str(path)],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # A chunk is closed at 512 KiB (or after 1 s of wall time); the whole file is about 2 MB.
+    t0 = time.monotonic()
+    while (not path.exists() or path.stat().st_size < 600_000) and time.monotonic() - t0 < 30:
+        assert p.poll() is None, "the run ended before it could be killed"
+        time.sleep(0.01)
+    p.kill()
+    p.wait()
+    with open(path, "rb") as f:
+        with pytest.raises(Exception):
+            make_reader(f).get_summary().statistics  # no summary, no footer
+    schemas, channels, messages = {}, {}, []
+    with open(path, "rb") as f:
+        try:
+            for r in StreamReader(f, emit_chunks=False).records:
+                if isinstance(r, Schema):
+                    schemas[r.id] = r
+                elif isinstance(r, Channel):
+                    channels[r.id] = r
+                elif isinstance(r, Message):
+                    messages.append(r)
+        except (McapError, EOFError, struct.error, ValueError):
+            pass  # the unfinished chunk at the end
+    assert messages, "no complete chunk"
+    factory = DecoderFactory()
+    clocks = 0
+    for m in messages:
+        ch = channels[m.channel_id]
+        sc = schemas[ch.schema_id]
+        msg = factory.decoder_for(ch.message_encoding, sc)(m.data)
+        if ch.topic == "/clock":
+            clocks += 1
+            assert msg.clock.sec * 10**9 + msg.clock.nanosec == m.log_time
+        if ch.topic == "/rkforge/tools":
+            assert all(math.isfinite(v) for v in msg.effort)
+    assert len(messages) == clocks * len(TOPICS)
+    times = [m.log_time for m in messages]
+    assert times == sorted(times)

@@ -1,0 +1,230 @@
+"""`rkforge-ros` seen by an independent ROS 2 peer: Cyclone DDS (PyPI `cyclonedds`, the DDS
+under rmw_cyclonedds_cpp) with the standard DDS type names. Each test uses its own ROS domain."""
+import math
+import struct
+import subprocess
+import time
+
+import pytest
+
+from ros_peer import (Clock, Float64, JointState, Peer, PointCloud2, WrenchStamped, run_history,
+                      small_block, stamp_ns, start_node, take, wait_matched,
+                      wait_until)
+
+NS = "/rkforge"
+
+
+class LockstepController:
+    """Answers each new joint state (by stamp) once with the velocities `command(k, js)` for
+    the top and bottom tools, and keeps what it read."""
+
+    def __init__(self, domain, command, clouds=False):
+        self.peer = Peer(domain)
+        self.tools = self.peer.reader(f"{NS}/tools", JointState)
+        self.wrenches = {n: self.peer.reader(f"{NS}/{n}/wrench", WrenchStamped)
+                         for n in ["top", "bottom"]}
+        self.clock = self.peer.reader("/clock", Clock)
+        self.cloud = self.peer.reader(f"{NS}/workpiece", PointCloud2, reliable=False)
+        self.cmd = {n: self.peer.writer(f"{NS}/{n}/velocity_cmd", Float64)
+                    for n in ["top", "bottom"]}
+        self.command = command
+        self.states = {}
+        self.wrench = {"top": {}, "bottom": {}}
+        self.clouds = {}
+        self.clocks = set()
+
+    def serve(self, node, timeout=60):
+        t0 = time.monotonic()
+        while node.poll() is None:
+            assert time.monotonic() - t0 < timeout, "the lockstep run did not finish"
+            for js in take(self.tools, 50):
+                s = stamp_ns(js.header)
+                if s in self.states:
+                    continue  # republished while the node waits
+                self.states[s] = js
+                for name, v in zip(["top", "bottom"], self.command(len(self.states) - 1, js)):
+                    wait_matched(self.cmd[name])
+                    self.cmd[name].write(Float64(v))
+            for n, r in self.wrenches.items():
+                for w in take(r, 50):
+                    self.wrench[n][stamp_ns(w.header)] = w
+            for c in take(self.cloud, 50):
+                self.clouds[stamp_ns(c.header)] = c
+            for c in take(self.clock, 50):
+                self.clocks.add(c.clock.sec * 10**9 + c.clock.nanosec)
+            time.sleep(0.001)
+        return node.communicate(timeout=10)
+
+
+def test_a_cyclone_dds_peer_reads_the_topics_with_history_values(rkforge_bin, rkforge_ros_bin,
+                                                                  tmp_path):
+    scene = small_block(tmp_path)
+    rows = run_history(rkforge_bin, scene, tmp_path / "out")
+    # Commanding the scene's own velocity (10 m/s) in lockstep must reproduce the run exactly.
+    ctl = LockstepController(161, lambda k, js: (10.0, 10.0))
+    node = start_node(rkforge_ros_bin, scene, 161, "--lockstep")
+    _, err = ctl.serve(node)
+    assert node.returncode == 0, err
+    stamps = sorted(ctl.states)
+    assert stamps == [round(r["time_s"] * 1e9) for r in rows]
+    for s, row in zip(stamps, rows):
+        js = ctl.states[s]
+        assert list(js.name) == ["top", "bottom"]
+        assert js.header.frame_id == "rkforge"
+        for k, tool in enumerate(js.name):
+            assert js.position[k] == row[f"{tool}.stroke_m"]
+            assert js.velocity[k] == row[f"{tool}.velocity_m_per_s"]
+            assert js.effort[k] == row[f"{tool}.force_N"]
+    for tool, got in ctl.wrench.items():
+        assert set(got) == set(stamps), f"{tool}: reliable wrenches are all delivered"
+        for s, row in zip(stamps, rows):
+            assert got[s].wrench.force.x == row[f"{tool}.force_x_N"]
+            assert got[s].wrench.force.y == row[f"{tool}.force_y_N"]
+    assert ctl.clocks == set(stamps)
+    assert ctl.clouds, "no point cloud arrived"
+    by_stamp = dict(zip(stamps, rows))
+    for s, c in ctl.clouds.items():
+        row = by_stamp[s]
+        assert [f.name for f in c.fields] == ["x", "y", "z", "plastic_strain", "von_mises"]
+        assert (c.width, c.point_step) == (64, 20)
+        data = bytes(c.data)
+        pts = [struct.unpack_from("<5f", data, 20 * k) for k in range(c.width)]
+        assert min(p[1] for p in pts) == pytest.approx(row["workpiece.y_min_m"], abs=1e-7)
+        assert max(p[1] for p in pts) == pytest.approx(row["workpiece.y_max_m"], abs=1e-7)
+        assert max(p[3] for p in pts) >= 0.0
+
+
+def test_the_stroke_follows_velocity_commands(rkforge_ros_bin, tmp_path):
+    scene = small_block(tmp_path)
+
+    def command(k, js):
+        v = 4.0 if k < 10 else 1.5
+        return v, 2.0 * v
+
+    ctl = LockstepController(162, command)
+    node = start_node(rkforge_ros_bin, scene, 162, "--lockstep")
+    _, err = ctl.serve(node)
+    assert node.returncode == 0, err
+    states = [ctl.states[s] for s in sorted(ctl.states)]
+    assert len(states) == 21
+    dt = 0.15e-3
+    for k in range(1, len(states)):
+        v = 4.0 if k - 1 < 10 else 1.5
+        top = states[k].position[0] - states[k - 1].position[0]
+        bottom = states[k].position[1] - states[k - 1].position[1]
+        assert top == pytest.approx(v * dt, rel=1e-9), k
+        assert bottom == pytest.approx(2.0 * v * dt, rel=1e-9), k
+        assert states[k].velocity[0] == v
+
+
+def test_lockstep_runs_are_reproducible(rkforge_ros_bin, tmp_path):
+    scene = small_block(tmp_path)
+
+    def command(k, js):
+        # A proportional force loop: the answer depends on the state read.
+        f = -js.effort[0]
+        return max(0.0, min(10.0, 10.0 * (2.6e8 - f) / 2.6e8 + 5.0)), 10.0
+
+    runs = []
+    for domain in [163, 164]:
+        ctl = LockstepController(domain, command)
+        node = start_node(rkforge_ros_bin, scene, domain, "--lockstep")
+        _, err = ctl.serve(node)
+        assert node.returncode == 0, err
+        runs.append([(s, list(js.position), list(js.effort))
+                     for s, js in sorted(ctl.states.items())])
+    assert runs[0] == runs[1]
+    assert len({round(p[0], 12) for _, p, _ in runs[0]}) > 10
+
+
+def test_bad_commands_are_ignored_and_a_burst_does_not_stall(rkforge_ros_bin, tmp_path):
+    scene = small_block(tmp_path, end="0.006")
+    peer = Peer(165)
+    tools = peer.reader(f"{NS}/tools", JointState)
+    cmd = peer.writer(f"{NS}/top/velocity_cmd", Float64)
+    # 0.006 s at 0.003 simulated s per wall s: about 2 s.
+    node = start_node(rkforge_ros_bin, scene, 165, "--real-time-factor", "0.003")
+    t0 = time.monotonic()
+    wait_until(lambda: take(tools, 10) or node.poll() is not None, 20, "a joint state")
+    assert node.poll() is None, "the run ended before the peer could join"
+    wait_matched(cmd)
+    for _ in range(2000):
+        cmd.write(Float64(3.0))
+    # Last, so that they are among the samples a reliable writer keeps (keep last 10).
+    for v in [math.nan, math.inf, -math.inf]:
+        cmd.write(Float64(v))
+    # The peer goes away in the middle of the run.
+    del cmd, tools, peer
+    _, err = node.communicate(timeout=30)
+    wall = time.monotonic() - t0
+    assert node.returncode == 0, err
+    assert "ignoring velocity command NaN m/s on /rkforge/top/velocity_cmd: not finite" in err
+    assert "ignoring velocity command inf m/s" in err
+    assert "ignoring velocity command -inf m/s" in err
+    assert wall < 10, f"the run took {wall:.1f} s of wall time for about 2 s of pacing"
+
+
+def test_the_stroke_of_a_paced_run_follows_a_command(rkforge_ros_bin, tmp_path):
+    scene = small_block(tmp_path, end="0.006")
+    peer = Peer(166)
+    tools = peer.reader(f"{NS}/tools", JointState)
+    cmd = peer.writer(f"{NS}/top/velocity_cmd", Float64)
+    node = start_node(rkforge_ros_bin, scene, 166, "--real-time-factor", "0.003")
+    got = []
+    wait_until(lambda: got.extend(take(tools, 10)) or got or node.poll() is not None, 20,
+               "a joint state")
+    wait_matched(cmd)
+    cmd.write(Float64(2.5))
+    while node.poll() is None:
+        got.extend(take(tools, 10))
+        time.sleep(0.002)
+    got.extend(take(tools, 10))
+    _, err = node.communicate(timeout=10)
+    assert node.returncode == 0, err
+    late = [js for js in got if js.velocity[0] == 2.5]
+    assert len(late) >= 3, "the command did not take over"
+    assert got[-1].velocity[1] == 10.0, "the other tool keeps its scene velocity"
+    for a, b in zip(late, late[1:]):
+        dt = (stamp_ns(b.header) - stamp_ns(a.header)) * 1e-9
+        assert b.position[0] - a.position[0] == pytest.approx(2.5 * dt, rel=1e-6)
+
+
+def test_the_example_controller_holds_a_force(rkforge_ros_bin, force_controller_bin, tmp_path):
+    scene = small_block(tmp_path, end="0.009")
+    env_domain = 167
+    node = start_node(rkforge_ros_bin, scene, env_domain, "--lockstep")
+    ctl = subprocess.Popen([force_controller_bin, "--tool", "top", "--other", "bottom",
+                            "--force", "2.6e8", "--kp", "2", "--idle-timeout", "2"],
+                           env={"ROS_DOMAIN_ID": str(env_domain)}, stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    _, err = node.communicate(timeout=60)
+    out, cerr = ctl.communicate(timeout=30)
+    assert node.returncode == 0, err
+    assert ctl.returncode == 0, cerr
+    forces = [float(line.split()[7]) for line in out.splitlines() if line.startswith("t ")]
+    assert len(forces) == 61
+    late = forces[30:]
+    assert sum(late) / len(late) == pytest.approx(2.6e8, rel=0.1)
+
+
+@pytest.mark.parametrize("value", ["abc", "233", "-1"])
+def test_a_bad_domain_id_is_named(rkforge_ros_bin, tmp_path, value):
+    scene = small_block(tmp_path)
+    p = subprocess.run([rkforge_ros_bin, str(scene)], env={"ROS_DOMAIN_ID": value},
+                       capture_output=True, text=True, timeout=30)
+    assert p.returncode == 1
+    assert f"ROS_DOMAIN_ID `{value}` is not an integer in 0..=232" in p.stderr
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--namespace", "rkforge"], "namespace `rkforge` must start with `/`"),
+    (["--namespace", "/1press"], "namespace token `1press` starts with a digit"),
+    (["--publish-rate", "0"], "--publish-rate 0: must be positive and finite"),
+    (["--real-time-factor", "nan"], "--real-time-factor NaN: must be positive and finite"),
+])
+def test_bad_arguments_are_named(rkforge_ros_bin, tmp_path, args, message):
+    scene = small_block(tmp_path)
+    p = subprocess.run([rkforge_ros_bin, str(scene), *args], env={"ROS_DOMAIN_ID": "168"},
+                       capture_output=True, text=True, timeout=30)
+    assert p.returncode == 1
+    assert message in p.stderr
