@@ -88,6 +88,24 @@ def test_frames_are_valid_vtk_and_plots_are_png(coarse_run):
         assert data[:8] == b"\x89PNG\r\n\x1a\n", png
 
 
+def test_stage_timers_account_for_the_wall_time(coarse_run):
+    out, stdout = coarse_run
+    s = json.loads((out / "summary.json").read_text())
+    t = s["stage_seconds"]
+    stages = ["stress", "internal_force", "contact", "integration", "output"]
+    for key in ["setup", "shape_functions", *stages]:
+        assert t[key] >= 0.0, key
+    assert t["shape_functions"] <= t["setup"]
+    # The stages are disjoint parts of the run: they add up to the wall time, less the
+    # untimed glue (loop control, progress bar), and the stress stage dominates this scene.
+    total = t["setup"] + sum(t[k] for k in stages)
+    assert 0.8 * s["wall_s"] < total <= s["wall_s"]
+    assert t["stress"] == max(t[k] for k in stages)
+    # Frames and plots were written, so output has a cost.
+    assert t["output"] > 0.0
+    assert "stages: setup" in stdout and "strain and stress" in stdout and "output" in stdout
+
+
 def test_table_is_printed_beside_the_references(coarse_run):
     _, stdout = coarse_run
     assert "Sidibe et al. 2009, Table 3, RKPM Q2" in stdout

@@ -160,6 +160,7 @@ fn run_command(a: RunArgs) -> Result<(), String> {
     };
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
+    println!("{}", report.stages());
     println!("results in {}", opts.out.display());
     Ok(())
 }

@@ -8,7 +8,7 @@ use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// A frame kept for the stage plot: time (s), particle positions (m), plastic strain, tool outlines.
 type Shape = (f64, Vec<[f64; 2]>, Vec<f64>, Vec<Vec<[f64; 2]>>);
@@ -38,6 +38,35 @@ impl Report {
     pub fn table(&self) -> String {
         output::reference_table(&self.scene, &self.summary)
     }
+
+    /// Where the wall time went: each stage of `stage_seconds` with its share of the run.
+    pub fn stages(&self) -> String {
+        let t = &self.summary["stage_seconds"];
+        let get = |k: &str| t[k].as_f64().unwrap_or(0.0);
+        let wall = self.summary["wall_s"].as_f64().unwrap_or(0.0);
+        let share = |x: f64| if wall > 0.0 { 100.0 * x / wall } else { 0.0 };
+        let stages = [
+            ("stress", "strain and stress"),
+            ("internal_force", "internal force"),
+            ("contact", "contact"),
+            ("integration", "integration"),
+            ("output", "output"),
+        ];
+        let mut line = format!(
+            "stages: setup {:.2} s (shape functions {:.2} s)",
+            get("setup"),
+            get("shape_functions")
+        );
+        let mut counted = get("setup");
+        for (key, name) in stages {
+            counted += get(key);
+            line += &format!(", {name} {:.2} s ({:.0} %)", get(key), share(get(key)));
+        }
+        line + &format!(
+            ", other {:.2} s of {wall:.2} s wall",
+            (wall - counted).max(0.0)
+        )
+    }
 }
 
 /// Run `scene` to its end time, writing results into `opts.out`. A run that fails midway
@@ -65,6 +94,9 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
         Some(path) => Some(Mcap::start(path, scene)?),
         None => None,
     };
+    // Wall time spent sampling and writing results (the `output` stage).
+    let mut output_time = Duration::ZERO;
+    let clock = Instant::now();
     history.record(&mut sim);
     if let Some(m) = &mut mcap {
         m.record(&sim)?;
@@ -72,6 +104,7 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     if frames > 0 {
         write_frame(&sim, opts, &mut frame_list, &mut stage_shapes)?;
     }
+    output_time += clock.elapsed();
     let mut failure = None;
     for (t, sample, frame) in schedule {
         if let Some(e) = mcap.as_ref().and_then(|m| m.interrupted(&sim)) {
@@ -84,6 +117,7 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
                 break;
             }
         }
+        let clock = Instant::now();
         if sample {
             history.record(&mut sim);
             if let Some(m) = &mut mcap {
@@ -93,9 +127,11 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
         if frame {
             write_frame(&sim, opts, &mut frame_list, &mut stage_shapes)?;
         }
+        output_time += clock.elapsed();
         bar.set_position((sim.time() / end * 1000.0) as u64);
     }
     bar.finish_and_clear();
+    let clock = Instant::now();
     if failure.is_some() {
         history.record(&mut sim);
         if let Some(m) = &mut mcap {
@@ -109,14 +145,26 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     if frames > 0 {
         vtu::write_pvd(&opts.out.join("frames.pvd"), &frame_list).map_err(|e| e.to_string())?;
     }
-    let summary = output::summary(&sim, wall.elapsed().as_secs_f64(), failure.as_deref());
+    // Plots come before the summary so that their time is in it; the summary is written
+    // even when a plot fails, and the plot's error is returned after it.
+    let plotted = if opts.frames {
+        history
+            .plots(&sim, &opts.out)
+            .and_then(|()| write_stages(&sim, opts, &stage_shapes))
+    } else {
+        Ok(())
+    };
+    output_time += clock.elapsed();
+    let summary = output::summary(
+        &sim,
+        wall.elapsed().as_secs_f64(),
+        output_time.as_secs_f64(),
+        failure.as_deref(),
+    );
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     std::fs::write(opts.out.join("summary.json"), text)
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
-    if opts.frames {
-        history.plots(&sim, &opts.out)?;
-        write_stages(&sim, opts, &stage_shapes)?;
-    }
+    plotted?;
     match failure {
         Some(e) => Err(format!(
             "{e}\n(history and summary up to the failure are in {})",

@@ -270,8 +270,10 @@ fn min_spacing(sim: &Simulation) -> f64 {
     h[0].min(h[1])
 }
 
-/// The summary (summary.json): scene, discretisation, run, workpiece, energy, tools, contact.
-pub fn summary(sim: &Simulation, wall_s: f64, error: Option<&str>) -> Value {
+/// The summary (summary.json): scene, discretisation, run, workpiece, energy, tools, contact,
+/// and the wall time of each stage (s); `output_s` is the time the caller spent sampling the
+/// history and writing files (history.csv, frames, plots, MCAP).
+pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>) -> Value {
     let m = measures(sim);
     let e = sim.energy();
     let x = m.extents;
@@ -332,6 +334,7 @@ pub fn summary(sim: &Simulation, wall_s: f64, error: Option<&str>) -> Value {
             "internal_force": times.internal_force.as_secs_f64(),
             "contact": times.contact.as_secs_f64(),
             "integration": times.integration.as_secs_f64(),
+            "output": output_s,
         },
     })
 }
