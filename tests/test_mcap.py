@@ -192,7 +192,8 @@ def test_a_killed_process_leaves_a_file_readable_to_its_last_chunk(rkforge_bin, 
     p = subprocess.Popen([rkforge_bin, "run", str(scene), "--no-frames", "--quiet",
                           "--out", str(tmp_path / "out"), "--mcap", str(path)],
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    # A chunk is closed at 512 KiB (or after 1 s of wall time); the whole file is about 2 MB.
+    # A chunk is closed after the sample that brings it to 512 KiB (or after 1 s of wall
+    # time), so it holds whole samples; the whole file is about 2 MB.
     t0 = time.monotonic()
     while (not path.exists() or path.stat().st_size < 600_000) and time.monotonic() - t0 < 30:
         assert p.poll() is None, "the run ended before it could be killed"
@@ -226,6 +227,7 @@ def test_a_killed_process_leaves_a_file_readable_to_its_last_chunk(rkforge_bin, 
             assert msg.clock.sec * 10**9 + msg.clock.nanosec == m.log_time
         if ch.topic == "/rkforge/tools":
             assert all(math.isfinite(v) for v in msg.effort)
+    # Whole samples only: every topic of every sample up to the last complete chunk.
     assert len(messages) == clocks * len(TOPICS)
     times = [m.log_time for m in messages]
     assert times == sorted(times)

@@ -2,10 +2,11 @@
 //! schema per message type (encoding `ros2msg`, the standard definition's text), one channel
 //! per topic (message encoding `cdr`), log and publish time = simulation time (ns).
 //!
-//! The file is chunked (uncompressed) and indexed. A chunk is closed when it reaches
-//! [`CHUNK_BYTES`] or when [`FLUSH_INTERVAL`] of wall time has passed since the last one, so a
-//! killed process leaves a file that stream readers read up to its last chunk;
-//! [`Recorder::finish`] writes the summary and footer.
+//! The file is chunked (uncompressed) and indexed. Chunks hold whole samples: a chunk is
+//! closed after the sample that brings it to [`CHUNK_BYTES`], or after the first sample once
+//! [`FLUSH_INTERVAL`] of wall time has passed since the last one, so a killed process leaves
+//! a file that stream readers read up to its last chunk, with every topic of every sample in
+//! it; [`Recorder::finish`] writes the summary and footer.
 
 use crate::frame::Sample;
 use crate::Topic;
@@ -17,10 +18,10 @@ use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-/// Largest chunk before it is written out (bytes, uncompressed).
+/// Size from which a chunk is written out at the end of the sample (bytes, uncompressed).
 pub const CHUNK_BYTES: u64 = 512 * 1024;
 
-/// Longest wall time a message waits in an unwritten chunk.
+/// Wall time after which the chunk is written out at the end of the next sample.
 pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
 
 /// Writes samples into an MCAP file.
@@ -30,6 +31,8 @@ pub struct Recorder {
     channels: Vec<u16>,
     sequence: u32,
     last_flush: Instant,
+    /// Bytes of message records in the open chunk.
+    pending: u64,
 }
 
 impl Recorder {
@@ -46,7 +49,7 @@ impl Recorder {
             .profile("ros2")
             .library(concat!("rkforge-ros ", env!("CARGO_PKG_VERSION")))
             .compression(None)
-            .chunk_size(Some(CHUNK_BYTES))
+            .chunk_size(None)
             .create(BufWriter::new(file))
             .map_err(|e| fail(&e))?;
         let mut schemas: BTreeMap<&str, u16> = BTreeMap::new();
@@ -78,6 +81,7 @@ impl Recorder {
             channels,
             sequence: 0,
             last_flush: Instant::now(),
+            pending: 0,
         })
     }
 
@@ -106,12 +110,15 @@ impl Recorder {
             self.writer
                 .write_to_known_channel(&header, data)
                 .map_err(|e| format!("MCAP file {}: {e}", self.path.display()))?;
+            // Opcode, record length, channel id, sequence, log and publish times.
+            self.pending += 1 + 8 + 2 + 4 + 8 + 8 + data.len() as u64;
         }
-        if self.last_flush.elapsed() >= FLUSH_INTERVAL {
+        if self.pending >= CHUNK_BYTES || self.last_flush.elapsed() >= FLUSH_INTERVAL {
             self.writer
                 .flush()
                 .map_err(|e| format!("MCAP file {}: {e}", self.path.display()))?;
             self.last_flush = Instant::now();
+            self.pending = 0;
         }
         Ok(())
     }
@@ -179,6 +186,36 @@ mod tests {
         let schema = last.channel.schema.as_ref().unwrap();
         assert_eq!(schema.encoding, "ros2msg");
         assert_eq!(schema.name, "rosgraph_msgs/msg/Clock");
+    }
+
+    /// Chunks close between samples: no sample's messages straddle two chunks, so the
+    /// chunks' time ranges (one log time per sample) do not touch.
+    #[test]
+    fn chunks_hold_whole_samples() {
+        let scene =
+            Scene::from_str_named(include_str!("../../scenes/block_forging.toml"), "b").unwrap();
+        let topics = crate::topics(&scene, "/rkforge").unwrap();
+        let mut sim = Simulation::new(&scene).unwrap();
+        let path = std::env::temp_dir().join(format!("rkforge_chk_{}.mcap", std::process::id()));
+        let mut rec = Recorder::create(&path, &topics).unwrap();
+        let samples = 150;
+        for _ in 0..samples {
+            sim.step(None).unwrap();
+            rec.write(&sample(&sim)).unwrap();
+        }
+        rec.finish().unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        assert_eq!(summary.stats.unwrap().message_count, samples * 6);
+        let chunks = &summary.chunk_indexes;
+        assert!(chunks.len() >= 2, "{} chunks", chunks.len());
+        for pair in chunks.windows(2) {
+            assert!(pair[0].message_end_time < pair[1].message_start_time);
+            assert!(pair[0].uncompressed_size >= CHUNK_BYTES);
+            assert!(pair[0].uncompressed_size < CHUNK_BYTES + 64 * 1024);
+            assert_eq!(pair[0].message_index_offsets.len(), 6);
+        }
     }
 
     #[test]
