@@ -235,10 +235,13 @@ fn default_run() -> Result<(), String> {
     );
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
+    println!("{}", report.stages());
     println!(
         "results in {} (summary.json, history.csv, frames/, *.png)",
         opts.out.display()
     );
-    println!("run another scene: rkforge run scenes/<name>.toml [--integration q2|q4] [--out DIR]");
+    println!(
+        "run another scene: rkforge run scenes/<name>.toml [--integration q2|q4|scni] [--out DIR]"
+    );
     Ok(())
 }
