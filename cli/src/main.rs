@@ -131,16 +131,7 @@ fn main() -> ExitCode {
 }
 
 fn set_threads(n: Option<usize>) -> Result<(), String> {
-    if let Some(n) = n {
-        if n == 0 {
-            return Err("--threads must be at least 1".into());
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .map_err(|e| format!("cannot start {n} threads: {e}"))?;
-    }
-    Ok(())
+    rkforge_core::set_threads(n).map_err(|e| e.to_string())
 }
 
 fn run_command(a: RunArgs) -> Result<(), String> {

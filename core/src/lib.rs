@@ -22,3 +22,23 @@ pub mod tools;
 pub use error::{Error, Result};
 pub use scene::{IntegrationRule, Kinematics, Scene};
 pub use solver::{Energy, Extents, Fields, Simulation, StageTimes, State};
+
+/// Size rayon's global pool, which runs the parallel stages, to `threads` worker threads
+/// (a `--threads` option); `None` keeps rayon's default of one per core. Results are the
+/// same bits for any count.
+///
+/// # Errors
+///
+/// `Some(0)`, or the pool cannot be built (for example because it already was).
+pub fn set_threads(threads: Option<usize>) -> Result<()> {
+    let Some(n) = threads else {
+        return Ok(());
+    };
+    if n == 0 {
+        return Err(Error::Request("--threads must be at least 1".into()));
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build_global()
+        .map_err(|e| Error::Request(format!("cannot start {n} threads: {e}")))
+}

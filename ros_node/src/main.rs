@@ -99,15 +99,7 @@ fn positive(name: &str, v: Option<f64>) -> Result<(), String> {
 fn run(a: &Args) -> Result<(), String> {
     positive("--real-time-factor", a.real_time_factor)?;
     positive("--publish-rate", a.publish_rate)?;
-    if let Some(n) = a.threads {
-        if n == 0 {
-            return Err("--threads must be at least 1".into());
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .map_err(|e| format!("cannot start {n} threads: {e}"))?;
-    }
+    rkforge_core::set_threads(a.threads).map_err(|e| e.to_string())?;
     let scene = Scene::from_file(&a.scene).map_err(|e| e.to_string())?;
     let topics = rkforge_ros::topics(&scene, &a.namespace)?;
     let domain = domain_id_from_env()?;

@@ -152,23 +152,30 @@ mod tests {
     use crate::frame::sample;
     use rkforge_core::{Scene, Simulation};
 
-    #[test]
-    fn a_recording_reads_back_with_every_message() {
-        let text = include_str!("../../scenes/block_forging.toml")
-            .replace("particles = [21, 21]", "particles = [5, 5]");
-        let scene = Scene::from_str_named(&text, "block").unwrap();
+    /// The MCAP bytes of `samples` samples of the scene `text` (at t = 0, then one per step)
+    /// and the simulation at the last one; `name` keeps the temporary files of tests apart.
+    fn record(text: &str, name: &str, samples: usize) -> (Vec<u8>, Simulation) {
+        let scene = Scene::from_str_named(text, "block").unwrap();
         let topics = crate::topics(&scene, "/rkforge").unwrap();
         let mut sim = Simulation::new(&scene).unwrap();
-        let path = std::env::temp_dir().join(format!("rkforge_rec_{}.mcap", std::process::id()));
+        let path = std::env::temp_dir().join(format!("rkforge_{name}_{}.mcap", std::process::id()));
         let mut rec = Recorder::create(&path, &topics).unwrap();
         rec.write(&sample(&sim)).unwrap();
-        for _ in 0..3 {
+        for _ in 1..samples {
             sim.step(None).unwrap();
             rec.write(&sample(&sim)).unwrap();
         }
         rec.finish().unwrap();
         let bytes = std::fs::read(&path).unwrap();
         std::fs::remove_file(&path).unwrap();
+        (bytes, sim)
+    }
+
+    #[test]
+    fn a_recording_reads_back_with_every_message() {
+        let text = include_str!("../../scenes/block_forging.toml")
+            .replace("particles = [21, 21]", "particles = [5, 5]");
+        let (bytes, sim) = record(&text, "rec", 4);
         let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
         let stats = summary.stats.unwrap();
         assert_eq!(stats.message_count, 4 * 6);
@@ -192,22 +199,14 @@ mod tests {
     /// chunks' time ranges (one log time per sample) do not touch.
     #[test]
     fn chunks_hold_whole_samples() {
-        let scene =
-            Scene::from_str_named(include_str!("../../scenes/block_forging.toml"), "b").unwrap();
-        let topics = crate::topics(&scene, "/rkforge").unwrap();
-        let mut sim = Simulation::new(&scene).unwrap();
-        let path = std::env::temp_dir().join(format!("rkforge_chk_{}.mcap", std::process::id()));
-        let mut rec = Recorder::create(&path, &topics).unwrap();
         let samples = 150;
-        for _ in 0..samples {
-            sim.step(None).unwrap();
-            rec.write(&sample(&sim)).unwrap();
-        }
-        rec.finish().unwrap();
-        let bytes = std::fs::read(&path).unwrap();
-        std::fs::remove_file(&path).unwrap();
+        let (bytes, _) = record(
+            include_str!("../../scenes/block_forging.toml"),
+            "chk",
+            samples,
+        );
         let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-        assert_eq!(summary.stats.unwrap().message_count, samples * 6);
+        assert_eq!(summary.stats.unwrap().message_count, samples as u64 * 6);
         let chunks = &summary.chunk_indexes;
         assert!(chunks.len() >= 2, "{} chunks", chunks.len());
         for pair in chunks.windows(2) {
