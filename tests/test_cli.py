@@ -106,6 +106,23 @@ def test_stage_timers_account_for_the_wall_time(coarse_run):
     assert "stages: setup" in stdout and "strain and stress" in stdout and "output" in stdout
 
 
+def test_a_history_interval_that_does_not_divide_the_run_still_reaches_the_end(rkforge_bin, tmp_path):
+    scene = tmp_path / "block.toml"
+    scene.write_text(scene_variant("block_forging.toml", {
+        "particles = [21, 21]": "particles = [7, 7]",
+        "history_interval_s = 0.15e-3": "history_interval_s = 6.2e-3",
+    }))
+    out = tmp_path / "out"
+    proc = subprocess.run([rkforge_bin, "run", str(scene), "--no-frames", "--quiet", "--out", str(out)],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    s = json.loads((out / "summary.json").read_text())
+    assert s["end_time_s"] == pytest.approx(0.015, rel=1e-12)
+    with open(out / "history.csv") as f:
+        times = [float(row["time_s"]) for row in csv.DictReader(f)]
+    assert times == pytest.approx([0.0, 6.2e-3, 12.4e-3, 15e-3], rel=1e-12)
+
+
 def test_table_is_printed_beside_the_references(coarse_run):
     _, stdout = coarse_run
     assert "Sidibe et al. 2009, Table 3, RKPM Q2" in stdout

@@ -78,11 +78,12 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     let mut sim = Simulation::new(scene).map_err(|e| e.to_string())?;
     let end = scene.time.end_s;
     let interval = scene.output.history_interval_s.unwrap_or(end / 200.0);
-    let samples = ((end / interval).round() as u64).max(1);
     let frames = if opts.frames { scene.output.frames } else { 0 };
-    // Sample times k * interval and frame times k * end / frames, merged in order.
-    let mut schedule: Vec<(f64, bool, bool)> = (1..=samples)
-        .map(|k| ((k as f64 * interval).min(end), true, false))
+    // Sample times (up to the end) and frame times k * end / frames, merged in order.
+    let mut schedule: Vec<(f64, bool, bool)> = rkforge_core::sample_times(end, interval)
+        .ok_or_else(|| format!("output.history_interval_s {interval:e} s: too many samples"))?
+        .into_iter()
+        .map(|t| (t, true, false))
         .collect();
     schedule.extend((1..=frames).map(|k| (end * k as f64 / frames as f64, false, true)));
     schedule.sort_by(|a, b| a.0.total_cmp(&b.0));

@@ -21,7 +21,9 @@ pub mod tools;
 
 pub use error::{Error, Result};
 pub use scene::{IntegrationRule, Kinematics, Scene};
-pub use solver::{Energy, Extents, Fields, Simulation, StageTimes, State};
+pub use solver::{
+    sample_times, Energy, Extents, Fields, Simulation, StageTimes, State, MAX_SAMPLES,
+};
 
 /// Size rayon's global pool, which runs the parallel stages, to `threads` worker threads
 /// (a `--threads` option); `None` keeps rayon's default of one per core. Results are the

@@ -584,9 +584,14 @@ impl Scene {
         }
         if let Some(h) = self.output.history_interval_s {
             check(
-                pos(h),
+                pos(h)
+                    && (self.time.end_s.is_nan()
+                        || self.time.end_s / h <= crate::solver::MAX_SAMPLES as Real),
                 "output.history_interval_s",
-                format!("must be positive, got {h}"),
+                format!(
+                    "must be positive and give at most {} samples over time.end_s, got {h}",
+                    crate::solver::MAX_SAMPLES
+                ),
             );
         }
         check(

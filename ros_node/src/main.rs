@@ -5,7 +5,7 @@
 //! and forwards velocity commands, which the simulation applies before its next step.
 
 use clap::Parser;
-use rkforge_core::{Scene, Simulation};
+use rkforge_core::{Scene, Simulation, MAX_SAMPLES};
 use rkforge_ros::dds::{domain_id_from_env, Command, Node};
 use rkforge_ros::frame::{sample, Sample};
 use rkforge_ros::record::Recorder;
@@ -180,33 +180,17 @@ fn run(a: &Args) -> Result<(), String> {
     Ok(())
 }
 
-/// Most samples a run publishes.
-const MAX_SAMPLES: f64 = 1e7;
-
-/// Sample times after t = 0: `k * interval` as `rkforge run` samples its history (the count
-/// rounded when `end / interval` is a whole number up to rounding errors), then `end` if the
-/// last one falls short of it.
+/// Sample times after t = 0, as `rkforge run` samples its history
+/// ([`rkforge_core::sample_times`]).
 fn schedule(end: f64, interval: f64) -> Result<Vec<f64>, String> {
-    let ratio = end / interval;
-    let n = if (ratio - ratio.round()).abs() < 1e-9 * ratio.max(1.0) {
-        ratio.round()
-    } else {
-        ratio.floor()
-    };
-    if n > MAX_SAMPLES {
-        return Err(format!(
-            "--publish-rate {:e} Hz gives {n:e} samples over {end:e} s; at most {MAX_SAMPLES:e}",
-            1.0 / interval
-        ));
-    }
-    // n is a whole number in [0, 1e7]: the cast is exact.
-    let mut times: Vec<f64> = (1..=n as u64)
-        .map(|k| (k as f64 * interval).min(end))
-        .collect();
-    if times.last().is_none_or(|&t| t < end * (1.0 - 1e-12)) {
-        times.push(end);
-    }
-    Ok(times)
+    rkforge_core::sample_times(end, interval).ok_or_else(|| {
+        format!(
+            "--publish-rate {:e} Hz gives {:e} samples over {end:e} s; at most {:e}",
+            1.0 / interval,
+            (end / interval).floor(),
+            MAX_SAMPLES as f64
+        )
+    })
 }
 
 /// The simulation thread: a sample at t = 0 and at each time of `schedule`, stepping as
