@@ -51,9 +51,9 @@ pub fn domain_id_from_env() -> Result<u16, String> {
     match std::env::var("ROS_DOMAIN_ID") {
         Ok(v) => parse_domain_id(Some(&v)),
         Err(std::env::VarError::NotPresent) => Ok(0),
-        Err(std::env::VarError::NotUnicode(v)) => {
-            Err(format!("ROS_DOMAIN_ID {v:?} is not an integer in 0..=232"))
-        }
+        Err(std::env::VarError::NotUnicode(v)) => Err(format!(
+            "ROS_DOMAIN_ID {v:?} is not an integer in 0..={MAX_DOMAIN_ID}"
+        )),
     }
 }
 
