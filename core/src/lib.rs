@@ -12,6 +12,7 @@ pub mod constraints;
 pub mod error;
 pub mod integration;
 pub mod kernel;
+pub mod lanes;
 pub mod material;
 pub mod math;
 pub mod rk_shape;

@@ -4,4 +4,4 @@ pub mod hardening;
 pub mod simo1992_hencky_j2;
 
 pub use hardening::Hardening;
-pub use simo1992_hencky_j2::{HenckyJ2, PointState, StressUpdate};
+pub use simo1992_hencky_j2::{HenckyJ2, PointLanes, PointState, StressLanes, StressUpdate};
