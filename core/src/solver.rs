@@ -391,9 +391,11 @@ impl StressContext<'_> {
         }
     }
 
-    /// Gather or scatter (`op`) a group of `g` points, `g` in `1..=MAX_GROUP`.
+    /// Gather (`SCATTER` false) or scatter a group of `g` points, `g` in `1..=MAX_GROUP`;
+    /// pairs and quads through [`group_avx2`] in the AVX2 build (`AVX2`, only from
+    /// `chunk_avx2`).
     #[inline(always)]
-    fn group<const SCATTER: bool>(
+    fn group<const SCATTER: bool, const AVX2: bool>(
         &self,
         g: usize,
         p0: usize,
@@ -411,6 +413,26 @@ impl StressContext<'_> {
                 }
             };
         }
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 && (g == 2 || g == 4) {
+            let index = &self.pt.index[self.pt.row(p0)];
+            let start = self.table_start[p0] as usize;
+            let table = &self.table[start..start + 3 * g * index.len()];
+            // SAFETY: `AVX2` is true only inside `chunk_avx2`, called where the CPU has AVX2.
+            unsafe {
+                match (SCATTER, g) {
+                    (false, 2) => group_avx2::gather2(index, table, self.d, &mut lanes.f, l0),
+                    (false, _) => group_avx2::gather4(index, table, self.d, &mut lanes.f, l0),
+                    (true, 2) => {
+                        group_avx2::scatter2(index, table, &lanes.pw, &lanes.px, l0, buf, lo)
+                    }
+                    (true, _) => {
+                        group_avx2::scatter4(index, table, &lanes.pw, &lanes.px, l0, buf, lo)
+                    }
+                }
+            }
+            return;
+        }
         match g {
             1 => run!(1),
             2 => run!(2),
@@ -425,7 +447,7 @@ impl StressContext<'_> {
     /// do not depend on the batch, so the bits equal a point-by-point loop.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn chunk(
+    fn chunk<const AVX2: bool>(
         &self,
         c: usize,
         chunk: usize,
@@ -455,7 +477,7 @@ impl StressContext<'_> {
             let mut used = 0;
             while k < states.len() && used + group[c * chunk + k] as usize <= LANES {
                 let g = group[c * chunk + k] as usize;
-                self.group::<false>(g, c * chunk + k, used, &mut lanes, buf, lo);
+                self.group::<false, AVX2>(g, c * chunk + k, used, &mut lanes, buf, lo);
                 used += g;
                 k += g;
             }
@@ -484,6 +506,18 @@ impl StressContext<'_> {
                     return s;
                 }
             };
+            // Smallest altitude of the deformed cell spanned by F (hx e_x), F (hy e_y):
+            // det F hx hy / max(|F hx e_x|, |F hy e_y|), compared squared (all lanes at
+            // once; unused lanes hold F = I and are not read).
+            let mut altitude2 = [0.0; LANES];
+            for (l, a2) in altitude2.iter_mut().enumerate() {
+                let (f11, f12, f21, f22) =
+                    (batch.f[0][l], batch.f[1][l], batch.f[2][l], batch.f[3][l]);
+                let ex2 = hx * hx * (f11 * f11 + f21 * f21);
+                let ey2 = hy * hy * (f12 * f12 + f22 * f22);
+                let area = (f11 * f22 - f12 * f21) * hx * hy;
+                *a2 = area * area.abs() / ex2.max(ey2);
+            }
             for l in 0..used {
                 let p = c * chunk + k0 + l;
                 let (state, out) = (&mut states[k0 + l], &mut outs[k0 + l]);
@@ -497,14 +531,7 @@ impl StressContext<'_> {
                 let w = self.weights[p];
                 s.elastic += u.elastic_energy[l] * w;
                 s.plastic += out.plastic_work * w;
-                // Smallest altitude of the deformed cell spanned by F (hx e_x), F (hy e_y):
-                // det F hx hy / max(|F hx e_x|, |F hy e_y|), compared squared.
-                let (f11, f12, f21, f22) =
-                    (batch.f[0][l], batch.f[1][l], batch.f[2][l], batch.f[3][l]);
-                let ex2 = hx * hx * (f11 * f11 + f21 * f21);
-                let ey2 = hy * hy * (f12 * f12 + f22 * f22);
-                let area = (f11 * f22 - f12 * f21) * hx * hy;
-                s.min_altitude2 = s.min_altitude2.min(area * area.abs() / ex2.max(ey2));
+                s.min_altitude2 = s.min_altitude2.min(altitude2[l]);
                 // Scatter weights w_p (P grad N_I + e_r P_33 N_I / R_p).
                 let q = [
                     u.piola[0][l] * w,
@@ -527,7 +554,7 @@ impl StressContext<'_> {
             let mut l0 = 0;
             while l0 < used {
                 let g = group[c * chunk + k0 + l0] as usize;
-                self.group::<true>(g, c * chunk + k0 + l0, l0, &mut lanes, buf, lo);
+                self.group::<true, AVX2>(g, c * chunk + k0 + l0, l0, &mut lanes, buf, lo);
                 l0 += g;
             }
         }
@@ -552,7 +579,191 @@ impl StressContext<'_> {
         lo: usize,
         buf: &mut [[Real; 2]],
     ) -> ChunkSums {
-        self.chunk(c, chunk, group, states, outs, lo, buf)
+        self.chunk::<true>(c, chunk, group, states, outs, lo, buf)
+    }
+}
+
+/// Gather and scatter of a pair (q2 cell) or a quad (q4 cell) of points sharing a particle
+/// list, with explicit 256-bit vectors: a neighbour's entries `[N.., N_x.., N_y..]` give
+/// `F_xX`, `F_xY` of all the group's points from products with `d_x`, and `F_yX`, `F_yY`
+/// from products with `d_y`. Each lane does the multiplies and adds of
+/// [`StressContext::gather`] and [`StressContext::scatter`] in their order (no fused
+/// multiply-add), so the bits are the generic build's; left to itself the compiler splits
+/// these loops into 128-bit pieces and shuffles (the quad gather took some 70 instructions
+/// per neighbour).
+#[cfg(target_arch = "x86_64")]
+mod group_avx2 {
+    use super::{Lanes, Real};
+    use std::arch::x86_64::*;
+
+    /// Loads 4 values.
+    #[inline(always)]
+    fn load4(x: &[Real]) -> __m256d {
+        assert!(x.len() >= 4);
+        // SAFETY: 4 values are in bounds (checked above).
+        unsafe { _mm256_loadu_pd(x.as_ptr()) }
+    }
+
+    /// Loads 2 values.
+    #[inline(always)]
+    fn load2(x: &[Real]) -> __m128d {
+        assert!(x.len() >= 2);
+        // SAFETY: 2 values are in bounds (checked above).
+        unsafe { _mm_loadu_pd(x.as_ptr()) }
+    }
+
+    /// The 4 values of a vector.
+    #[inline(always)]
+    fn store4(x: __m256d) -> [Real; 4] {
+        let mut out = [0.0; 4];
+        // SAFETY: `out` holds 4 values.
+        unsafe { _mm256_storeu_pd(out.as_mut_ptr(), x) };
+        out
+    }
+
+    /// Adds `[b0, b1]` pairs to a buffer entry in order: `((b + p[0]) + p[1]) + ..`.
+    #[inline(always)]
+    fn add_to(b: &mut [Real; 2], pairs: &[__m128d]) {
+        // SAFETY: `b` holds 2 values.
+        unsafe {
+            let mut acc = _mm_loadu_pd(b.as_ptr());
+            for &p in pairs {
+                acc = _mm_add_pd(acc, p);
+            }
+            _mm_storeu_pd(b.as_mut_ptr(), acc);
+        }
+    }
+
+    /// `F` and `u_r` of a pair into lanes `l0, l0 + 1` of `f`; neighbour entries
+    /// `[N_1, N_2, N_1,x, N_2,x, N_1,y, N_2,y]`.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn gather2(
+        index: &[u32],
+        table: &[Real],
+        d: &[[Real; 2]],
+        f: &mut [Lanes; 5],
+        l0: usize,
+    ) {
+        // [F_xX 1, F_xX 2, F_xY 1, F_xY 2] and [F_yX 1, F_yX 2, F_yY 1, F_yY 2].
+        let mut fx = _mm256_setr_pd(1.0, 1.0, 0.0, 0.0);
+        let mut fy = _mm256_setr_pd(0.0, 0.0, 1.0, 1.0);
+        let mut ur = _mm_setzero_pd();
+        for (&i, e) in index.iter().zip(table.chunks_exact(6)) {
+            let di = d[i as usize];
+            let (v, g) = (load2(e), load4(&e[2..]));
+            fx = _mm256_add_pd(fx, _mm256_mul_pd(_mm256_set1_pd(di[0]), g));
+            fy = _mm256_add_pd(fy, _mm256_mul_pd(_mm256_set1_pd(di[1]), g));
+            ur = _mm_add_pd(ur, _mm_mul_pd(_mm_set1_pd(di[0]), v));
+        }
+        let (a, b) = (store4(fx), store4(fy));
+        let mut u = [0.0; 2];
+        // SAFETY: `u` holds 2 values.
+        unsafe { _mm_storeu_pd(u.as_mut_ptr(), ur) };
+        for j in 0..2 {
+            f[0][l0 + j] = a[j];
+            f[1][l0 + j] = a[2 + j];
+            f[2][l0 + j] = b[j];
+            f[3][l0 + j] = b[2 + j];
+            f[4][l0 + j] = u[j];
+        }
+    }
+
+    /// `w_p (P grad N_I + e_r P_33 N_I / R_p)` of lanes `l0, l0 + 1` into `buf`.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn scatter2(
+        index: &[u32],
+        table: &[Real],
+        pw: &[Lanes; 3],
+        px: &[Lanes; 2],
+        l0: usize,
+        buf: &mut [[Real; 2]],
+        lo: usize,
+    ) {
+        let (j0, j1) = (l0, l0 + 1);
+        let wx = _mm256_setr_pd(pw[0][j0], pw[0][j1], pw[1][j0], pw[1][j1]);
+        let wy = _mm256_setr_pd(px[0][j0], px[0][j1], px[1][j0], px[1][j1]);
+        let wv = _mm_setr_pd(pw[2][j0], pw[2][j1]);
+        for (&i, e) in index.iter().zip(table.chunks_exact(6)) {
+            let (v, g) = (load2(e), load4(&e[2..]));
+            let tx = _mm256_mul_pd(wx, g);
+            let ty = _mm256_mul_pd(wy, g);
+            // Per point j: (P_xX N_x + P_xY N_y) + P_33 N / R, and P_yX N_x + P_yY N_y.
+            let sx = _mm_add_pd(
+                _mm_add_pd(_mm256_castpd256_pd128(tx), _mm256_extractf128_pd::<1>(tx)),
+                _mm_mul_pd(wv, v),
+            );
+            let sy = _mm_add_pd(_mm256_castpd256_pd128(ty), _mm256_extractf128_pd::<1>(ty));
+            add_to(
+                &mut buf[i as usize - lo],
+                &[_mm_unpacklo_pd(sx, sy), _mm_unpackhi_pd(sx, sy)],
+            );
+        }
+    }
+
+    /// `F` and `u_r` of a quad into lanes `l0..l0 + 4` of `f`; neighbour entries
+    /// `[N_1..N_4, N_1,x..N_4,x, N_1,y..N_4,y]`.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn gather4(
+        index: &[u32],
+        table: &[Real],
+        d: &[[Real; 2]],
+        f: &mut [Lanes; 5],
+        l0: usize,
+    ) {
+        let one = _mm256_set1_pd(1.0);
+        let zero = _mm256_setzero_pd();
+        let (mut fxx, mut fxy, mut fyx, mut fyy, mut ur) = (one, zero, zero, one, zero);
+        for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
+            let di = d[i as usize];
+            let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
+            let (d0, d1) = (_mm256_set1_pd(di[0]), _mm256_set1_pd(di[1]));
+            fxx = _mm256_add_pd(fxx, _mm256_mul_pd(d0, x));
+            fxy = _mm256_add_pd(fxy, _mm256_mul_pd(d0, y));
+            fyx = _mm256_add_pd(fyx, _mm256_mul_pd(d1, x));
+            fyy = _mm256_add_pd(fyy, _mm256_mul_pd(d1, y));
+            ur = _mm256_add_pd(ur, _mm256_mul_pd(d0, v));
+        }
+        for (c, x) in [fxx, fxy, fyx, fyy, ur].into_iter().enumerate() {
+            f[c][l0..l0 + 4].copy_from_slice(&store4(x));
+        }
+    }
+
+    /// `w_p (P grad N_I + e_r P_33 N_I / R_p)` of lanes `l0..l0 + 4` into `buf`.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn scatter4(
+        index: &[u32],
+        table: &[Real],
+        pw: &[Lanes; 3],
+        px: &[Lanes; 2],
+        l0: usize,
+        buf: &mut [[Real; 2]],
+        lo: usize,
+    ) {
+        let w = |x: &Lanes| load4(&x[l0..]);
+        let (wxx, wxy, wv, wyx, wyy) = (w(&pw[0]), w(&pw[1]), w(&pw[2]), w(&px[0]), w(&px[1]));
+        for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
+            let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
+            // Per point j: (P_xX N_x + P_xY N_y) + P_33 N / R, and P_yX N_x + P_yY N_y.
+            let sx = _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(wxx, x), _mm256_mul_pd(wxy, y)),
+                _mm256_mul_pd(wv, v),
+            );
+            let sy = _mm256_add_pd(_mm256_mul_pd(wyx, x), _mm256_mul_pd(wyy, y));
+            let (x01, y01) = (_mm256_castpd256_pd128(sx), _mm256_castpd256_pd128(sy));
+            let (x23, y23) = (
+                _mm256_extractf128_pd::<1>(sx),
+                _mm256_extractf128_pd::<1>(sy),
+            );
+            add_to(
+                &mut buf[i as usize - lo],
+                &[
+                    _mm_unpacklo_pd(x01, y01),
+                    _mm_unpackhi_pd(x01, y01),
+                    _mm_unpacklo_pd(x23, y23),
+                    _mm_unpackhi_pd(x23, y23),
+                ],
+            );
+        }
     }
 }
 
@@ -1224,7 +1435,7 @@ impl Simulation {
                     // SAFETY: AVX2 support was detected at run time.
                     return unsafe { cx.chunk_avx2(c, chunk, group, states, outs, lo, buf) };
                 }
-                cx.chunk(c, chunk, group, states, outs, lo, buf)
+                cx.chunk::<false>(c, chunk, group, states, outs, lo, buf)
             })
             .collect();
         self.hold_workers();
