@@ -659,13 +659,11 @@ mod group_avx2 {
         let mut u = [0.0; 2];
         // SAFETY: `u` holds 2 values.
         unsafe { _mm_storeu_pd(u.as_mut_ptr(), ur) };
-        for j in 0..2 {
-            f[0][l0 + j] = a[j];
-            f[1][l0 + j] = a[2 + j];
-            f[2][l0 + j] = b[j];
-            f[3][l0 + j] = b[2 + j];
-            f[4][l0 + j] = u[j];
-        }
+        f[0][l0..l0 + 2].copy_from_slice(&a[..2]);
+        f[1][l0..l0 + 2].copy_from_slice(&a[2..]);
+        f[2][l0..l0 + 2].copy_from_slice(&b[..2]);
+        f[3][l0..l0 + 2].copy_from_slice(&b[2..]);
+        f[4][l0..l0 + 2].copy_from_slice(&u);
     }
 
     /// `w_p (P grad N_I + e_r P_33 N_I / R_p)` of lanes `l0, l0 + 1` into `buf`.
