@@ -470,6 +470,7 @@ impl StressContext<'_> {
             pw: [[0.0; LANES]; 3],
             px: [[0.0; LANES]; 2],
         };
+        let mut batch = PointLanes::unstressed();
         let mut k = 0;
         while k < states.len() {
             // Whole groups of points, in order, while they fit in the lanes.
@@ -481,28 +482,38 @@ impl StressContext<'_> {
                 used += g;
                 k += g;
             }
-            let mut batch = PointLanes::unstressed();
-            for l in 0..used {
-                let p = c * chunk + k0 + l;
-                let (f11, f12, f21, f22, ur) = (
-                    lanes.f[0][l],
-                    lanes.f[1][l],
-                    lanes.f[2][l],
-                    lanes.f[3][l],
-                    lanes.f[4][l],
-                );
-                let f33 = if self.axi {
-                    1.0 + ur * self.inv_radius[p]
+            let p0 = c * chunk + k0;
+            if used < LANES {
+                // Unused lanes: undeformed, unstressed, unable to yield.
+                for l in used..LANES {
+                    lanes.f[0][l] = 1.0;
+                    lanes.f[1][l] = 0.0;
+                    lanes.f[2][l] = 0.0;
+                    lanes.f[3][l] = 1.0;
+                    lanes.f[4][l] = 0.0;
+                }
+                batch = PointLanes::unstressed();
+            }
+            let mut weight = [0.0; LANES];
+            weight[..used].copy_from_slice(&self.weights[p0..p0 + used]);
+            let mut inv_radius = [0.0; LANES];
+            inv_radius[..used].copy_from_slice(&self.inv_radius[p0..p0 + used]);
+            batch.f.copy_from_slice(&lanes.f[..4]);
+            for l in 0..LANES {
+                batch.f33[l] = if self.axi {
+                    1.0 + lanes.f[4][l] * inv_radius[l]
                 } else {
                     1.0
                 };
-                let flow = outs[k0 + l].flow_stress;
-                batch.set(l, [f11, f12, f21, f22], f33, &states[k0 + l], flow);
+            }
+            let (states, outs) = (&mut states[k0..k0 + used], &mut outs[k0..k0 + used]);
+            for (l, (state, out)) in states.iter().zip(outs.iter()).enumerate() {
+                batch.set_history(l, state, out.flow_stress);
             }
             let u = match self.material.update_lanes(&mut batch) {
                 Ok(u) => u,
                 Err((l, m)) => {
-                    s.failure = Some((c * chunk + k0 + l, m));
+                    s.failure = Some((p0 + l, m));
                     return s;
                 }
             };
@@ -518,9 +529,20 @@ impl StressContext<'_> {
                 let area = (f11 * f22 - f12 * f21) * hx * hy;
                 *a2 = area * area.abs() / ex2.max(ey2);
             }
-            for l in 0..used {
-                let p = c * chunk + k0 + l;
-                let (state, out) = (&mut states[k0 + l], &mut outs[k0 + l]);
+            // Scatter weights w_p (P grad N_I + e_r P_33 N_I / R_p), all lanes at once.
+            for l in 0..LANES {
+                let w = weight[l];
+                lanes.pw[0][l] = u.piola[0][l] * w;
+                lanes.pw[1][l] = u.piola[1][l] * w;
+                lanes.px[0][l] = u.piola[2][l] * w;
+                lanes.px[1][l] = u.piola[3][l] * w;
+                lanes.pw[2][l] = if self.axi {
+                    u.piola[4][l] * w * inv_radius[l]
+                } else {
+                    0.0
+                };
+            }
+            for (l, (state, out)) in states.iter_mut().zip(outs.iter_mut()).enumerate() {
                 let eps_p = state.eps_p;
                 *state = batch.state(l);
                 if state.eps_p != eps_p {
@@ -528,28 +550,9 @@ impl StressContext<'_> {
                 }
                 out.von_mises = u.von_mises[l];
                 out.jacobian = u.jacobian[l];
-                let w = self.weights[p];
-                s.elastic += u.elastic_energy[l] * w;
-                s.plastic += out.plastic_work * w;
+                s.elastic += u.elastic_energy[l] * weight[l];
+                s.plastic += out.plastic_work * weight[l];
                 s.min_altitude2 = s.min_altitude2.min(altitude2[l]);
-                // Scatter weights w_p (P grad N_I + e_r P_33 N_I / R_p).
-                let q = [
-                    u.piola[0][l] * w,
-                    u.piola[1][l] * w,
-                    u.piola[2][l] * w,
-                    u.piola[3][l] * w,
-                    u.piola[4][l] * w,
-                ];
-                let hoop = if self.axi {
-                    q[4] * self.inv_radius[p]
-                } else {
-                    0.0
-                };
-                for (c, v) in [q[0], q[1], hoop].into_iter().enumerate() {
-                    lanes.pw[c][l] = v;
-                }
-                lanes.px[0][l] = q[2];
-                lanes.px[1][l] = q[3];
             }
             let mut l0 = 0;
             while l0 < used {

@@ -115,6 +115,17 @@ impl PointLanes {
         self.flow_stress[l] = flow;
     }
 
+    /// Loads the history of one point into lane `l`.
+    #[inline(always)]
+    pub fn set_history(&mut self, l: usize, state: &PointState, flow: Real) {
+        self.cp_inv[0][l] = state.cp_inv[0];
+        self.cp_inv[1][l] = state.cp_inv[1];
+        self.cp_inv[2][l] = state.cp_inv[2];
+        self.cp_inv[3][l] = state.cp_inv[3];
+        self.eps_p[l] = state.eps_p;
+        self.flow_stress[l] = flow;
+    }
+
     /// The history of lane `l`.
     #[inline(always)]
     pub fn state(&self, l: usize) -> PointState {
