@@ -447,6 +447,7 @@ impl StressContext<'_> {
     /// do not depend on the batch, so the bits equal a point-by-point loop.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
+    #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
     fn chunk<const AVX2: bool>(
         &self,
         c: usize,
