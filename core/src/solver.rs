@@ -769,6 +769,15 @@ mod group_avx2 {
     }
 }
 
+/// Whether the CPU runs the AVX2 build of the stress stage (x86_64 with AVX2; false on
+/// other architectures, which use the generic build).
+fn has_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return std::arch::is_x86_feature_detected!("avx2");
+    #[cfg(not(target_arch = "x86_64"))]
+    return false;
+}
+
 /// Per-batch lanes of the stress stage: gathered `[F_xX, F_xY, F_yX, F_yY, u_r]`, and the
 /// weighted stresses to scatter (see [`StressContext::scatter`]).
 struct Batch {
@@ -1411,8 +1420,7 @@ impl Simulation {
             axi,
             spacing: self.spacing,
         };
-        #[cfg(target_arch = "x86_64")]
-        let avx2 = self.simd && std::arch::is_x86_feature_detected!("avx2");
+        let avx2 = self.simd && has_avx2();
         let (chunk, group) = (*chunk, &*group);
         let mut slices = Vec::with_capacity(lo.len());
         let mut rest = buf.as_mut_slice();
@@ -1432,9 +1440,9 @@ impl Simulation {
             .zip(slices.into_par_iter())
             .enumerate()
             .map(|(c, ((states, outs), (lo, buf)))| {
-                #[cfg(target_arch = "x86_64")]
                 if avx2 {
-                    // SAFETY: AVX2 support was detected at run time.
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: AVX2 support was detected at run time (`has_avx2`).
                     return unsafe { cx.chunk_avx2(c, chunk, group, states, outs, lo, buf) };
                 }
                 cx.chunk::<false>(c, chunk, group, states, outs, lo, buf)
