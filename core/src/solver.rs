@@ -848,6 +848,9 @@ pub struct Simulation {
     spacing: [Real; 2],
     ref_pos: Vec<[Real; 2]>,
     mass: Vec<Real>,
+    /// `1 / m_I` (1/kg): the predictor and corrector multiply by it (two divisions per
+    /// particle and step were a quarter of the serial stages' time).
+    inv_mass: Vec<Real>,
     points: PointSet,
     weights: Vec<Real>,
     /// `1 / R_p` of each integration point (1/m) in axisymmetry, 1 in plane strain.
@@ -1009,6 +1012,7 @@ impl Simulation {
             nx,
             ny,
             spacing: h,
+            inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
             mass,
             weights,
             inv_radius,
@@ -1219,9 +1223,10 @@ impl Simulation {
         let dt_avg = 0.5 * (dt + self.st.dt_prev);
         // Predictor.
         self.v_prev.copy_from_slice(&self.st.v);
-        for ((v, f), m) in self.st.v.iter_mut().zip(&self.f_int).zip(&self.mass) {
-            v[0] -= dt_avg * f[0] / m;
-            v[1] -= dt_avg * f[1] / m;
+        for ((v, f), im) in self.st.v.iter_mut().zip(&self.f_int).zip(&self.inv_mass) {
+            let a = dt_avg * im;
+            v[0] -= a * f[0];
+            v[1] -= a * f[1];
         }
         // Tools advance over the step at their mid-step velocity.
         let t_mid = self.st.time + 0.5 * dt;
@@ -1234,9 +1239,10 @@ impl Simulation {
         let t4 = Instant::now();
         // Corrector, constraints, update.
         if contact_work_rate {
-            for ((v, f), m) in self.st.v.iter_mut().zip(&self.f_con).zip(&self.mass) {
-                v[0] += dt_avg * f[0] / m;
-                v[1] += dt_avg * f[1] / m;
+            for ((v, f), im) in self.st.v.iter_mut().zip(&self.f_con).zip(&self.inv_mass) {
+                let a = dt_avg * im;
+                v[0] += a * f[0];
+                v[1] += a * f[1];
             }
         }
         if let Some(c) = &self.constraints {
@@ -1674,7 +1680,7 @@ impl Simulation {
             + self.scatter.table_start.len() * 4
             + (self.scatter.cover.len() + self.scatter.cover_offsets.len() + self.scatter.lo.len())
                 * 4
-            + np * (5 * r2 + 8)
+            + np * (5 * r2 + 2 * 8)
             + npts
                 * (r2 + 3 * 8 + std::mem::size_of::<PointState>() + std::mem::size_of::<PointOut>())
             + self.boundary.len() * 4
