@@ -301,17 +301,14 @@ impl HenckyJ2 {
         }
         // Radial return (step 4), lanes that yield only.
         let mut scale = [1.0; LANES];
-        let mut dgamma = [0.0; LANES];
         let mut yields = [false; LANES];
         for l in 0..LANES {
             yields[l] = t.q_trial[l] > p.flow_stress[l];
         }
         if yields.iter().any(|&y| y) {
+            let dgamma = self.return_map(&t.q_trial, &p.eps_p, &p.flow_stress, &yields)?;
             for l in 0..LANES {
                 if yields[l] {
-                    dgamma[l] = self
-                        .return_map(t.q_trial[l], p.eps_p[l], p.flow_stress[l])
-                        .map_err(|m| (l, m))?;
                     scale[l] = 1.0 - 3.0 * g * dgamma[l] / t.q_trial[l];
                 }
             }
@@ -382,37 +379,88 @@ impl HenckyJ2 {
         Ok(out)
     }
 
-    /// Plastic multiplier `dgamma >= 0` from `q_trial - 3 G dgamma - sigma_y(eps_p + dgamma) = 0`:
-    /// closed form for linear hardening, safeguarded Newton for the power law.
-    /// `sy` is the flow stress at `eps_p` (Pa).
-    fn return_map(&self, q_trial: Real, eps_p: Real, sy: Real) -> Result<Real, String> {
+    /// Plastic multipliers `dgamma >= 0` of the lanes that yield, from
+    /// `q_trial - 3 G dgamma - sigma_y(eps_p + dgamma) = 0` (0 in the other lanes): closed
+    /// form for linear hardening; for the power law `sigma_y = K (eps0 + eps_p)^n`,
+    /// Newton's method safeguarded by bisection in `[0, q_trial / 3G]`, all lanes iterating
+    /// together and each frozen once its residual is below `1e-12 q_trial` (so a lane's
+    /// result does not depend on the others), with `x^a = exp(a ln x)` from [`lanes`].
+    /// `sy` is the flow stress at `eps_p` (Pa). An error names the lane that did not
+    /// converge in 50 iterations.
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lane loops index several arrays
+    fn return_map(
+        &self,
+        q_trial: &Lanes,
+        eps_p: &Lanes,
+        sy: &Lanes,
+        yields: &[bool; LANES],
+    ) -> Result<Lanes, (usize, String)> {
         let g3 = 3.0 * self.shear;
+        let mut x = [0.0; LANES];
         match self.hardening {
-            Hardening::Linear { modulus_pa, .. } => Ok((q_trial - sy) / (g3 + modulus_pa)),
-            Hardening::Power { .. } => {
+            Hardening::Linear { modulus_pa, .. } => {
+                for l in 0..LANES {
+                    if yields[l] {
+                        x[l] = (q_trial[l] - sy[l]) / (g3 + modulus_pa);
+                    }
+                }
+                Ok(x)
+            }
+            Hardening::Power { k_pa, eps0, n } => {
                 // The residual is decreasing and concave in dgamma; Newton from below
                 // converges monotonically. Bracket [0, q_trial / 3G] for safety.
-                let (mut lo, mut hi) = (0.0, q_trial / g3);
-                let mut x = (q_trial - sy) / (g3 + self.hardening.slope(eps_p));
-                for _ in 0..50 {
-                    let r = q_trial - g3 * x - self.hardening.flow_stress(eps_p + x);
-                    if r > 0.0 {
-                        lo = x;
-                    } else {
-                        hi = x;
+                let pow = |base: Real, a: Real| lanes::exp(a * lanes::ln(base));
+                let (mut lo, mut hi) = ([0.0; LANES], [0.0; LANES]);
+                let mut done = [true; LANES];
+                for l in 0..LANES {
+                    let slope = k_pa * n * pow(eps0 + eps_p[l], n - 1.0);
+                    hi[l] = q_trial[l] / g3;
+                    // Lanes that do not yield keep x = 0 and never iterate.
+                    if yields[l] {
+                        x[l] = (q_trial[l] - sy[l]) / (g3 + slope);
                     }
-                    if r.abs() <= 1e-12 * q_trial {
-                        return Ok(x);
-                    }
-                    let dr = -g3 - self.hardening.slope(eps_p + x);
-                    let next = x - r / dr;
-                    x = if next > lo && next < hi {
-                        next
-                    } else {
-                        0.5 * (lo + hi)
-                    };
+                    done[l] = !yields[l];
                 }
-                Err(format!("return mapping did not converge (q_trial = {q_trial:.6e} Pa, eps_p = {eps_p:.6e})"))
+                for _ in 0..50 {
+                    if done.iter().all(|&d| d) {
+                        break;
+                    }
+                    for l in 0..LANES {
+                        let log_base = lanes::ln(eps0 + (eps_p[l] + x[l]));
+                        let flow = k_pa * lanes::exp(n * log_base);
+                        let slope = k_pa * n * lanes::exp((n - 1.0) * log_base);
+                        let r = q_trial[l] - g3 * x[l] - flow;
+                        let (lo_new, hi_new) = if r > 0.0 {
+                            (x[l], hi[l])
+                        } else {
+                            (lo[l], x[l])
+                        };
+                        let next = x[l] - r / (-g3 - slope);
+                        let x_new = if next > lo_new && next < hi_new {
+                            next
+                        } else {
+                            0.5 * (lo_new + hi_new)
+                        };
+                        if !done[l] {
+                            if r.abs() <= 1e-12 * q_trial[l] {
+                                done[l] = true;
+                            } else {
+                                (lo[l], hi[l], x[l]) = (lo_new, hi_new, x_new);
+                            }
+                        }
+                    }
+                }
+                match done.iter().position(|&d| !d) {
+                    None => Ok(x),
+                    Some(l) => Err((
+                        l,
+                        format!(
+                            "return mapping did not converge (q_trial = {:.6e} Pa, eps_p = {:.6e})",
+                            q_trial[l], eps_p[l]
+                        ),
+                    )),
+                }
             }
         }
     }
@@ -565,15 +613,20 @@ mod tests {
     /// in every lane of batches filled with the other points.
     #[test]
     fn lanes_are_independent() {
-        let m = copper();
+        // Linear hardening (closed-form return map) and the power law (Newton in lanes).
+        lanes_are_independent_for(copper());
+        lanes_are_independent_for(aluminium());
+    }
+
+    fn lanes_are_independent_for(m: HenckyJ2) {
         let plastic = PointState {
             cp_inv: [0.9, 0.05, 1.1, 1.02],
             eps_p: 0.3,
         };
         let cases: [([Real; 4], Real, PointState); 5] = [
             (
-                [1.001, 0.0002, -0.0001, 0.998],
-                1.0005,
+                [1.0001, 0.00002, -0.00001, 0.9998],
+                1.00005,
                 PointState::default(),
             ),
             ([1.2, 0.1, -0.05, 0.8], 1.1, PointState::default()),
@@ -593,8 +646,12 @@ mod tests {
             alone.iter().any(|(_, st)| st.eps_p > 0.3),
             "some case yields"
         );
+        // An elastic step leaves the plastic strain exactly as it was.
+        assert_eq!(alone[0].1.eps_p, 0.0);
         assert!(
-            alone.iter().any(|(u, _)| u.von_mises < 400e6),
+            alone
+                .iter()
+                .any(|(u, _)| u.von_mises < m.hardening.initial_yield()),
             "some case is elastic"
         );
         for shift in 0..cases.len() {
