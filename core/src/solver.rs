@@ -297,9 +297,21 @@ impl Scatter {
     }
 }
 
+/// One chunk's share of the stress stage: points `first..first + states.len()` with their
+/// histories and cached outputs, and the chunk's force buffer (particles from `lo`).
+struct ChunkWork<'a> {
+    first: usize,
+    states: &'a mut [PointState],
+    outs: &'a mut [PointOut],
+    lo: usize,
+    buf: &'a mut [[Real; 2]],
+}
+
 /// What the stress stage reads, shared by all chunks.
 struct StressContext<'a> {
     pt: &'a ShapeTable,
+    /// Group sizes per point ([`Scatter::group`]).
+    groups: &'a [u8],
     table: &'a [Real],
     table_start: &'a [u32],
     d: &'a [[Real; 2]],
@@ -441,23 +453,20 @@ impl StressContext<'_> {
         }
     }
 
-    /// The stress stage of chunk `c`: points `c chunk..` with their `states` and `outs`,
-    /// forces into the chunk's buffer `buf` (particles from `lo`). Points go through the
+    /// The stress stage of one chunk of points (`work`). Points go through the
     /// material in batches of whole groups filling up to [`LANES`] lanes; a lane's results
     /// do not depend on the batch, so the bits equal a point-by-point loop.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
     #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
-    fn chunk<const AVX2: bool>(
-        &self,
-        c: usize,
-        chunk: usize,
-        group: &[u8],
-        states: &mut [PointState],
-        outs: &mut [PointOut],
-        lo: usize,
-        buf: &mut [[Real; 2]],
-    ) -> ChunkSums {
+    fn chunk<const AVX2: bool>(&self, work: ChunkWork<'_>) -> ChunkSums {
+        let ChunkWork {
+            first,
+            states,
+            outs,
+            lo,
+            buf,
+        } = work;
+        let group = &self.groups[first..first + states.len()];
         buf.iter_mut().for_each(|b| *b = [0.0; 2]);
         let mut s = ChunkSums {
             elastic: 0.0,
@@ -477,13 +486,13 @@ impl StressContext<'_> {
             // Whole groups of points, in order, while they fit in the lanes.
             let k0 = k;
             let mut used = 0;
-            while k < states.len() && used + group[c * chunk + k] as usize <= LANES {
-                let g = group[c * chunk + k] as usize;
-                self.group::<false, AVX2>(g, c * chunk + k, used, &mut lanes, buf, lo);
+            while k < states.len() && used + group[k] as usize <= LANES {
+                let g = group[k] as usize;
+                self.group::<false, AVX2>(g, first + k, used, &mut lanes, buf, lo);
                 used += g;
                 k += g;
             }
-            let p0 = c * chunk + k0;
+            let p0 = first + k0;
             if used < LANES {
                 // Unused lanes: undeformed, unstressed, unable to yield.
                 for l in used..LANES {
@@ -557,8 +566,8 @@ impl StressContext<'_> {
             }
             let mut l0 = 0;
             while l0 < used {
-                let g = group[c * chunk + k0 + l0] as usize;
-                self.group::<true, AVX2>(g, c * chunk + k0 + l0, l0, &mut lanes, buf, lo);
+                let g = group[k0 + l0] as usize;
+                self.group::<true, AVX2>(g, p0 + l0, l0, &mut lanes, buf, lo);
                 l0 += g;
             }
         }
@@ -572,18 +581,8 @@ impl StressContext<'_> {
     /// The CPU must support AVX2 (checked by the caller).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn chunk_avx2(
-        &self,
-        c: usize,
-        chunk: usize,
-        group: &[u8],
-        states: &mut [PointState],
-        outs: &mut [PointOut],
-        lo: usize,
-        buf: &mut [[Real; 2]],
-    ) -> ChunkSums {
-        self.chunk::<true>(c, chunk, group, states, outs, lo, buf)
+    unsafe fn chunk_avx2(&self, work: ChunkWork<'_>) -> ChunkSums {
+        self.chunk::<true>(work)
     }
 }
 
@@ -1417,6 +1416,7 @@ impl Simulation {
         } = &mut self.scatter;
         let cx = StressContext {
             pt: &self.pt,
+            groups: group,
             table,
             table_start,
             d: &self.st.d,
@@ -1427,7 +1427,7 @@ impl Simulation {
             spacing: self.spacing,
         };
         let avx2 = self.simd && has_avx2();
-        let (chunk, group) = (*chunk, &*group);
+        let chunk = *chunk;
         let mut slices = Vec::with_capacity(lo.len());
         let mut rest = buf.as_mut_slice();
         for c in 0..lo.len() {
@@ -1446,12 +1446,19 @@ impl Simulation {
             .zip(slices.into_par_iter())
             .enumerate()
             .map(|(c, ((states, outs), (lo, buf)))| {
+                let work = ChunkWork {
+                    first: c * chunk,
+                    states,
+                    outs,
+                    lo,
+                    buf,
+                };
                 if avx2 {
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: AVX2 support was detected at run time (`has_avx2`).
-                    return unsafe { cx.chunk_avx2(c, chunk, group, states, outs, lo, buf) };
+                    return unsafe { cx.chunk_avx2(work) };
                 }
-                cx.chunk::<false>(c, chunk, group, states, outs, lo, buf)
+                cx.chunk::<false>(work)
             })
             .collect();
         self.hold_workers();
