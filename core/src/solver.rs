@@ -323,15 +323,22 @@ struct StressContext<'a> {
 }
 
 impl StressContext<'_> {
+    /// The particle list of the group of `g` points starting at `p0`, and the group's
+    /// interleaved shape-function entries ([`Scatter::table`]).
+    #[inline(always)]
+    fn neighbours(&self, p0: usize, g: usize) -> (&[u32], &[Real]) {
+        let index = &self.pt.index[self.pt.row(p0)];
+        let start = self.table_start[p0] as usize;
+        (index, &self.table[start..start + 3 * g * index.len()])
+    }
+
     /// Gathers `F = I + sum_I d_I (x) grad N_I` and `u_r = sum_I N_I d_I,r` of the `G`
     /// consecutive points `p0..p0 + G`, which share one particle list (each particle's
     /// displacement is loaded once for the `G` points), into lanes `l0..l0 + G` of `f`
     /// (`[F_xX, F_xY, F_yX, F_yY, u_r]`).
     #[inline(always)]
     fn gather<const G: usize>(&self, p0: usize, f: &mut [Lanes; 5], l0: usize) {
-        let index = &self.pt.index[self.pt.row(p0)];
-        let start = self.table_start[p0] as usize;
-        let table = &self.table[start..start + 3 * G * index.len()];
+        let (index, table) = self.neighbours(p0, G);
         // xy holds F_xX, F_xY (from d_x) then F_yX, F_yY (from d_y) of the G points in the
         // order of a neighbour's `[N_x.., N_y..]` entries, so each neighbour adds two
         // vectors of 2G products.
@@ -374,9 +381,7 @@ impl StressContext<'_> {
         buf: &mut [[Real; 2]],
         lo: usize,
     ) {
-        let index = &self.pt.index[self.pt.row(p0)];
-        let start = self.table_start[p0] as usize;
-        let table = &self.table[start..start + 3 * G * index.len()];
+        let (index, table) = self.neighbours(p0, G);
         // Per neighbour, P_xX N_x + P_xY N_y is the sum of the two halves of a vector of 2G
         // products (likewise P_yX N_x + P_yY N_y), as in the one-point loop.
         let mut wx = [[0.0; 2 * MAX_GROUP]; 2];
@@ -427,9 +432,7 @@ impl StressContext<'_> {
         }
         #[cfg(target_arch = "x86_64")]
         if AVX2 && (g == 2 || g == 4) {
-            let index = &self.pt.index[self.pt.row(p0)];
-            let start = self.table_start[p0] as usize;
-            let table = &self.table[start..start + 3 * g * index.len()];
+            let (index, table) = self.neighbours(p0, g);
             // SAFETY: `AVX2` is true only inside `chunk_avx2`, called where the CPU has AVX2.
             unsafe {
                 match (SCATTER, g) {

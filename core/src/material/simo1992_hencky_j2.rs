@@ -108,11 +108,9 @@ impl PointLanes {
     pub fn set(&mut self, l: usize, f: [Real; 4], f33: Real, state: &PointState, flow: Real) {
         for c in 0..4 {
             self.f[c][l] = f[c];
-            self.cp_inv[c][l] = state.cp_inv[c];
         }
         self.f33[l] = f33;
-        self.eps_p[l] = state.eps_p;
-        self.flow_stress[l] = flow;
+        self.set_history(l, state, flow);
     }
 
     /// Loads the history of one point into lane `l`.
