@@ -18,6 +18,7 @@ pub mod math;
 pub mod rk_shape;
 pub mod scene;
 pub mod solver;
+pub mod team;
 pub mod tools;
 
 pub use error::{Error, Result};

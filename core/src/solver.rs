@@ -31,25 +31,17 @@ use crate::math::Real;
 use crate::rk_shape::{KernelCloud, ShapeTable};
 use crate::scene::{Component, Edge, IntegrationRule, Kinematics, Scene};
 use crate::tools::{penalty_force, Tool, ToolState, SEARCH_DEPTH_SPACINGS};
-use rayon::prelude::*;
+use crate::team::{Parts, Team};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Points or particles handled by one parallel task; fixed so that results do not depend
-/// on the number of threads.
-const CHUNK: usize = 256;
+/// Particles handled by one task of the particle phases (force gather and predictor,
+/// energy sums and update); fixed so that results do not depend on the number of threads.
+const BLOCK: usize = 128;
 
-/// Particle count from which the internal-force gather runs in parallel: below it the
-/// fork-join costs more than the sums (a few microseconds per step). The sums are the same
-/// either way, in the same order.
-const PARALLEL_GATHER_MIN: usize = 16 * CHUNK;
-
-/// Longest time a worker is held awake between two parallel stages (see
-/// [`Simulation::hold_workers`]).
-const MAX_HOLD: Duration = Duration::from_micros(500);
+/// Boundary particles handled by one task of the contact stage's interpolation.
+const BOUNDARY_BLOCK: usize = 32;
 
 /// Energy account (J), whole ring in axisymmetry, per depth in plane strain.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
@@ -189,7 +181,7 @@ impl PointOut {
 }
 
 /// Sums over one chunk of points in the stress stage.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 struct ChunkSums {
     elastic: Real,
     plastic: Real,
@@ -211,13 +203,21 @@ struct Scatter {
     buf: Vec<[Real; 2]>,
     cover_offsets: Vec<u32>,
     cover: Vec<u32>,
-    /// For each point: the number of consecutive points, starting at it, that share its
-    /// particle list (at most [`MAX_GROUP`], never across a chunk boundary), or 0 for a
-    /// point inside such a group. The Gauss points of a cell usually share one list.
+    /// For each point: the number of consecutive points, starting at it, processed as
+    /// one group over one particle list (at most [`MAX_GROUP`], never across a chunk
+    /// boundary), or 0 for a point inside a group. The Gauss points of a cell share their
+    /// list; two neighbouring q2 cells, or four neighbouring SCNI points, are grouped over
+    /// the union of their lists when it is shorter than the lists together ([`GroupPlan`]).
     group: Vec<u8>,
+    /// The groups' particle lists (ascending), each `lists[list_range[p].0..list_range[p].1]`
+    /// for the first point `p` of a group.
+    lists: Vec<u32>,
+    list_range: Vec<[u32; 2]>,
     /// Shape function values and gradients of each group, neighbour-major and interleaved
     /// so that a neighbour's values for the group's `g` points are contiguous:
-    /// `[N_1..N_g, N_1,x..N_g,x, N_1,y..N_g,y]` per neighbour (one SIMD load each).
+    /// `[N_1..N_g, N_1,x..N_g,x, N_1,y..N_g,y]` per neighbour (one SIMD load each); zero
+    /// where a particle of the union is not in a point's own list, which adds exact zeros
+    /// and leaves each point's sums as its own list gives them.
     table: Vec<Real>,
     /// Where each group's entries start in `table` (for the first point of a group).
     table_start: Vec<u32>,
@@ -226,6 +226,52 @@ struct Scatter {
 /// Largest group of points processed together in the stress stage (the 4 points of a q4
 /// cell).
 const MAX_GROUP: usize = 4;
+
+/// The group of points starting at a point and its particle list.
+struct GroupPlan {
+    size: usize,
+    list: Vec<u32>,
+}
+
+impl GroupPlan {
+    /// The group starting at point `p`, within points `..end`: the consecutive points
+    /// sharing `p`'s list (up to `max_group`), or, where those are a single point or a
+    /// pair, the group of 4 (or else 2) formed with the next singles or pair when the union
+    /// of their lists is shorter than the lists together. A group of 2 or 4 runs the AVX2
+    /// gather and scatter with one vector operation per particle of its list, so two q2
+    /// cells over their union of 20 particles cost 20 operations instead of 2 x 16.
+    fn at(pt: &ShapeTable, p: usize, end: usize, max_group: usize) -> GroupPlan {
+        let list = |q: usize| &pt.index[pt.row(q)];
+        let run = |q: usize| {
+            let mut n = 1;
+            while n < max_group && q + n < end && list(q + n) == list(q) {
+                n += 1;
+            }
+            n
+        };
+        let same = run(p);
+        for size in [4, 2] {
+            if size > max_group || size <= same || size % same != 0 || p + size > end {
+                continue;
+            }
+            let starts = (p..p + size).step_by(same);
+            if starts.clone().any(|q| run(q) != same) {
+                continue;
+            }
+            let separate: usize = starts.clone().map(|q| list(q).len()).sum();
+            let mut union: Vec<u32> = starts.flat_map(list).copied().collect();
+            union.sort_unstable();
+            union.dedup();
+            if union.len() < separate {
+                return GroupPlan { size, list: union };
+            }
+        }
+        GroupPlan {
+            size: same,
+            list: list(p).to_vec(),
+        }
+    }
+}
 
 impl Scatter {
     /// Chunks of `chunk` points over `particles` particles, groups of at most `max_group`
@@ -256,35 +302,37 @@ impl Scatter {
             cover_offsets.push(cover.len() as u32);
         }
         let mut group = vec![0u8; pt.rows()];
-        let mut p = 0;
-        while p < pt.rows() {
-            let end = (p / chunk + 1) * chunk;
-            let mut g = 1;
-            while g < max_group
-                && p + g < end.min(pt.rows())
-                && pt.index[pt.row(p + g)] == pt.index[pt.row(p)]
-            {
-                g += 1;
-            }
-            group[p] = g as u8;
-            p += g;
-        }
+        let (mut lists, mut list_range) = (Vec::new(), vec![[0u32; 2]; pt.rows()]);
         let mut table = Vec::with_capacity(3 * pt.n.len());
         let mut table_start = vec![0u32; pt.rows()];
-        for p in 0..pt.rows() {
-            let g = group[p] as usize;
-            if g == 0 {
-                continue;
-            }
+        let mut p = 0;
+        while p < pt.rows() {
+            let end = ((p / chunk + 1) * chunk).min(pt.rows());
+            let plan = GroupPlan::at(pt, p, end, max_group);
+            group[p] = plan.size as u8;
+            list_range[p] = [lists.len() as u32, (lists.len() + plan.list.len()) as u32];
             table_start[p] = table.len() as u32;
-            for k in 0..pt.row(p).len() {
+            // Each point's entries in list order, matched against the union.
+            let mut next: Vec<usize> = (p..p + plan.size).map(|q| pt.row(q).start).collect();
+            for &i in &plan.list {
+                let mut hit = [None; MAX_GROUP];
+                for (q, e) in next.iter_mut().enumerate() {
+                    if *e < pt.row(p + q).end && pt.index[*e] == i {
+                        hit[q] = Some(*e);
+                        *e += 1;
+                    }
+                }
                 for values in [&pt.n, &pt.dx, &pt.dy] {
-                    table.extend((p..p + g).map(|q| values[pt.row(q).start + k]));
+                    table.extend(hit[..plan.size].iter().map(|e| e.map_or(0.0, |e| values[e])));
                 }
             }
+            lists.extend(plan.list);
+            p += plan.size;
         }
         Scatter {
             group,
+            lists,
+            list_range,
             table,
             table_start,
             chunk,
@@ -309,7 +357,9 @@ struct ChunkWork<'a> {
 
 /// What the stress stage reads, shared by all chunks.
 struct StressContext<'a> {
-    pt: &'a ShapeTable,
+    /// Group particle lists ([`Scatter::lists`]).
+    lists: &'a [u32],
+    list_range: &'a [[u32; 2]],
     /// Group sizes per point ([`Scatter::group`]).
     groups: &'a [u8],
     table: &'a [Real],
@@ -327,7 +377,8 @@ impl StressContext<'_> {
     /// interleaved shape-function entries ([`Scatter::table`]).
     #[inline(always)]
     fn neighbours(&self, p0: usize, g: usize) -> (&[u32], &[Real]) {
-        let index = &self.pt.index[self.pt.row(p0)];
+        let [a, b] = self.list_range[p0];
+        let index = &self.lists[a as usize..b as usize];
         let start = self.table_start[p0] as usize;
         (index, &self.table[start..start + 3 * g * index.len()])
     }
@@ -869,8 +920,11 @@ pub struct Simulation {
     f_con: Vec<[Real; 2]>,
     v_prev: Vec<[Real; 2]>,
     critical_dt0: Real,
-    /// Set to release the workers held awake since the last parallel stage.
-    hold: Option<Arc<AtomicBool>>,
+    /// Predicted position (m) and velocity (m/s) of each boundary particle in the contact
+    /// stage.
+    boundary_motion: Vec<[[Real; 2]; 2]>,
+    /// The threads of the parallel phases.
+    team: Team,
     /// Use the AVX2 build of the stress stage where the CPU has it (same bits either way;
     /// false only in the test that compares the two).
     simd: bool,
@@ -1019,6 +1073,7 @@ impl Simulation {
             weights,
             inv_radius,
             scatter,
+            boundary_motion: vec![[[0.0; 2]; 2]; boundary.len()],
             boundary,
             constraints,
             st: State {
@@ -1046,7 +1101,7 @@ impl Simulation {
             v_prev: v,
             critical_dt0: stable_dt,
             simd: true,
-            hold: None,
+            team: Team::default(),
             ref_pos,
             points,
             pt,
@@ -1059,6 +1114,7 @@ impl Simulation {
         };
         sim.critical_dt0 = sim.measure_critical_step()?;
         sim.stress_stage()?;
+        sim.force_stage(None);
         sim.times = StageTimes {
             setup: t0.elapsed(),
             shape_functions,
@@ -1223,20 +1279,15 @@ impl Simulation {
             )));
         }
         let dt_avg = 0.5 * (dt + self.st.dt_prev);
-        // Predictor.
-        self.v_prev.copy_from_slice(&self.st.v);
-        for ((v, f), im) in self.st.v.iter_mut().zip(&self.f_int).zip(&self.inv_mass) {
-            let a = dt_avg * im;
-            v[0] -= a * f[0];
-            v[1] -= a * f[1];
-        }
+        let t2 = Instant::now();
+        self.force_stage(Some(dt_avg));
+        let t3 = Instant::now();
         // Tools advance over the step at their mid-step velocity.
         let t_mid = self.st.time + 0.5 * dt;
         for t in self.tools.iter_mut() {
             t.state.velocity = t.velocity_at(t_mid);
             t.state.stroke += dt * t.state.velocity;
         }
-        let t3 = Instant::now();
         let (contact_work_rate, tool_work) = self.contact_stage(dt_full, dt_avg);
         let t4 = Instant::now();
         // Corrector, constraints, update.
@@ -1250,24 +1301,7 @@ impl Simulation {
         if let Some(c) = &self.constraints {
             c.project(&mut self.st.v, &self.mass);
         }
-        let mut kinetic = 0.0;
-        let mut work = 0.0;
-        let mut half_step = 0.0;
-        for i in 0..self.st.v.len() {
-            let v = self.st.v[i];
-            let vp = self.v_prev[i];
-            kinetic += 0.5 * self.mass[i] * (v[0] * v[0] + v[1] * v[1]);
-            let fi = self.f_int[i];
-            half_step += 0.5 * dt * (fi[0] * v[0] + fi[1] * v[1]);
-            if contact_work_rate {
-                let f = self.f_con[i];
-                // Exact discrete identity: dKE = dt_avg f . (v_new + v_old) / 2.
-                work += 0.5 * dt_avg * (f[0] * (v[0] + vp[0]) + f[1] * (v[1] + vp[1]));
-            }
-            let d = &mut self.st.d[i];
-            d[0] += dt * v[0];
-            d[1] += dt * v[1];
-        }
+        let [kinetic, work, half_step] = self.update_stage(dt, dt_avg, contact_work_rate);
         if !kinetic.is_finite() {
             let i = self
                 .st
@@ -1347,7 +1381,7 @@ impl Simulation {
         }
         let t5 = Instant::now();
         self.times.contact += t4 - t3;
-        self.times.integration += (t3 - t1) + (t5 - t4);
+        self.times.integration += (t2 - t1) + (t5 - t4);
         Ok(())
     }
 
@@ -1375,35 +1409,11 @@ impl Simulation {
         }
     }
 
-    /// Keeps the pool's other workers spinning (at most [`MAX_HOLD`]) until the next stress
-    /// stage starts. Between two stress stages the steps' serial stages take some 30 us; a
-    /// rayon worker idle that long goes to sleep, and waking it costs about as much again
-    /// on a virtual machine (measured: 2 threads, 95 us of parallel work after 30 us of
-    /// serial work took 165 us a step, 139 us with the workers held). The held workers only
-    /// spin; the results do not depend on them.
-    fn hold_workers(&mut self) {
-        let others = rayon::current_num_threads().saturating_sub(1);
-        if others == 0 {
-            return;
-        }
-        let release = Arc::new(AtomicBool::new(false));
-        for _ in 0..others {
-            let release = release.clone();
-            rayon::spawn(move || {
-                let t0 = Instant::now();
-                while !release.load(Ordering::Acquire) && t0.elapsed() < MAX_HOLD {
-                    std::hint::spin_loop();
-                }
-            });
-        }
-        self.hold = Some(release);
-    }
-
-    /// Stress and internal force stage, fused, over fixed chunks of points in parallel:
-    /// `F = I + sum_I d_I (x) grad N_I` (and `F_33 = 1 + u_r / R` in axisymmetry), the
-    /// Hencky J2 update, and the scatter of `(P grad N_I + e_r P_33 N_I / R) w_p` into the
-    /// chunk's buffer; then `f_I` sums the buffers covering `I` in chunk order.
-    /// Returns (elastic, plastic) energy.
+    /// Stress stage and the scatter of the internal force, fused, over fixed chunks of
+    /// points in parallel: `F = I + sum_I d_I (x) grad N_I` (and `F_33 = 1 + u_r / R` in
+    /// axisymmetry), the Hencky J2 update, and the scatter of
+    /// `(P grad N_I + e_r P_33 N_I / R) w_p` into the chunk's buffer, which
+    /// [`Simulation::force_stage`] sums. Returns (elastic, plastic) energy (J).
     fn stress_stage(&mut self) -> Result<(Real, Real)> {
         let t0 = Instant::now();
         let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
@@ -1413,12 +1423,15 @@ impl Simulation {
             offsets,
             buf,
             group,
+            lists,
+            list_range,
             table,
             table_start,
             ..
         } = &mut self.scatter;
         let cx = StressContext {
-            pt: &self.pt,
+            lists,
+            list_range,
             groups: group,
             table,
             table_start,
@@ -1430,41 +1443,42 @@ impl Simulation {
             spacing: self.spacing,
         };
         let avx2 = self.simd && has_avx2();
-        let chunk = *chunk;
-        let mut slices = Vec::with_capacity(lo.len());
-        let mut rest = buf.as_mut_slice();
-        for c in 0..lo.len() {
-            let (head, tail) = rest.split_at_mut(offsets[c + 1] - offsets[c]);
-            slices.push((lo[c] as usize, head));
-            rest = tail;
-        }
-        if let Some(hold) = self.hold.take() {
-            hold.store(true, Ordering::Release);
-        }
-        let sums: Vec<ChunkSums> = self
-            .st
-            .points
-            .par_chunks_mut(chunk)
-            .zip(self.out.par_chunks_mut(chunk))
-            .zip(slices.into_par_iter())
-            .enumerate()
-            .map(|(c, ((states, outs), (lo, buf)))| {
-                let work = ChunkWork {
-                    first: c * chunk,
-                    states,
-                    outs,
-                    lo,
-                    buf,
-                };
-                if avx2 {
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: AVX2 support was detected at run time (`has_avx2`).
-                    return unsafe { cx.chunk_avx2(work) };
+        let (chunk, lo, offsets) = (*chunk, &*lo, &*offsets);
+        let points = self.st.points.len();
+        let mut sums = vec![ChunkSums::default(); lo.len()];
+        let (states, outs, bufs, slots) = (
+            Parts::new(&mut self.st.points),
+            Parts::new(&mut self.out),
+            Parts::new(buf),
+            Parts::new(&mut sums),
+        );
+        self.team.for_each(lo.len(), &|c| {
+            let range = c * chunk..((c + 1) * chunk).min(points);
+            // SAFETY: chunk `c` alone takes these points, its buffer slice and its slot.
+            let (work, slot) = unsafe {
+                (
+                    ChunkWork {
+                        first: range.start,
+                        states: states.get(range.clone()),
+                        outs: outs.get(range),
+                        lo: lo[c] as usize,
+                        buf: bufs.get(offsets[c]..offsets[c + 1]),
+                    },
+                    &mut slots.get(c..c + 1)[0],
+                )
+            };
+            *slot = if avx2 {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: AVX2 support was detected at run time (`has_avx2`).
+                unsafe {
+                    cx.chunk_avx2(work)
                 }
+                #[cfg(not(target_arch = "x86_64"))]
+                unreachable!("AVX2 is detected on x86_64 only")
+            } else {
                 cx.chunk::<false>(work)
-            })
-            .collect();
-        self.hold_workers();
+            };
+        });
         let (mut elastic, mut plastic, mut min_altitude2) = (0.0, 0.0, Real::INFINITY);
         for s in &sums {
             if let Some((p, m)) = &s.failure {
@@ -1483,30 +1497,83 @@ impl Simulation {
         }
         let min_altitude = min_altitude2.max(0.0).sqrt();
         self.st.stable_dt = self.critical_dt0 * min_altitude / self.spacing[0].min(self.spacing[1]);
-        let t1 = Instant::now();
+        self.times.stress += t0.elapsed();
+        Ok((elastic, plastic))
+    }
+
+    /// Internal force gather over fixed blocks of particles in parallel, fused with the
+    /// predictor: `f_I` sums the chunk buffers covering `I` in chunk order; with
+    /// `predict = Some(dt_avg)` (s), also `v* = v_{n-1/2} - dt_avg f_I / m_I` (m/s), keeping
+    /// `v_{n-1/2}` for the energy account.
+    fn force_stage(&mut self, predict: Option<Real>) {
+        let t0 = Instant::now();
         let sc = &self.scatter;
-        let gather = |(c, fs): (usize, &mut [[Real; 2]])| {
-            for (k, f) in fs.iter_mut().enumerate() {
-                let i = c * CHUNK + k;
+        let inv_mass = &self.inv_mass;
+        let np = self.f_int.len();
+        let (f_int, v, v_prev) = (
+            Parts::new(&mut self.f_int),
+            Parts::new(&mut self.st.v),
+            Parts::new(&mut self.v_prev),
+        );
+        self.team.for_each(np.div_ceil(BLOCK), &|b| {
+            let range = b * BLOCK..((b + 1) * BLOCK).min(np);
+            // SAFETY: block `b` alone takes these particles.
+            let fs = unsafe { f_int.get(range.clone()) };
+            for (f, i) in fs.iter_mut().zip(range.clone()) {
                 let covering =
                     &sc.cover[sc.cover_offsets[i] as usize..sc.cover_offsets[i + 1] as usize];
-                *f = covering.iter().fold([0.0; 2], |a, &b| {
-                    let v = sc.buf[b as usize];
+                *f = covering.iter().fold([0.0; 2], |a, &c| {
+                    let v = sc.buf[c as usize];
                     [a[0] + v[0], a[1] + v[1]]
                 });
             }
-        };
-        if self.f_int.len() >= PARALLEL_GATHER_MIN {
-            self.f_int
-                .par_chunks_mut(CHUNK)
-                .enumerate()
-                .for_each(gather);
-        } else {
-            self.f_int.chunks_mut(CHUNK).enumerate().for_each(gather);
-        }
-        self.times.stress += t1 - t0;
-        self.times.internal_force += t1.elapsed();
-        Ok((elastic, plastic))
+            if let Some(dt_avg) = predict {
+                // SAFETY: as above.
+                let (vs, vps) = unsafe { (v.get(range.clone()), v_prev.get(range.clone())) };
+                vps.copy_from_slice(vs);
+                for ((v, f), im) in vs.iter_mut().zip(fs.iter()).zip(&inv_mass[range]) {
+                    let a = dt_avg * im;
+                    v[0] -= a * f[0];
+                    v[1] -= a * f[1];
+                }
+            }
+        });
+        self.times.internal_force += t0.elapsed();
+    }
+
+    /// Displacement update `d_{n+1} = d_n + dt v_{n+1/2}` (m) over fixed blocks of
+    /// particles in parallel, with the energy sums of the step, each summed per block and
+    /// the blocks in order: kinetic `sum m |v|^2 / 2`, contact work
+    /// `sum dt_avg f_c . (v_{n+1/2} + v_{n-1/2}) / 2` (the exact discrete identity of the
+    /// corrector, when `contact` forces act) and internal half-step work
+    /// `sum dt f_int . v_{n+1/2} / 2` (J).
+    fn update_stage(&mut self, dt: Real, dt_avg: Real, contact: bool) -> [Real; 3] {
+        let np = self.st.v.len();
+        let blocks = np.div_ceil(BLOCK);
+        let mut sums = vec![[0.0; 3]; blocks];
+        let (v, v_prev, mass, f_int, f_con) =
+            (&self.st.v, &self.v_prev, &self.mass, &self.f_int, &self.f_con);
+        let (d, slots) = (Parts::new(&mut self.st.d), Parts::new(&mut sums));
+        self.team.for_each(blocks, &|b| {
+            let range = b * BLOCK..((b + 1) * BLOCK).min(np);
+            let (mut kinetic, mut work, mut half_step) = (0.0, 0.0, 0.0);
+            // SAFETY: block `b` alone takes these particles and its slot.
+            let (ds, slot) = unsafe { (d.get(range.clone()), &mut slots.get(b..b + 1)[0]) };
+            for (d, i) in ds.iter_mut().zip(range) {
+                let (v, vp) = (v[i], v_prev[i]);
+                kinetic += 0.5 * mass[i] * (v[0] * v[0] + v[1] * v[1]);
+                let fi = f_int[i];
+                half_step += 0.5 * dt * (fi[0] * v[0] + fi[1] * v[1]);
+                if contact {
+                    let f = f_con[i];
+                    work += 0.5 * dt_avg * (f[0] * (v[0] + vp[0]) + f[1] * (v[1] + vp[1]));
+                }
+                d[0] += dt * v[0];
+                d[1] += dt * v[1];
+            }
+            *slot = [kinetic, work, half_step];
+        });
+        sums.iter().fold([0.0; 3], |a, s| [a[0] + s[0], a[1] + s[1], a[2] + s[2]])
     }
 
     /// Contact of the predicted boundary positions with the tools (paper eqs. 4-7).
@@ -1528,20 +1595,34 @@ impl Simulation {
             .iter()
             .map(|t| bounds_of(&t.vertices(), t.depth))
             .collect();
-        let mut any = false;
-        for &j in &self.boundary {
-            let j = j as usize;
-            let (mut x, mut vj) = (self.ref_pos[j], [0.0; 2]);
-            for e in self.nodal.row(j) {
-                let i = self.nodal.index[e] as usize;
-                let n = self.nodal.n[e];
-                let v = self.st.v[i];
-                let d = self.st.d[i];
-                x[0] += n * (d[0] + dt * v[0]);
-                x[1] += n * (d[1] + dt * v[1]);
-                vj[0] += n * v[0];
-                vj[1] += n * v[1];
+        // Predicted positions x_J = X_J + sum_I N_I(X_J) (d_I + dt v*_I) and velocities
+        // v_J = sum_I N_I(X_J) v*_I of the boundary particles, in parallel.
+        let nb = self.boundary.len();
+        let (boundary, nodal, ref_pos) = (&self.boundary, &self.nodal, &self.ref_pos);
+        let (d, v) = (&self.st.d, &self.st.v);
+        let motion = Parts::new(&mut self.boundary_motion);
+        self.team.for_each(nb.div_ceil(BOUNDARY_BLOCK), &|b| {
+            let range = b * BOUNDARY_BLOCK..((b + 1) * BOUNDARY_BLOCK).min(nb);
+            // SAFETY: block `b` alone takes these boundary particles.
+            let out = unsafe { motion.get(range.clone()) };
+            for (m, &j) in out.iter_mut().zip(&boundary[range]) {
+                let j = j as usize;
+                let (mut x, mut vj) = (ref_pos[j], [0.0; 2]);
+                for e in nodal.row(j) {
+                    let i = nodal.index[e] as usize;
+                    let n = nodal.n[e];
+                    let (v, d) = (v[i], d[i]);
+                    x[0] += n * (d[0] + dt * v[0]);
+                    x[1] += n * (d[1] + dt * v[1]);
+                    vj[0] += n * v[0];
+                    vj[1] += n * v[1];
+                }
+                *m = [x, vj];
             }
+        });
+        let mut any = false;
+        for (&j, &[x, vj]) in self.boundary.iter().zip(&self.boundary_motion) {
+            let j = j as usize;
             for (k, tool) in self.tools.iter_mut().enumerate() {
                 let b = &bounds[k];
                 if x[0] < b.x[0] || x[0] > b.x[1] || x[1] < b.y[0] || x[1] > b.y[1] {
@@ -1629,6 +1710,7 @@ impl Simulation {
                 .map(|(a, s)| [a[0] * s * scale, a[1] * s * scale])
                 .collect();
             self.stress_stage()?;
+            self.force_stage(None);
             let b_prev = beta.last().copied().unwrap_or(0.0);
             let mut w: Vec<[Real; 2]> = self
                 .f_int
@@ -1801,6 +1883,7 @@ impl Simulation {
     /// Internal force on each coefficient from the current stresses (N); for tests.
     pub fn internal_forces(&mut self) -> Result<Vec<[Real; 2]>> {
         self.stress_stage()?;
+        self.force_stage(None);
         Ok(self.f_int.clone())
     }
 
