@@ -301,9 +301,13 @@ mod tests {
                         let parts = Parts::new(&mut hits);
                         team.for_each(n, &|c| {
                             // SAFETY: chunk c takes element c only.
-                            unsafe { parts.get(c..c + 1) }[0] += 1;
+                            let hit = unsafe { parts.get(c..c + 1) };
+                            hit[0] += 1;
                         });
-                        assert!(hits.iter().all(|&h| h == 1), "{threads} threads, {n} chunks");
+                        assert!(
+                            hits.iter().all(|&h| h == 1),
+                            "{threads} threads, {n} chunks"
+                        );
                     }
                 }
             });
