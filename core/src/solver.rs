@@ -396,7 +396,7 @@ impl StressContext<'_> {
         let (index, table) = self.neighbours(p0, G);
         // xy holds F_xX, F_xY (from d_x) then F_yX, F_yY (from d_y) of the G points in the
         // order of a neighbour's `[N_x.., N_y..]` entries, so each neighbour adds two
-        // vectors of 2G products.
+        // vectors of 2G products, each a fused multiply-add.
         let mut xy = [[0.0; 2 * MAX_GROUP]; 2];
         xy[0][..G].fill(1.0);
         xy[1][G..2 * G].fill(1.0);
@@ -404,11 +404,11 @@ impl StressContext<'_> {
         for (&i, e) in index.iter().zip(table.chunks_exact(3 * G)) {
             let di = self.d[i as usize];
             for q in 0..2 * G {
-                xy[0][q] += di[0] * e[G + q];
-                xy[1][q] += di[1] * e[G + q];
+                xy[0][q] = di[0].mul_add(e[G + q], xy[0][q]);
+                xy[1][q] = di[1].mul_add(e[G + q], xy[1][q]);
             }
             for j in 0..G {
-                ur[j] += di[0] * e[j];
+                ur[j] = di[0].mul_add(e[j], ur[j]);
             }
         }
         for j in 0..G {
@@ -425,7 +425,8 @@ impl StressContext<'_> {
     /// one particle list) as `w_p (P grad N_I + e_r P_33 N_I / R_p)` into `buf`, each buffer
     /// entry read and written once for the `G` points; the contributions are still added
     /// point by point, so the bits equal a one-point loop. `pw = w [P_xX, P_xY, P_33 / R]`,
-    /// `px = w [P_yX, P_yY]` per lane.
+    /// `px = w [P_yX, P_yY]` per lane. A point's contribution is, with fused multiply-adds,
+    /// `fma(P_xX, N_x, fma(P_xY, N_y, P_33 N / R))` and `fma(P_yX, N_x, P_yY N_y)`.
     #[inline(always)]
     fn scatter<const G: usize>(
         &self,
@@ -437,28 +438,13 @@ impl StressContext<'_> {
         lo: usize,
     ) {
         let (index, table) = self.neighbours(p0, G);
-        // Per neighbour, P_xX N_x + P_xY N_y is the sum of the two halves of a vector of 2G
-        // products (likewise P_yX N_x + P_yY N_y), as in the one-point loop.
-        let mut wx = [[0.0; 2 * MAX_GROUP]; 2];
-        let mut wv = [0.0; MAX_GROUP];
-        for j in 0..G {
-            let l = l0 + j;
-            wx[0][j] = pw[0][l];
-            wx[0][G + j] = pw[1][l];
-            wx[1][j] = px[0][l];
-            wx[1][G + j] = px[1][l];
-            wv[j] = pw[2][l];
-        }
         for (&i, e) in index.iter().zip(table.chunks_exact(3 * G)) {
-            let mut t = [[0.0; 2 * MAX_GROUP]; 2];
-            for q in 0..2 * G {
-                t[0][q] = wx[0][q] * e[G + q];
-                t[1][q] = wx[1][q] * e[G + q];
-            }
             let b = &mut buf[i as usize - lo];
             for j in 0..G {
-                b[0] += t[0][j] + t[0][G + j] + wv[j] * e[j];
-                b[1] += t[1][j] + t[1][G + j];
+                let l = l0 + j;
+                let (n, nx, ny) = (e[j], e[G + j], e[2 * G + j]);
+                b[0] += pw[0][l].mul_add(nx, pw[1][l].mul_add(ny, pw[2][l] * n));
+                b[1] += px[0][l].mul_add(nx, px[1][l] * ny);
             }
         }
     }
@@ -638,7 +624,7 @@ impl StressContext<'_> {
     ///
     /// The CPU must support AVX2 (checked by the caller).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     unsafe fn chunk_avx2(&self, work: ChunkWork<'_>) -> ChunkSums {
         self.chunk::<true>(work)
     }
@@ -647,11 +633,11 @@ impl StressContext<'_> {
 /// Gather and scatter of a pair (q2 cell) or a quad (q4 cell) of points sharing a particle
 /// list, with explicit 256-bit vectors: a neighbour's entries `[N.., N_x.., N_y..]` give
 /// `F_xX`, `F_xY` of all the group's points from products with `d_x`, and `F_yX`, `F_yY`
-/// from products with `d_y`. Each lane does the multiplies and adds of
-/// [`StressContext::gather`] and [`StressContext::scatter`] in their order (no fused
-/// multiply-add), so the bits are the generic build's; left to itself the compiler splits
-/// these loops into 128-bit pieces and shuffles (the quad gather took some 70 instructions
-/// per neighbour).
+/// from products with `d_y`. Each lane does the fused multiply-adds of
+/// [`StressContext::gather`] and [`StressContext::scatter`] in their order (the generic
+/// build's `mul_add` rounds once, as the FMA instruction does), so the bits are the
+/// generic build's; left to itself the compiler splits these loops into 128-bit pieces and
+/// shuffles (the quad gather took some 70 instructions per neighbour).
 #[cfg(target_arch = "x86_64")]
 mod group_avx2 {
     use super::{Lanes, Real};
@@ -697,7 +683,7 @@ mod group_avx2 {
 
     /// `F` and `u_r` of a pair into lanes `l0, l0 + 1` of `f`; neighbour entries
     /// `[N_1, N_2, N_1,x, N_2,x, N_1,y, N_2,y]`.
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     pub(super) fn gather2(
         index: &[u32],
         table: &[Real],
@@ -712,9 +698,9 @@ mod group_avx2 {
         for (&i, e) in index.iter().zip(table.chunks_exact(6)) {
             let di = d[i as usize];
             let (v, g) = (load2(e), load4(&e[2..]));
-            fx = _mm256_add_pd(fx, _mm256_mul_pd(_mm256_set1_pd(di[0]), g));
-            fy = _mm256_add_pd(fy, _mm256_mul_pd(_mm256_set1_pd(di[1]), g));
-            ur = _mm_add_pd(ur, _mm_mul_pd(_mm_set1_pd(di[0]), v));
+            fx = _mm256_fmadd_pd(_mm256_set1_pd(di[0]), g, fx);
+            fy = _mm256_fmadd_pd(_mm256_set1_pd(di[1]), g, fy);
+            ur = _mm_fmadd_pd(_mm_set1_pd(di[0]), v, ur);
         }
         let (a, b) = (store4(fx), store4(fy));
         let mut u = [0.0; 2];
@@ -728,7 +714,7 @@ mod group_avx2 {
     }
 
     /// `w_p (P grad N_I + e_r P_33 N_I / R_p)` of lanes `l0, l0 + 1` into `buf`.
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     pub(super) fn scatter2(
         index: &[u32],
         table: &[Real],
@@ -738,20 +724,13 @@ mod group_avx2 {
         buf: &mut [[Real; 2]],
         lo: usize,
     ) {
-        let (j0, j1) = (l0, l0 + 1);
-        let wx = _mm256_setr_pd(pw[0][j0], pw[0][j1], pw[1][j0], pw[1][j1]);
-        let wy = _mm256_setr_pd(px[0][j0], px[0][j1], px[1][j0], px[1][j1]);
-        let wv = _mm_setr_pd(pw[2][j0], pw[2][j1]);
+        let w = |x: &Lanes| load2(&x[l0..]);
+        let (wxx, wxy, wv, wyx, wyy) = (w(&pw[0]), w(&pw[1]), w(&pw[2]), w(&px[0]), w(&px[1]));
         for (&i, e) in index.iter().zip(table.chunks_exact(6)) {
-            let (v, g) = (load2(e), load4(&e[2..]));
-            let tx = _mm256_mul_pd(wx, g);
-            let ty = _mm256_mul_pd(wy, g);
-            // Per point j: (P_xX N_x + P_xY N_y) + P_33 N / R, and P_yX N_x + P_yY N_y.
-            let sx = _mm_add_pd(
-                _mm_add_pd(_mm256_castpd256_pd128(tx), _mm256_extractf128_pd::<1>(tx)),
-                _mm_mul_pd(wv, v),
-            );
-            let sy = _mm_add_pd(_mm256_castpd256_pd128(ty), _mm256_extractf128_pd::<1>(ty));
+            let (v, x, y) = (load2(e), load2(&e[2..]), load2(&e[4..]));
+            // Per point j: fma(P_xX, N_x, fma(P_xY, N_y, P_33 N / R)), fma(P_yX, N_x, P_yY N_y).
+            let sx = _mm_fmadd_pd(wxx, x, _mm_fmadd_pd(wxy, y, _mm_mul_pd(wv, v)));
+            let sy = _mm_fmadd_pd(wyx, x, _mm_mul_pd(wyy, y));
             add_to(
                 &mut buf[i as usize - lo],
                 &[_mm_unpacklo_pd(sx, sy), _mm_unpackhi_pd(sx, sy)],
@@ -761,7 +740,7 @@ mod group_avx2 {
 
     /// `F` and `u_r` of a quad into lanes `l0..l0 + 4` of `f`; neighbour entries
     /// `[N_1..N_4, N_1,x..N_4,x, N_1,y..N_4,y]`.
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     pub(super) fn gather4(
         index: &[u32],
         table: &[Real],
@@ -776,11 +755,11 @@ mod group_avx2 {
             let di = d[i as usize];
             let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
             let (d0, d1) = (_mm256_set1_pd(di[0]), _mm256_set1_pd(di[1]));
-            fxx = _mm256_add_pd(fxx, _mm256_mul_pd(d0, x));
-            fxy = _mm256_add_pd(fxy, _mm256_mul_pd(d0, y));
-            fyx = _mm256_add_pd(fyx, _mm256_mul_pd(d1, x));
-            fyy = _mm256_add_pd(fyy, _mm256_mul_pd(d1, y));
-            ur = _mm256_add_pd(ur, _mm256_mul_pd(d0, v));
+            fxx = _mm256_fmadd_pd(d0, x, fxx);
+            fxy = _mm256_fmadd_pd(d0, y, fxy);
+            fyx = _mm256_fmadd_pd(d1, x, fyx);
+            fyy = _mm256_fmadd_pd(d1, y, fyy);
+            ur = _mm256_fmadd_pd(d0, v, ur);
         }
         for (c, x) in [fxx, fxy, fyx, fyy, ur].into_iter().enumerate() {
             f[c][l0..l0 + 4].copy_from_slice(&store4(x));
@@ -788,7 +767,7 @@ mod group_avx2 {
     }
 
     /// `w_p (P grad N_I + e_r P_33 N_I / R_p)` of lanes `l0..l0 + 4` into `buf`.
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     pub(super) fn scatter4(
         index: &[u32],
         table: &[Real],
@@ -802,12 +781,9 @@ mod group_avx2 {
         let (wxx, wxy, wv, wyx, wyy) = (w(&pw[0]), w(&pw[1]), w(&pw[2]), w(&px[0]), w(&px[1]));
         for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
             let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
-            // Per point j: (P_xX N_x + P_xY N_y) + P_33 N / R, and P_yX N_x + P_yY N_y.
-            let sx = _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(wxx, x), _mm256_mul_pd(wxy, y)),
-                _mm256_mul_pd(wv, v),
-            );
-            let sy = _mm256_add_pd(_mm256_mul_pd(wyx, x), _mm256_mul_pd(wyy, y));
+            // Per point j: fma(P_xX, N_x, fma(P_xY, N_y, P_33 N / R)), fma(P_yX, N_x, P_yY N_y).
+            let sx = _mm256_fmadd_pd(wxx, x, _mm256_fmadd_pd(wxy, y, _mm256_mul_pd(wv, v)));
+            let sy = _mm256_fmadd_pd(wyx, x, _mm256_mul_pd(wyy, y));
             let (x01, y01) = (_mm256_castpd256_pd128(sx), _mm256_castpd256_pd128(sy));
             let (x23, y23) = (
                 _mm256_extractf128_pd::<1>(sx),
@@ -826,11 +802,12 @@ mod group_avx2 {
     }
 }
 
-/// Whether the CPU runs the AVX2 build of the stress stage (x86_64 with AVX2; false on
-/// other architectures, which use the generic build).
+/// Whether the CPU runs the AVX2 build of the stress stage (x86_64 with AVX2 and FMA; false
+/// on other architectures, which use the generic build).
 fn has_avx2() -> bool {
     #[cfg(target_arch = "x86_64")]
-    return std::arch::is_x86_feature_detected!("avx2");
+    return std::arch::is_x86_feature_detected!("avx2")
+        && std::arch::is_x86_feature_detected!("fma");
     #[cfg(not(target_arch = "x86_64"))]
     return false;
 }
