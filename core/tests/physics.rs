@@ -347,8 +347,9 @@ fn restored_state_continues_bit_for_bit() {
 }
 
 /// The same run on 1, 2 and 3 threads gives the same bits, with every rule: on the paper's
-/// grid (1071 particles, serial internal-force gather) and on 41 x 101 (4141 particles, above
-/// the 4096 where the gather goes parallel).
+/// grid (1071 particles: stress phase on the team, particle phases on one thread) and on
+/// 41 x 101 (4141 particles, above the 4096 where the force gather and predictor, contact
+/// interpolation and update phases run on the team too).
 #[test]
 fn thread_count_does_not_change_the_bits() {
     for (nx, ny, end_s) in [(21, 51, 2e-6), (41, 101, 0.3e-6)] {
