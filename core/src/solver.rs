@@ -280,6 +280,17 @@ impl GroupPlan {
     }
 }
 
+impl ContactCache {
+    /// Forgets the clearances and the last step's search boxes, so that the next contact
+    /// stage evaluates every boundary particle (after the displacements were set from
+    /// outside).
+    fn forget(&mut self) {
+        self.clearance.fill(0.0);
+        self.boxes.clear();
+        self.du = Real::INFINITY;
+    }
+}
+
 impl Scatter {
     /// Chunks of `chunk` points over `particles` particles, groups of at most `max_group`
     /// points.
@@ -838,6 +849,31 @@ struct Batch {
     px: [Lanes; 2],
 }
 
+/// What the contact stage keeps from step to step to skip boundary particles that cannot
+/// reach a tool ([`Simulation::contact_stage`]). None of it is state: dropping it (as
+/// `restore` does) only makes the next step evaluate every boundary particle.
+#[derive(Debug, Clone, Default)]
+struct ContactCache {
+    /// `u_I = d_I + dt v*_I` of every particle at the last predictor (m).
+    u: Vec<[Real; 2]>,
+    /// Largest change of a component of `u_I` over the last step (m).
+    du: Real,
+    /// `S_J = sum_I |N_I(X_J)|` of each boundary particle: `|x_J|` moves at most `S_J`
+    /// times the largest move of a `u_I` (per component).
+    sum_abs: Vec<Real>,
+    /// Lower bound on the distance (largest component) from each boundary particle to
+    /// every tool's search box (m); positive means the particle cannot be in one.
+    clearance: Vec<Real>,
+    /// Predicted position (m) and velocity (m/s) of each boundary particle evaluated this
+    /// step.
+    motion: Vec<[[Real; 2]; 2]>,
+    /// The tools' search boxes at the last step.
+    boxes: Vec<Extents>,
+    /// Skip the particles with a positive clearance (false only in the test that compares
+    /// against evaluating all of them).
+    skip: bool,
+}
+
 /// Axis-aligned bounds of the deformed workpiece (m).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Extents {
@@ -919,9 +955,8 @@ pub struct Simulation {
     f_con: Vec<[Real; 2]>,
     v_prev: Vec<[Real; 2]>,
     critical_dt0: Real,
-    /// Predicted position (m) and velocity (m/s) of each boundary particle in the contact
-    /// stage.
-    boundary_motion: Vec<[[Real; 2]; 2]>,
+    /// Contact bookkeeping carried between steps.
+    contact: ContactCache,
     /// The threads of the parallel phases.
     team: Team,
     /// Use the AVX2 build of the stress stage where the CPU has it (same bits either way;
@@ -1072,7 +1107,17 @@ impl Simulation {
             weights,
             inv_radius,
             scatter,
-            boundary_motion: vec![[[0.0; 2]; 2]; boundary.len()],
+            contact: ContactCache {
+                u: vec![[0.0; 2]; np],
+                sum_abs: boundary
+                    .iter()
+                    .map(|&j| nodal.row(j as usize).map(|e| nodal.n[e].abs()).sum())
+                    .collect(),
+                clearance: vec![0.0; boundary.len()],
+                motion: vec![[[0.0; 2]; 2]; boundary.len()],
+                skip: true,
+                ..Default::default()
+            },
             boundary,
             constraints,
             st: State {
@@ -1259,6 +1304,7 @@ impl Simulation {
             t.state = *s;
         }
         self.v_prev.clone_from(&st.v);
+        self.contact.forget();
         for (out, point) in self.out.iter_mut().zip(&st.points) {
             out.set_plastic_strain(&self.material, point.eps_p);
         }
@@ -1279,7 +1325,7 @@ impl Simulation {
         }
         let dt_avg = 0.5 * (dt + self.st.dt_prev);
         let t2 = Instant::now();
-        self.force_stage(Some(dt_avg));
+        self.force_stage(Some((dt_avg, dt_full)));
         let t3 = Instant::now();
         // Tools advance over the step at their mid-step velocity.
         let t_mid = self.st.time + 0.5 * dt;
@@ -1504,17 +1550,22 @@ impl Simulation {
     /// predictor: `f_I` sums the chunk buffers covering `I` in chunk order; with
     /// `predict = Some(dt_avg)` (s), also `v* = v_{n-1/2} - dt_avg f_I / m_I` (m/s), keeping
     /// `v_{n-1/2}` for the energy account.
-    fn force_stage(&mut self, predict: Option<Real>) {
+    fn force_stage(&mut self, predict: Option<(Real, Real)>) {
         let t0 = Instant::now();
         let sc = &self.scatter;
-        let inv_mass = &self.inv_mass;
+        let (inv_mass, d) = (&self.inv_mass, &self.st.d);
         let np = self.f_int.len();
-        let (f_int, v, v_prev) = (
+        let blocks = np.div_ceil(BLOCK);
+        let mut du: Vec<Real> = vec![0.0; blocks];
+        let track = !self.tools.is_empty();
+        let (f_int, v, v_prev, u, du_slots) = (
             Parts::new(&mut self.f_int),
             Parts::new(&mut self.st.v),
             Parts::new(&mut self.v_prev),
+            Parts::new(&mut self.contact.u),
+            Parts::new(&mut du),
         );
-        particle_phase(&self.team, np, np.div_ceil(BLOCK), &|b| {
+        particle_phase(&self.team, np, blocks, &|b| {
             let range = b * BLOCK..((b + 1) * BLOCK).min(np);
             // SAFETY: block `b` alone takes these particles.
             let fs = unsafe { f_int.get(range.clone()) };
@@ -1526,17 +1577,34 @@ impl Simulation {
                     [a[0] + v[0], a[1] + v[1]]
                 });
             }
-            if let Some(dt_avg) = predict {
+            if let Some((dt_avg, dt)) = predict {
                 // SAFETY: as above.
                 let (vs, vps) = unsafe { (v.get(range.clone()), v_prev.get(range.clone())) };
                 vps.copy_from_slice(vs);
-                for ((v, f), im) in vs.iter_mut().zip(fs.iter()).zip(&inv_mass[range]) {
+                for ((v, f), im) in vs.iter_mut().zip(fs.iter()).zip(&inv_mass[range.clone()]) {
                     let a = dt_avg * im;
                     v[0] -= a * f[0];
                     v[1] -= a * f[1];
                 }
+                if track {
+                    // SAFETY: as above.
+                    let (us, slot) =
+                        unsafe { (u.get(range.clone()), &mut du_slots.get(b..b + 1)[0]) };
+                    for ((u, v), d) in us.iter_mut().zip(vs.iter()).zip(&d[range]) {
+                        let new = [d[0] + dt * v[0], d[1] + dt * v[1]];
+                        let change = (new[0] - u[0]).abs().max((new[1] - u[1]).abs());
+                        // A non-finite change makes every particle re-evaluated.
+                        *slot = slot.max(if change.is_finite() {
+                            change
+                        } else {
+                            Real::INFINITY
+                        });
+                        *u = new;
+                    }
+                }
             }
         });
+        self.contact.du = du.into_iter().fold(0.0, Real::max);
         self.times.internal_force += t0.elapsed();
     }
 
@@ -1584,8 +1652,11 @@ impl Simulation {
     /// Contact of the predicted boundary positions with the tools (paper eqs. 4-7).
     /// The penalty stiffness `m_s / dt^2` uses the solver's natural step `dt` (equal to the
     /// actual step except when a step is shortened to land on a requested time), so a short
-    /// step never turns a residual penetration into a huge impulse. Fills `f_con`; returns
-    /// whether any force acts.
+    /// step never turns a residual penetration into a huge impulse. A boundary particle is
+    /// interpolated only when it may be in a tool's search box: its clearance to the boxes,
+    /// measured when last interpolated, shrinks each step by `S_J du + box_move` (the bound
+    /// of [`ContactCache`]) and while it stays positive the particle is skipped. Fills
+    /// `f_con`; returns whether any force acts.
     fn contact_stage(&mut self, dt: Real, dt_avg: Real) -> (bool, Real) {
         for t in self.tools.iter_mut() {
             t.state.force = [0.0; 2];
@@ -1600,33 +1671,86 @@ impl Simulation {
             .iter()
             .map(|t| bounds_of(&t.vertices(), t.depth))
             .collect();
-        // Predicted positions x_J = X_J + sum_I N_I(X_J) (d_I + dt v*_I) and velocities
-        // v_J = sum_I N_I(X_J) v*_I of the boundary particles, in parallel.
+        // How far any search box moved since the last step (a first step: unbounded).
+        let box_move = if self.contact.boxes.len() == bounds.len() {
+            bounds
+                .iter()
+                .zip(&self.contact.boxes)
+                .flat_map(|(a, b)| {
+                    [
+                        a.x[0] - b.x[0],
+                        a.x[1] - b.x[1],
+                        a.y[0] - b.y[0],
+                        a.y[1] - b.y[1],
+                    ]
+                })
+                .fold(0.0, |m: Real, e| m.max(e.abs()))
+        } else {
+            Real::INFINITY
+        };
+        // Predicted positions x_J = X_J + sum_I N_I(X_J) u_I, u_I = d_I + dt v*_I, and
+        // velocities v_J = sum_I N_I(X_J) v*_I of the boundary particles that may be in a
+        // search box: a particle's clearance to the boxes shrinks each step by at most
+        // S_J du + box_move, and while it stays positive the particle is skipped (it could
+        // not have touched a tool: the bits are those of evaluating every particle).
         let (np, nb) = (self.ref_pos.len(), self.boundary.len());
-        let (boundary, nodal, ref_pos) = (&self.boundary, &self.nodal, &self.ref_pos);
-        let (d, v) = (&self.st.d, &self.st.v);
-        let motion = Parts::new(&mut self.boundary_motion);
+        let (boundary, nodal, ref_pos, v) =
+            (&self.boundary, &self.nodal, &self.ref_pos, &self.st.v);
+        let ContactCache {
+            u,
+            du,
+            sum_abs,
+            clearance,
+            motion,
+            skip,
+            ..
+        } = &mut self.contact;
+        let (du, skip, u, sum_abs) = (*du, *skip, &*u, &*sum_abs);
+        let margin = 1e-9 * self.spacing[0].min(self.spacing[1]);
+        let (motion_parts, clearance_parts) = (Parts::new(motion), Parts::new(clearance));
         particle_phase(&self.team, np, nb.div_ceil(BOUNDARY_BLOCK), &|b| {
             let range = b * BOUNDARY_BLOCK..((b + 1) * BOUNDARY_BLOCK).min(nb);
             // SAFETY: block `b` alone takes these boundary particles.
-            let out = unsafe { motion.get(range.clone()) };
-            for (m, &j) in out.iter_mut().zip(&boundary[range]) {
-                let j = j as usize;
+            let (out, clear) = unsafe {
+                (
+                    motion_parts.get(range.clone()),
+                    clearance_parts.get(range.clone()),
+                )
+            };
+            for (k, (m, c)) in range.zip(out.iter_mut().zip(clear.iter_mut())) {
+                *c -= sum_abs[k] * du + box_move;
+                if skip && *c > 0.0 {
+                    continue;
+                }
+                let j = boundary[k] as usize;
                 let (mut x, mut vj) = (ref_pos[j], [0.0; 2]);
                 for e in nodal.row(j) {
                     let i = nodal.index[e] as usize;
                     let n = nodal.n[e];
-                    let (v, d) = (v[i], d[i]);
-                    x[0] += n * (d[0] + dt * v[0]);
-                    x[1] += n * (d[1] + dt * v[1]);
-                    vj[0] += n * v[0];
-                    vj[1] += n * v[1];
+                    x[0] += n * u[i][0];
+                    x[1] += n * u[i][1];
+                    vj[0] += n * v[i][0];
+                    vj[1] += n * v[i][1];
                 }
                 *m = [x, vj];
+                let gap = bounds.iter().fold(Real::INFINITY, |g, b| {
+                    let dx = (b.x[0] - x[0]).max(x[0] - b.x[1]);
+                    let dy = (b.y[0] - x[1]).max(x[1] - b.y[1]);
+                    g.min(dx.max(dy))
+                });
+                *c = gap - margin;
             }
         });
         let mut any = false;
-        for (&j, &[x, vj]) in self.boundary.iter().zip(&self.boundary_motion) {
+        for ((&j, &[x, vj]), &c) in self
+            .boundary
+            .iter()
+            .zip(&self.contact.motion)
+            .zip(&self.contact.clearance)
+        {
+            if self.contact.skip && c > 0.0 {
+                continue;
+            }
             let j = j as usize;
             for (k, tool) in self.tools.iter_mut().enumerate() {
                 let b = &bounds[k];
@@ -1664,6 +1788,7 @@ impl Simulation {
             let f = t.state.force;
             t.state.peak_force = t.state.peak_force.max((f[0] * f[0] + f[1] * f[1]).sqrt());
         }
+        self.contact.boxes = bounds;
         (any, tool_work)
     }
 
@@ -1902,6 +2027,7 @@ impl Simulation {
             )));
         }
         self.st.d = d;
+        self.contact.forget();
         Ok(())
     }
 
@@ -2167,6 +2293,66 @@ mod tests {
             assert_eq!(simd.st.d, generic.st.d, "{rule:?}");
             assert_eq!(simd.st.points, generic.st.points, "{rule:?}");
             assert_eq!(simd.st.energy, generic.st.energy, "{rule:?}");
+        }
+    }
+
+    /// Skipping the boundary particles whose clearance to every tool's search box is
+    /// positive gives the bits of evaluating all of them, on the shipped scenes, with tool
+    /// velocities that jump and reverse, and across a restore; and it does skip where the
+    /// tools' search boxes leave room.
+    #[test]
+    fn contact_skipping_gives_the_bits_of_checking_every_particle() {
+        // The least share of evaluations skipped: most of the bar is far from the wall;
+        // the block's top and bottom rows are always inside the dies' boxes; the wheel's
+        // die is a container whose box holds the whole workpiece.
+        for (name, particles, steps, least_skipped) in [
+            ("taylor_bar", [11, 26], 600, 0.5),
+            ("block_forging", [21, 21], 3000, 0.2),
+            ("wheel_forging", [20, 20], 3000, 0.0),
+        ] {
+            let path = format!("{}/../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+            let mut scene = Scene::from_file(std::path::Path::new(&path)).unwrap();
+            scene.workpiece.particles = particles;
+            let mut skipping = Simulation::new(&scene).unwrap();
+            let mut all = skipping.clone();
+            all.contact.skip = false;
+            let (mut skipped, mut evaluated) = (0, 0);
+            for step in 0..steps {
+                if step == steps / 3 || step == 2 * steps / 3 {
+                    // A jump to 50 m/s, then a reversal: the tools leave.
+                    let v = if step == steps / 3 { 50.0 } else { -20.0 };
+                    for sim in [&mut skipping, &mut all] {
+                        for t in 0..sim.tools().len() {
+                            if sim.tools()[t].is_movable() {
+                                sim.set_tool_velocity(t, v).unwrap();
+                            }
+                        }
+                    }
+                }
+                if step == steps / 2 {
+                    let saved = skipping.state().clone();
+                    skipping.restore(saved).unwrap();
+                }
+                skipping.step(None).unwrap();
+                all.step(None).unwrap();
+                let positive = skipping
+                    .contact
+                    .clearance
+                    .iter()
+                    .filter(|&&c| c > 0.0)
+                    .count();
+                skipped += positive;
+                evaluated += skipping.boundary.len() - positive;
+            }
+            assert_eq!(skipping.state(), all.state(), "{name}");
+            assert!(
+                skipping.tools().iter().any(|t| t.state.peak_force > 0.0),
+                "{name}: contact"
+            );
+            assert!(
+                skipped as f64 >= least_skipped * (skipped + evaluated) as f64,
+                "{name}: skipped {skipped}, evaluated {evaluated}"
+            );
         }
     }
 
