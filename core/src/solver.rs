@@ -287,7 +287,7 @@ impl ContactCache {
     fn forget(&mut self) {
         self.clearance.fill(0.0);
         self.boxes.clear();
-        self.du = Real::INFINITY;
+        self.update_move = Real::INFINITY;
     }
 }
 
@@ -820,6 +820,32 @@ mod group_avx2 {
     }
 }
 
+/// Largest velocity component `max_I max(|v_I,x|, |v_I,y|)` (m/s) of `vs`, infinite if
+/// one is not finite (then the sum of the magnitudes is not finite either). Written with
+/// four independent running maxima and sums, which compile to vector max and add
+/// instructions (a single running maximum stays scalar).
+fn largest_component(vs: &[[Real; 2]]) -> Real {
+    let (mut most, mut sum) = ([0.0; 4], [0.0; 4]);
+    let mut chunks = vs.as_flattened().chunks_exact(4);
+    for c in &mut chunks {
+        for k in 0..4 {
+            let a = c[k].abs();
+            most[k] = if a > most[k] { a } else { most[k] };
+            sum[k] += a;
+        }
+    }
+    for (k, x) in chunks.remainder().iter().enumerate() {
+        let a = x.abs();
+        most[k] = if a > most[k] { a } else { most[k] };
+        sum[k] += a;
+    }
+    if (sum[0] + sum[1] + sum[2] + sum[3]).is_finite() {
+        most.into_iter().fold(0.0, Real::max)
+    } else {
+        Real::INFINITY
+    }
+}
+
 /// Runs `body` over `blocks` blocks of a particle phase of a model of `particles`
 /// particles: on the team from [`PARALLEL_PARTICLES`] up, else on this thread in block
 /// order.
@@ -854,12 +880,15 @@ struct Batch {
 /// `restore` does) only makes the next step evaluate every boundary particle.
 #[derive(Debug, Clone, Default)]
 struct ContactCache {
-    /// `u_I = d_I + dt v*_I` of every particle at the last predictor (m).
-    u: Vec<[Real; 2]>,
-    /// Largest change of a component of `u_I` over the last step (m).
-    du: Real,
-    /// `S_J = sum_I |N_I(X_J)|` of each boundary particle: `|x_J|` moves at most `S_J`
-    /// times the largest move of a `u_I` (per component).
+    /// `dt V*` of the last two predictors (m), `V*` the largest velocity component of a
+    /// particle after the predictor and `dt` the step the contact stage interpolates with.
+    predicted_moves: [Real; 2],
+    /// `dt V` of the last update (m), `V` the largest velocity component at the half step.
+    update_move: Real,
+    /// `S_J = sum_I |N_I(X_J)|` of each boundary particle. Between two contact stages
+    /// `u_I = d_I + dt v*_I` changes by `dt_n v_{n+1/2} + dt_{n+1} v*_{n+1} - dt_n v*_n`,
+    /// at most `du = update_move + predicted_moves[0] + predicted_moves[1]` per component,
+    /// so `x_J = X_J + sum_I N_I(X_J) u_I` moves at most `S_J du` per component.
     sum_abs: Vec<Real>,
     /// Lower bound on the distance (largest component) from each boundary particle to
     /// every tool's search box (m); positive means the particle cannot be in one.
@@ -1108,7 +1137,6 @@ impl Simulation {
             inv_radius,
             scatter,
             contact: ContactCache {
-                u: vec![[0.0; 2]; np],
                 sum_abs: boundary
                     .iter()
                     .map(|&j| nodal.row(j as usize).map(|e| nodal.n[e].abs()).sum())
@@ -1553,17 +1581,15 @@ impl Simulation {
     fn force_stage(&mut self, predict: Option<(Real, Real)>) {
         let t0 = Instant::now();
         let sc = &self.scatter;
-        let (inv_mass, d) = (&self.inv_mass, &self.st.d);
+        let inv_mass = &self.inv_mass;
         let np = self.f_int.len();
         let blocks = np.div_ceil(BLOCK);
-        let mut du: Vec<Real> = vec![0.0; blocks];
-        let track = !self.tools.is_empty();
-        let (f_int, v, v_prev, u, du_slots) = (
+        let mut speeds: Vec<Real> = vec![0.0; blocks];
+        let (f_int, v, v_prev, speed_slots) = (
             Parts::new(&mut self.f_int),
             Parts::new(&mut self.st.v),
             Parts::new(&mut self.v_prev),
-            Parts::new(&mut self.contact.u),
-            Parts::new(&mut du),
+            Parts::new(&mut speeds),
         );
         particle_phase(&self.team, np, blocks, &|b| {
             let range = b * BLOCK..((b + 1) * BLOCK).min(np);
@@ -1577,34 +1603,31 @@ impl Simulation {
                     [a[0] + v[0], a[1] + v[1]]
                 });
             }
-            if let Some((dt_avg, dt)) = predict {
+            if let Some((dt_avg, _)) = predict {
                 // SAFETY: as above.
-                let (vs, vps) = unsafe { (v.get(range.clone()), v_prev.get(range.clone())) };
+                let (vs, vps, slot) = unsafe {
+                    (
+                        v.get(range.clone()),
+                        v_prev.get(range.clone()),
+                        &mut speed_slots.get(b..b + 1)[0],
+                    )
+                };
                 vps.copy_from_slice(vs);
-                for ((v, f), im) in vs.iter_mut().zip(fs.iter()).zip(&inv_mass[range.clone()]) {
+                for ((v, f), im) in vs.iter_mut().zip(fs.iter()).zip(&inv_mass[range]) {
                     let a = dt_avg * im;
                     v[0] -= a * f[0];
                     v[1] -= a * f[1];
                 }
-                if track {
-                    // SAFETY: as above.
-                    let (us, slot) =
-                        unsafe { (u.get(range.clone()), &mut du_slots.get(b..b + 1)[0]) };
-                    for ((u, v), d) in us.iter_mut().zip(vs.iter()).zip(&d[range]) {
-                        let new = [d[0] + dt * v[0], d[1] + dt * v[1]];
-                        let change = (new[0] - u[0]).abs().max((new[1] - u[1]).abs());
-                        // A non-finite change makes every particle re-evaluated.
-                        *slot = slot.max(if change.is_finite() {
-                            change
-                        } else {
-                            Real::INFINITY
-                        });
-                        *u = new;
-                    }
-                }
+                *slot = largest_component(vs);
             }
         });
-        self.contact.du = du.into_iter().fold(0.0, Real::max);
+        if let Some((_, dt)) = predict {
+            let c = &mut self.contact;
+            c.predicted_moves = [
+                c.predicted_moves[1],
+                dt * speeds.into_iter().fold(0.0, Real::max),
+            ];
+        }
         self.times.internal_force += t0.elapsed();
     }
 
@@ -1617,7 +1640,7 @@ impl Simulation {
     fn update_stage(&mut self, dt: Real, dt_avg: Real, contact: bool) -> [Real; 3] {
         let np = self.st.v.len();
         let blocks = np.div_ceil(BLOCK);
-        let mut sums = vec![[0.0; 3]; blocks];
+        let mut sums = vec![[0.0; 4]; blocks];
         let (v, v_prev, mass, f_int, f_con) = (
             &self.st.v,
             &self.v_prev,
@@ -1631,6 +1654,7 @@ impl Simulation {
             let (mut kinetic, mut work, mut half_step) = (0.0, 0.0, 0.0);
             // SAFETY: block `b` alone takes these particles and its slot.
             let (ds, slot) = unsafe { (d.get(range.clone()), &mut slots.get(b..b + 1)[0]) };
+            let speed = largest_component(&v[range.clone()]);
             for (d, i) in ds.iter_mut().zip(range) {
                 let (v, vp) = (v[i], v_prev[i]);
                 kinetic += 0.5 * mass[i] * (v[0] * v[0] + v[1] * v[1]);
@@ -1643,10 +1667,13 @@ impl Simulation {
                 d[0] += dt * v[0];
                 d[1] += dt * v[1];
             }
-            *slot = [kinetic, work, half_step];
+            *slot = [kinetic, work, half_step, speed];
         });
-        sums.iter()
-            .fold([0.0; 3], |a, s| [a[0] + s[0], a[1] + s[1], a[2] + s[2]])
+        let [kinetic, work, half_step, speed] = sums.iter().fold([0.0; 4], |a, s| {
+            [a[0] + s[0], a[1] + s[1], a[2] + s[2], a[3].max(s[3])]
+        });
+        self.contact.update_move = dt * speed;
+        [kinetic, work, half_step]
     }
 
     /// Contact of the predicted boundary positions with the tools (paper eqs. 4-7).
@@ -1694,18 +1721,19 @@ impl Simulation {
         // S_J du + box_move, and while it stays positive the particle is skipped (it could
         // not have touched a tool: the bits are those of evaluating every particle).
         let (np, nb) = (self.ref_pos.len(), self.boundary.len());
-        let (boundary, nodal, ref_pos, v) =
-            (&self.boundary, &self.nodal, &self.ref_pos, &self.st.v);
+        let (boundary, nodal, ref_pos) = (&self.boundary, &self.nodal, &self.ref_pos);
+        let (d, v) = (&self.st.d, &self.st.v);
         let ContactCache {
-            u,
-            du,
+            predicted_moves,
+            update_move,
             sum_abs,
             clearance,
             motion,
             skip,
             ..
         } = &mut self.contact;
-        let (du, skip, u, sum_abs) = (*du, *skip, &*u, &*sum_abs);
+        let du = *update_move + predicted_moves[0] + predicted_moves[1];
+        let (skip, sum_abs) = (*skip, &*sum_abs);
         let margin = 1e-9 * self.spacing[0].min(self.spacing[1]);
         let (motion_parts, clearance_parts) = (Parts::new(motion), Parts::new(clearance));
         particle_phase(&self.team, np, nb.div_ceil(BOUNDARY_BLOCK), &|b| {
@@ -1727,8 +1755,8 @@ impl Simulation {
                 for e in nodal.row(j) {
                     let i = nodal.index[e] as usize;
                     let n = nodal.n[e];
-                    x[0] += n * u[i][0];
-                    x[1] += n * u[i][1];
+                    x[0] += n * (d[i][0] + dt * v[i][0]);
+                    x[1] += n * (d[i][1] + dt * v[i][1]);
                     vj[0] += n * v[i][0];
                     vj[1] += n * v[i][1];
                 }
