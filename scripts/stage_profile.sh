@@ -8,7 +8,7 @@ cargo build --release -q -p rkforge
 scenes=("$@")
 [ ${#scenes[@]} -gt 0 ] || scenes=(scenes/taylor_bar.toml scenes/block_forging.toml scenes/wheel_forging.toml)
 out=$(mktemp -d)
-echo "| scene | rule | steps | wall (s) | setup (s) | of which shape functions | stress + scatter | internal-force gather | contact | integration | output | other | us / step | ns / point-step |"
+echo "| scene | rule | steps | wall (s) | setup (s) | of which shape functions | stress + scatter | force gather + predictor | contact | integration | output | other | us / step | ns / point-step |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for scene in "${scenes[@]}"; do
   for rule in q4 q2 scni; do

@@ -121,7 +121,7 @@ pub struct StageTimes {
     pub shape_functions: Duration,
     /// Deformation gradient and stress update at the points.
     pub stress: Duration,
-    /// Internal force gather.
+    /// Internal force gather, fused with the predictor.
     pub internal_force: Duration,
     /// Contact search and forces.
     pub contact: Duration,
