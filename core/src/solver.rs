@@ -201,15 +201,18 @@ struct ChunkSums {
 /// `chunk` points (cells in row order, so a chunk touches a contiguous band of particles);
 /// chunk `c` adds its contributions to particles `lo[c]..lo[c] + len` into its own slice
 /// `offsets[c]..offsets[c + 1]` of `buf`, and each particle then sums the slices that cover
-/// it in chunk order (`cover`). The bits do not depend on the number of threads.
+/// it in chunk order (a block of [`BLOCK`] particles adds the overlapping part of each
+/// chunk in `block_chunks`). The bits do not depend on the number of threads.
 #[derive(Debug, Clone, Default)]
 struct Scatter {
     chunk: usize,
     lo: Vec<u32>,
     offsets: Vec<usize>,
     buf: Vec<[Real; 2]>,
-    cover_offsets: Vec<u32>,
-    cover: Vec<u32>,
+    /// The chunks whose particles overlap each block of particles, ascending:
+    /// `block_chunks[block_offsets[b]..block_offsets[b + 1]]`.
+    block_offsets: Vec<u32>,
+    block_chunks: Vec<u32>,
     /// For each point: the number of consecutive points, starting at it, processed as
     /// one group over one particle list (at most [`MAX_GROUP`], never across a chunk
     /// boundary), or 0 for a point inside a group. The Gauss points of a cell share their
@@ -297,7 +300,7 @@ impl Scatter {
     fn new(pt: &ShapeTable, particles: usize, chunk: usize, max_group: usize) -> Scatter {
         let chunks = pt.rows().div_ceil(chunk);
         let (mut lo, mut offsets) = (Vec::with_capacity(chunks), vec![0usize]);
-        let mut covering: Vec<Vec<u32>> = vec![Vec::new(); particles];
+        let mut covering: Vec<Vec<u32>> = vec![Vec::new(); particles.div_ceil(BLOCK)];
         for c in 0..chunks {
             let rows = c * chunk..((c + 1) * chunk).min(pt.rows());
             let entries = pt.offsets[rows.start] as usize..pt.offsets[rows.end] as usize;
@@ -307,17 +310,17 @@ impl Scatter {
                 idx.iter().copied().max().unwrap_or(0),
             );
             let base = offsets[c];
-            for i in a..=b {
-                covering[i as usize].push((base + (i - a) as usize) as u32);
+            for list in &mut covering[a as usize / BLOCK..=b as usize / BLOCK] {
+                list.push(c as u32);
             }
             lo.push(a);
             offsets.push(base + (b - a) as usize + 1);
         }
-        let mut cover_offsets = vec![0u32];
-        let mut cover = Vec::new();
+        let mut block_offsets = vec![0u32];
+        let mut block_chunks = Vec::new();
         for list in covering {
-            cover.extend(list);
-            cover_offsets.push(cover.len() as u32);
+            block_chunks.extend(list);
+            block_offsets.push(block_chunks.len() as u32);
         }
         let mut group = vec![0u8; pt.rows()];
         let (mut lists, mut list_range) = (Vec::new(), vec![[0u32; 2]; pt.rows()]);
@@ -361,8 +364,8 @@ impl Scatter {
             lo,
             buf: vec![[0.0; 2]; *offsets.last().unwrap_or(&0)],
             offsets,
-            cover_offsets,
-            cover,
+            block_offsets,
+            block_chunks,
         }
     }
 }
@@ -1575,7 +1578,8 @@ impl Simulation {
     }
 
     /// Internal force gather over fixed blocks of particles in parallel, fused with the
-    /// predictor: `f_I` sums the chunk buffers covering `I` in chunk order; with
+    /// predictor: `f_I` sums the chunk buffers covering `I` in chunk order (per block, the
+    /// overlapping slice of each chunk in turn); with
     /// `predict = Some(dt_avg)` (s), also `v* = v_{n-1/2} - dt_avg f_I / m_I` (m/s), keeping
     /// `v_{n-1/2}` for the energy account.
     fn force_stage(&mut self, predict: Option<(Real, Real)>) {
@@ -1595,13 +1599,18 @@ impl Simulation {
             let range = b * BLOCK..((b + 1) * BLOCK).min(np);
             // SAFETY: block `b` alone takes these particles.
             let fs = unsafe { f_int.get(range.clone()) };
-            for (f, i) in fs.iter_mut().zip(range.clone()) {
-                let covering =
-                    &sc.cover[sc.cover_offsets[i] as usize..sc.cover_offsets[i + 1] as usize];
-                *f = covering.iter().fold([0.0; 2], |a, &c| {
-                    let v = sc.buf[c as usize];
-                    [a[0] + v[0], a[1] + v[1]]
-                });
+            fs.fill([0.0; 2]);
+            let chunks = sc.block_offsets[b] as usize..sc.block_offsets[b + 1] as usize;
+            for &c in &sc.block_chunks[chunks] {
+                let c = c as usize;
+                let lo = sc.lo[c] as usize;
+                let hi = lo + sc.offsets[c + 1] - sc.offsets[c];
+                let (a, e) = (range.start.max(lo), range.end.min(hi));
+                let src = &sc.buf[sc.offsets[c] + a - lo..sc.offsets[c] + e - lo];
+                for (f, v) in fs[a - range.start..e - range.start].iter_mut().zip(src) {
+                    f[0] += v[0];
+                    f[1] += v[1];
+                }
             }
             if let Some((dt_avg, _)) = predict {
                 // SAFETY: as above.
@@ -1632,8 +1641,8 @@ impl Simulation {
     }
 
     /// Displacement update `d_{n+1} = d_n + dt v_{n+1/2}` (m) over fixed blocks of
-    /// particles in parallel, with the energy sums of the step, each summed per block and
-    /// the blocks in order: kinetic `sum m |v|^2 / 2`, contact work
+    /// particles in parallel, with the energy sums of the step, each summed per block (four
+    /// interleaved running sums, added pairwise) and the blocks in order: kinetic `sum m |v|^2 / 2`, contact work
     /// `sum dt_avg f_c . (v_{n+1/2} + v_{n-1/2}) / 2` (the exact discrete identity of the
     /// corrector, when `contact` forces act) and internal half-step work
     /// `sum dt f_int . v_{n+1/2} / 2` (J).
@@ -1651,22 +1660,35 @@ impl Simulation {
         let (d, slots) = (Parts::new(&mut self.st.d), Parts::new(&mut sums));
         particle_phase(&self.team, np, blocks, &|b| {
             let range = b * BLOCK..((b + 1) * BLOCK).min(np);
-            let (mut kinetic, mut work, mut half_step) = (0.0, 0.0, 0.0);
             // SAFETY: block `b` alone takes these particles and its slot.
             let (ds, slot) = unsafe { (d.get(range.clone()), &mut slots.get(b..b + 1)[0]) };
-            let speed = largest_component(&v[range.clone()]);
-            for (d, i) in ds.iter_mut().zip(range) {
-                let (v, vp) = (v[i], v_prev[i]);
-                kinetic += 0.5 * mass[i] * (v[0] * v[0] + v[1] * v[1]);
-                let fi = f_int[i];
-                half_step += 0.5 * dt * (fi[0] * v[0] + fi[1] * v[1]);
-                if contact {
-                    let f = f_con[i];
-                    work += 0.5 * dt_avg * (f[0] * (v[0] + vp[0]) + f[1] * (v[1] + vp[1]));
+            let n = ds.len();
+            let (vs, vps, ms) = (
+                &v[range.clone()],
+                &v_prev[range.clone()],
+                &mass[range.clone()],
+            );
+            let (fis, fcs) = (&f_int[range.clone()], &f_con[range]);
+            let speed = largest_component(vs);
+            // Four running sums per quantity (particle i into sum i mod 4), added pairwise at
+            // the end: independent chains instead of one long dependent one.
+            let (mut ke, mut wk, mut hs) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+            for j in (0..n).step_by(4) {
+                for k in 0..4.min(n - j) {
+                    let i = j + k;
+                    let (v, vp, fi) = (vs[i], vps[i], fis[i]);
+                    ke[k] += 0.5 * ms[i] * (v[0] * v[0] + v[1] * v[1]);
+                    hs[k] += 0.5 * dt * (fi[0] * v[0] + fi[1] * v[1]);
+                    if contact {
+                        let f = fcs[i];
+                        wk[k] += 0.5 * dt_avg * (f[0] * (v[0] + vp[0]) + f[1] * (v[1] + vp[1]));
+                    }
+                    ds[i][0] += dt * v[0];
+                    ds[i][1] += dt * v[1];
                 }
-                d[0] += dt * v[0];
-                d[1] += dt * v[1];
             }
+            let sum4 = |x: [Real; 4]| (x[0] + x[1]) + (x[2] + x[3]);
+            let (kinetic, work, half_step) = (sum4(ke), sum4(wk), sum4(hs));
             *slot = [kinetic, work, half_step, speed];
         });
         let [kinetic, work, half_step, speed] = sums.iter().fold([0.0; 4], |a, s| {
@@ -1928,7 +1950,9 @@ impl Simulation {
             + self.scatter.buf.len() * r2
             + self.scatter.table.len() * 8
             + self.scatter.table_start.len() * 4
-            + (self.scatter.cover.len() + self.scatter.cover_offsets.len() + self.scatter.lo.len())
+            + (self.scatter.block_chunks.len()
+                + self.scatter.block_offsets.len()
+                + self.scatter.lo.len())
                 * 4
             + np * (5 * r2 + 2 * 8)
             + npts
