@@ -13,11 +13,14 @@
 //!    `dt_crit0 = 2 / omega_max` measured at setup (Lanczos iteration on `M^{-1} K`) and
 //!    `h_min` the smallest altitude of the deformed cells
 //!    `det F hx hy / max(|F e_x| hx, |F e_y| hy)`;
-//! 3. force stage, fused with 1: `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p`
-//!    scattered per chunk of points and summed per particle in a fixed order;
+//! 3. force stage: `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p` scattered per chunk
+//!    of points (fused with 1) and summed per particle in a fixed order (fused with 4);
 //! 4. predictor: `v* = v_{n-1/2} + dt_avg (-f_int / m)`, `d* = d_n + dt v*`;
 //! 5. contact: penetration of the predicted boundary particles into the tools at `t_{n+1}`,
-//!    paper eqs. 4-6, spread with eq. 7;
+//!    paper eqs. 4-6, spread with eq. 7 (particles that cannot reach a tool skipped);
+//!
+//! The parallel phases (1 with the scatter; on large models also 4, the contact
+//! interpolation and the update of 6) run on a [`Team`] over fixed chunks.
 //! 6. corrector: `v_{n+1/2} = v* + dt_avg f_c / m`, Lagrange-multiplier projection onto the
 //!    essential conditions, `d_{n+1} = d_n + dt v_{n+1/2}`, tools advance;
 //! 7. energy account and divergence checks.
