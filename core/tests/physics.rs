@@ -346,6 +346,39 @@ fn restored_state_continues_bit_for_bit() {
     );
 }
 
+/// Two simulations stepping at once in one 2-thread pool (each on a worker, each with its
+/// own team, their helpers competing for the same workers) finish and give the bits of
+/// one run alone; so does a simulation stepped from a thread outside any pool.
+#[test]
+fn simulations_sharing_a_pool_or_outside_it_give_the_bits_of_one_run() {
+    let mut scene = common::taylor(41, 101, IntegrationRule::Q2);
+    scene.time.end_s = 0.2e-6;
+    let run = |scene: &rkforge_core::Scene| {
+        let mut s = Simulation::new(scene).unwrap();
+        s.run_to(scene.time.end_s, |_| {}).unwrap();
+        s.state().clone()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let alone = pool.install(|| run(&scene));
+    let (a, b) = pool.install(|| rayon::join(|| run(&scene), || run(&scene)));
+    assert!(alone.step > 10, "{} steps", alone.step);
+    assert_eq!(a, alone);
+    assert_eq!(b, alone);
+    let outside = std::thread::spawn(move || {
+        let mut s = Simulation::new(&scene).unwrap();
+        while s.time() < scene.time.end_s - 1e-18 {
+            s.step(Some(scene.time.end_s - s.time())).unwrap();
+        }
+        s.state().clone()
+    })
+    .join()
+    .unwrap();
+    assert_eq!(outside, alone);
+}
+
 /// The same run on 1, 2 and 3 threads gives the same bits, with every rule: on the paper's
 /// grid (1071 particles: stress phase on the team, particle phases on one thread) and on
 /// 41 x 101 (4141 particles, above the 4096 where the force gather and predictor, contact
