@@ -36,6 +36,7 @@ use crate::scene::{Component, Edge, IntegrationRule, Kinematics, Scene};
 use crate::team::{Parts, Team};
 use crate::tools::{penalty_force, Tool, ToolState, SEARCH_DEPTH_SPACINGS};
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::time::{Duration, Instant};
 
@@ -222,10 +223,12 @@ struct Scatter {
     /// list; two neighbouring q2 cells, or four neighbouring SCNI points, are grouped over
     /// the union of their lists when it is shorter than the lists together ([`GroupPlan`]).
     group: Vec<u8>,
-    /// The groups' particle lists (ascending), each `lists[list_range[p].0..list_range[p].1]`
-    /// for the first point `p` of a group.
+    /// The groups' particle lists (ascending) as offsets from the group's first particle
+    /// `base[p]`: `lists[list_range[p].0..list_range[p].1]` for the first point `p` of a
+    /// group. Groups with the same offsets share one stored list.
     lists: Vec<u32>,
     list_range: Vec<[u32; 2]>,
+    base: Vec<u32>,
     /// Shape function values and gradients of each group, neighbour-major and interleaved
     /// so that a neighbour's values for the group's `g` points are contiguous:
     /// `[N_1..N_g, N_1,x..N_g,x, N_1,y..N_g,y]` per neighbour (one SIMD load each); zero
@@ -233,6 +236,10 @@ struct Scatter {
     /// and leaves each point's sums as its own list gives them.
     table: Vec<Real>,
     /// Where each group's entries start in `table` (for the first point of a group).
+    /// Groups whose entries are bitwise equal (most interior cells of a uniform grid: the
+    /// shape functions depend on positions relative to the particles) share one stored
+    /// block, so a large model reads a few distinct blocks from cache instead of streaming
+    /// one per group from memory.
     table_start: Vec<u32>,
 }
 
@@ -327,16 +334,26 @@ impl Scatter {
         }
         let mut group = vec![0u8; pt.rows()];
         let (mut lists, mut list_range) = (Vec::new(), vec![[0u32; 2]; pt.rows()]);
-        let mut table = Vec::with_capacity(3 * pt.n.len());
+        let mut base = vec![0u32; pt.rows()];
+        let mut table = Vec::new();
         let mut table_start = vec![0u32; pt.rows()];
+        let mut stored_lists: HashMap<Vec<u32>, u32> = HashMap::new();
+        let mut stored_blocks: HashMap<Vec<u64>, u32> = HashMap::new();
+        let mut block = Vec::new();
         let mut p = 0;
         while p < pt.rows() {
             let end = ((p / chunk + 1) * chunk).min(pt.rows());
             let plan = GroupPlan::at(pt, p, end, max_group);
             group[p] = plan.size as u8;
-            list_range[p] = [lists.len() as u32, (lists.len() + plan.list.len()) as u32];
-            table_start[p] = table.len() as u32;
+            base[p] = plan.list[0];
+            let offsets: Vec<u32> = plan.list.iter().map(|&i| i - base[p]).collect();
+            let start = *stored_lists.entry(offsets.clone()).or_insert_with(|| {
+                lists.extend(&offsets);
+                (lists.len() - offsets.len()) as u32
+            });
+            list_range[p] = [start, start + offsets.len() as u32];
             // Each point's entries in list order, matched against the union.
+            block.clear();
             let mut next: Vec<usize> = (p..p + plan.size).map(|q| pt.row(q).start).collect();
             for &i in &plan.list {
                 let mut hit = [None; MAX_GROUP];
@@ -347,20 +364,25 @@ impl Scatter {
                     }
                 }
                 for values in [&pt.n, &pt.dx, &pt.dy] {
-                    table.extend(
+                    block.extend(
                         hit[..plan.size]
                             .iter()
                             .map(|e| e.map_or(0.0, |e| values[e])),
                     );
                 }
             }
-            lists.extend(plan.list);
+            let bits: Vec<u64> = block.iter().map(|x| x.to_bits()).collect();
+            table_start[p] = *stored_blocks.entry(bits).or_insert_with(|| {
+                table.extend(&block);
+                (table.len() - block.len()) as u32
+            });
             p += plan.size;
         }
         Scatter {
             group,
             lists,
             list_range,
+            base,
             table,
             table_start,
             chunk,
@@ -388,6 +410,7 @@ struct StressContext<'a> {
     /// Group particle lists ([`Scatter::lists`]).
     lists: &'a [u32],
     list_range: &'a [[u32; 2]],
+    base: &'a [u32],
     /// Group sizes per point ([`Scatter::group`]).
     groups: &'a [u8],
     table: &'a [Real],
@@ -401,14 +424,19 @@ struct StressContext<'a> {
 }
 
 impl StressContext<'_> {
-    /// The particle list of the group of `g` points starting at `p0`, and the group's
-    /// interleaved shape-function entries ([`Scatter::table`]).
+    /// The first particle of the group of `g` points starting at `p0`, the group's
+    /// particles as offsets from it, and the group's interleaved shape-function entries
+    /// ([`Scatter::table`]).
     #[inline(always)]
-    fn neighbours(&self, p0: usize, g: usize) -> (&[u32], &[Real]) {
+    fn neighbours(&self, p0: usize, g: usize) -> (usize, &[u32], &[Real]) {
         let [a, b] = self.list_range[p0];
         let index = &self.lists[a as usize..b as usize];
         let start = self.table_start[p0] as usize;
-        (index, &self.table[start..start + 3 * g * index.len()])
+        (
+            self.base[p0] as usize,
+            index,
+            &self.table[start..start + 3 * g * index.len()],
+        )
     }
 
     /// Gathers `F = I + sum_I d_I (x) grad N_I` and `u_r = sum_I N_I d_I,r` of the `G`
@@ -417,7 +445,8 @@ impl StressContext<'_> {
     /// (`[F_xX, F_xY, F_yX, F_yY, u_r]`).
     #[inline(always)]
     fn gather<const G: usize>(&self, p0: usize, f: &mut [Lanes; 5], l0: usize) {
-        let (index, table) = self.neighbours(p0, G);
+        let (base, index, table) = self.neighbours(p0, G);
+        let d = &self.d[base..];
         // xy holds F_xX, F_xY (from d_x) then F_yX, F_yY (from d_y) of the G points in the
         // order of a neighbour's `[N_x.., N_y..]` entries, so each neighbour adds two
         // vectors of 2G products, each a fused multiply-add.
@@ -426,7 +455,7 @@ impl StressContext<'_> {
         xy[1][G..2 * G].fill(1.0);
         let mut ur = [0.0; MAX_GROUP];
         for (&i, e) in index.iter().zip(table.chunks_exact(3 * G)) {
-            let di = self.d[i as usize];
+            let di = d[i as usize];
             for q in 0..2 * G {
                 xy[0][q] = di[0].mul_add(e[G + q], xy[0][q]);
                 xy[1][q] = di[1].mul_add(e[G + q], xy[1][q]);
@@ -461,9 +490,10 @@ impl StressContext<'_> {
         buf: &mut [[Real; 2]],
         lo: usize,
     ) {
-        let (index, table) = self.neighbours(p0, G);
+        let (base, index, table) = self.neighbours(p0, G);
+        let buf = &mut buf[base - lo..];
         for (&i, e) in index.iter().zip(table.chunks_exact(3 * G)) {
-            let b = &mut buf[i as usize - lo];
+            let b = &mut buf[i as usize];
             for j in 0..G {
                 let l = l0 + j;
                 let (n, nx, ny) = (e[j], e[G + j], e[2 * G + j]);
@@ -497,18 +527,15 @@ impl StressContext<'_> {
         }
         #[cfg(target_arch = "x86_64")]
         if AVX2 && (g == 2 || g == 4) {
-            let (index, table) = self.neighbours(p0, g);
+            let (base, index, table) = self.neighbours(p0, g);
+            let (d, buf) = (&self.d[base..], &mut buf[base - lo..]);
             // SAFETY: `AVX2` is true only inside `chunk_avx2`, called where the CPU has AVX2.
             unsafe {
                 match (SCATTER, g) {
-                    (false, 2) => group_avx2::gather2(index, table, self.d, &mut lanes.f, l0),
-                    (false, _) => group_avx2::gather4(index, table, self.d, &mut lanes.f, l0),
-                    (true, 2) => {
-                        group_avx2::scatter2(index, table, &lanes.pw, &lanes.px, l0, buf, lo)
-                    }
-                    (true, _) => {
-                        group_avx2::scatter4(index, table, &lanes.pw, &lanes.px, l0, buf, lo)
-                    }
+                    (false, 2) => group_avx2::gather2(index, table, d, &mut lanes.f, l0),
+                    (false, _) => group_avx2::gather4(index, table, d, &mut lanes.f, l0),
+                    (true, 2) => group_avx2::scatter2(index, table, &lanes.pw, &lanes.px, l0, buf),
+                    (true, _) => group_avx2::scatter4(index, table, &lanes.pw, &lanes.px, l0, buf),
                 }
             }
             return;
@@ -661,7 +688,8 @@ impl StressContext<'_> {
 /// [`StressContext::gather`] and [`StressContext::scatter`] in their order (the generic
 /// build's `mul_add` rounds once, as the FMA instruction does), so the bits are the
 /// generic build's; left to itself the compiler splits these loops into 128-bit pieces and
-/// shuffles (the quad gather took some 70 instructions per neighbour).
+/// shuffles (the quad gather took some 70 instructions per neighbour). `index` holds the
+/// particles as offsets from the group's first particle, where `d` and `buf` start.
 #[cfg(target_arch = "x86_64")]
 mod group_avx2 {
     use super::{Lanes, Real};
@@ -746,7 +774,6 @@ mod group_avx2 {
         px: &[Lanes; 2],
         l0: usize,
         buf: &mut [[Real; 2]],
-        lo: usize,
     ) {
         let w = |x: &Lanes| load2(&x[l0..]);
         let (wxx, wxy, wv, wyx, wyy) = (w(&pw[0]), w(&pw[1]), w(&pw[2]), w(&px[0]), w(&px[1]));
@@ -756,7 +783,7 @@ mod group_avx2 {
             let sx = _mm_fmadd_pd(wxx, x, _mm_fmadd_pd(wxy, y, _mm_mul_pd(wv, v)));
             let sy = _mm_fmadd_pd(wyx, x, _mm_mul_pd(wyy, y));
             add_to(
-                &mut buf[i as usize - lo],
+                &mut buf[i as usize],
                 &[_mm_unpacklo_pd(sx, sy), _mm_unpackhi_pd(sx, sy)],
             );
         }
@@ -799,7 +826,6 @@ mod group_avx2 {
         px: &[Lanes; 2],
         l0: usize,
         buf: &mut [[Real; 2]],
-        lo: usize,
     ) {
         let w = |x: &Lanes| load4(&x[l0..]);
         let (wxx, wxy, wv, wyx, wyy) = (w(&pw[0]), w(&pw[1]), w(&pw[2]), w(&px[0]), w(&px[1]));
@@ -814,7 +840,7 @@ mod group_avx2 {
                 _mm256_extractf128_pd::<1>(sy),
             );
             add_to(
-                &mut buf[i as usize - lo],
+                &mut buf[i as usize],
                 &[
                     _mm_unpacklo_pd(x01, y01),
                     _mm_unpackhi_pd(x01, y01),
@@ -1504,6 +1530,7 @@ impl Simulation {
             group,
             lists,
             list_range,
+            base,
             table,
             table_start,
             ..
@@ -1511,6 +1538,7 @@ impl Simulation {
         let cx = StressContext {
             lists,
             list_range,
+            base,
             groups: group,
             table,
             table_start,
@@ -1952,7 +1980,12 @@ impl Simulation {
             + table(&self.nodal)
             + self.scatter.buf.len() * r2
             + self.scatter.table.len() * 8
-            + self.scatter.table_start.len() * 4
+            + (self.scatter.table_start.len()
+                + self.scatter.base.len()
+                + self.scatter.lists.len()
+                + 2 * self.scatter.list_range.len()
+                + self.scatter.group.len() / 4)
+                * 4
             + (self.scatter.block_chunks.len()
                 + self.scatter.block_offsets.len()
                 + self.scatter.lo.len())
@@ -2316,6 +2349,34 @@ mod tests {
             assert_eq!(grouped.st.d, single.st.d, "{rule:?}");
             assert_eq!(grouped.st.points, single.st.points, "{rule:?}");
             assert_eq!(grouped.st.energy, single.st.energy, "{rule:?}");
+        }
+    }
+
+    /// On a uniform grid the interior groups' shape-function blocks are bitwise equal and
+    /// stored once: the stored table is a small part of one block per group.
+    #[test]
+    fn interior_groups_share_their_stored_tables() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/taylor_bar.toml");
+        for (rule, most) in [
+            (IntegrationRule::Q4, 0.15),
+            (IntegrationRule::Q2, 0.2),
+            (IntegrationRule::Scni, 0.6),
+        ] {
+            let mut scene = Scene::from_file(std::path::Path::new(path))
+                .unwrap()
+                .with_integration(rule);
+            scene.workpiece.particles = [81, 201];
+            let sim = Simulation::new(&scene).unwrap();
+            let sc = &sim.scatter;
+            let unshared: usize = (0..sc.group.len())
+                .filter(|&p| sc.group[p] > 0)
+                .map(|p| {
+                    let [a, b] = sc.list_range[p];
+                    3 * sc.group[p] as usize * (b - a) as usize
+                })
+                .sum();
+            let share = sc.table.len() as f64 / unshared as f64;
+            assert!(share < most, "{rule:?}: stored {share:.3} of the blocks");
         }
     }
 
