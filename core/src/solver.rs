@@ -312,7 +312,7 @@ impl Scatter {
         let (mut lo, mut offsets) = (Vec::with_capacity(chunks), vec![0usize]);
         let mut covering: Vec<Vec<u32>> = vec![Vec::new(); particles.div_ceil(BLOCK)];
         for c in 0..chunks {
-            let rows = c * chunk..((c + 1) * chunk).min(pt.rows());
+            let rows = part(c, chunk, pt.rows());
             let entries = pt.offsets[rows.start] as usize..pt.offsets[rows.end] as usize;
             let idx = &pt.index[entries];
             let (a, b) = (
@@ -850,6 +850,11 @@ mod group_avx2 {
             );
         }
     }
+}
+
+/// Part `k` of `0..n` cut into parts of `size`: `k size..min((k + 1) size, n)`.
+fn part(k: usize, size: usize, n: usize) -> std::ops::Range<usize> {
+    k * size..((k + 1) * size).min(n)
 }
 
 /// Largest velocity component `max_I max(|v_I,x|, |v_I,y|)` (m/s) of `vs`, infinite if
@@ -1560,7 +1565,7 @@ impl Simulation {
             Parts::new(&mut sums),
         );
         self.team.for_each(lo.len(), &|c| {
-            let range = c * chunk..((c + 1) * chunk).min(points);
+            let range = part(c, chunk, points);
             // SAFETY: chunk `c` alone takes these points, its buffer slice and its slot.
             let (work, slot) = unsafe {
                 (
@@ -1619,6 +1624,8 @@ impl Simulation {
         let inv_mass = &self.inv_mass;
         let np = self.f_int.len();
         let blocks = np.div_ceil(BLOCK);
+        // The largest speeds serve only the contact stage's skipping.
+        let track = !self.tools.is_empty();
         let mut speeds: Vec<Real> = vec![0.0; blocks];
         let (f_int, v, v_prev, speed_slots) = (
             Parts::new(&mut self.f_int),
@@ -1627,7 +1634,7 @@ impl Simulation {
             Parts::new(&mut speeds),
         );
         particle_phase(&self.team, np, blocks, &|b| {
-            let range = b * BLOCK..((b + 1) * BLOCK).min(np);
+            let range = part(b, BLOCK, np);
             // SAFETY: block `b` alone takes these particles.
             let fs = unsafe { f_int.get(range.clone()) };
             fs.fill([0.0; 2]);
@@ -1658,7 +1665,9 @@ impl Simulation {
                     v[0] -= a * f[0];
                     v[1] -= a * f[1];
                 }
-                *slot = largest_component(vs);
+                if track {
+                    *slot = largest_component(vs);
+                }
             }
         });
         if let Some((_, dt)) = predict {
@@ -1681,6 +1690,7 @@ impl Simulation {
         let np = self.st.v.len();
         let blocks = np.div_ceil(BLOCK);
         let mut sums = vec![[0.0; 4]; blocks];
+        let track = !self.tools.is_empty();
         let (v, v_prev, mass, f_int, f_con) = (
             &self.st.v,
             &self.v_prev,
@@ -1690,7 +1700,7 @@ impl Simulation {
         );
         let (d, slots) = (Parts::new(&mut self.st.d), Parts::new(&mut sums));
         particle_phase(&self.team, np, blocks, &|b| {
-            let range = b * BLOCK..((b + 1) * BLOCK).min(np);
+            let range = part(b, BLOCK, np);
             // SAFETY: block `b` alone takes these particles and its slot.
             let (ds, slot) = unsafe { (d.get(range.clone()), &mut slots.get(b..b + 1)[0]) };
             let n = ds.len();
@@ -1700,7 +1710,7 @@ impl Simulation {
                 &mass[range.clone()],
             );
             let (fis, fcs) = (&f_int[range.clone()], &f_con[range]);
-            let speed = largest_component(vs);
+            let speed = if track { largest_component(vs) } else { 0.0 };
             // Four running sums per quantity (particle i into sum i mod 4), added pairwise at
             // the end: independent chains instead of one long dependent one.
             let (mut ke, mut wk, mut hs) = ([0.0; 4], [0.0; 4], [0.0; 4]);
@@ -1790,7 +1800,7 @@ impl Simulation {
         let margin = 1e-9 * self.spacing[0].min(self.spacing[1]);
         let (motion_parts, clearance_parts) = (Parts::new(motion), Parts::new(clearance));
         particle_phase(&self.team, np, nb.div_ceil(BOUNDARY_BLOCK), &|b| {
-            let range = b * BOUNDARY_BLOCK..((b + 1) * BOUNDARY_BLOCK).min(nb);
+            let range = part(b, BOUNDARY_BLOCK, nb);
             // SAFETY: block `b` alone takes these boundary particles.
             let (out, clear) = unsafe {
                 (

@@ -23,7 +23,7 @@ use std::cell::UnsafeCell;
 use std::marker::PhantomData;
 use std::ops::Range;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -56,7 +56,7 @@ struct Shared {
     /// Helpers alive (spinning or inside a phase).
     helpers: AtomicUsize,
     /// Set when the team is dropped: helpers leave at once.
-    dropped: std::sync::atomic::AtomicBool,
+    dropped: AtomicBool,
     /// The first panic of a helper in the open phase.
     panic: Mutex<Option<Box<dyn Any + Send>>>,
 }
@@ -82,7 +82,7 @@ impl Default for Team {
                 ends: Padded::default(),
                 done: Padded::default(),
                 helpers: AtomicUsize::new(0),
-                dropped: std::sync::atomic::AtomicBool::new(false),
+                dropped: AtomicBool::new(false),
                 panic: Mutex::new(None),
             }),
         }
