@@ -14,17 +14,29 @@
 //!   (the linear patch test passes to round-off, also next to the boundary).
 
 use crate::math::Real;
+use crate::rk_shape::{Lattice, Site};
 use crate::scene::IntegrationRule;
 
 /// Integration points: reference positions and cell-local data.
 #[derive(Debug, Clone, Default)]
 pub struct PointSet {
+    /// Each point as a particle of the lattice and the offset from it.
+    pub sites: Vec<Site>,
     /// Reference positions (m).
     pub positions: Vec<[Real; 2]>,
     /// Planar area weights (m^2): Gauss weight times the cell Jacobian.
     pub areas: Vec<Real>,
     /// Cell index `j * (nx - 1) + i` of each point.
     pub cells: Vec<u32>,
+}
+
+impl PointSet {
+    fn push(&mut self, lattice: &Lattice, site: Site, area: Real, cell: usize) {
+        self.sites.push(site);
+        self.positions.push(lattice.position(site));
+        self.areas.push(area);
+        self.cells.push(cell as u32);
+    }
 }
 
 /// Gauss points `(xi, eta, weight)` of a cell rule on the reference square `[-1, 1]^2`
@@ -42,31 +54,31 @@ pub fn rule_points(rule: IntegrationRule) -> Vec<(Real, Real, Real)> {
 pub const SCNI_EDGE_POINTS: usize = 12;
 
 /// The nodal domains of SCNI: one point per particle at its domain's centroid with the
-/// domain's area, and for each domain [`SCNI_EDGE_POINTS`] boundary points with their
-/// outward normal times the quadrature weight (m).
-pub fn nodal_domains(
-    origin: [Real; 2],
-    h: [Real; 2],
-    nx: usize,
-    ny: usize,
-) -> (PointSet, Vec<[Real; 2]>, Vec<[Real; 2]>) {
+/// domain's area, and for each domain [`SCNI_EDGE_POINTS`] boundary sites with their
+/// outward normal times the quadrature weight (m). Everything is formed relative to the
+/// domain's particle, so interior domains get the same bits.
+pub fn nodal_domains(lattice: &Lattice) -> (PointSet, Vec<Site>, Vec<[Real; 2]>) {
     let g = (0.6_f64).sqrt() / 2.0;
     let gauss = [
         (0.5 - g, 5.0 / 18.0),
         (0.5, 8.0 / 18.0),
         (0.5 + g, 5.0 / 18.0),
     ];
+    let (h, [nx, ny]) = (lattice.spacing(), lattice.dims());
     let mut s = PointSet::default();
-    let (mut edge_points, mut edge_nw) = (Vec::new(), Vec::new());
-    let lo = |k: usize, i: usize| origin[k] + (i as Real - 0.5).max(0.0) * h[k];
-    let hi =
-        |k: usize, i: usize, n: usize| origin[k] + (i as Real + 0.5).min((n - 1) as Real) * h[k];
+    let (mut edge_sites, mut edge_nw) = (Vec::new(), Vec::new());
+    // Domain bounds relative to particle `i` of `n`: half a spacing, cut at the edges.
+    let lo = |k: usize, i: usize| if i > 0 { -0.5 * h[k] } else { 0.0 };
+    let hi = |k: usize, i: usize, n: usize| if i + 1 < n { 0.5 * h[k] } else { 0.0 };
     for j in 0..ny {
         for i in 0..nx {
+            let node = [i, j];
             let (x0, x1, y0, y1) = (lo(0, i), hi(0, i, nx), lo(1, j), hi(1, j, ny));
-            s.positions.push([0.5 * (x0 + x1), 0.5 * (y0 + y1)]);
-            s.areas.push((x1 - x0) * (y1 - y0));
-            s.cells.push((j * nx + i) as u32);
+            let centre = Site {
+                node,
+                offset: [0.5 * (x0 + x1), 0.5 * (y0 + y1)],
+            };
+            s.push(lattice, centre, (x1 - x0) * (y1 - y0), j * nx + i);
             // Counter-clockwise edges: bottom, right, top, left, with outward normals.
             let edges = [
                 ([x0, y0], [x1, y0], [0.0, -1.0]),
@@ -77,35 +89,40 @@ pub fn nodal_domains(
             for (a, b, n) in edges {
                 let len = (b[0] - a[0]).hypot(b[1] - a[1]);
                 for &(t, w) in &gauss {
-                    edge_points.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+                    edge_sites.push(Site {
+                        node,
+                        offset: [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])],
+                    });
                     edge_nw.push([n[0] * w * len, n[1] * w * len]);
                 }
             }
         }
     }
-    (s, edge_points, edge_nw)
+    (s, edge_sites, edge_nw)
 }
 
-/// Points of `rule` in every cell of the `nx x ny` grid with lower-left `origin` and
-/// spacings `h`.
-pub fn grid_points(
-    rule: IntegrationRule,
-    origin: [Real; 2],
-    h: [Real; 2],
-    nx: usize,
-    ny: usize,
-) -> PointSet {
-    let local = rule_points(rule);
+/// Points of `rule` in every cell of the lattice, as offsets from the cell's lower-left
+/// particle.
+pub fn grid_points(rule: IntegrationRule, lattice: &Lattice) -> PointSet {
+    let (h, [nx, ny]) = (lattice.spacing(), lattice.dims());
+    let local: Vec<([Real; 2], Real)> = rule_points(rule)
+        .into_iter()
+        .map(|(xi, eta, w)| {
+            (
+                [(0.5 + 0.5 * xi) * h[0], (0.5 + 0.5 * eta) * h[1]],
+                w * 0.25 * h[0] * h[1],
+            )
+        })
+        .collect();
     let mut s = PointSet::default();
     for j in 0..ny - 1 {
         for i in 0..nx - 1 {
-            let xc = origin[0] + (i as Real + 0.5) * h[0];
-            let yc = origin[1] + (j as Real + 0.5) * h[1];
-            for &(xi, eta, w) in &local {
-                s.positions
-                    .push([xc + 0.5 * xi * h[0], yc + 0.5 * eta * h[1]]);
-                s.areas.push(w * 0.25 * h[0] * h[1]);
-                s.cells.push((j * (nx - 1) + i) as u32);
+            for &(offset, area) in &local {
+                let site = Site {
+                    node: [i, j],
+                    offset,
+                };
+                s.push(lattice, site, area, j * (nx - 1) + i);
             }
         }
     }
@@ -146,12 +163,13 @@ mod tests {
 
     #[test]
     fn weights_sum_to_the_area() {
+        let lattice = Lattice::new([0.0, 0.0], [0.5, 0.25], [5, 9], [1.0, 0.5]);
         for rule in [IntegrationRule::Q4, IntegrationRule::Q2] {
-            let s = grid_points(rule, [0.0, 0.0], [0.5, 0.25], 5, 9);
+            let s = grid_points(rule, &lattice);
             let a: Real = s.areas.iter().sum();
             assert!((a - 2.0 * 2.0).abs() < 1e-12);
         }
-        let (s, e, nw) = nodal_domains([0.0, 0.0], [0.5, 0.25], 5, 9);
+        let (s, e, nw) = nodal_domains(&lattice);
         let a: Real = s.areas.iter().sum();
         assert!((a - 2.0 * 2.0).abs() < 1e-12);
         assert_eq!(e.len(), 45 * SCNI_EDGE_POINTS);

@@ -171,116 +171,295 @@ impl KernelCloud {
         points: &[[Real; 2]],
         label: &dyn Fn(usize) -> String,
     ) -> Result<ShapeTable> {
-        let mut t = ShapeTable {
-            offsets: Vec::with_capacity(points.len() + 1),
-            ..Default::default()
-        };
-        t.offsets.push(0);
-        let mut nb = Vec::new();
-        let mut vals = Vec::new();
+        let mut t = ShapeTable::with_rows(points.len());
+        let (mut nb, mut offsets, mut vals) = (Vec::new(), Vec::new(), Vec::new());
         for (p, &x) in points.iter().enumerate() {
             self.grid.query(&self.positions, x, self.support, &mut nb);
-            self.evaluate(x, &nb, &mut vals)
+            offsets.clear();
+            offsets.extend(nb.iter().map(|&i| {
+                let xi = self.positions[i as usize];
+                [x[0] - xi[0], x[1] - xi[1]]
+            }));
+            evaluate(x, &offsets, &nb, &self.volumes, self.support, &mut vals)
                 .map_err(|m| Error::ShapeFunctions(format!("{}: {m}", label(p))))?;
-            for (k, &i) in nb.iter().enumerate() {
-                t.index.push(i);
-                t.n.push(vals[k][0]);
-                t.dx.push(vals[k][1]);
-                t.dy.push(vals[k][2]);
-            }
-            t.offsets.push(t.index.len() as u32);
+            t.push_row(&nb, &vals);
         }
         Ok(t)
     }
+}
 
-    /// `[N_I, dN_I/dx, dN_I/dy]` at `x` for the neighbours `nb`.
-    fn evaluate(
-        &self,
-        x: [Real; 2],
-        nb: &[u32],
-        out: &mut Vec<[Real; 3]>,
-    ) -> std::result::Result<(), String> {
-        let [ax, ay] = self.support;
-        out.clear();
-        if nb.len() < 3 {
-            return Err(format!(
-                "only {} particles within the kernel support at ({:.6e}, {:.6e}) m; a linear basis needs 3 (increase the support)",
-                nb.len(),
-                x[0],
-                x[1]
-            ));
+/// A point of a [`Lattice`] given by a particle and its offset from it: the position is
+/// `X_node + offset` (m). Shape functions at a site depend only on the offsets to the
+/// neighbours, which are formed from whole multiples of the spacing, so two sites with
+/// the same offset and the same neighbourhood (any two away from the edges) get the same
+/// bits wherever they lie: their stored blocks can be shared.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Site {
+    /// Lattice indices `(i, j)` of the particle.
+    pub node: [usize; 2],
+    /// Offset from the particle (m).
+    pub offset: [Real; 2],
+}
+
+/// The particles of a rectangular workpiece: `n[0] x n[1]` particles at
+/// `X_ij = origin + (i h_x, j h_y)`, numbered `j n[0] + i`, with volumes `h_x h_y`, halved
+/// on each edge (a quarter in the corners), so that they sum to the rectangle's area.
+#[derive(Debug, Clone)]
+pub struct Lattice {
+    cloud: KernelCloud,
+    origin: [Real; 2],
+    h: [Real; 2],
+    n: [usize; 2],
+}
+
+impl Lattice {
+    /// The lattice with lower-left particle at `origin` (m), spacings `h` (m), `n`
+    /// particles per direction and kernel support radii `support` (m).
+    pub fn new(origin: [Real; 2], h: [Real; 2], n: [usize; 2], support: [Real; 2]) -> Self {
+        let mut positions = Vec::with_capacity(n[0] * n[1]);
+        let mut volumes = Vec::with_capacity(n[0] * n[1]);
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                positions.push([origin[0] + i as Real * h[0], origin[1] + j as Real * h[1]]);
+                let fx = if i == 0 || i == n[0] - 1 { 0.5 } else { 1.0 };
+                let fy = if j == 0 || j == n[1] - 1 { 0.5 } else { 1.0 };
+                volumes.push(h[0] * h[1] * fx * fy);
+            }
         }
-        let mut m = Matrix3::zeros();
-        let mut mx = Matrix3::zeros();
-        let mut my = Matrix3::zeros();
-        // Derivatives of H(X_I - x) with respect to x.
-        let hx = Vector3::new(0.0, -1.0 / ax, 0.0);
-        let hy = Vector3::new(0.0, 0.0, -1.0 / ay);
-        for &i in nb {
-            let xi = self.positions[i as usize];
-            let v = self.volumes[i as usize];
-            let (phi, gx, gy) = window(x[0] - xi[0], x[1] - xi[1], ax, ay);
-            let h = Vector3::new(1.0, (xi[0] - x[0]) / ax, (xi[1] - x[1]) / ay);
-            let hh = h * h.transpose();
-            m += hh * (phi * v);
-            mx += (hx * h.transpose() + h * hx.transpose()) * (phi * v) + hh * (gx * v);
-            my += (hy * h.transpose() + h * hy.transpose()) * (phi * v) + hh * (gy * v);
+        Lattice {
+            cloud: KernelCloud::new(positions, volumes, support),
+            origin,
+            h,
+            n,
         }
-        // Conditioning check before inversion: a (near-)singular moment matrix means the
-        // neighbours are collinear or too few.
-        let chol = m.cholesky().ok_or_else(|| {
-            format!(
-                "moment matrix is singular at ({:.6e}, {:.6e}) m ({} neighbours); increase the support",
-                x[0],
-                x[1],
-                nb.len()
-            )
-        })?;
-        let eig = m.symmetric_eigenvalues();
-        let (lmin, lmax) = (eig.min(), eig.max());
-        if lmin <= 1e-10 * lmax {
-            return Err(format!(
-                "moment matrix is ill-conditioned (condition {:.1e}) at ({:.6e}, {:.6e}) m; increase the support",
-                lmax / lmin,
-                x[0],
-                x[1]
-            ));
-        }
-        let b = chol.solve(&Vector3::new(1.0, 0.0, 0.0));
-        let bx = -chol.solve(&(mx * b));
-        let by = -chol.solve(&(my * b));
-        for &i in nb {
-            let xi = self.positions[i as usize];
-            let v = self.volumes[i as usize];
-            let (phi, gx, gy) = window(x[0] - xi[0], x[1] - xi[1], ax, ay);
-            let h = Vector3::new(1.0, (xi[0] - x[0]) / ax, (xi[1] - x[1]) / ay);
-            let c = b.dot(&h);
-            let n = c * phi * v;
-            let dnx = (bx.dot(&h) + b.dot(&hx)) * phi * v + c * gx * v;
-            let dny = (by.dot(&h) + b.dot(&hy)) * phi * v + c * gy * v;
-            out.push([n, dnx, dny]);
-        }
-        Ok(())
     }
+
+    /// The particles as a general cloud.
+    pub fn cloud(&self) -> &KernelCloud {
+        &self.cloud
+    }
+
+    /// Particle spacings `(h_x, h_y)` (m).
+    pub fn spacing(&self) -> [Real; 2] {
+        self.h
+    }
+
+    /// Particles per direction.
+    pub fn dims(&self) -> [usize; 2] {
+        self.n
+    }
+
+    /// Position of a site (m).
+    pub fn position(&self, s: Site) -> [Real; 2] {
+        [0, 1].map(|k| self.origin[k] + s.node[k] as Real * self.h[k] + s.offset[k])
+    }
+
+    /// Evaluate `N_I` and `grad N_I` at each site, with the neighbour offsets
+    /// `x - X_I = (node - I) h + offset` formed from lattice indices; `label` names a site
+    /// in errors. Neighbours are the particles with `|x - X_I| < a` per direction, in
+    /// ascending index order, as for [`KernelCloud::shape_table`].
+    pub fn shape_table(
+        &self,
+        sites: &[Site],
+        label: &dyn Fn(usize) -> String,
+    ) -> Result<ShapeTable> {
+        let mut t = ShapeTable::with_rows(sites.len());
+        let (mut nb, mut offsets, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        let a = self.cloud.support;
+        for (p, s) in sites.iter().enumerate() {
+            // Index range per direction that can lie within the support.
+            let range = |k: usize| {
+                let reach = ((a[k] + s.offset[k].abs()) / self.h[k]).ceil() as usize + 1;
+                s.node[k].saturating_sub(reach)..(s.node[k] + reach + 1).min(self.n[k])
+            };
+            let near =
+                |k: usize, i: usize| (s.node[k] as Real - i as Real) * self.h[k] + s.offset[k];
+            nb.clear();
+            offsets.clear();
+            let (ri, rj) = (range(0), range(1));
+            for j in rj {
+                let dy = near(1, j);
+                if dy.abs() >= a[1] {
+                    continue;
+                }
+                for i in ri.clone() {
+                    let dx = near(0, i);
+                    if dx.abs() < a[0] {
+                        nb.push((j * self.n[0] + i) as u32);
+                        offsets.push([dx, dy]);
+                    }
+                }
+            }
+            evaluate(
+                self.position(*s),
+                &offsets,
+                &nb,
+                &self.cloud.volumes,
+                a,
+                &mut vals,
+            )
+            .map_err(|m| Error::ShapeFunctions(format!("{}: {m}", label(p))))?;
+            t.push_row(&nb, &vals);
+        }
+        Ok(t)
+    }
+}
+
+impl ShapeTable {
+    fn with_rows(rows: usize) -> ShapeTable {
+        let mut offsets = Vec::with_capacity(rows + 1);
+        offsets.push(0);
+        ShapeTable {
+            offsets,
+            ..Default::default()
+        }
+    }
+
+    fn push_row(&mut self, nb: &[u32], vals: &[[Real; 3]]) {
+        for (&i, v) in nb.iter().zip(vals) {
+            self.index.push(i);
+            self.n.push(v[0]);
+            self.dx.push(v[1]);
+            self.dy.push(v[2]);
+        }
+        self.offsets.push(self.index.len() as u32);
+    }
+}
+
+/// `[N_I, dN_I/dx, dN_I/dy]` at `x` (m, named in errors) for the neighbours `nb` with
+/// offsets `d_I = x - X_I` (m), volumes `volumes[I]` (m^2) and support radii `support`
+/// (m), paper eqs. (2)-(3).
+fn evaluate(
+    x: [Real; 2],
+    d: &[[Real; 2]],
+    nb: &[u32],
+    volumes: &[Real],
+    support: [Real; 2],
+    out: &mut Vec<[Real; 3]>,
+) -> std::result::Result<(), String> {
+    let [ax, ay] = support;
+    out.clear();
+    if nb.len() < 3 {
+        return Err(format!(
+            "only {} particles within the kernel support at ({:.6e}, {:.6e}) m; a linear basis needs 3 (increase the support)",
+            nb.len(),
+            x[0],
+            x[1]
+        ));
+    }
+    let mut m = Matrix3::zeros();
+    let mut mx = Matrix3::zeros();
+    let mut my = Matrix3::zeros();
+    // Derivatives of H(X_I - x) with respect to x.
+    let hx = Vector3::new(0.0, -1.0 / ax, 0.0);
+    let hy = Vector3::new(0.0, 0.0, -1.0 / ay);
+    let basis = |d: [Real; 2]| Vector3::new(1.0, -d[0] / ax, -d[1] / ay);
+    for (&i, &di) in nb.iter().zip(d) {
+        let v = volumes[i as usize];
+        let (phi, gx, gy) = window(di[0], di[1], ax, ay);
+        let h = basis(di);
+        let hh = h * h.transpose();
+        m += hh * (phi * v);
+        mx += (hx * h.transpose() + h * hx.transpose()) * (phi * v) + hh * (gx * v);
+        my += (hy * h.transpose() + h * hy.transpose()) * (phi * v) + hh * (gy * v);
+    }
+    // Conditioning check before inversion: a (near-)singular moment matrix means the
+    // neighbours are collinear or too few.
+    let chol = m.cholesky().ok_or_else(|| {
+        format!(
+            "moment matrix is singular at ({:.6e}, {:.6e}) m ({} neighbours); increase the support",
+            x[0],
+            x[1],
+            nb.len()
+        )
+    })?;
+    let eig = m.symmetric_eigenvalues();
+    let (lmin, lmax) = (eig.min(), eig.max());
+    if lmin <= 1e-10 * lmax {
+        return Err(format!(
+            "moment matrix is ill-conditioned (condition {:.1e}) at ({:.6e}, {:.6e}) m; increase the support",
+            lmax / lmin,
+            x[0],
+            x[1]
+        ));
+    }
+    let b = chol.solve(&Vector3::new(1.0, 0.0, 0.0));
+    let bx = -chol.solve(&(mx * b));
+    let by = -chol.solve(&(my * b));
+    for (&i, &di) in nb.iter().zip(d) {
+        let v = volumes[i as usize];
+        let (phi, gx, gy) = window(di[0], di[1], ax, ay);
+        let h = basis(di);
+        let c = b.dot(&h);
+        let n = c * phi * v;
+        let dnx = (bx.dot(&h) + b.dot(&hx)) * phi * v + c * gx * v;
+        let dny = (by.dot(&h) + b.dot(&hy)) * phi * v + c * gy * v;
+        out.push([n, dnx, dny]);
+    }
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// A graded grid with irregular volumes, to exercise the correction near edges.
+    /// A grid with halved volumes on the edges, to exercise the correction there.
     fn cloud(nx: usize, ny: usize, hx: Real, hy: Real, s: Real) -> KernelCloud {
-        let mut pos = Vec::new();
-        let mut vol = Vec::new();
-        for j in 0..ny {
-            for i in 0..nx {
-                pos.push([i as Real * hx, j as Real * hy]);
-                let fx = if i == 0 || i == nx - 1 { 0.5 } else { 1.0 };
-                let fy = if j == 0 || j == ny - 1 { 0.5 } else { 1.0 };
-                vol.push(hx * hy * fx * fy);
+        Lattice::new([0.0, 0.0], [hx, hy], [nx, ny], [s * hx, s * hy])
+            .cloud()
+            .clone()
+    }
+
+    /// The lattice path finds the cloud's neighbours and values (to round-off), and two
+    /// interior sites with the same offset get the same bits wherever they lie.
+    #[test]
+    fn lattice_sites_match_the_cloud_and_repeat_their_bits_inside() {
+        let h = [0.16e-3, 0.648e-3];
+        let l = Lattice::new([1.3e-3, -0.7e-3], h, [15, 17], [2.0 * h[0], 2.0 * h[1]]);
+        let offsets = [
+            [0.0, 0.0],
+            [0.3e-4, 0.2e-3],
+            [-0.08e-3, 0.324e-3],
+            [0.1e-3, -0.5e-3],
+        ];
+        let nodes = [[0, 0], [7, 8], [10, 11], [14, 16], [3, 12]];
+        let sites: Vec<Site> = nodes
+            .iter()
+            .flat_map(|&node| offsets.iter().map(move |&offset| Site { node, offset }))
+            .collect();
+        let t = l.shape_table(&sites, &|p| format!("site {p}")).unwrap();
+        let x: Vec<[Real; 2]> = sites.iter().map(|&s| l.position(s)).collect();
+        let c = l
+            .cloud()
+            .shape_table(&x, &|p| format!("point {p}"))
+            .unwrap();
+        // A particle exactly one support radius away has a zero window: the lattice
+        // leaves it out, the cloud may keep it from rounding in the absolute offsets.
+        let value = |t: &ShapeTable, p: usize, i: u32| {
+            t.row(p)
+                .find(|&e| t.index[e] == i)
+                .map_or([0.0; 3], |e| [t.n[e], t.dx[e] * h[0], t.dy[e] * h[1]])
+        };
+        for p in 0..sites.len() {
+            for &i in &c.index[c.row(p)] {
+                let (a, b) = (value(&t, p, i), value(&c, p, i));
+                assert!(
+                    (0..3).all(|k| (a[k] - b[k]).abs() < 1e-12),
+                    "site {p}, particle {i}"
+                );
+            }
+            assert!(t.row(p).all(|e| c.index[c.row(p)].contains(&t.index[e])));
+        }
+        // Sites 4..8 sit at node (7, 8), sites 8..12 at node (10, 11).
+        for k in 0..offsets.len() {
+            let (a, b) = (t.row(4 + k), t.row(8 + k));
+            for v in [&t.n, &t.dx, &t.dy] {
+                let bits = |r: std::ops::Range<usize>| -> Vec<u64> {
+                    v[r].iter().map(|x| x.to_bits()).collect()
+                };
+                assert_eq!(bits(a.clone()), bits(b.clone()), "offset {k}");
             }
         }
-        KernelCloud::new(pos, vol, [s * hx, s * hy])
     }
 
     #[test]

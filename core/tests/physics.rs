@@ -4,7 +4,7 @@
 
 mod common;
 
-use rkforge_core::rk_shape::KernelCloud;
+use rkforge_core::rk_shape::Lattice;
 use rkforge_core::{IntegrationRule, Kinematics, Simulation};
 
 const RULES: [IntegrationRule; 3] = [
@@ -103,16 +103,9 @@ fn boundary_residual(sim: &Simulation, f: &[[f64; 2]]) -> f64 {
     let h = sim.spacing();
     let (nx, ny) = sim.grid();
     let x0 = sim.reference_positions();
-    let vols: Vec<f64> = (0..x0.len())
-        .map(|i| {
-            let (ix, iy) = (i % nx, i / nx);
-            let fx = if ix == 0 || ix == nx - 1 { 0.5 } else { 1.0 };
-            let fy = if iy == 0 || iy == ny - 1 { 0.5 } else { 1.0 };
-            h[0] * h[1] * fx * fy
-        })
-        .collect();
     let s = sim.scene().discretization.support;
-    let cloud = KernelCloud::new(x0.to_vec(), vols, [s[0] * h[0], s[1] * h[1]]);
+    let lattice = Lattice::new(x0[0], h, [nx, ny], [s[0] * h[0], s[1] * h[1]]);
+    let cloud = lattice.cloud();
     // Uniform P from the material at F = I + A (plane strain).
     let p = {
         let pt = sim.point_shapes();
