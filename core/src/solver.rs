@@ -395,6 +395,25 @@ impl Scatter {
     }
 }
 
+impl Scatter {
+    /// Point `p`'s entries in its group's block: each particle of the group's list with
+    /// `[N, dN/dX, dN/dY]`, zero where the particle is only in another point's list.
+    fn point_row(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
+        let first = (0..=p).rev().find(|&q| self.group[q] > 0).unwrap_or(0);
+        let (g, q) = (self.group[first] as usize, p - first);
+        let [a, b] = self.list_range[first];
+        let block = &self.table[self.table_start[first] as usize..];
+        let base = self.base[first] as usize;
+        self.lists[a as usize..b as usize]
+            .iter()
+            .enumerate()
+            .map(move |(k, &i)| {
+                let v = &block[3 * g * k..3 * g * (k + 1)];
+                (base + i as usize, [v[q], v[g + q], v[2 * g + q]])
+            })
+    }
+}
+
 /// One chunk's share of the stress stage: points `first..first + states.len()` with their
 /// histories and cached outputs, and the chunk's force buffer (particles from `lo`).
 struct ChunkWork<'a> {
@@ -1009,7 +1028,8 @@ pub struct Simulation {
     weights: Vec<Real>,
     /// `1 / R_p` of each integration point (1/m) in axisymmetry, 1 in plane strain.
     inv_radius: Vec<Real>,
-    pt: ShapeTable,
+    /// The point shape functions live only in the scatter's shared blocks
+    /// ([`Scatter::point_row`]); the point-major table is dropped after setup.
     scatter: Scatter,
     nodal: ShapeTable,
     boundary: Vec<u32>,
@@ -1050,20 +1070,7 @@ impl Simulation {
         let t_shapes = Instant::now();
         let lattice = Lattice::new(w.origin_m, h, [nx, ny], support);
         let ref_pos = lattice.cloud().positions.clone();
-        let (points, pt) = match scene.discretization.integration {
-            IntegrationRule::Scni => {
-                let (points, edges, nw) = nodal_domains(&lattice);
-                let pt = smoothed_shape_table(&lattice, &points, &edges, &nw)?;
-                (points, pt)
-            }
-            rule => {
-                let points = grid_points(rule, &lattice);
-                let pt = lattice.shape_table(&points.sites, &|p| {
-                    format!("integration point {p} (cell {})", points.cells[p])
-                })?;
-                (points, pt)
-            }
-        };
+        let (points, pt) = point_shapes(&lattice, scene.discretization.integration)?;
         let particles: Vec<Site> = (0..ny)
             .flat_map(|j| {
                 (0..nx).map(move |i| Site {
@@ -1209,7 +1216,6 @@ impl Simulation {
             team: Team::default(),
             ref_pos,
             points,
-            pt,
             nodal,
             scene: scene.clone(),
             times: StageTimes {
@@ -1982,8 +1988,7 @@ impl Simulation {
         let r2 = std::mem::size_of::<[Real; 2]>();
         let np = self.ref_pos.len();
         let npts = self.points.positions.len();
-        table(&self.pt)
-            + table(&self.nodal)
+        table(&self.nodal)
             + self.scatter.buf.len() * r2
             + self.scatter.table.len() * 8
             + (self.scatter.table_start.len()
@@ -2084,11 +2089,10 @@ impl Simulation {
             ..Default::default()
         };
         let (mut wsum, mut ep, mut vm) = (vec![0.0; np], vec![0.0; np], vec![0.0; np]);
-        for p in 0..self.pt.rows() {
+        for p in 0..self.weights.len() {
             let (eps_p, mises) = (self.st.points[p].eps_p, self.out[p].von_mises);
-            for e in self.pt.row(p) {
-                let i = self.pt.index[e] as usize;
-                let w = (self.pt.n[e] * self.weights[p]).abs();
+            for (i, [n, _, _]) in self.scatter.point_row(p) {
+                let w = (n * self.weights[p]).abs();
                 wsum[i] += w;
                 ep[i] += w * eps_p;
                 vm[i] += w * mises;
@@ -2125,9 +2129,11 @@ impl Simulation {
         Ok(())
     }
 
-    /// Shape functions at the integration points (point-major).
-    pub fn point_shapes(&self) -> &ShapeTable {
-        &self.pt
+    /// Shape functions at integration point `p`: each particle `I` of its group's list
+    /// with `[N_I, dN_I/dX, dN_I/dY]` (1, 1/m), including zeros where `I` is outside the
+    /// point's own support.
+    pub fn point_shapes(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
+        self.scatter.point_row(p)
     }
     /// Shape functions at the particles (`N_I(X_J)`, row J).
     pub fn nodal_shapes(&self) -> &ShapeTable {
@@ -2155,6 +2161,24 @@ impl Simulation {
             .as_ref()
             .map_or(0.0, |c| c.residual(&self.st.v))
     }
+}
+
+/// The integration points of `rule` on the lattice and their shape functions.
+fn point_shapes(lattice: &Lattice, rule: IntegrationRule) -> Result<(PointSet, ShapeTable)> {
+    Ok(match rule {
+        IntegrationRule::Scni => {
+            let (points, edges, nw) = nodal_domains(lattice);
+            let pt = smoothed_shape_table(lattice, &points, &edges, &nw)?;
+            (points, pt)
+        }
+        rule => {
+            let points = grid_points(rule, lattice);
+            let pt = lattice.shape_table(&points.sites, &|p| {
+                format!("integration point {p} (cell {})", points.cells[p])
+            })?;
+            (points, pt)
+        }
+    })
 }
 
 /// SCNI shape table (Chen, Wu, Yoon, You 2001): per nodal domain `L`, `N_I` at its centroid
@@ -2285,7 +2309,8 @@ fn bounds_of(p: &[[Real; 2]], pad: Real) -> Extents {
 
 #[cfg(test)]
 mod tests {
-    use super::{landing_step, tridiagonal_max_eigenvalue, Scatter, Simulation};
+    use super::{landing_step, point_shapes, tridiagonal_max_eigenvalue, Scatter, Simulation};
+    use crate::rk_shape::{Lattice, ShapeTable};
 
     #[test]
     fn tridiagonal_largest_eigenvalue() {
@@ -2303,6 +2328,17 @@ mod tests {
         assert_eq!(tridiagonal_max_eigenvalue(&[3.0, -1.0], &[0.0]), 3.0);
     }
     use crate::{IntegrationRule, Scene};
+
+    /// The point shape table of a simulation, built again as its setup builds it.
+    fn point_table(sim: &Simulation) -> ShapeTable {
+        let (nx, ny) = sim.grid();
+        let (h, s) = (sim.spacing(), sim.scene.discretization.support);
+        let support = [s[0] * h[0], s[1] * h[1]];
+        let lattice = Lattice::new(sim.scene.workpiece.origin_m, h, [nx, ny], support);
+        point_shapes(&lattice, sim.scene.discretization.integration)
+            .unwrap()
+            .1
+    }
 
     /// The stress stage processes points in groups: the 4 points of a q4 cell over their
     /// shared list, two q2 cells (2 + 2 points) and four SCNI points over the union of
@@ -2332,17 +2368,15 @@ mod tests {
                 .filter(|&p| sc.group[p] == 4)
                 .map(|p| (sc.list_range[p][1] - sc.list_range[p][0]) as usize)
                 .max();
-            let longest_own = (0..grouped.pt.rows())
-                .map(|p| grouped.pt.row(p).len())
-                .max();
+            let pt = point_table(&grouped);
+            let longest_own = (0..pt.rows()).map(|p| pt.row(p).len()).max();
             assert_eq!(
                 longest_union > longest_own,
                 rule != IntegrationRule::Q4,
                 "{rule:?}: unions {longest_union:?}, own lists {longest_own:?}"
             );
             let mut single = grouped.clone();
-            single.scatter =
-                Scatter::new(&single.pt, single.ref_pos.len(), grouped.scatter.chunk, 1);
+            single.scatter = Scatter::new(&pt, single.ref_pos.len(), grouped.scatter.chunk, 1);
             for _ in 0..200 {
                 grouped.step(None).unwrap();
                 single.step(None).unwrap();
@@ -2384,6 +2418,43 @@ mod tests {
                 .sum();
             let share = sc.table.len() as f64 / unshared as f64;
             assert!(share < 0.01, "{rule:?}: stored {share:.4} of the blocks");
+        }
+    }
+
+    /// The point rows read back from the shared blocks are the shape table's rows, bit for
+    /// bit, with zeros only where a particle belongs to another point of the group.
+    #[test]
+    fn point_rows_from_the_shared_blocks_are_the_table_rows() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/taylor_bar.toml");
+        for rule in [
+            IntegrationRule::Q4,
+            IntegrationRule::Q2,
+            IntegrationRule::Scni,
+        ] {
+            let mut scene = Scene::from_file(std::path::Path::new(path))
+                .unwrap()
+                .with_integration(rule);
+            scene.workpiece.particles = [11, 26];
+            let sim = Simulation::new(&scene).unwrap();
+            let pt = point_table(&sim);
+            for p in 0..pt.rows() {
+                let own: Vec<(usize, [u64; 3])> = pt
+                    .row(p)
+                    .map(|e| {
+                        let v = [pt.n[e], pt.dx[e], pt.dy[e]];
+                        (pt.index[e] as usize, v.map(f64::to_bits))
+                    })
+                    .collect();
+                let mut read = Vec::new();
+                for (i, v) in sim.point_shapes(p) {
+                    if own.iter().any(|&(j, _)| j == i) {
+                        read.push((i, v.map(f64::to_bits)));
+                    } else {
+                        assert_eq!(v, [0.0; 3], "{rule:?}: point {p}, particle {i}");
+                    }
+                }
+                assert_eq!(read, own, "{rule:?}: point {p}");
+            }
         }
     }
 

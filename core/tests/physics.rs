@@ -108,14 +108,13 @@ fn boundary_residual(sim: &Simulation, f: &[[f64; 2]]) -> f64 {
     let cloud = lattice.cloud();
     // Uniform P from the material at F = I + A (plane strain).
     let p = {
-        let pt = sim.point_shapes();
         let mut g = [1.0, 0.0, 0.0, 1.0];
-        for e in pt.row(0) {
-            let di = sim.state().d[pt.index[e] as usize];
-            g[0] += di[0] * pt.dx[e];
-            g[1] += di[0] * pt.dy[e];
-            g[2] += di[1] * pt.dx[e];
-            g[3] += di[1] * pt.dy[e];
+        for (i, [_, dx, dy]) in sim.point_shapes(0) {
+            let di = sim.state().d[i];
+            g[0] += di[0] * dx;
+            g[1] += di[0] * dy;
+            g[2] += di[1] * dx;
+            g[3] += di[1] * dy;
         }
         let mut st = rkforge_core::material::PointState::default();
         sim.material().update(g, 1.0, &mut st).unwrap().piola
