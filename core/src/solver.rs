@@ -184,10 +184,11 @@ impl PointOut {
         }
     }
 
-    /// Re-evaluates the cached hardening law at `eps_p`.
-    fn set_plastic_strain(&mut self, material: &HenckyJ2, eps_p: Real) {
-        self.flow_stress = material.hardening.flow_stress(eps_p);
-        self.plastic_work = material.hardening.plastic_work(eps_p);
+    /// Caches the hardening law at `eps_p`, where the flow stress is `flow` and the
+    /// initial yield stress `initial` (Pa).
+    fn set_plastic_strain(&mut self, material: &HenckyJ2, eps_p: Real, flow: Real, initial: Real) {
+        self.flow_stress = flow;
+        self.plastic_work = material.hardening.plastic_work_at(eps_p, flow, initial);
     }
 }
 
@@ -440,6 +441,8 @@ struct StressContext<'a> {
     inv_radius: &'a [Real],
     axi: bool,
     spacing: [Real; 2],
+    /// `sigma_y(0)` (Pa), for the plastic work.
+    initial_yield: Real,
 }
 
 impl StressContext<'_> {
@@ -670,7 +673,8 @@ impl StressContext<'_> {
                 let eps_p = state.eps_p;
                 *state = batch.state(l);
                 if state.eps_p != eps_p {
-                    out.set_plastic_strain(self.material, state.eps_p);
+                    let flow = batch.flow_stress[l];
+                    out.set_plastic_strain(self.material, state.eps_p, flow, self.initial_yield);
                 }
                 out.von_mises = u.von_mises[l];
                 out.jacobian = u.jacobian[l];
@@ -1372,8 +1376,11 @@ impl Simulation {
         }
         self.v_prev.clone_from(&st.v);
         self.contact.forget();
+        let hardening = &self.material.hardening;
+        let initial = hardening.initial_yield();
         for (out, point) in self.out.iter_mut().zip(&st.points) {
-            out.set_plastic_strain(&self.material, point.eps_p);
+            let flow = hardening.flow_stress(point.eps_p);
+            out.set_plastic_strain(&self.material, point.eps_p, flow, initial);
         }
         self.st = st;
         Ok(())
@@ -1555,6 +1562,7 @@ impl Simulation {
             inv_radius: &self.inv_radius,
             axi,
             spacing: self.spacing,
+            initial_yield: self.material.hardening.initial_yield(),
         };
         let avx2 = self.simd && has_avx2();
         let (chunk, lo, offsets) = (*chunk, &*lo, &*offsets);

@@ -1,5 +1,6 @@
 //! Isotropic hardening laws: flow stress as a function of the equivalent plastic strain.
 
+use crate::lanes;
 use crate::math::Real;
 use serde::{Deserialize, Serialize};
 
@@ -27,24 +28,27 @@ pub enum Hardening {
 }
 
 impl Hardening {
-    /// Flow stress `sigma_y(eps_p)` (Pa).
-    #[inline]
+    /// Flow stress `sigma_y(eps_p)` (Pa). The power law is `K exp(n ln(eps0 + eps_p))`
+    /// with [`lanes::ln`] and [`lanes::exp`], written exactly as the return map in lanes
+    /// writes it, so the flow stress it leaves in a lane has these bits.
+    #[inline(always)]
     pub fn flow_stress(&self, eps_p: Real) -> Real {
         match *self {
             Hardening::Linear {
                 yield_stress_pa,
                 modulus_pa,
             } => yield_stress_pa + modulus_pa * eps_p,
-            Hardening::Power { k_pa, eps0, n } => k_pa * (eps0 + eps_p).powf(n),
+            Hardening::Power { k_pa, eps0, n } => k_pa * lanes::exp(n * lanes::ln(eps0 + eps_p)),
         }
     }
 
-    /// Hardening slope `d sigma_y / d eps_p` (Pa).
-    #[inline]
-    pub fn slope(&self, eps_p: Real) -> Real {
+    /// Hardening slope `d sigma_y / d eps_p` (Pa) given the flow stress `flow` at `eps_p`:
+    /// `H`, or `n sigma_y / (eps0 + eps_p)` for the power law.
+    #[inline(always)]
+    pub fn slope_at(&self, eps_p: Real, flow: Real) -> Real {
         match *self {
             Hardening::Linear { modulus_pa, .. } => modulus_pa,
-            Hardening::Power { k_pa, eps0, n } => k_pa * n * (eps0 + eps_p).powf(n - 1.0),
+            Hardening::Power { eps0, n, .. } => n * flow / (eps0 + eps_p),
         }
     }
 
@@ -55,13 +59,22 @@ impl Hardening {
 
     /// Plastic work density `int_0^eps_p sigma_y de` (J/m^3), exact for both laws.
     pub fn plastic_work(&self, eps_p: Real) -> Real {
+        self.plastic_work_at(eps_p, self.flow_stress(eps_p), self.initial_yield())
+    }
+
+    /// Plastic work density (J/m^3) given the flow stresses `flow` at `eps_p` and
+    /// `initial` at 0 (Pa): for the power law `K / (n + 1) ((eps0 + eps_p)^(n+1) -
+    /// eps0^(n+1)) = ((eps0 + eps_p) sigma_y(eps_p) - eps0 sigma_y(0)) / (n + 1)`, so no
+    /// power is evaluated.
+    #[inline]
+    pub fn plastic_work_at(&self, eps_p: Real, flow: Real, initial: Real) -> Real {
         match *self {
             Hardening::Linear {
                 yield_stress_pa,
                 modulus_pa,
             } => yield_stress_pa * eps_p + 0.5 * modulus_pa * eps_p * eps_p,
-            Hardening::Power { k_pa, eps0, n } => {
-                k_pa / (n + 1.0) * ((eps0 + eps_p).powf(n + 1.0) - eps0.powf(n + 1.0))
+            Hardening::Power { eps0, n, .. } => {
+                ((eps0 + eps_p) * flow - eps0 * initial) / (n + 1.0)
             }
         }
     }
@@ -85,6 +98,27 @@ mod tests {
         );
     }
 
+    /// The power law through the lanes' `exp` and `ln`, and its work through the flow
+    /// stress, agree with `powf` of the C library to round-off (the work relative to the
+    /// `eps0 sigma_y(0)` that both forms subtract).
+    #[test]
+    fn power_law_matches_powf() {
+        let (k, eps0, n) = (576.79e6, 0.01658, 0.3593);
+        let h = Hardening::Power { k_pa: k, eps0, n };
+        for &e in &[0.0, 1e-9, 1e-4, 0.01, 0.3, 1.0, 2.5, 10.0] {
+            let flow: Real = k * (eps0 + e).powf(n);
+            let work: Real = k / (n + 1.0) * ((eps0 + e).powf(n + 1.0) - eps0.powf(n + 1.0));
+            assert!(
+                (h.flow_stress(e) - flow).abs() <= 4e-16 * flow,
+                "{e}: {} {flow}",
+                h.flow_stress(e)
+            );
+            // Both forms subtract eps0 sigma_y(0) (J/m^3): round-off relative to that.
+            let scale = work + eps0 * h.initial_yield();
+            assert!((h.plastic_work(e) - work).abs() <= 2e-15 * scale, "{e}");
+        }
+    }
+
     #[test]
     fn slope_and_work_are_consistent_with_flow_stress() {
         let laws = [
@@ -103,8 +137,9 @@ mod tests {
                 let d = 1e-7;
                 let fd = (h.flow_stress(e + d) - h.flow_stress((e - d).max(0.0)))
                     / (e + d - (e - d).max(0.0));
+                let slope = h.slope_at(e, h.flow_stress(e));
                 assert!(
-                    (fd - h.slope(e)).abs() < 1e-4 * h.slope(e).abs().max(1.0),
+                    (fd - slope).abs() < 1e-4 * slope.abs().max(1.0),
                     "{h:?} {e}"
                 );
                 let fw = (h.plastic_work(e + d) - h.plastic_work((e - d).max(0.0)))

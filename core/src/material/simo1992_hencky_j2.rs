@@ -217,7 +217,8 @@ impl HenckyJ2 {
     /// `sigma_y(eps_p)` (Pa) of each supplied by the caller (who caches it, so an elastic
     /// step never evaluates the hardening law). Branch-free per lane up to the return
     /// mapping, so the compiler can use SIMD; a lane's bits do not depend on the other lanes.
-    /// Updates `p.cp_inv` and `p.eps_p`; on an inverted or non-finite deformation returns the
+    /// Updates `p.cp_inv`, `p.eps_p` and `p.flow_stress` (the bits of
+    /// `Hardening::flow_stress` at the new `eps_p`); on an inverted or non-finite deformation returns the
     /// first failing lane and the reason, with `p` unchanged.
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
@@ -304,7 +305,7 @@ impl HenckyJ2 {
             yields[l] = t.q_trial[l] > p.flow_stress[l];
         }
         if yields.iter().any(|&y| y) {
-            let dgamma = self.return_map(&t.q_trial, &p.eps_p, &p.flow_stress, &yields)?;
+            let (dgamma, flow) = self.return_map(&t.q_trial, &p.eps_p, &p.flow_stress, &yields)?;
             for l in 0..LANES {
                 if yields[l] {
                     scale[l] = 1.0 - 3.0 * g * dgamma[l] / t.q_trial[l];
@@ -337,6 +338,7 @@ impl HenckyJ2 {
                     p.cp_inv[c][l] = if yields[l] { cp[c] } else { p.cp_inv[c][l] };
                 }
                 p.eps_p[l] += dgamma[l];
+                p.flow_stress[l] = flow[l];
             }
         }
         let mut out = StressLanes::default();
@@ -378,13 +380,15 @@ impl HenckyJ2 {
     }
 
     /// Plastic multipliers `dgamma >= 0` of the lanes that yield, from
-    /// `q_trial - 3 G dgamma - sigma_y(eps_p + dgamma) = 0` (0 in the other lanes): closed
-    /// form for linear hardening; for the power law `sigma_y = K (eps0 + eps_p)^n`,
-    /// Newton's method safeguarded by bisection in `[0, q_trial / 3G]`, all lanes iterating
-    /// together and each frozen once its residual is below `1e-12 q_trial` (so a lane's
-    /// result does not depend on the others), with `x^a = exp(a ln x)` from [`lanes`].
-    /// `sy` is the flow stress at `eps_p` (Pa). An error names the lane that did not
-    /// converge in 50 iterations.
+    /// `q_trial - 3 G dgamma - sigma_y(eps_p + dgamma) = 0` (0 in the other lanes), and the
+    /// flow stress `sigma_y(eps_p + dgamma)` (Pa) in every lane: closed form for linear
+    /// hardening; for the power law `sigma_y = K (eps0 + eps_p)^n`, Newton's method
+    /// safeguarded by bisection in `[0, q_trial / 3G]`, all lanes iterating together and
+    /// each frozen once its residual is below `1e-12 q_trial` (so a lane's result does not
+    /// depend on the others), with `x^n = exp(n ln x)` from [`lanes`] and the slope
+    /// `n sigma_y / (eps0 + eps_p)` (one `ln` and one `exp` per iterate). `sy` is the flow
+    /// stress at `eps_p` (Pa). An error names the lane that did not converge in 50
+    /// iterations.
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lane loops index several arrays
     fn return_map(
@@ -393,26 +397,27 @@ impl HenckyJ2 {
         eps_p: &Lanes,
         sy: &Lanes,
         yields: &[bool; LANES],
-    ) -> Result<Lanes, (usize, String)> {
+    ) -> Result<(Lanes, Lanes), (usize, String)> {
         let g3 = 3.0 * self.shear;
         let mut x = [0.0; LANES];
+        let mut flow_at = *sy;
         match self.hardening {
             Hardening::Linear { modulus_pa, .. } => {
                 for l in 0..LANES {
                     if yields[l] {
                         x[l] = (q_trial[l] - sy[l]) / (g3 + modulus_pa);
+                        flow_at[l] = self.hardening.flow_stress(eps_p[l] + x[l]);
                     }
                 }
-                Ok(x)
+                Ok((x, flow_at))
             }
             Hardening::Power { k_pa, eps0, n } => {
                 // The residual is decreasing and concave in dgamma; Newton from below
                 // converges monotonically. Bracket [0, q_trial / 3G] for safety.
-                let pow = |base: Real, a: Real| lanes::exp(a * lanes::ln(base));
                 let (mut lo, mut hi) = ([0.0; LANES], [0.0; LANES]);
                 let mut done = [true; LANES];
                 for l in 0..LANES {
-                    let slope = k_pa * n * pow(eps0 + eps_p[l], n - 1.0);
+                    let slope = self.hardening.slope_at(eps_p[l], sy[l]);
                     hi[l] = q_trial[l] / g3;
                     // Lanes that do not yield keep x = 0 and never iterate.
                     if yields[l] {
@@ -425,9 +430,10 @@ impl HenckyJ2 {
                         break;
                     }
                     for l in 0..LANES {
-                        let log_base = lanes::ln(eps0 + (eps_p[l] + x[l]));
-                        let flow = k_pa * lanes::exp(n * log_base);
-                        let slope = k_pa * n * lanes::exp((n - 1.0) * log_base);
+                        // As `Hardening::flow_stress`, so that the cached bits agree.
+                        let base = eps0 + (eps_p[l] + x[l]);
+                        let flow = k_pa * lanes::exp(n * lanes::ln(base));
+                        let slope = n * flow / base;
                         let r = q_trial[l] - g3 * x[l] - flow;
                         let (lo_new, hi_new) = if r > 0.0 {
                             (x[l], hi[l])
@@ -443,6 +449,7 @@ impl HenckyJ2 {
                         if !done[l] {
                             if r.abs() <= 1e-12 * q_trial[l] {
                                 done[l] = true;
+                                flow_at[l] = flow;
                             } else {
                                 (lo[l], hi[l], x[l]) = (lo_new, hi_new, x_new);
                             }
@@ -450,7 +457,7 @@ impl HenckyJ2 {
                     }
                 }
                 match done.iter().position(|&d| !d) {
-                    None => Ok(x),
+                    None => Ok((x, flow_at)),
                     Some(l) => Err((
                         l,
                         format!(
@@ -662,6 +669,8 @@ mod tests {
             for l in 0..LANES {
                 let (want, want_st) = &alone[(shift + l) % cases.len()];
                 assert_eq!(p.state(l), *want_st, "lane {l}, shift {shift}");
+                let flow = m.hardening.flow_stress(want_st.eps_p);
+                assert_eq!(p.flow_stress[l].to_bits(), flow.to_bits(), "lane {l}");
                 for c in 0..5 {
                     assert_eq!(u.piola[c][l].to_bits(), want.piola[c].to_bits());
                 }
