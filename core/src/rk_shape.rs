@@ -151,6 +151,12 @@ impl ShapeTable {
     pub fn entries(&self) -> usize {
         self.index.len()
     }
+    /// Frees the gradients of a table that is only interpolated: `dx` and `dy` become
+    /// empty, `n` and the rows stay.
+    pub fn drop_gradients(&mut self) {
+        self.dx = Vec::new();
+        self.dy = Vec::new();
+    }
 }
 
 impl KernelCloud {

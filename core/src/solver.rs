@@ -1035,6 +1035,8 @@ pub struct Simulation {
     /// The point shape functions live only in the scatter's shared blocks
     /// ([`Scatter::point_row`]); the point-major table is dropped after setup.
     scatter: Scatter,
+    /// `N_I(X_J)` in row `J`, for positions and contact; its gradients are freed after
+    /// setup (nothing reads them).
     nodal: ShapeTable,
     boundary: Vec<u32>,
     constraints: Option<Constraints>,
@@ -1083,7 +1085,8 @@ impl Simulation {
                 })
             })
             .collect();
-        let nodal = lattice.shape_table(&particles, &|j| format!("particle {j}"))?;
+        let mut nodal = lattice.shape_table(&particles, &|j| format!("particle {j}"))?;
+        nodal.drop_gradients();
         let shape_functions = t_shapes.elapsed();
         let (weights, inv_radius): (Vec<Real>, Vec<Real>) = points
             .positions
@@ -2142,10 +2145,6 @@ impl Simulation {
     /// point's own support.
     pub fn point_shapes(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
         self.scatter.point_row(p)
-    }
-    /// Shape functions at the particles (`N_I(X_J)`, row J).
-    pub fn nodal_shapes(&self) -> &ShapeTable {
-        &self.nodal
     }
     /// Reference volume weights of the integration points (m^3; 2 pi R included).
     pub fn point_weights(&self) -> &[Real] {
