@@ -2336,6 +2336,22 @@ mod tests {
     }
     use crate::{IntegrationRule, Scene};
 
+    const RULES: [IntegrationRule; 3] = [
+        IntegrationRule::Q4,
+        IntegrationRule::Q2,
+        IntegrationRule::Scni,
+    ];
+
+    /// The shipped Taylor bar with `rule` on a grid of `particles`.
+    fn taylor(rule: IntegrationRule, particles: [usize; 2]) -> Scene {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/taylor_bar.toml");
+        let mut scene = Scene::from_file(std::path::Path::new(path))
+            .unwrap()
+            .with_integration(rule);
+        scene.workpiece.particles = particles;
+        scene
+    }
+
     /// The point shape table of a simulation, built again as its setup builds it.
     fn point_table(sim: &Simulation) -> ShapeTable {
         let (nx, ny) = sim.grid();
@@ -2352,16 +2368,8 @@ mod tests {
     /// their lists, zero-padded. The bits must equal a point-by-point loop.
     #[test]
     fn grouped_points_give_the_bits_of_single_points() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/taylor_bar.toml");
-        for rule in [
-            IntegrationRule::Q4,
-            IntegrationRule::Q2,
-            IntegrationRule::Scni,
-        ] {
-            let mut scene = Scene::from_file(std::path::Path::new(path))
-                .unwrap()
-                .with_integration(rule);
-            scene.workpiece.particles = [11, 26];
+        for rule in RULES {
+            let scene = taylor(rule, [11, 26]);
             let mut grouped = Simulation::new(&scene).unwrap();
             let sc = &grouped.scatter;
             let in_quads = sc.group.iter().filter(|&&g| g == 4).count() * 4;
@@ -2404,16 +2412,8 @@ mod tests {
     /// neighbourhoods near the edges.
     #[test]
     fn interior_groups_share_their_stored_tables() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/taylor_bar.toml");
-        for rule in [
-            IntegrationRule::Q4,
-            IntegrationRule::Q2,
-            IntegrationRule::Scni,
-        ] {
-            let mut scene = Scene::from_file(std::path::Path::new(path))
-                .unwrap()
-                .with_integration(rule);
-            scene.workpiece.particles = [81, 201];
+        for rule in RULES {
+            let scene = taylor(rule, [81, 201]);
             let sim = Simulation::new(&scene).unwrap();
             let sc = &sim.scatter;
             let unshared: usize = (0..sc.group.len())
@@ -2432,16 +2432,8 @@ mod tests {
     /// bit, with zeros only where a particle belongs to another point of the group.
     #[test]
     fn point_rows_from_the_shared_blocks_are_the_table_rows() {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/taylor_bar.toml");
-        for rule in [
-            IntegrationRule::Q4,
-            IntegrationRule::Q2,
-            IntegrationRule::Scni,
-        ] {
-            let mut scene = Scene::from_file(std::path::Path::new(path))
-                .unwrap()
-                .with_integration(rule);
-            scene.workpiece.particles = [11, 26];
+        for rule in RULES {
+            let scene = taylor(rule, [11, 26]);
             let sim = Simulation::new(&scene).unwrap();
             let pt = point_table(&sim);
             for p in 0..pt.rows() {
@@ -2473,16 +2465,8 @@ mod tests {
         if !std::arch::is_x86_feature_detected!("avx2") {
             eprintln!("no AVX2 on this CPU: both runs take the generic path");
         }
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/taylor_bar.toml");
-        for rule in [
-            IntegrationRule::Q4,
-            IntegrationRule::Q2,
-            IntegrationRule::Scni,
-        ] {
-            let mut scene = Scene::from_file(std::path::Path::new(path))
-                .unwrap()
-                .with_integration(rule);
-            scene.workpiece.particles = [11, 26];
+        for rule in RULES {
+            let scene = taylor(rule, [11, 26]);
             let mut simd = Simulation::new(&scene).unwrap();
             let mut generic = simd.clone();
             generic.simd = false;
