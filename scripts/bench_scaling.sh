@@ -3,7 +3,7 @@
 # criterion bench core/benches/step.rs and prints the Markdown table of docs/performance.md
 # (criterion medians; time per particle-step and per integration point-step; memory per
 # particle from Simulation::memory_bytes; the ratio of the largest to the smallest model).
-#   scripts/bench_scaling.sh            (about 6 minutes on 2 cores)
+#   scripts/bench_scaling.sh            (about 2 minutes on 2 cores)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 log=$(mktemp)
