@@ -385,8 +385,9 @@ impl HenckyJ2 {
     /// hardening; for the power law `sigma_y = K (eps0 + eps_p)^n`, Newton's method
     /// safeguarded by bisection in `[0, q_trial / 3G]`, all lanes iterating together and
     /// each frozen once its residual is below `1e-12 q_trial` (so a lane's result does not
-    /// depend on the others), with `x^n = exp(n ln x)` from [`lanes`] and the slope
-    /// `n sigma_y / (eps0 + eps_p)` (one `ln` and one `exp` per iterate). `sy` is the flow
+    /// depend on the others), evaluating [`Hardening::flow_stress`] (one `ln` and one
+    /// `exp` from [`lanes`]) and [`Hardening::slope_at`] per iterate, so the flow stress
+    /// returned has the bits that function gives at the new `eps_p`. `sy` is the flow
     /// stress at `eps_p` (Pa). An error names the lane that did not converge in 50
     /// iterations.
     #[inline(always)]
@@ -411,7 +412,7 @@ impl HenckyJ2 {
                 }
                 Ok((x, flow_at))
             }
-            Hardening::Power { k_pa, eps0, n } => {
+            Hardening::Power { .. } => {
                 // The residual is decreasing and concave in dgamma; Newton from below
                 // converges monotonically. Bracket [0, q_trial / 3G] for safety.
                 let (mut lo, mut hi) = ([0.0; LANES], [0.0; LANES]);
@@ -430,10 +431,9 @@ impl HenckyJ2 {
                         break;
                     }
                     for l in 0..LANES {
-                        // As `Hardening::flow_stress`, so that the cached bits agree.
-                        let base = eps0 + (eps_p[l] + x[l]);
-                        let flow = k_pa * lanes::exp(n * lanes::ln(base));
-                        let slope = n * flow / base;
+                        let eps = eps_p[l] + x[l];
+                        let flow = self.hardening.flow_stress(eps);
+                        let slope = self.hardening.slope_at(eps, flow);
                         let r = q_trial[l] - g3 * x[l] - flow;
                         let (lo_new, hi_new) = if r > 0.0 {
                             (x[l], hi[l])
