@@ -157,6 +157,27 @@ impl ShapeTable {
         self.dx = Vec::new();
         self.dy = Vec::new();
     }
+
+    /// An empty table with room for `rows` rows.
+    fn with_rows(rows: usize) -> ShapeTable {
+        let mut offsets = Vec::with_capacity(rows + 1);
+        offsets.push(0);
+        ShapeTable {
+            offsets,
+            ..Default::default()
+        }
+    }
+
+    /// Appends a row: the neighbours `nb` with their `[N, N_x, N_y]`.
+    fn push_row(&mut self, nb: &[u32], vals: &[[Real; 3]]) {
+        for (&i, v) in nb.iter().zip(vals) {
+            self.index.push(i);
+            self.n.push(v[0]);
+            self.dx.push(v[1]);
+            self.dy.push(v[2]);
+        }
+        self.offsets.push(self.index.len() as u32);
+    }
 }
 
 impl KernelCloud {
@@ -308,27 +329,6 @@ impl Lattice {
             t.push_row(&nb, &vals);
         }
         Ok(t)
-    }
-}
-
-impl ShapeTable {
-    fn with_rows(rows: usize) -> ShapeTable {
-        let mut offsets = Vec::with_capacity(rows + 1);
-        offsets.push(0);
-        ShapeTable {
-            offsets,
-            ..Default::default()
-        }
-    }
-
-    fn push_row(&mut self, nb: &[u32], vals: &[[Real; 3]]) {
-        for (&i, v) in nb.iter().zip(vals) {
-            self.index.push(i);
-            self.n.push(v[0]);
-            self.dx.push(v[1]);
-            self.dy.push(v[2]);
-        }
-        self.offsets.push(self.index.len() as u32);
     }
 }
 

@@ -394,9 +394,7 @@ impl Scatter {
             block_chunks,
         }
     }
-}
 
-impl Scatter {
     /// Point `p`'s entries in its group's block: each particle of the group's list with
     /// `[N, dN/dX, dN/dY]`, zero where the particle is only in another point's list.
     fn point_row(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
