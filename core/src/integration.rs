@@ -13,8 +13,9 @@
 //!   `B_I = (1 / A_L) int_{dA_L} N_I n dG`, which satisfies the integration constraint exactly
 //!   (the linear patch test passes to round-off, also next to the boundary).
 
+use crate::error::Result;
 use crate::math::Real;
-use crate::rk_shape::{Lattice, Site};
+use crate::rk_shape::{Lattice, ShapeTable, Site};
 use crate::scene::IntegrationRule;
 
 /// Integration points: reference positions and cell-local data.
@@ -127,6 +128,70 @@ pub fn grid_points(rule: IntegrationRule, lattice: &Lattice) -> PointSet {
         }
     }
     s
+}
+
+/// The integration points of `rule` on the lattice and their shape functions.
+pub fn point_shapes(lattice: &Lattice, rule: IntegrationRule) -> Result<(PointSet, ShapeTable)> {
+    Ok(match rule {
+        IntegrationRule::Scni => {
+            let (points, edges, nw) = nodal_domains(lattice);
+            let pt = smoothed_shape_table(lattice, &points, &edges, &nw)?;
+            (points, pt)
+        }
+        rule => {
+            let points = grid_points(rule, lattice);
+            let pt = lattice.shape_table(&points.sites, &|p| {
+                format!("integration point {p} (cell {})", points.cells[p])
+            })?;
+            (points, pt)
+        }
+    })
+}
+
+/// SCNI shape table (Chen, Wu, Yoon, You 2001): per nodal domain `L`, `N_I` at its centroid
+/// and the smoothed gradient `B_I = (1 / A_L) sum_edges N_I(x_g) n w_g` from the boundary
+/// quadrature points of the domain.
+fn smoothed_shape_table(
+    lattice: &Lattice,
+    points: &PointSet,
+    edges: &[Site],
+    nw: &[[Real; 2]],
+) -> Result<ShapeTable> {
+    let at_centre =
+        lattice.shape_table(&points.sites, &|p| format!("nodal integration point {p}"))?;
+    let on_edges = lattice.shape_table(edges, &|q| {
+        format!(
+            "boundary point {q} of nodal domain {}",
+            q / SCNI_EDGE_POINTS
+        )
+    })?;
+    let mut t = ShapeTable {
+        offsets: vec![0],
+        ..Default::default()
+    };
+    let mut row: std::collections::BTreeMap<u32, [Real; 3]> = Default::default();
+    for (p, area) in points.areas.iter().enumerate() {
+        row.clear();
+        for e in at_centre.row(p) {
+            row.entry(at_centre.index[e]).or_default()[0] = at_centre.n[e];
+        }
+        let first = p * SCNI_EDGE_POINTS;
+        for (q, w) in nw.iter().enumerate().skip(first).take(SCNI_EDGE_POINTS) {
+            for e in on_edges.row(q) {
+                let v = row.entry(on_edges.index[e]).or_default();
+                v[1] += on_edges.n[e] * w[0] / area;
+                v[2] += on_edges.n[e] * w[1] / area;
+            }
+        }
+        for (&i, v) in &row {
+            t.index.push(i);
+            t.n.push(v[0]);
+            t.dx.push(v[1]);
+            t.dy.push(v[2]);
+        }
+        t.offsets.push(t.index.len() as u32);
+    }
+    Ok(t)
 }
 
 #[cfg(test)]

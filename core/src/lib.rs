@@ -4,28 +4,33 @@
 //!
 //! Stages, each in its own module and named after its method: RK shape functions
 //! ([`rk_shape`], [`kernel`]), background-cell integration ([`integration`]), Hencky J2
-//! plasticity ([`material`]), penalty contact ([`tools`]), essential conditions
-//! ([`constraints`]), and the explicit solver that calls them in order ([`solver`]).
-//! Scenes ([`scene`]) decide what is modelled.
+//! plasticity ([`material`]), rigid tools and the penalty contact laws ([`tools`]) applied
+//! by the contact stage ([`contact`]), essential conditions ([`constraints`]), and the
+//! explicit solver that calls them in order ([`solver`], one file per stage). Scenes
+//! ([`scene`]) decide what is modelled; [`geometry`] and [`sampling`] serve the solver and
+//! every front end. Nothing below the solver imports it.
 
 pub mod constraints;
+pub mod contact;
 pub mod error;
+pub mod geometry;
 pub mod integration;
 pub mod kernel;
 pub mod lanes;
 pub mod material;
 pub mod math;
 pub mod rk_shape;
+pub mod sampling;
 pub mod scene;
 pub mod solver;
 pub mod team;
 pub mod tools;
 
 pub use error::{Error, Result};
+pub use geometry::Extents;
+pub use sampling::{sample_times, MAX_SAMPLES};
 pub use scene::{IntegrationRule, Kinematics, Scene};
-pub use solver::{
-    sample_times, Energy, Extents, Fields, Simulation, StageTimes, State, MAX_SAMPLES,
-};
+pub use solver::{Energy, Fields, Simulation, StageTimes, State};
 
 /// Size rayon's global pool, which runs the parallel stages, to `threads` worker threads
 /// (a `--threads` option); `None` keeps rayon's default of one per core. Results are the

@@ -586,11 +586,11 @@ impl Scene {
             check(
                 pos(h)
                     && (self.time.end_s.is_nan()
-                        || self.time.end_s / h <= crate::solver::MAX_SAMPLES as Real),
+                        || self.time.end_s / h <= crate::sampling::MAX_SAMPLES as Real),
                 "output.history_interval_s",
                 format!(
                     "must be positive and give at most {} samples over time.end_s, got {h}",
-                    crate::solver::MAX_SAMPLES
+                    crate::sampling::MAX_SAMPLES
                 ),
             );
         }

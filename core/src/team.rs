@@ -284,6 +284,29 @@ impl<'a, T> Parts<'a, T> {
     }
 }
 
+/// Particle count from which the particle phases run on the team. Below it the phases take
+/// a few microseconds, and handing half the particles to the other core costs more in
+/// cache-line transfers than it saves (measured on the 1 071-particle Taylor bar: the
+/// force, contact and update stages took 0.45-0.50 s run on one thread against 0.48-0.58 s
+/// on two). The blocks and their order are the same either way, and so are the bits.
+pub const PARALLEL_PARTICLES: usize = 4096;
+
+/// Part `k` of `0..n` cut into parts of `size`: `k size..min((k + 1) size, n)`.
+pub fn part(k: usize, size: usize, n: usize) -> std::ops::Range<usize> {
+    k * size..((k + 1) * size).min(n)
+}
+
+/// Runs `body` over `blocks` blocks of a particle phase of a model of `particles`
+/// particles: on the team from [`PARALLEL_PARTICLES`] up, else on this thread in block
+/// order.
+pub fn particle_phase(team: &Team, particles: usize, blocks: usize, body: &(dyn Fn(usize) + Sync)) {
+    if particles >= PARALLEL_PARTICLES {
+        team.for_each(blocks, body);
+    } else {
+        (0..blocks).for_each(body);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -25,7 +25,7 @@ fn measures(sim: &Simulation) -> Measures {
     let x = sim.positions();
     let v0 = sim.reference_volume();
     Measures {
-        extents: rkforge_core::solver::bounds(&x),
+        extents: rkforge_core::geometry::bounds(&x),
         volume_change_rel: sim.volume_of(&x) / v0 - 1.0,
     }
 }

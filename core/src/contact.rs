@@ -1,0 +1,254 @@
+//! The contact stage of a step: the paper's penalty contact (Sidibe et al. 2009, section
+//! II-3, eqs. 4-7; the force laws are in [`crate::tools`]) applied to the predicted
+//! boundary particles of the workpiece.
+//!
+//! For each boundary particle `J` the predicted physical position and velocity are
+//! interpolated from the RK coefficients, `x_J = X_J + sum_I N_I(X_J) (d_I + dt v*_I)` (m)
+//! and `v_J = sum_I N_I(X_J) v*_I` (m/s); a particle behind a tool segment gets the penalty
+//! force of eqs. 4-6 (N), spread to the coefficients with eq. 7, `f_I += N_I(X_J) f_J`, and
+//! the tool takes the reaction. Particles that cannot have reached a tool's search box are
+//! skipped ([`Contact`]), with the bits of evaluating every one.
+
+use crate::geometry::{bounds_of, Extents};
+use crate::math::Real;
+use crate::rk_shape::ShapeTable;
+use crate::team::{part, particle_phase, Parts, Team};
+use crate::tools::{penalty_force, Tool};
+
+/// Boundary particles handled by one task of the contact stage's interpolation.
+const BOUNDARY_BLOCK: usize = 32;
+
+/// The workpiece as the contact stage reads it.
+pub struct Body<'a> {
+    /// Boundary particles, counter-clockwise.
+    pub boundary: &'a [u32],
+    /// `N_I(X_J)` in row `J` (no gradients needed).
+    pub nodal: &'a ShapeTable,
+    /// Reference particle positions `X_J` (m).
+    pub reference: &'a [[Real; 2]],
+    /// Lumped masses `m_J` (kg), the slave masses of eqs. 4 and 6.
+    pub mass: &'a [Real],
+    /// RK coefficients of the displacement at `t_n` (m).
+    pub d: &'a [[Real; 2]],
+    /// Predicted coefficient velocities `v*` (m/s).
+    pub v: &'a [[Real; 2]],
+    /// Particle spacings (m).
+    pub spacing: [Real; 2],
+}
+
+/// The contact forces of the last step, and what the stage keeps from step to step to skip
+/// boundary particles that cannot reach a tool. None of the latter is state: dropping it
+/// ([`Contact::forget`], as a restore does) only makes the next step evaluate every
+/// boundary particle.
+#[derive(Debug, Clone, Default)]
+pub struct Contact {
+    /// Contact force on each RK coefficient (N), eq. 7; zero where no particle touches.
+    pub force: Vec<[Real; 2]>,
+    /// `dt V*` of the last two predictors (m), `V*` the largest velocity component of a
+    /// particle after the predictor and `dt` the step the contact stage interpolates with.
+    predicted_moves: [Real; 2],
+    /// `dt V` of the last update (m), `V` the largest velocity component at the half step.
+    update_move: Real,
+    /// `S_J = sum_I |N_I(X_J)|` of each boundary particle. Between two contact stages
+    /// `u_I = d_I + dt v*_I` changes by `dt_n v_{n+1/2} + dt_{n+1} v*_{n+1} - dt_n v*_n`,
+    /// at most `du = update_move + predicted_moves[0] + predicted_moves[1]` per component,
+    /// so `x_J = X_J + sum_I N_I(X_J) u_I` moves at most `S_J du` per component.
+    sum_abs: Vec<Real>,
+    /// Lower bound on the distance (largest component) from each boundary particle to
+    /// every tool's search box (m); positive means the particle cannot be in one.
+    pub(crate) clearance: Vec<Real>,
+    /// Predicted position (m) and velocity (m/s) of each boundary particle evaluated this
+    /// step.
+    motion: Vec<[[Real; 2]; 2]>,
+    /// The tools' search boxes at the last step.
+    boxes: Vec<Extents>,
+    /// Skip the particles with a positive clearance (false only in the test that compares
+    /// against evaluating all of them).
+    pub(crate) skip: bool,
+}
+
+impl Contact {
+    /// The stage for a workpiece of `particles` particles whose `boundary` particles have
+    /// the rows of `nodal`; every particle is evaluated at the first step.
+    pub fn new(boundary: &[u32], nodal: &ShapeTable, particles: usize) -> Contact {
+        Contact {
+            force: vec![[0.0; 2]; particles],
+            sum_abs: boundary
+                .iter()
+                .map(|&j| nodal.row(j as usize).map(|e| nodal.n[e].abs()).sum())
+                .collect(),
+            clearance: vec![0.0; boundary.len()],
+            motion: vec![[[0.0; 2]; 2]; boundary.len()],
+            skip: true,
+            ..Default::default()
+        }
+    }
+
+    /// Forgets the clearances and the last step's search boxes, so that the next contact
+    /// stage evaluates every boundary particle (after the displacements were set from
+    /// outside).
+    pub fn forget(&mut self) {
+        self.clearance.fill(0.0);
+        self.boxes.clear();
+        self.update_move = Real::INFINITY;
+    }
+
+    /// Records the predictor's move bound `dt V*` (m): `dt` the natural step, `V*` the
+    /// largest predicted velocity component.
+    pub fn predicted_move(&mut self, bound: Real) {
+        self.predicted_moves = [self.predicted_moves[1], bound];
+    }
+
+    /// Records the update's move bound `dt V` (m): `V` the largest velocity component at
+    /// the half step.
+    pub fn updated_move(&mut self, bound: Real) {
+        self.update_move = bound;
+    }
+
+    /// Contact of the predicted boundary positions with `tools` at `t_{n+1}` (paper eqs.
+    /// 4-7). The penalty stiffness `m_s / dt^2` uses the solver's natural step `dt` (s; equal
+    /// to the actual step except when a step is shortened to land on a requested time), so a
+    /// short step never turns a residual penetration into a huge impulse; `dt_avg` (s) is the
+    /// corrector's step. A boundary particle is interpolated only when it may be in a tool's
+    /// search box: its clearance to the boxes, measured when last interpolated, shrinks each
+    /// step by `S_J du + box_move` and while it stays positive the particle is skipped.
+    /// Fills [`Contact::force`] and each tool's force (N); returns whether any force acts and
+    /// the work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
+    pub fn stage(
+        &mut self,
+        team: &Team,
+        tools: &mut [Tool],
+        body: &Body<'_>,
+        dt: Real,
+        dt_avg: Real,
+    ) -> (bool, Real) {
+        for t in tools.iter_mut() {
+            t.state.force = [0.0; 2];
+        }
+        if tools.is_empty() {
+            return (false, 0.0);
+        }
+        let mut tool_work = 0.0;
+        self.force.iter_mut().for_each(|f| *f = [0.0; 2]);
+        let bounds: Vec<Extents> = tools
+            .iter()
+            .map(|t| bounds_of(&t.vertices(), t.depth))
+            .collect();
+        // How far any search box moved since the last step (a first step: unbounded).
+        let box_move = if self.boxes.len() == bounds.len() {
+            bounds
+                .iter()
+                .zip(&self.boxes)
+                .flat_map(|(a, b)| {
+                    [
+                        a.x[0] - b.x[0],
+                        a.x[1] - b.x[1],
+                        a.y[0] - b.y[0],
+                        a.y[1] - b.y[1],
+                    ]
+                })
+                .fold(0.0, |m: Real, e| m.max(e.abs()))
+        } else {
+            Real::INFINITY
+        };
+        // Predicted positions x_J = X_J + sum_I N_I(X_J) u_I, u_I = d_I + dt v*_I, and
+        // velocities v_J = sum_I N_I(X_J) v*_I of the boundary particles that may be in a
+        // search box: a particle's clearance to the boxes shrinks each step by at most
+        // S_J du + box_move, and while it stays positive the particle is skipped (it could
+        // not have touched a tool: the bits are those of evaluating every particle).
+        let Body {
+            boundary,
+            nodal,
+            reference,
+            mass,
+            d,
+            v,
+            spacing,
+        } = *body;
+        let (np, nb) = (reference.len(), boundary.len());
+        let du = self.update_move + self.predicted_moves[0] + self.predicted_moves[1];
+        let (skip, sum_abs) = (self.skip, &self.sum_abs);
+        let margin = 1e-9 * spacing[0].min(spacing[1]);
+        let (motion_parts, clearance_parts) = (
+            Parts::new(&mut self.motion),
+            Parts::new(&mut self.clearance),
+        );
+        particle_phase(team, np, nb.div_ceil(BOUNDARY_BLOCK), &|b| {
+            let range = part(b, BOUNDARY_BLOCK, nb);
+            // SAFETY: block `b` alone takes these boundary particles.
+            let (out, clear) = unsafe {
+                (
+                    motion_parts.get(range.clone()),
+                    clearance_parts.get(range.clone()),
+                )
+            };
+            for (k, (m, c)) in range.zip(out.iter_mut().zip(clear.iter_mut())) {
+                *c -= sum_abs[k] * du + box_move;
+                if skip && *c > 0.0 {
+                    continue;
+                }
+                let j = boundary[k] as usize;
+                let (mut x, mut vj) = (reference[j], [0.0; 2]);
+                for e in nodal.row(j) {
+                    let i = nodal.index[e] as usize;
+                    let n = nodal.n[e];
+                    x[0] += n * (d[i][0] + dt * v[i][0]);
+                    x[1] += n * (d[i][1] + dt * v[i][1]);
+                    vj[0] += n * v[i][0];
+                    vj[1] += n * v[i][1];
+                }
+                *m = [x, vj];
+                let gap = bounds.iter().fold(Real::INFINITY, |g, b| {
+                    let dx = (b.x[0] - x[0]).max(x[0] - b.x[1]);
+                    let dy = (b.y[0] - x[1]).max(x[1] - b.y[1]);
+                    g.min(dx.max(dy))
+                });
+                *c = gap - margin;
+            }
+        });
+        let mut any = false;
+        for ((&j, &[x, vj]), &c) in boundary.iter().zip(&self.motion).zip(&self.clearance) {
+            if self.skip && c > 0.0 {
+                continue;
+            }
+            let j = j as usize;
+            for (k, tool) in tools.iter_mut().enumerate() {
+                let b = &bounds[k];
+                if x[0] < b.x[0] || x[0] > b.x[1] || x[1] < b.y[0] || x[1] > b.y[1] {
+                    continue;
+                }
+                let Some(pen) = tool.penetration(x) else {
+                    continue;
+                };
+                let vt = [
+                    tool.axis[0] * tool.state.velocity,
+                    tool.axis[1] * tool.state.velocity,
+                ];
+                let f = penalty_force(
+                    mass[j],
+                    pen,
+                    [vj[0] - vt[0], vj[1] - vt[1]],
+                    tool.friction,
+                    dt,
+                    dt_avg,
+                );
+                tool.state.force[0] -= f[0];
+                tool.state.force[1] -= f[1];
+                tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
+                for e in nodal.row(j) {
+                    let i = nodal.index[e] as usize;
+                    let n = nodal.n[e];
+                    self.force[i][0] += n * f[0];
+                    self.force[i][1] += n * f[1];
+                }
+                any = true;
+            }
+        }
+        for t in tools.iter_mut() {
+            let f = t.state.force;
+            t.state.peak_force = t.state.peak_force.max((f[0] * f[0] + f[1] * f[1]).sqrt());
+        }
+        self.boxes = bounds;
+        (any, tool_work)
+    }
+}

@@ -1,0 +1,130 @@
+//! What the outputs read from a running simulation: physical positions, bounds and volumes
+//! of the workpiece, tool penetration, particle fields smoothed from the integration points,
+//! and the points' own data.
+
+use super::Simulation;
+use crate::geometry::{bounds, enclosed_volume, Extents};
+use crate::math::Real;
+
+/// Particle fields for output frames.
+#[derive(Debug, Clone, Default)]
+pub struct Fields {
+    /// Physical positions `X_J + u(X_J)` (m).
+    pub positions: Vec<[Real; 2]>,
+    /// Physical displacements `u(X_J)` (m).
+    pub displacement: Vec<[Real; 2]>,
+    /// Physical velocities (m/s).
+    pub velocity: Vec<[Real; 2]>,
+    /// Equivalent plastic strain smoothed to particles (-).
+    pub plastic_strain: Vec<Real>,
+    /// Von Mises stress smoothed to particles (Pa).
+    pub von_mises: Vec<Real>,
+}
+
+impl Simulation {
+    /// Physical positions `X_J + sum_I N_I(X_J) d_I` of all particles (m).
+    pub fn positions(&self) -> Vec<[Real; 2]> {
+        (0..self.ref_pos.len())
+            .map(|j| {
+                let u = self.nodal.interpolate(j, &self.st.d);
+                [self.ref_pos[j][0] + u[0], self.ref_pos[j][1] + u[1]]
+            })
+            .collect()
+    }
+
+    /// Bounds of the deformed workpiece over all particles (m).
+    pub fn extents(&self) -> Extents {
+        bounds(&self.positions())
+    }
+
+    /// Volume enclosed by the physical boundary particles now (m^3).
+    pub fn volume(&self) -> Real {
+        self.volume_of(&self.positions())
+    }
+
+    /// Current volume as the integration rule sees it, `sum_p J_p w_p` (m^3), at the last
+    /// stress stage.
+    pub fn integrated_volume(&self) -> Real {
+        self.out
+            .iter()
+            .zip(&self.weights)
+            .map(|(o, w)| o.jacobian * w)
+            .sum()
+    }
+
+    /// Volume of the undeformed workpiece (m^3).
+    pub fn reference_volume(&self) -> Real {
+        self.volume_of(&self.ref_pos)
+    }
+
+    /// Volume enclosed by the boundary particles of the particle positions `x` (m^3):
+    /// Pappus' theorem `2 pi r_c A` in axisymmetry, `A depth` in plane strain.
+    pub fn volume_of(&self, x: &[[Real; 2]]) -> Real {
+        let ring: Vec<[Real; 2]> = self.boundary.iter().map(|&j| x[j as usize]).collect();
+        let model = &self.scene.model;
+        enclosed_volume(&ring, model.kinematics, model.depth_m)
+    }
+
+    /// Largest penetration of a boundary particle into a tool now (m); also kept as the
+    /// run's maximum.
+    pub fn measure_penetration(&mut self) -> Real {
+        let x = self.positions();
+        let mut worst: Real = 0.0;
+        for t in &self.tools {
+            for &j in &self.boundary {
+                if let Some(p) = t.penetration(x[j as usize]) {
+                    worst = worst.max(p.gap);
+                }
+            }
+        }
+        self.st.max_penetration = self.st.max_penetration.max(worst);
+        worst
+    }
+
+    /// Particle fields for output: physical positions, displacements and velocities;
+    /// plastic strain and von Mises stress smoothed from the points with weights `|N_I| w_p`.
+    pub fn fields(&self) -> Fields {
+        let np = self.ref_pos.len();
+        let mut f = Fields {
+            positions: self.positions(),
+            ..Default::default()
+        };
+        let (mut wsum, mut ep, mut vm) = (vec![0.0; np], vec![0.0; np], vec![0.0; np]);
+        for p in 0..self.weights.len() {
+            let (eps_p, mises) = (self.st.points[p].eps_p, self.out[p].von_mises);
+            for (i, [n, _, _]) in self.scatter.point_row(p) {
+                let w = (n * self.weights[p]).abs();
+                wsum[i] += w;
+                ep[i] += w * eps_p;
+                vm[i] += w * mises;
+            }
+        }
+        for j in 0..np {
+            f.displacement.push(self.nodal.interpolate(j, &self.st.d));
+            f.velocity.push(self.nodal.interpolate(j, &self.st.v));
+            let w = if wsum[j] > 0.0 { 1.0 / wsum[j] } else { 0.0 };
+            f.plastic_strain.push(ep[j] * w);
+            f.von_mises.push(vm[j] * w);
+        }
+        f
+    }
+
+    /// Shape functions at integration point `p`: each particle `I` of its group's list
+    /// with `[N_I, dN_I/dX, dN_I/dY]` (1, 1/m), including zeros where `I` is outside the
+    /// point's own support.
+    pub fn point_shapes(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
+        self.scatter.point_row(p)
+    }
+    /// Reference volume weights of the integration points (m^3; 2 pi R included).
+    pub fn point_weights(&self) -> &[Real] {
+        &self.weights
+    }
+    /// Reference positions of the integration points (m).
+    pub fn point_positions(&self) -> &[[Real; 2]] {
+        &self.points.positions
+    }
+    /// Equivalent plastic strain at each integration point.
+    pub fn point_plastic_strain(&self) -> Vec<Real> {
+        self.st.points.iter().map(|s| s.eps_p).collect()
+    }
+}

@@ -1,0 +1,236 @@
+//! Where the stress stage reads and writes: the integration points cut into fixed chunks,
+//! grouped into point groups over one particle list, their shape functions stored as
+//! interleaved blocks (bitwise-equal blocks once), and the chunk buffers the internal force
+//! is scattered into and gathered from in a fixed order.
+//!
+//! The internal force `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p` (N) is summed in
+//! two passes so that its bits do not depend on the number of threads: each chunk of points
+//! adds its terms into its own slice of [`Scatter::buf`] ([`super::stress`]), then each block
+//! of [`BLOCK`] particles adds the overlapping slices in chunk order ([`super::update`]).
+
+use crate::math::Real;
+use crate::rk_shape::ShapeTable;
+use crate::team::part;
+use std::collections::HashMap;
+
+/// Particles handled by one task of the particle phases (force gather and predictor,
+/// energy sums and update); fixed so that results do not depend on the number of threads.
+pub const BLOCK: usize = 128;
+
+/// Deterministic parallel scatter of point forces. The points are cut into fixed chunks of
+/// `chunk` points (cells in row order, so a chunk touches a contiguous band of particles);
+/// chunk `c` adds its contributions to particles `lo[c]..lo[c] + len` into its own slice
+/// `offsets[c]..offsets[c + 1]` of `buf`, and each particle then sums the slices that cover
+/// it in chunk order (a block of [`BLOCK`] particles adds the overlapping part of each
+/// chunk in `block_chunks`). The bits do not depend on the number of threads.
+#[derive(Debug, Clone, Default)]
+pub struct Scatter {
+    pub(super) chunk: usize,
+    pub(super) lo: Vec<u32>,
+    pub(super) offsets: Vec<usize>,
+    pub(super) buf: Vec<[Real; 2]>,
+    /// The chunks whose particles overlap each block of particles, ascending:
+    /// `block_chunks[block_offsets[b]..block_offsets[b + 1]]`.
+    pub(super) block_offsets: Vec<u32>,
+    pub(super) block_chunks: Vec<u32>,
+    /// For each point: the number of consecutive points, starting at it, processed as
+    /// one group over one particle list (at most [`MAX_GROUP`], never across a chunk
+    /// boundary), or 0 for a point inside a group. The Gauss points of a cell share their
+    /// list; two neighbouring q2 cells, or four neighbouring SCNI points, are grouped over
+    /// the union of their lists when it is shorter than the lists together ([`GroupPlan`]).
+    pub(super) group: Vec<u8>,
+    /// The groups' particle lists (ascending) as offsets from the group's first particle
+    /// `base[p]`: `lists[list_range[p].0..list_range[p].1]` for the first point `p` of a
+    /// group. Groups with the same offsets share one stored list.
+    pub(super) lists: Vec<u32>,
+    pub(super) list_range: Vec<[u32; 2]>,
+    pub(super) base: Vec<u32>,
+    /// Shape function values and gradients of each group, neighbour-major and interleaved
+    /// so that a neighbour's values for the group's `g` points are contiguous:
+    /// `[N_1..N_g, N_1,x..N_g,x, N_1,y..N_g,y]` per neighbour (one SIMD load each); zero
+    /// where a particle of the union is not in a point's own list, which adds exact zeros
+    /// and leaves each point's sums as its own list gives them.
+    pub(super) table: Vec<Real>,
+    /// Where each group's entries start in `table` (for the first point of a group).
+    /// Groups whose entries are bitwise equal share one stored block. On the lattice that
+    /// is every group away from the edges: the shape functions are formed from offsets to
+    /// the particles in whole spacings ([`crate::rk_shape::Lattice::shape_table`]), so a large model reads
+    /// a few distinct blocks from cache instead of streaming one per group from memory.
+    pub(super) table_start: Vec<u32>,
+}
+
+/// Largest group of points processed together in the stress stage (the 4 points of a q4
+/// cell).
+pub const MAX_GROUP: usize = 4;
+
+/// The group of points starting at a point and its particle list.
+struct GroupPlan {
+    size: usize,
+    list: Vec<u32>,
+}
+
+impl GroupPlan {
+    /// The group starting at point `p`, within points `..end`: the consecutive points
+    /// sharing `p`'s list (up to `max_group`), or, where those are a single point or a
+    /// pair, the group of 4 (or else 2) formed with the next singles or pair when the union
+    /// of their lists is shorter than the lists together. A group of 2 or 4 runs the AVX2
+    /// gather and scatter with one vector operation per particle of its list, so two q2
+    /// cells over their union of 20 particles cost 20 operations instead of 2 x 16.
+    fn at(pt: &ShapeTable, p: usize, end: usize, max_group: usize) -> GroupPlan {
+        let list = |q: usize| &pt.index[pt.row(q)];
+        let run = |q: usize| {
+            let mut n = 1;
+            while n < max_group && q + n < end && list(q + n) == list(q) {
+                n += 1;
+            }
+            n
+        };
+        let same = run(p);
+        for size in [4, 2] {
+            if size > max_group || size <= same || size % same != 0 || p + size > end {
+                continue;
+            }
+            let starts = (p..p + size).step_by(same);
+            if starts.clone().any(|q| run(q) != same) {
+                continue;
+            }
+            let separate: usize = starts.clone().map(|q| list(q).len()).sum();
+            let mut union: Vec<u32> = starts.flat_map(list).copied().collect();
+            union.sort_unstable();
+            union.dedup();
+            if union.len() < separate {
+                return GroupPlan { size, list: union };
+            }
+        }
+        GroupPlan {
+            size: same,
+            list: list(p).to_vec(),
+        }
+    }
+}
+
+impl Scatter {
+    /// Chunks of `chunk` points over `particles` particles, groups of at most `max_group`
+    /// points.
+    pub(super) fn new(
+        pt: &ShapeTable,
+        particles: usize,
+        chunk: usize,
+        max_group: usize,
+    ) -> Scatter {
+        let chunks = pt.rows().div_ceil(chunk);
+        let (mut lo, mut offsets) = (Vec::with_capacity(chunks), vec![0usize]);
+        let mut covering: Vec<Vec<u32>> = vec![Vec::new(); particles.div_ceil(BLOCK)];
+        for c in 0..chunks {
+            let rows = part(c, chunk, pt.rows());
+            let entries = pt.offsets[rows.start] as usize..pt.offsets[rows.end] as usize;
+            let idx = &pt.index[entries];
+            let (a, b) = (
+                idx.iter().copied().min().unwrap_or(0),
+                idx.iter().copied().max().unwrap_or(0),
+            );
+            let base = offsets[c];
+            for list in &mut covering[a as usize / BLOCK..=b as usize / BLOCK] {
+                list.push(c as u32);
+            }
+            lo.push(a);
+            offsets.push(base + (b - a) as usize + 1);
+        }
+        let mut block_offsets = vec![0u32];
+        let mut block_chunks = Vec::new();
+        for list in covering {
+            block_chunks.extend(list);
+            block_offsets.push(block_chunks.len() as u32);
+        }
+        let mut group = vec![0u8; pt.rows()];
+        let (mut lists, mut list_range) = (Vec::new(), vec![[0u32; 2]; pt.rows()]);
+        let mut base = vec![0u32; pt.rows()];
+        let mut table = Vec::new();
+        let mut table_start = vec![0u32; pt.rows()];
+        let mut stored_lists: HashMap<Vec<u32>, u32> = HashMap::new();
+        let mut stored_blocks: HashMap<Vec<u64>, u32> = HashMap::new();
+        let mut block = Vec::new();
+        let mut p = 0;
+        while p < pt.rows() {
+            let end = ((p / chunk + 1) * chunk).min(pt.rows());
+            let plan = GroupPlan::at(pt, p, end, max_group);
+            group[p] = plan.size as u8;
+            base[p] = plan.list[0];
+            let offsets: Vec<u32> = plan.list.iter().map(|&i| i - base[p]).collect();
+            let start = *stored_lists.entry(offsets.clone()).or_insert_with(|| {
+                lists.extend(&offsets);
+                (lists.len() - offsets.len()) as u32
+            });
+            list_range[p] = [start, start + offsets.len() as u32];
+            // Each point's entries in list order, matched against the union.
+            block.clear();
+            let mut next: Vec<usize> = (p..p + plan.size).map(|q| pt.row(q).start).collect();
+            for &i in &plan.list {
+                let mut hit = [None; MAX_GROUP];
+                for (q, e) in next.iter_mut().enumerate() {
+                    if *e < pt.row(p + q).end && pt.index[*e] == i {
+                        hit[q] = Some(*e);
+                        *e += 1;
+                    }
+                }
+                for values in [&pt.n, &pt.dx, &pt.dy] {
+                    block.extend(
+                        hit[..plan.size]
+                            .iter()
+                            .map(|e| e.map_or(0.0, |e| values[e])),
+                    );
+                }
+            }
+            let bits: Vec<u64> = block.iter().map(|x| x.to_bits()).collect();
+            table_start[p] = *stored_blocks.entry(bits).or_insert_with(|| {
+                table.extend(&block);
+                (table.len() - block.len()) as u32
+            });
+            p += plan.size;
+        }
+        Scatter {
+            group,
+            lists,
+            list_range,
+            base,
+            table,
+            table_start,
+            chunk,
+            lo,
+            buf: vec![[0.0; 2]; *offsets.last().unwrap_or(&0)],
+            offsets,
+            block_offsets,
+            block_chunks,
+        }
+    }
+
+    /// Point `p`'s entries in its group's block: each particle of the group's list with
+    /// `[N, dN/dX, dN/dY]`, zero where the particle is only in another point's list.
+    pub(super) fn point_row(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
+        let first = (0..=p).rev().find(|&q| self.group[q] > 0).unwrap_or(0);
+        let (g, q) = (self.group[first] as usize, p - first);
+        let [a, b] = self.list_range[first];
+        let block = &self.table[self.table_start[first] as usize..];
+        let base = self.base[first] as usize;
+        self.lists[a as usize..b as usize]
+            .iter()
+            .enumerate()
+            .map(move |(k, &i)| {
+                let v = &block[3 * g * k..3 * g * (k + 1)];
+                (base + i as usize, [v[q], v[g + q], v[2 * g + q]])
+            })
+    }
+
+    /// Bytes held by the chunk buffers, the groups' lists and the shared blocks.
+    pub(super) fn memory_bytes(&self) -> usize {
+        self.buf.len() * std::mem::size_of::<[Real; 2]>()
+            + self.table.len() * 8
+            + (self.table_start.len()
+                + self.base.len()
+                + self.lists.len()
+                + 2 * self.list_range.len()
+                + self.group.len() / 4)
+                * 4
+            + (self.block_chunks.len() + self.block_offsets.len() + self.lo.len()) * 4
+    }
+}

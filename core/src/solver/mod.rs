@@ -1,0 +1,722 @@
+//! The explicit RKPM solver (total Lagrangian, Lagrangian kernel): a [`Simulation`] of one
+//! scene, set up once in the reference configuration and advanced step by step.
+//!
+//! Setup ([`Simulation::new`]): particle lattice and planar volumes; integration points of
+//! the chosen rule and their RK shape functions ([`crate::integration`],
+//! [`crate::rk_shape`]); the point groups, shared shape-function blocks and chunk buffers
+//! (`layout.rs`); row-sum lumped masses `m_I = sum_p rho N_I(X_p) w_p` (kg); essential
+//! conditions ([`crate::constraints`]); the critical step (`stable_step.rs`).
+//!
+//! One step `n -> n+1` of the central-difference scheme (Belytschko, Liu, Moran 2000,
+//! Box 6.1) with the paper's predictor-corrector contact (section II-3), as
+//! [`Simulation::step`] calls the stages:
+//! 1. stress (`stress.rs`): `F = I + sum_I d_I (x) grad N_I` at each point (plus
+//!    `F_33 = 1 + u_r / R` in axisymmetry), Hencky J2 update, first Piola-Kirchhoff stress
+//!    `P`, fused with the scatter of `w_p (P grad N_I + e_r P_33 N_I / R)` into chunk
+//!    buffers;
+//! 2. time step (`stable_step.rs`): fixed, or `dt_safety * dt_crit`, with
+//!    `dt_crit = dt_crit0 h_min / h_min0` from the smallest altitude of the deformed cells;
+//! 3. force gather and predictor (`update.rs`): `f_I` summed in a fixed order,
+//!    `v* = v_{n-1/2} - dt_avg f_int / m`;
+//! 4. contact ([`crate::contact`]): the tools advance; penetration of the predicted boundary
+//!    particles at `t_{n+1}`, paper eqs. 4-7;
+//! 5. corrector (`update.rs`): `v_{n+1/2} = v* + dt_avg f_c / m`, then the projection onto the
+//!    essential conditions;
+//! 6. update (`update.rs`): `d_{n+1} = d_n + dt v_{n+1/2}` with the step's energy sums;
+//! 7. energy account and its checks (`energy.rs`).
+//!
+//! The parallel phases (1; on large models also 3, the contact interpolation and 6) run on
+//! a [`Team`] over fixed chunks, so the bits do not depend on the number of threads. What
+//! the outputs read is in `fields.rs`; the whole changing state is [`State`].
+
+mod energy;
+mod fields;
+mod layout;
+mod stable_step;
+mod state;
+mod stress;
+#[cfg(test)]
+mod tests;
+mod update;
+
+pub use energy::Energy;
+pub use fields::Fields;
+pub use state::State;
+
+use crate::constraints::Constraints;
+use crate::contact::{Body, Contact};
+use crate::error::{Error, Result};
+use crate::integration::{point_shapes, PointSet};
+use crate::material::{HenckyJ2, PointState};
+use crate::math::Real;
+use crate::rk_shape::{Lattice, ShapeTable, Site};
+use crate::scene::{Component, Edge, Kinematics, Scene};
+use crate::team::Team;
+use crate::tools::{Tool, SEARCH_DEPTH_SPACINGS};
+use energy::StepEnergy;
+use layout::{Scatter, MAX_GROUP};
+use stable_step::landing_step;
+use std::f64::consts::PI;
+use std::time::{Duration, Instant};
+use stress::{has_avx2, PointOut};
+use update::{Motion, Predictor};
+
+/// Wall time spent in each stage.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Whole setup: particles, shape functions, masses, constraints, critical step.
+    pub setup: Duration,
+    /// Part of `setup`: neighbour search and RK shape functions (and SCNI smoothing).
+    pub shape_functions: Duration,
+    /// Deformation gradient and stress update at the points.
+    pub stress: Duration,
+    /// Internal force gather, fused with the predictor.
+    pub internal_force: Duration,
+    /// Contact search and forces.
+    pub contact: Duration,
+    /// Time integration, constraints and energy.
+    pub integration: Duration,
+}
+
+/// A running simulation of one scene.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    /// The scene being run.
+    scene: Scene,
+    /// The workpiece's material.
+    material: HenckyJ2,
+    /// Particles along x (r).
+    nx: usize,
+    /// Particles along y (z).
+    ny: usize,
+    /// Particle spacings (m).
+    spacing: [Real; 2],
+    /// Reference particle positions `X_I` (m), row by row.
+    ref_pos: Vec<[Real; 2]>,
+    /// Row-sum lumped masses `m_I` (kg; whole ring in axisymmetry, per depth in plane
+    /// strain).
+    mass: Vec<Real>,
+    /// `1 / m_I` (1/kg): the predictor and corrector multiply by it (two divisions per
+    /// particle and step were a quarter of the serial stages' time).
+    inv_mass: Vec<Real>,
+    /// The integration points of the scene's rule.
+    points: PointSet,
+    /// Reference volume weights `w_p` of the points (m^3; 2 pi R included).
+    weights: Vec<Real>,
+    /// `1 / R_p` of each integration point (1/m) in axisymmetry, 1 in plane strain.
+    inv_radius: Vec<Real>,
+    /// The point shape functions live only in the scatter's shared blocks
+    /// ([`Scatter::point_row`]); the point-major table is dropped after setup.
+    scatter: Scatter,
+    /// `N_I(X_J)` in row `J`, for positions and contact; its gradients are freed after
+    /// setup (nothing reads them).
+    nodal: ShapeTable,
+    /// Boundary particles, counter-clockwise (the contact slaves).
+    boundary: Vec<u32>,
+    /// Essential conditions, if the scene has any.
+    constraints: Option<Constraints>,
+    /// The rigid tools.
+    tools: Vec<Tool>,
+    /// The whole changing state.
+    st: State,
+    /// Per-point outputs of the last stress stage.
+    out: Vec<PointOut>,
+    /// Internal forces `f_I` of the last force gather (N).
+    f_int: Vec<[Real; 2]>,
+    /// Coefficient velocities `v_{n-1/2}` before the last predictor (m/s).
+    v_prev: Vec<[Real; 2]>,
+    /// Critical step of the undeformed discretisation (s).
+    critical_dt0: Real,
+    /// The contact stage: contact forces and what it carries between steps.
+    contact: Contact,
+    /// The threads of the parallel phases.
+    team: Team,
+    /// Use the AVX2 build of the stress stage where the CPU has it (same bits either way;
+    /// false only in the test that compares the two).
+    simd: bool,
+    /// Wall time per stage since setup.
+    pub times: StageTimes,
+}
+
+impl Simulation {
+    /// Build the discretisation of a validated scene.
+    pub fn new(scene: &Scene) -> Result<Simulation> {
+        let t0 = Instant::now();
+        let axi = scene.model.kinematics == Kinematics::Axisymmetric;
+        let w = &scene.workpiece;
+        let [nx, ny] = w.particles;
+        let h = [
+            w.size_m[0] / (nx - 1) as Real,
+            w.size_m[1] / (ny - 1) as Real,
+        ];
+        let support = [
+            scene.discretization.support[0] * h[0],
+            scene.discretization.support[1] * h[1],
+        ];
+        let t_shapes = Instant::now();
+        let lattice = Lattice::new(w.origin_m, h, [nx, ny], support);
+        let ref_pos = lattice.cloud().positions.clone();
+        let (points, pt) = point_shapes(&lattice, scene.discretization.integration)?;
+        let particles: Vec<Site> = (0..ny)
+            .flat_map(|j| {
+                (0..nx).map(move |i| Site {
+                    node: [i, j],
+                    offset: [0.0; 2],
+                })
+            })
+            .collect();
+        let mut nodal = lattice.shape_table(&particles, &|j| format!("particle {j}"))?;
+        nodal.drop_gradients();
+        let shape_functions = t_shapes.elapsed();
+        let (weights, inv_radius): (Vec<Real>, Vec<Real>) = points
+            .positions
+            .iter()
+            .zip(&points.areas)
+            .map(|(x, a)| {
+                if axi {
+                    (a * 2.0 * PI * x[0], 1.0 / x[0])
+                } else {
+                    (a * scene.model.depth_m, 1.0)
+                }
+            })
+            .unzip();
+        let rho = scene.material.density_kg_per_m3;
+        // Row-sum lumped masses m_I = sum_p rho N_I(x_p) w_p.
+        let np = ref_pos.len();
+        let mut mass = vec![0.0; np];
+        for (p, w) in weights.iter().enumerate() {
+            for e in pt.row(p) {
+                mass[pt.index[e] as usize] += rho * pt.n[e] * w;
+            }
+        }
+        // Chunks of about two rows of cells, at least 64 points: enough chunks to balance
+        // the threads, few enough that the buffers overlap little.
+        let chunk = (2 * pt.rows() / (ny - 1)).max(64);
+        let scatter = Scatter::new(&pt, np, chunk, MAX_GROUP);
+        if let Some((i, m)) = mass
+            .iter()
+            .enumerate()
+            .find(|(_, m)| m.is_nan() || **m <= 0.0)
+        {
+            return Err(Error::ShapeFunctions(format!(
+                "lumped mass of particle {i} at {:?} m is {m:.3e} kg; increase the support or the resolution",
+                ref_pos[i]
+            )));
+        }
+        // Boundary ring, counter-clockwise.
+        let id = |i: usize, j: usize| (j * nx + i) as u32;
+        let mut boundary = Vec::new();
+        boundary.extend((0..nx).map(|i| id(i, 0)));
+        boundary.extend((1..ny).map(|j| id(nx - 1, j)));
+        boundary.extend((0..nx - 1).rev().map(|i| id(i, ny - 1)));
+        boundary.extend((1..ny - 1).rev().map(|j| id(0, j)));
+        // Essential conditions: user edges, plus the axis of an axisymmetric body.
+        let edge_particles = |e: Edge| -> Vec<u32> {
+            match e {
+                Edge::XMin => (0..ny).map(|j| id(0, j)).collect(),
+                Edge::XMax => (0..ny).map(|j| id(nx - 1, j)).collect(),
+                Edge::YMin => (0..nx).map(|i| id(i, 0)).collect(),
+                Edge::YMax => (0..nx).map(|i| id(i, ny - 1)).collect(),
+            }
+        };
+        let mut rows = Vec::new();
+        for c in &scene.constraints {
+            for comp in &c.fix {
+                let k = match comp {
+                    Component::X => 0,
+                    Component::Y => 1,
+                };
+                rows.extend(edge_particles(c.edge).into_iter().map(|j| (j, k)));
+            }
+        }
+        if axi && w.origin_m[0] == 0.0 {
+            rows.extend(edge_particles(Edge::XMin).into_iter().map(|j| (j, 0)));
+        }
+        let constraints = Constraints::new(rows, &nodal, &mass)?;
+        let material = HenckyJ2::new(
+            scene.material.youngs_modulus_pa,
+            scene.material.poisson_ratio,
+            scene.material.hardening,
+        );
+        let wave_speed = material.wave_speed(rho);
+        let depth = SEARCH_DEPTH_SPACINGS * h[0].max(h[1]);
+        let tools: Vec<Tool> = scene.tools.iter().map(|t| Tool::new(t, depth)).collect();
+        let mut v = vec![w.initial_velocity_m_per_s; np];
+        if let Some(c) = &constraints {
+            c.project(&mut v, &mass);
+        }
+        let initial = 0.5
+            * mass
+                .iter()
+                .zip(&v)
+                .map(|(m, v)| m * (v[0] * v[0] + v[1] * v[1]))
+                .sum::<Real>();
+        let npts = points.positions.len();
+        let stable_dt = h[0].min(h[1]) / wave_speed;
+        let mut sim = Simulation {
+            material,
+            nx,
+            ny,
+            spacing: h,
+            inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
+            mass,
+            weights,
+            inv_radius,
+            scatter,
+            contact: Contact::new(&boundary, &nodal, np),
+            boundary,
+            constraints,
+            st: State {
+                step: 0,
+                time: 0.0,
+                dt_prev: 0.0,
+                d: vec![[0.0; 2]; np],
+                v: v.clone(),
+                points: vec![PointState::default(); npts],
+                tools: tools.iter().map(|t| t.state).collect(),
+                energy: Energy {
+                    initial,
+                    kinetic: initial,
+                    ..Default::default()
+                },
+                max_penetration: 0.0,
+                stable_dt,
+                anchor_time: 0.0,
+                anchor_step: 0,
+            },
+            tools,
+            out: vec![PointOut::initial(&material); npts],
+            f_int: vec![[0.0; 2]; np],
+            v_prev: v,
+            critical_dt0: stable_dt,
+            simd: true,
+            team: Team::default(),
+            ref_pos,
+            points,
+            nodal,
+            scene: scene.clone(),
+            times: StageTimes {
+                setup: t0.elapsed(),
+                ..Default::default()
+            },
+        };
+        sim.critical_dt0 = sim.measure_critical_step()?;
+        sim.stress_stage()?;
+        sim.force_stage(None);
+        sim.times = StageTimes {
+            setup: t0.elapsed(),
+            shape_functions,
+            ..Default::default()
+        };
+        if let Some(dt) = scene.time.dt_s {
+            if dt > sim.st.stable_dt {
+                return Err(Error::Unstable {
+                    step: 0,
+                    time: 0.0,
+                    dt,
+                    dt_crit: sim.st.stable_dt,
+                    detail: format!(
+                        "time.dt_s is above the critical step 2 / omega_max of this discretisation (h_min / c = {:.4e} s); lower it or remove it to use dt_safety",
+                        h[0].min(h[1]) / wave_speed
+                    ),
+                });
+            }
+        }
+        Ok(sim)
+    }
+
+    /// The scene being run.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.ref_pos.len()
+    }
+    /// Number of integration points.
+    pub fn point_count(&self) -> usize {
+        self.points.positions.len()
+    }
+    /// Grid size `(nx, ny)`.
+    pub fn grid(&self) -> (usize, usize) {
+        (self.nx, self.ny)
+    }
+    /// Particle spacings (m).
+    pub fn spacing(&self) -> [Real; 2] {
+        self.spacing
+    }
+    /// Reference particle positions (m).
+    pub fn reference_positions(&self) -> &[[Real; 2]] {
+        &self.ref_pos
+    }
+    /// Lumped masses (kg).
+    pub fn masses(&self) -> &[Real] {
+        &self.mass
+    }
+    /// Boundary particles, counter-clockwise.
+    pub fn boundary(&self) -> &[u32] {
+        &self.boundary
+    }
+    /// Time (s).
+    pub fn time(&self) -> Real {
+        self.st.time
+    }
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.st.step
+    }
+    /// Stable step estimate `h_min / c` on the current deformation (s).
+    pub fn stable_dt(&self) -> Real {
+        self.st.stable_dt
+    }
+    /// The step the next call to `step` will take when not limited (s).
+    pub fn next_dt(&self) -> Real {
+        self.scene
+            .time
+            .dt_s
+            .unwrap_or(self.scene.time.dt_safety * self.st.stable_dt)
+    }
+    /// Energy account.
+    pub fn energy(&self) -> Energy {
+        self.st.energy
+    }
+    /// Tools.
+    pub fn tools(&self) -> &[Tool] {
+        &self.tools
+    }
+    /// Index of the tool named `name`.
+    pub fn tool_index(&self, name: &str) -> Option<usize> {
+        self.tools.iter().position(|t| t.name == name)
+    }
+    /// Set a tool's velocity along its axis (m/s) from outside, overriding the scene motion.
+    pub fn set_tool_velocity(&mut self, tool: usize, v: Real) -> Result<()> {
+        let t = self
+            .tools
+            .get_mut(tool)
+            .ok_or_else(|| Error::Request(format!("no tool with index {tool}")))?;
+        if !t.is_movable() {
+            return Err(Error::Request(format!(
+                "tool `{}` is fixed in the scene",
+                t.name
+            )));
+        }
+        if !v.is_finite() {
+            return Err(Error::Request(format!(
+                "velocity {v} for tool `{}` is not finite",
+                t.name
+            )));
+        }
+        t.state.command = Some(v);
+        Ok(())
+    }
+    /// Total mass of the workpiece (kg; whole ring or per depth).
+    pub fn total_mass(&self) -> Real {
+        self.mass.iter().sum()
+    }
+    /// Momentum `sum m_I v_I` (kg m/s) at the last half step.
+    pub fn momentum(&self) -> [Real; 2] {
+        self.st
+            .v
+            .iter()
+            .zip(&self.mass)
+            .fold([0.0; 2], |a, (v, m)| [a[0] + m * v[0], a[1] + m * v[1]])
+    }
+    /// Largest equivalent plastic strain over the integration points.
+    pub fn max_plastic_strain(&self) -> Real {
+        self.st.points.iter().map(|s| s.eps_p).fold(0.0, Real::max)
+    }
+    /// Largest penetration seen at an output time (m).
+    pub fn max_penetration(&self) -> Real {
+        self.st.max_penetration
+    }
+    /// The whole changing state.
+    pub fn state(&self) -> &State {
+        &self.st
+    }
+    /// Restore a state saved from a simulation of the same scene.
+    pub fn restore(&mut self, st: State) -> Result<()> {
+        if st.d.len() != self.st.d.len()
+            || st.v.len() != self.st.v.len()
+            || st.points.len() != self.st.points.len()
+            || st.tools.len() != self.st.tools.len()
+        {
+            return Err(Error::State(
+                "the saved state belongs to another discretisation".into(),
+            ));
+        }
+        for (t, s) in self.tools.iter_mut().zip(&st.tools) {
+            t.state = *s;
+        }
+        self.v_prev.clone_from(&st.v);
+        self.contact.forget();
+        let hardening = &self.material.hardening;
+        let initial = hardening.initial_yield();
+        for (out, point) in self.out.iter_mut().zip(&st.points) {
+            let flow = hardening.flow_stress(point.eps_p);
+            out.set_plastic_strain(&self.material, point.eps_p, flow, initial);
+        }
+        self.st = st;
+        Ok(())
+    }
+
+    /// One central-difference step, at most `max_dt` long (s): the stages of the module
+    /// doc, in order.
+    pub fn step(&mut self, max_dt: Option<Real>) -> Result<()> {
+        // 1. Stress, fused with the scatter of the internal force.
+        let (elastic, plastic) = self.stress_stage()?;
+        // 2. Time step.
+        let t1 = Instant::now();
+        let dt_full = self.next_dt();
+        let dt = landing_step(dt_full, max_dt);
+        if dt.is_nan() || dt <= 0.0 {
+            return Err(Error::Request(format!(
+                "step length {dt} s is not positive"
+            )));
+        }
+        let dt_avg = 0.5 * (dt + self.st.dt_prev);
+        let t2 = Instant::now();
+        // 3. Force gather and predictor.
+        self.force_stage(Some((dt_avg, dt_full)));
+        let t3 = Instant::now();
+        // 4. Contact: the tools advance over the step at their mid-step velocity.
+        let t_mid = self.st.time + 0.5 * dt;
+        for t in self.tools.iter_mut() {
+            t.state.velocity = t.velocity_at(t_mid);
+            t.state.stroke += dt * t.state.velocity;
+        }
+        let body = Body {
+            boundary: &self.boundary,
+            nodal: &self.nodal,
+            reference: &self.ref_pos,
+            mass: &self.mass,
+            d: &self.st.d,
+            v: &self.st.v,
+            spacing: self.spacing,
+        };
+        let (contact, tool_work) =
+            self.contact
+                .stage(&self.team, &mut self.tools, &body, dt_full, dt_avg);
+        let t4 = Instant::now();
+        // 5. Corrector and essential conditions.
+        if contact {
+            update::correct(&mut self.st.v, &self.contact.force, &self.inv_mass, dt_avg);
+        }
+        if let Some(c) = &self.constraints {
+            c.project(&mut self.st.v, &self.mass);
+        }
+        // 6. Update, with the energy sums.
+        let motion = Motion {
+            v: &self.st.v,
+            v_prev: &self.v_prev,
+            mass: &self.mass,
+            f_int: &self.f_int,
+            f_con: &self.contact.force,
+        };
+        let track = !self.tools.is_empty();
+        let u = update::update(
+            &self.team,
+            &mut self.st.d,
+            &motion,
+            dt,
+            dt_avg,
+            contact,
+            track,
+        );
+        self.contact.updated_move(dt * u.largest_speed);
+        if !u.kinetic.is_finite() {
+            let i = self
+                .st
+                .v
+                .iter()
+                .position(|v| !(v[0].is_finite() && v[1].is_finite()))
+                .unwrap_or(0);
+            return Err(Error::Diverged {
+                step: self.st.step,
+                time: self.st.time,
+                what: format!(
+                    "velocity of particle {i} at {:?} m is not finite",
+                    self.ref_pos[i]
+                ),
+            });
+        }
+        // 7. Energy account; time advances; the checks.
+        self.st.energy.add_step(StepEnergy {
+            kinetic: u.kinetic,
+            elastic,
+            plastic,
+            contact_work: u.contact_work,
+            tool_work,
+            internal_half_step: u.half_step,
+        });
+        self.st.step += 1;
+        match self.scene.time.dt_s {
+            Some(fixed) if dt == fixed => {
+                self.st.time =
+                    self.st.anchor_time + (self.st.step - self.st.anchor_step) as Real * fixed;
+            }
+            _ => {
+                self.st.time += dt;
+                self.st.anchor_time = self.st.time;
+                self.st.anchor_step = self.st.step;
+            }
+        }
+        self.st.dt_prev = dt;
+        for (t, s) in self.tools.iter().zip(self.st.tools.iter_mut()) {
+            *s = t.state;
+        }
+        let tol = self.scene.checks.energy_balance_tol;
+        self.st
+            .energy
+            .check(tol, self.st.step, self.st.time, dt, self.st.stable_dt)?;
+        let t5 = Instant::now();
+        self.times.contact += t4 - t3;
+        self.times.integration += (t2 - t1) + (t5 - t4);
+        Ok(())
+    }
+
+    /// step start without a thread hand-off.
+    pub fn run_to(
+        &mut self,
+        t_end: Real,
+        mut on_step: impl FnMut(&Simulation) + Send,
+    ) -> Result<()> {
+        let this = &mut *self;
+        let mut run = move || -> Result<()> {
+            while this.st.time < t_end - 1e-12 * t_end.abs() {
+                this.step(Some(t_end - this.st.time))?;
+                on_step(this);
+            }
+            Ok(())
+        };
+        if rayon::current_thread_index().is_some() {
+            run()
+        } else {
+            // `scope` runs its body on a worker of the global pool.
+            rayon::scope(|_| run())
+        }
+    }
+
+    /// The stress stage (`stress.rs`) on this simulation's points, timed; a point whose
+    /// update fails stops the run with a diagnosis naming it. Sets the stable step estimate
+    /// from the smallest deformed altitude. Returns (elastic, plastic) energy (J).
+    fn stress_stage(&mut self) -> Result<(Real, Real)> {
+        let t0 = Instant::now();
+        let input = stress::Inputs {
+            d: &self.st.d,
+            material: &self.material,
+            weights: &self.weights,
+            inv_radius: &self.inv_radius,
+            axi: self.scene.model.kinematics == Kinematics::Axisymmetric,
+            spacing: self.spacing,
+            avx2: self.simd && has_avx2(),
+        };
+        let sums = stress::stage(
+            &self.team,
+            &mut self.scatter,
+            &input,
+            &mut self.st.points,
+            &mut self.out,
+        )
+        .map_err(|(p, m)| Error::Diverged {
+            step: self.st.step,
+            time: self.st.time,
+            what: format!(
+                "integration point {p} (reference position {:?} m): {m}",
+                self.points.positions[p]
+            ),
+        })?;
+        self.st.stable_dt =
+            self.critical_dt0 * sums.min_altitude / self.spacing[0].min(self.spacing[1]);
+        self.times.stress += t0.elapsed();
+        Ok((sums.elastic, sums.plastic))
+    }
+
+    /// The internal force gather (`update.rs`), timed; with
+    /// `predict = Some((dt_avg, dt))` (s) fused with the predictor, recording the move bound
+    /// `dt V*` for the contact stage.
+    fn force_stage(&mut self, predict: Option<(Real, Real)>) {
+        let t0 = Instant::now();
+        let predictor = predict.map(|(dt_avg, _)| Predictor {
+            dt_avg,
+            v: &mut self.st.v,
+            v_prev: &mut self.v_prev,
+            inv_mass: &self.inv_mass,
+            track: !self.tools.is_empty(),
+        });
+        let speed = update::gather_forces(&self.team, &self.scatter, &mut self.f_int, predictor);
+        if let Some((_, dt)) = predict {
+            self.contact.predicted_move(dt * speed);
+        }
+        self.times.internal_force += t0.elapsed();
+    }
+
+    /// The critical step on the undeformed discretisation (`stable_step.rs`),
+    /// with `K x` the internal force of a displacement of 1e-7 of the spacing; the state is
+    /// left undeformed.
+    fn measure_critical_step(&mut self) -> Result<Real> {
+        let saved_points = self.st.points.clone();
+        let amplitude = 1e-7 * self.spacing[0].min(self.spacing[1]);
+        let inv_sqrt_m: Vec<Real> = self.mass.iter().map(|m| 1.0 / m.sqrt()).collect();
+        let dt = stable_step::critical_step(&inv_sqrt_m, amplitude, |d| {
+            self.st.d = d;
+            self.stress_stage()?;
+            self.force_stage(None);
+            Ok(self.f_int.clone())
+        });
+        self.st.d = vec![[0.0; 2]; self.ref_pos.len()];
+        self.st.points = saved_points;
+        dt
+    }
+
+    /// of its arrays).
+    pub fn memory_bytes(&self) -> usize {
+        let table = |t: &ShapeTable| {
+            t.offsets.len() * 4 + t.index.len() * 4 + (t.n.len() + t.dx.len() + t.dy.len()) * 8
+        };
+        let r2 = std::mem::size_of::<[Real; 2]>();
+        let np = self.ref_pos.len();
+        let npts = self.points.positions.len();
+        table(&self.nodal)
+            + self.scatter.memory_bytes()
+            + np * (5 * r2 + 2 * 8)
+            + npts
+                * (r2 + 3 * 8 + std::mem::size_of::<PointState>() + std::mem::size_of::<PointOut>())
+            + self.boundary.len() * 4
+    }
+
+    /// Critical step measured on the undeformed discretisation (s).
+    pub fn critical_dt0(&self) -> Real {
+        self.critical_dt0
+    }
+
+    /// Internal force on each coefficient from the current stresses (N); for tests.
+    pub fn internal_forces(&mut self) -> Result<Vec<[Real; 2]>> {
+        self.stress_stage()?;
+        self.force_stage(None);
+        Ok(self.f_int.clone())
+    }
+
+    /// Set the displacement coefficients directly (m); for tests and restarts.
+    pub fn set_displacement(&mut self, d: Vec<[Real; 2]>) -> Result<()> {
+        if d.len() != self.st.d.len() {
+            return Err(Error::State(format!(
+                "expected {} coefficients, got {}",
+                self.st.d.len(),
+                d.len()
+            )));
+        }
+        self.st.d = d;
+        self.contact.forget();
+        Ok(())
+    }
+    /// The material model.
+    pub fn material(&self) -> &HenckyJ2 {
+        &self.material
+    }
+    /// Largest physical velocity of a constrained component (m/s): zero up to round-off.
+    pub fn constraint_residual(&self) -> Real {
+        self.constraints
+            .as_ref()
+            .map_or(0.0, |c| c.residual(&self.st.v))
+    }
+}

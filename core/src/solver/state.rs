@@ -1,0 +1,38 @@
+//! The whole changing state of a simulation, saved and restored as one value.
+
+use super::energy::Energy;
+use crate::material::PointState;
+use crate::math::Real;
+use crate::tools::ToolState;
+use serde::{Deserialize, Serialize};
+
+/// Everything that changes during a run: saving and restoring it continues bit for bit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct State {
+    /// Steps taken.
+    pub step: u64,
+    /// Time (s).
+    pub time: Real,
+    /// Length of the last step (s), 0 before the first.
+    pub dt_prev: Real,
+    /// RK coefficients of the displacement `d_I` (m).
+    pub d: Vec<[Real; 2]>,
+    /// Coefficient velocities at the last half step (m/s).
+    pub v: Vec<[Real; 2]>,
+    /// Integration point histories.
+    pub points: Vec<PointState>,
+    /// Tool states.
+    pub tools: Vec<ToolState>,
+    /// Energy account.
+    pub energy: Energy,
+    /// Largest penetration seen at an output time (m).
+    pub max_penetration: Real,
+    /// Stable step estimate on the deformation at `time` (s).
+    pub stable_dt: Real,
+    /// Time (s) and step count at the last step that was not a full fixed step: with a
+    /// fixed step, `time = anchor_time + (step - anchor_step) dt` has no rounding drift, so
+    /// requested instants that are whole multiples of the step are reached exactly.
+    pub anchor_time: Real,
+    /// Step count at `anchor_time`.
+    pub anchor_step: u64,
+}

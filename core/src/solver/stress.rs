@@ -1,0 +1,491 @@
+//! The stress stage of a step, fused with the scatter of the internal force (Belytschko,
+//! Liu, Moran 2000, Box 6.1, steps 4-6, in total Lagrangian form):
+//!
+//! - deformation gradient `F = I + sum_I d_I (x) grad N_I(X_p)` at each integration point,
+//!   with the hoop stretch `F_33 = 1 + u_r / R_p` in axisymmetry (`u_r = sum_I N_I d_I,r`);
+//! - the Hencky J2 update of [`crate::material`] (first Piola-Kirchhoff stress `P`, Pa);
+//! - the scatter of `w_p (P grad N_I + e_r P_33 N_I / R_p)` (N) into the chunk's buffer of
+//!   [`Scatter`], which the force gather of [`super::update`] sums in a fixed order.
+//!
+//! Points are processed per group over one particle list ([`super::layout`]), four points
+//! per batch in SIMD lanes; the AVX2+FMA build ([`avx2`]) is chosen at run time and gives
+//! the generic build's bits. Chunks of points run on the team in parallel.
+
+use super::layout::{Scatter, MAX_GROUP};
+use crate::lanes::{Lanes, LANES};
+use crate::material::{HenckyJ2, PointLanes, PointState};
+use crate::math::Real;
+use crate::team::{part, Parts, Team};
+
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+
+/// Per-point results of the last stress update, and the hardening law evaluated at the
+/// point's `eps_p` (cached: recomputed only when the point yields).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct PointOut {
+    pub(super) von_mises: Real,
+    pub(super) jacobian: Real,
+    /// `sigma_y(eps_p)` (Pa).
+    pub(super) flow_stress: Real,
+    /// `int_0^eps_p sigma_y de` (J/m^3).
+    pub(super) plastic_work: Real,
+}
+
+impl PointOut {
+    pub(super) fn initial(material: &HenckyJ2) -> PointOut {
+        PointOut {
+            flow_stress: material.hardening.initial_yield(),
+            ..Default::default()
+        }
+    }
+
+    /// Caches the hardening law at `eps_p`, where the flow stress is `flow` and the
+    /// initial yield stress `initial` (Pa).
+    pub(super) fn set_plastic_strain(
+        &mut self,
+        material: &HenckyJ2,
+        eps_p: Real,
+        flow: Real,
+        initial: Real,
+    ) {
+        self.flow_stress = flow;
+        self.plastic_work = material.hardening.plastic_work_at(eps_p, flow, initial);
+    }
+}
+
+/// Sums over one chunk of points in the stress stage.
+#[derive(Debug, Clone, Default)]
+struct ChunkSums {
+    elastic: Real,
+    plastic: Real,
+    /// Smallest squared altitude of a deformed cell (m^2).
+    min_altitude2: Real,
+    failure: Option<(usize, String)>,
+}
+
+/// One chunk's share of the stress stage: points `first..first + states.len()` with their
+/// histories and cached outputs, and the chunk's force buffer (particles from `lo`).
+struct ChunkWork<'a> {
+    first: usize,
+    states: &'a mut [PointState],
+    outs: &'a mut [PointOut],
+    lo: usize,
+    buf: &'a mut [[Real; 2]],
+}
+
+/// What the stress stage reads, shared by all chunks.
+struct StressContext<'a> {
+    /// Group particle lists ([`Scatter::lists`]).
+    lists: &'a [u32],
+    list_range: &'a [[u32; 2]],
+    base: &'a [u32],
+    /// Group sizes per point ([`Scatter::group`]).
+    groups: &'a [u8],
+    table: &'a [Real],
+    table_start: &'a [u32],
+    d: &'a [[Real; 2]],
+    material: &'a HenckyJ2,
+    weights: &'a [Real],
+    inv_radius: &'a [Real],
+    axi: bool,
+    spacing: [Real; 2],
+    /// `sigma_y(0)` (Pa), for the plastic work.
+    initial_yield: Real,
+}
+
+impl StressContext<'_> {
+    /// The first particle of the group of `g` points starting at `p0`, the group's
+    /// particles as offsets from it, and the group's interleaved shape-function entries
+    /// ([`Scatter::table`]).
+    #[inline(always)]
+    fn neighbours(&self, p0: usize, g: usize) -> (usize, &[u32], &[Real]) {
+        let [a, b] = self.list_range[p0];
+        let index = &self.lists[a as usize..b as usize];
+        let start = self.table_start[p0] as usize;
+        (
+            self.base[p0] as usize,
+            index,
+            &self.table[start..start + 3 * g * index.len()],
+        )
+    }
+
+    /// Gathers `F = I + sum_I d_I (x) grad N_I` and `u_r = sum_I N_I d_I,r` of the `G`
+    /// consecutive points `p0..p0 + G`, which share one particle list (each particle's
+    /// displacement is loaded once for the `G` points), into lanes `l0..l0 + G` of `f`
+    /// (`[F_xX, F_xY, F_yX, F_yY, u_r]`).
+    #[inline(always)]
+    fn gather<const G: usize>(&self, p0: usize, f: &mut [Lanes; 5], l0: usize) {
+        let (base, index, table) = self.neighbours(p0, G);
+        let d = &self.d[base..];
+        // xy holds F_xX, F_xY (from d_x) then F_yX, F_yY (from d_y) of the G points in the
+        // order of a neighbour's `[N_x.., N_y..]` entries, so each neighbour adds two
+        // vectors of 2G products, each a fused multiply-add.
+        let mut xy = [[0.0; 2 * MAX_GROUP]; 2];
+        xy[0][..G].fill(1.0);
+        xy[1][G..2 * G].fill(1.0);
+        let mut ur = [0.0; MAX_GROUP];
+        for (&i, e) in index.iter().zip(table.chunks_exact(3 * G)) {
+            let di = d[i as usize];
+            for q in 0..2 * G {
+                xy[0][q] = di[0].mul_add(e[G + q], xy[0][q]);
+                xy[1][q] = di[1].mul_add(e[G + q], xy[1][q]);
+            }
+            for j in 0..G {
+                ur[j] = di[0].mul_add(e[j], ur[j]);
+            }
+        }
+        for j in 0..G {
+            let l = l0 + j;
+            f[0][l] = xy[0][j];
+            f[1][l] = xy[0][G + j];
+            f[2][l] = xy[1][j];
+            f[3][l] = xy[1][G + j];
+            f[4][l] = ur[j];
+        }
+    }
+
+    /// Scatters the weighted stresses of lanes `l0..l0 + G` (points `p0..p0 + G`, sharing
+    /// one particle list) as `w_p (P grad N_I + e_r P_33 N_I / R_p)` into `buf`, each buffer
+    /// entry read and written once for the `G` points; the contributions are still added
+    /// point by point, so the bits equal a one-point loop. `pw = w [P_xX, P_xY, P_33 / R]`,
+    /// `px = w [P_yX, P_yY]` per lane. A point's contribution is, with fused multiply-adds,
+    /// `fma(P_xX, N_x, fma(P_xY, N_y, P_33 N / R))` and `fma(P_yX, N_x, P_yY N_y)`.
+    #[inline(always)]
+    fn scatter<const G: usize>(
+        &self,
+        p0: usize,
+        pw: &[Lanes; 3],
+        px: &[Lanes; 2],
+        l0: usize,
+        buf: &mut [[Real; 2]],
+        lo: usize,
+    ) {
+        let (base, index, table) = self.neighbours(p0, G);
+        let buf = &mut buf[base - lo..];
+        for (&i, e) in index.iter().zip(table.chunks_exact(3 * G)) {
+            let b = &mut buf[i as usize];
+            for j in 0..G {
+                let l = l0 + j;
+                let (n, nx, ny) = (e[j], e[G + j], e[2 * G + j]);
+                b[0] += pw[0][l].mul_add(nx, pw[1][l].mul_add(ny, pw[2][l] * n));
+                b[1] += px[0][l].mul_add(nx, px[1][l] * ny);
+            }
+        }
+    }
+
+    /// Gather (`SCATTER` false) or scatter a group of `g` points, `g` in `1..=MAX_GROUP`;
+    /// pairs and quads through [`avx2`] in the AVX2 build (`AVX2`, only from
+    /// `chunk_avx2`).
+    #[inline(always)]
+    fn group<const SCATTER: bool, const AVX2: bool>(
+        &self,
+        g: usize,
+        p0: usize,
+        l0: usize,
+        lanes: &mut Batch,
+        buf: &mut [[Real; 2]],
+        lo: usize,
+    ) {
+        macro_rules! run {
+            ($g:literal) => {
+                if SCATTER {
+                    self.scatter::<$g>(p0, &lanes.pw, &lanes.px, l0, buf, lo)
+                } else {
+                    self.gather::<$g>(p0, &mut lanes.f, l0)
+                }
+            };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 && (g == 2 || g == 4) {
+            let (base, index, table) = self.neighbours(p0, g);
+            let (d, buf) = (&self.d[base..], &mut buf[base - lo..]);
+            // SAFETY: `AVX2` is true only inside `chunk_avx2`, called where the CPU has AVX2.
+            unsafe {
+                match (SCATTER, g) {
+                    (false, 2) => avx2::gather2(index, table, d, &mut lanes.f, l0),
+                    (false, _) => avx2::gather4(index, table, d, &mut lanes.f, l0),
+                    (true, 2) => avx2::scatter2(index, table, &lanes.pw, &lanes.px, l0, buf),
+                    (true, _) => avx2::scatter4(index, table, &lanes.pw, &lanes.px, l0, buf),
+                }
+            }
+            return;
+        }
+        match g {
+            1 => run!(1),
+            2 => run!(2),
+            3 => run!(3),
+            _ => run!(4),
+        }
+    }
+
+    /// The stress stage of one chunk of points (`work`). Points go through the
+    /// material in batches of whole groups filling up to [`LANES`] lanes; a lane's results
+    /// do not depend on the batch, so the bits equal a point-by-point loop.
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
+    fn chunk<const AVX2: bool>(&self, work: ChunkWork<'_>) -> ChunkSums {
+        let ChunkWork {
+            first,
+            states,
+            outs,
+            lo,
+            buf,
+        } = work;
+        let group = &self.groups[first..first + states.len()];
+        buf.iter_mut().for_each(|b| *b = [0.0; 2]);
+        let mut s = ChunkSums {
+            elastic: 0.0,
+            plastic: 0.0,
+            min_altitude2: Real::INFINITY,
+            failure: None,
+        };
+        let [hx, hy] = self.spacing;
+        let mut lanes = Batch {
+            f: [[0.0; LANES]; 5],
+            pw: [[0.0; LANES]; 3],
+            px: [[0.0; LANES]; 2],
+        };
+        let mut batch = PointLanes::unstressed();
+        let mut k = 0;
+        while k < states.len() {
+            // Whole groups of points, in order, while they fit in the lanes.
+            let k0 = k;
+            let mut used = 0;
+            while k < states.len() && used + group[k] as usize <= LANES {
+                let g = group[k] as usize;
+                self.group::<false, AVX2>(g, first + k, used, &mut lanes, buf, lo);
+                used += g;
+                k += g;
+            }
+            let p0 = first + k0;
+            if used < LANES {
+                // Unused lanes: undeformed, unstressed, unable to yield.
+                for l in used..LANES {
+                    lanes.f[0][l] = 1.0;
+                    lanes.f[1][l] = 0.0;
+                    lanes.f[2][l] = 0.0;
+                    lanes.f[3][l] = 1.0;
+                    lanes.f[4][l] = 0.0;
+                }
+                batch = PointLanes::unstressed();
+            }
+            let mut weight = [0.0; LANES];
+            weight[..used].copy_from_slice(&self.weights[p0..p0 + used]);
+            let mut inv_radius = [0.0; LANES];
+            inv_radius[..used].copy_from_slice(&self.inv_radius[p0..p0 + used]);
+            batch.f.copy_from_slice(&lanes.f[..4]);
+            for l in 0..LANES {
+                batch.f33[l] = if self.axi {
+                    1.0 + lanes.f[4][l] * inv_radius[l]
+                } else {
+                    1.0
+                };
+            }
+            let (states, outs) = (&mut states[k0..k0 + used], &mut outs[k0..k0 + used]);
+            for (l, (state, out)) in states.iter().zip(outs.iter()).enumerate() {
+                batch.set_history(l, state, out.flow_stress);
+            }
+            let u = match self.material.update_lanes(&mut batch) {
+                Ok(u) => u,
+                Err((l, m)) => {
+                    s.failure = Some((p0 + l, m));
+                    return s;
+                }
+            };
+            // Smallest altitude of the deformed cell spanned by F (hx e_x), F (hy e_y):
+            // det F hx hy / max(|F hx e_x|, |F hy e_y|), compared squared (all lanes at
+            // once; unused lanes hold F = I and are not read).
+            let mut altitude2 = [0.0; LANES];
+            for (l, a2) in altitude2.iter_mut().enumerate() {
+                let (f11, f12, f21, f22) =
+                    (batch.f[0][l], batch.f[1][l], batch.f[2][l], batch.f[3][l]);
+                let ex2 = hx * hx * (f11 * f11 + f21 * f21);
+                let ey2 = hy * hy * (f12 * f12 + f22 * f22);
+                let area = (f11 * f22 - f12 * f21) * hx * hy;
+                *a2 = area * area.abs() / ex2.max(ey2);
+            }
+            // Scatter weights w_p (P grad N_I + e_r P_33 N_I / R_p), all lanes at once.
+            for l in 0..LANES {
+                let w = weight[l];
+                lanes.pw[0][l] = u.piola[0][l] * w;
+                lanes.pw[1][l] = u.piola[1][l] * w;
+                lanes.px[0][l] = u.piola[2][l] * w;
+                lanes.px[1][l] = u.piola[3][l] * w;
+                lanes.pw[2][l] = if self.axi {
+                    u.piola[4][l] * w * inv_radius[l]
+                } else {
+                    0.0
+                };
+            }
+            for (l, (state, out)) in states.iter_mut().zip(outs.iter_mut()).enumerate() {
+                let eps_p = state.eps_p;
+                *state = batch.state(l);
+                if state.eps_p != eps_p {
+                    let flow = batch.flow_stress[l];
+                    out.set_plastic_strain(self.material, state.eps_p, flow, self.initial_yield);
+                }
+                out.von_mises = u.von_mises[l];
+                out.jacobian = u.jacobian[l];
+                s.elastic += u.elastic_energy[l] * weight[l];
+                s.plastic += out.plastic_work * weight[l];
+                s.min_altitude2 = s.min_altitude2.min(altitude2[l]);
+            }
+            let mut l0 = 0;
+            while l0 < used {
+                let g = group[k0 + l0] as usize;
+                self.group::<true, AVX2>(g, p0 + l0, l0, &mut lanes, buf, lo);
+                l0 += g;
+            }
+        }
+        s
+    }
+
+    /// [`StressContext::chunk`] compiled for AVX2, so the lanes run as one register.
+    ///
+    /// # Safety
+    ///
+    /// The CPU must support AVX2 (checked by the caller).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn chunk_avx2(&self, work: ChunkWork<'_>) -> ChunkSums {
+        self.chunk::<true>(work)
+    }
+}
+
+/// Whether the CPU runs the AVX2 build of the stress stage (x86_64 with AVX2 and FMA; false
+/// on other architectures, which use the generic build).
+pub(super) fn has_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return std::arch::is_x86_feature_detected!("avx2")
+        && std::arch::is_x86_feature_detected!("fma");
+    #[cfg(not(target_arch = "x86_64"))]
+    return false;
+}
+
+/// Per-batch lanes of the stress stage: gathered `[F_xX, F_xY, F_yX, F_yY, u_r]`, and the
+/// weighted stresses to scatter (see [`StressContext::scatter`]).
+struct Batch {
+    f: [Lanes; 5],
+    pw: [Lanes; 3],
+    px: [Lanes; 2],
+}
+
+/// What the stress stage reads besides the layout.
+pub(super) struct Inputs<'a> {
+    /// RK coefficients of the displacement `d_I` (m).
+    pub d: &'a [[Real; 2]],
+    /// The material.
+    pub material: &'a HenckyJ2,
+    /// Reference volume weights `w_p` of the points (m^3; 2 pi R included).
+    pub weights: &'a [Real],
+    /// `1 / R_p` of each point (1/m) in axisymmetry.
+    pub inv_radius: &'a [Real],
+    /// Axisymmetric (hoop stretch and stress) or plane strain.
+    pub axi: bool,
+    /// Particle spacings (m), for the deformed cells' altitudes.
+    pub spacing: [Real; 2],
+    /// Run the AVX2 build (the CPU must have it, [`has_avx2`]).
+    pub avx2: bool,
+}
+
+/// What the stress stage sums over all points.
+pub(super) struct Sums {
+    /// Stored elastic energy `sum_p W(eps_e) w_p` (J).
+    pub elastic: Real,
+    /// Plastic dissipation `sum_p w_p int sigma_y d eps_p` (J).
+    pub plastic: Real,
+    /// Smallest altitude of a deformed cell `det F hx hy / max(|F hx e_x|, |F hy e_y|)` (m).
+    pub min_altitude: Real,
+}
+
+/// Runs the stress stage over all points on `team`: updates each point's history in
+/// `states` and its outputs in `outs`, fills the chunk buffers of `scatter`. A point whose
+/// update fails stops the stage: `Err((point, message))`, the first in point order.
+pub(super) fn stage(
+    team: &Team,
+    scatter: &mut Scatter,
+    input: &Inputs<'_>,
+    states: &mut [PointState],
+    outs: &mut [PointOut],
+) -> Result<Sums, (usize, String)> {
+    let Scatter {
+        chunk,
+        lo,
+        offsets,
+        buf,
+        group,
+        lists,
+        list_range,
+        base,
+        table,
+        table_start,
+        ..
+    } = scatter;
+    let cx = StressContext {
+        lists,
+        list_range,
+        base,
+        groups: group,
+        table,
+        table_start,
+        d: input.d,
+        material: input.material,
+        weights: input.weights,
+        inv_radius: input.inv_radius,
+        axi: input.axi,
+        spacing: input.spacing,
+        initial_yield: input.material.hardening.initial_yield(),
+    };
+    let avx2 = input.avx2;
+    let (chunk, lo, offsets) = (*chunk, &*lo, &*offsets);
+    let points = states.len();
+    let mut sums = vec![ChunkSums::default(); lo.len()];
+    let (states, outs, bufs, slots) = (
+        Parts::new(states),
+        Parts::new(outs),
+        Parts::new(buf),
+        Parts::new(&mut sums),
+    );
+    team.for_each(lo.len(), &|c| {
+        let range = part(c, chunk, points);
+        // SAFETY: chunk `c` alone takes these points, its buffer slice and its slot.
+        let (work, slot) = unsafe {
+            (
+                ChunkWork {
+                    first: range.start,
+                    states: states.get(range.clone()),
+                    outs: outs.get(range),
+                    lo: lo[c] as usize,
+                    buf: bufs.get(offsets[c]..offsets[c + 1]),
+                },
+                &mut slots.get(c..c + 1)[0],
+            )
+        };
+        *slot = if avx2 {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: AVX2 support was detected at run time (`has_avx2`).
+            unsafe {
+                cx.chunk_avx2(work)
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            unreachable!("AVX2 is detected on x86_64 only")
+        } else {
+            cx.chunk::<false>(work)
+        };
+    });
+    let (mut elastic, mut plastic, mut min_altitude2) = (0.0, 0.0, Real::INFINITY);
+    for s in sums {
+        if let Some(failure) = s.failure {
+            return Err(failure);
+        }
+        elastic += s.elastic;
+        plastic += s.plastic;
+        min_altitude2 = min_altitude2.min(s.min_altitude2);
+    }
+    Ok(Sums {
+        elastic,
+        plastic,
+        min_altitude: min_altitude2.max(0.0).sqrt(),
+    })
+}

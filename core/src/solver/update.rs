@@ -1,0 +1,226 @@
+//! Time integration of the RK coefficients (Belytschko, Liu, Moran 2000, Box 6.1, central
+//! differences with lumped masses), in the paper's predictor-corrector form for contact
+//! (Sidibe et al. 2009, section II-3):
+//!
+//! - force gather and predictor: `f_I` summed from the chunk buffers of [`Scatter`] in a
+//!   fixed order (N), `v* = v_{n-1/2} - dt_avg f_I / m_I` (m/s);
+//! - corrector: `v_{n+1/2} = v* + dt_avg f_c,I / m_I` with the contact forces `f_c`;
+//! - update: `d_{n+1} = d_n + dt v_{n+1/2}` (m), with the step's energy sums.
+//!
+//! Particles are cut into fixed blocks of [`BLOCK`], summed in block order, so the bits do
+//! not depend on the number of threads.
+
+use super::layout::{Scatter, BLOCK};
+use crate::math::Real;
+use crate::team::{part, particle_phase, Parts, Team};
+
+/// Largest velocity component `max_I max(|v_I,x|, |v_I,y|)` (m/s) of `vs`, infinite if
+/// one is not finite (then the sum of the magnitudes is not finite either). Written with
+/// four independent running maxima and sums, which compile to vector max and add
+/// instructions (a single running maximum stays scalar).
+fn largest_component(vs: &[[Real; 2]]) -> Real {
+    let (mut most, mut sum) = ([0.0; 4], [0.0; 4]);
+    let mut chunks = vs.as_flattened().chunks_exact(4);
+    for c in &mut chunks {
+        for k in 0..4 {
+            let a = c[k].abs();
+            most[k] = if a > most[k] { a } else { most[k] };
+            sum[k] += a;
+        }
+    }
+    for (k, x) in chunks.remainder().iter().enumerate() {
+        let a = x.abs();
+        most[k] = if a > most[k] { a } else { most[k] };
+        sum[k] += a;
+    }
+    if (sum[0] + sum[1] + sum[2] + sum[3]).is_finite() {
+        most.into_iter().fold(0.0, Real::max)
+    } else {
+        Real::INFINITY
+    }
+}
+
+/// The predictor: `v* = v_{n-1/2} - dt_avg f_int / m` on `v`, keeping `v_{n-1/2}` in
+/// `v_prev`.
+pub(super) struct Predictor<'a> {
+    /// `(dt_n + dt_{n+1}) / 2` (s).
+    pub dt_avg: Real,
+    /// Coefficient velocities: `v_{n-1/2}` in, `v*` out (m/s).
+    pub v: &'a mut [[Real; 2]],
+    /// `v_{n-1/2}` out (m/s), for the energy account.
+    pub v_prev: &'a mut [[Real; 2]],
+    /// `1 / m_I` (1/kg).
+    pub inv_mass: &'a [Real],
+    /// Find the largest predicted velocity component (for the contact stage's skipping).
+    pub track: bool,
+}
+
+/// Internal force gather over fixed blocks of particles on `team`, fused with the
+/// predictor: `f_I` (N) sums the chunk buffers covering `I` in chunk order (per block, the
+/// overlapping slice of each chunk in turn). With a [`Predictor`], returns the largest
+/// component of `v*` (m/s; 0 when not tracked).
+pub(super) fn gather_forces(
+    team: &Team,
+    sc: &Scatter,
+    f_int: &mut [[Real; 2]],
+    predict: Option<Predictor<'_>>,
+) -> Real {
+    let np = f_int.len();
+    let blocks = np.div_ceil(BLOCK);
+    let mut speeds: Vec<Real> = vec![0.0; blocks];
+    let track = predict.as_ref().is_some_and(|p| p.track);
+    let dt_avg = predict.as_ref().map(|p| p.dt_avg);
+    let (v, v_prev, inv_mass) = match predict {
+        Some(p) => (p.v, p.v_prev, p.inv_mass),
+        None => (&mut [][..], &mut [][..], &[][..]),
+    };
+    let (f_int, v, v_prev, speed_slots) = (
+        Parts::new(f_int),
+        Parts::new(v),
+        Parts::new(v_prev),
+        Parts::new(&mut speeds),
+    );
+    particle_phase(team, np, blocks, &|b| {
+        let range = part(b, BLOCK, np);
+        // SAFETY: block `b` alone takes these particles.
+        let fs = unsafe { f_int.get(range.clone()) };
+        fs.fill([0.0; 2]);
+        let chunks = sc.block_offsets[b] as usize..sc.block_offsets[b + 1] as usize;
+        for &c in &sc.block_chunks[chunks] {
+            let c = c as usize;
+            let lo = sc.lo[c] as usize;
+            let hi = lo + sc.offsets[c + 1] - sc.offsets[c];
+            let (a, e) = (range.start.max(lo), range.end.min(hi));
+            let src = &sc.buf[sc.offsets[c] + a - lo..sc.offsets[c] + e - lo];
+            for (f, v) in fs[a - range.start..e - range.start].iter_mut().zip(src) {
+                f[0] += v[0];
+                f[1] += v[1];
+            }
+        }
+        if let Some(dt_avg) = dt_avg {
+            // SAFETY: as above.
+            let (vs, vps, slot) = unsafe {
+                (
+                    v.get(range.clone()),
+                    v_prev.get(range.clone()),
+                    &mut speed_slots.get(b..b + 1)[0],
+                )
+            };
+            vps.copy_from_slice(vs);
+            for ((v, f), im) in vs.iter_mut().zip(fs.iter()).zip(&inv_mass[range]) {
+                let a = dt_avg * im;
+                v[0] -= a * f[0];
+                v[1] -= a * f[1];
+            }
+            if track {
+                *slot = largest_component(vs);
+            }
+        }
+    });
+    speeds.into_iter().fold(0.0, Real::max)
+}
+
+/// Corrector: `v += dt_avg f_c / m` (m/s) with the contact forces `f_con` (N) and the inverse
+/// masses `inv_mass` (1/kg).
+pub(super) fn correct(v: &mut [[Real; 2]], f_con: &[[Real; 2]], inv_mass: &[Real], dt_avg: Real) {
+    for ((v, f), im) in v.iter_mut().zip(f_con).zip(inv_mass) {
+        let a = dt_avg * im;
+        v[0] += a * f[0];
+        v[1] += a * f[1];
+    }
+}
+
+/// What the update reads: the velocities of the step and the forces that acted.
+pub(super) struct Motion<'a> {
+    /// `v_{n+1/2}` (m/s).
+    pub v: &'a [[Real; 2]],
+    /// `v_{n-1/2}` (m/s).
+    pub v_prev: &'a [[Real; 2]],
+    /// Lumped masses (kg).
+    pub mass: &'a [Real],
+    /// Internal forces (N).
+    pub f_int: &'a [[Real; 2]],
+    /// Contact forces (N), read when `contact` forces act.
+    pub f_con: &'a [[Real; 2]],
+}
+
+/// The step's sums from [`update`].
+pub(super) struct Update {
+    /// Kinetic energy `sum m |v_{n+1/2}|^2 / 2` (J).
+    pub kinetic: Real,
+    /// Contact work `sum dt_avg f_c . (v_{n+1/2} + v_{n-1/2}) / 2` (J).
+    pub contact_work: Real,
+    /// Internal half-step work `sum dt f_int . v_{n+1/2} / 2` (J).
+    pub half_step: Real,
+    /// Largest velocity component of `v_{n+1/2}` (m/s; 0 when not tracked).
+    pub largest_speed: Real,
+}
+
+/// Displacement update `d_{n+1} = d_n + dt v_{n+1/2}` (m) over fixed blocks of particles on
+/// `team`, with the energy sums of the step ([`Update`]), each summed per block (four
+/// interleaved running sums, added pairwise) and the blocks in order. The contact work is
+/// the exact discrete identity of the corrector, summed when `contact` forces act; the
+/// largest speed is found when `track` is set.
+pub(super) fn update(
+    team: &Team,
+    d: &mut [[Real; 2]],
+    m: &Motion<'_>,
+    dt: Real,
+    dt_avg: Real,
+    contact: bool,
+    track: bool,
+) -> Update {
+    let np = m.v.len();
+    let blocks = np.div_ceil(BLOCK);
+    let mut sums = vec![[0.0; 4]; blocks];
+    let Motion {
+        v,
+        v_prev,
+        mass,
+        f_int,
+        f_con,
+    } = *m;
+    let (d, slots) = (Parts::new(d), Parts::new(&mut sums));
+    particle_phase(team, np, blocks, &|b| {
+        let range = part(b, BLOCK, np);
+        // SAFETY: block `b` alone takes these particles and its slot.
+        let (ds, slot) = unsafe { (d.get(range.clone()), &mut slots.get(b..b + 1)[0]) };
+        let n = ds.len();
+        let (vs, vps, ms) = (
+            &v[range.clone()],
+            &v_prev[range.clone()],
+            &mass[range.clone()],
+        );
+        let (fis, fcs) = (&f_int[range.clone()], &f_con[range]);
+        let speed = if track { largest_component(vs) } else { 0.0 };
+        // Four running sums per quantity (particle i into sum i mod 4), added pairwise at
+        // the end: independent chains instead of one long dependent one.
+        let (mut ke, mut wk, mut hs) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+        for j in (0..n).step_by(4) {
+            for k in 0..4.min(n - j) {
+                let i = j + k;
+                let (v, vp, fi) = (vs[i], vps[i], fis[i]);
+                ke[k] += 0.5 * ms[i] * (v[0] * v[0] + v[1] * v[1]);
+                hs[k] += 0.5 * dt * (fi[0] * v[0] + fi[1] * v[1]);
+                if contact {
+                    let f = fcs[i];
+                    wk[k] += 0.5 * dt_avg * (f[0] * (v[0] + vp[0]) + f[1] * (v[1] + vp[1]));
+                }
+                ds[i][0] += dt * v[0];
+                ds[i][1] += dt * v[1];
+            }
+        }
+        let sum4 = |x: [Real; 4]| (x[0] + x[1]) + (x[2] + x[3]);
+        let (kinetic, work, half_step) = (sum4(ke), sum4(wk), sum4(hs));
+        *slot = [kinetic, work, half_step, speed];
+    });
+    let [kinetic, contact_work, half_step, largest_speed] = sums.iter().fold([0.0; 4], |a, s| {
+        [a[0] + s[0], a[1] + s[1], a[2] + s[2], a[3].max(s[3])]
+    });
+    Update {
+        kinetic,
+        contact_work,
+        half_step,
+        largest_speed,
+    }
+}

@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# Do two rkforge binaries give the same bits? Runs coarse versions of the shipped scenes with
+# every rule (fixed and adaptive steps, with and without frames) through both and compares
+# history.csv, the VTK frames and summary.json (less the wall and stage times) byte for byte.
+#   scripts/same_bits.sh OLD_BINARY NEW_BINARY
+#   FULL=1 scripts/same_bits.sh OLD_BINARY NEW_BINARY   the shipped scenes as they are (minutes)
+# An older build: git worktree add /tmp/old <commit> && cargo build --release -p rkforge
+#   --manifest-path /tmp/old/Cargo.toml (its binary is /tmp/old/target/release/rkforge).
+# Exit status 0 when every case matches, 1 otherwise (each difference is printed).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+old=$1; new=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# name  scene  particles  end_s  keep the fixed step (1) or use dt_safety (0)
+cases="taylor scenes/taylor_bar.toml [11,26] 40.0e-6 1
+taylor_adaptive scenes/taylor_bar.toml [11,26] 40.0e-6 0
+block scenes/block_forging.toml [11,11] 0.015 1
+wheel scenes/wheel_forging.toml [15,15] 1.0e-3 1"
+if [ "${FULL:-0}" = 1 ]; then
+  cases="taylor_bar scenes/taylor_bar.toml - - 1
+block_forging scenes/block_forging.toml - - 1
+wheel_forging scenes/wheel_forging.toml - - 1"
+fi
+strip() {
+  python3 - "$1" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+for k in ("wall_s", "stage_seconds"):
+    s.pop(k, None)
+print(json.dumps(s, indent=1, sort_keys=True))
+PY
+}
+failed=0
+while read -r name scene particles end fixed; do
+  if [ "$particles" = - ]; then
+    cp "$scene" "$work/$name.toml"
+  else
+    sed -e "s/^particles = .*/particles = $particles/" -e "s/^end_s = .*/end_s = $end/" "$scene" > "$work/$name.toml"
+  fi
+  if [ "$fixed" = 0 ]; then sed -i -e '/^dt_s = /d' "$work/$name.toml"; fi
+  for rule in q4 q2 scni; do
+    for frames in "--no-frames" ""; do
+      tag="$name $rule ${frames:-frames}"
+      for b in old new; do
+        bin=$old; [ "$b" = new ] && bin=$new
+        rm -rf "$work/$b"
+        "$bin" run "$work/$name.toml" --integration "$rule" --out "$work/$b" --quiet $frames > "$work/$b.log" 2>&1 || true
+        strip "$work/$b/summary.json" > "$work/$b.summary"
+      done
+      if ! grep -q '"status": "ok"' "$work/new/summary.json"; then
+        echo "FAILED run: $tag"; cat "$work/new.log"; failed=1
+      elif ! cmp -s "$work/old/history.csv" "$work/new/history.csv"; then
+        echo "DIFFERENT history.csv: $tag"; failed=1
+      elif ! cmp -s "$work/old.summary" "$work/new.summary"; then
+        echo "DIFFERENT summary.json: $tag"; diff "$work/old.summary" "$work/new.summary" | head -20; failed=1
+      elif [ -z "$frames" ] && ! diff -rq "$work/old/frames" "$work/new/frames" > /dev/null; then
+        echo "DIFFERENT frames: $tag"; failed=1
+      else
+        echo "same bits: $tag ($(wc -l < "$work/new/history.csv") history rows)"
+      fi
+    done
+  done
+done <<< "$cases"
+exit $failed
