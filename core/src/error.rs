@@ -31,6 +31,15 @@ pub enum Error {
         bound: f64,
         detail: String,
     },
+    /// Inertia stopped being negligible in a run that assumes it (mass scaling).
+    #[error("step {step} (t = {time:.6e} s): kinetic energy {ratio:.3e} of the internal energy exceeds checks.kinetic_to_internal_max = {bound:.3e} ({detail})")]
+    QuasiStatic {
+        step: u64,
+        time: f64,
+        ratio: f64,
+        bound: f64,
+        detail: String,
+    },
     /// The time step is above the stable step.
     #[error("step {step} (t = {time:.6e} s): time step {dt:.3e} s exceeds the stable step {dt_crit:.3e} s ({detail})")]
     Unstable {

@@ -30,7 +30,7 @@ pub use error::{Error, Result};
 pub use geometry::Extents;
 pub use sampling::{sample_times, MAX_SAMPLES};
 pub use scene::{IntegrationRule, Kinematics, Scene};
-pub use solver::{Energy, Fields, Simulation, StageTimes, State};
+pub use solver::{Energy, Fields, MassScalingReport, Simulation, StageTimes, State};
 
 /// Size rayon's global pool, which runs the parallel stages, to `threads` worker threads
 /// (a `--threads` option); `None` keeps rayon's default of one per core. Results are the

@@ -67,6 +67,47 @@ impl Energy {
         }
     }
 
+    /// Kinetic over internal energy (-): infinite while the workpiece moves without
+    /// internal energy, 0 at rest.
+    pub fn kinetic_to_internal(&self) -> Real {
+        let internal = self.internal();
+        if internal > 0.0 {
+            self.kinetic / internal
+        } else if self.kinetic > 0.0 {
+            Real::INFINITY
+        } else {
+            0.0
+        }
+    }
+
+    /// Stops a run whose kinetic-to-internal ratio `ratio` exceeds the scene's `bound`
+    /// (`step` ending at `time`, s): inertia is no longer negligible, so the quasi-static
+    /// assumption behind mass scaling fails.
+    pub(super) fn check_quasi_static(
+        &self,
+        ratio: Real,
+        bound: Real,
+        step: u64,
+        time: Real,
+    ) -> Result<()> {
+        if ratio > bound {
+            return Err(Error::QuasiStatic {
+                step,
+                time,
+                ratio,
+                bound,
+                detail: format!(
+                    "kinetic {:.4e} J, internal {:.4e} J (elastic {:.4e} J + plastic {:.4e} J); lower the mass scaling or the tool speed",
+                    self.kinetic,
+                    self.internal(),
+                    self.elastic,
+                    self.plastic
+                ),
+            });
+        }
+        Ok(())
+    }
+
     /// Adds one step's figures (J): the kinetic energy at the new half step, the elastic and
     /// plastic energy of the stress stage, the contact work and the work the tools delivered
     /// over the step, and the internal half-step work.

@@ -32,6 +32,7 @@
 mod energy;
 mod fields;
 mod layout;
+mod mass_scaling;
 mod stable_step;
 mod state;
 mod stress;
@@ -41,6 +42,7 @@ mod update;
 
 pub use energy::Energy;
 pub use fields::Fields;
+pub use mass_scaling::MassScalingReport;
 pub use state::State;
 
 use crate::constraints::Constraints;
@@ -55,6 +57,7 @@ use crate::team::Team;
 use crate::tools::{Tool, SEARCH_DEPTH_SPACINGS};
 use energy::StepEnergy;
 use layout::{Scatter, MAX_GROUP};
+use mass_scaling::{stiffness_bounds, Plan};
 use stable_step::landing_step;
 use std::f64::consts::PI;
 use std::time::{Duration, Instant};
@@ -127,6 +130,8 @@ pub struct Simulation {
     v_prev: Vec<[Real; 2]>,
     /// Critical step of the undeformed discretisation (s).
     critical_dt0: Real,
+    /// What mass scaling added, if the scene scales.
+    mass_scaling: Option<MassScalingReport>,
     /// The contact stage: contact forces and what it carries between steps.
     contact: Contact,
     /// The threads of the parallel phases.
@@ -193,6 +198,26 @@ impl Simulation {
         // the threads, few enough that the buffers overlap little.
         let chunk = (2 * pt.rows() / (ny - 1)).max(64);
         let scatter = Scatter::new(&pt, np, chunk, MAX_GROUP);
+        let material = HenckyJ2::new(
+            scene.material.youngs_modulus_pa,
+            scene.material.poisson_ratio,
+            scene.material.hardening,
+        );
+        let wave_speed = material.wave_speed(rho);
+        let scaling = scene.time.mass_scaling.map(|ms| match ms.factor {
+            Some(f) => Plan::Uniform(f),
+            None => Plan::Selective {
+                target: ms.target_dt_s.unwrap_or(0.0),
+                stiffness: stiffness_bounds(
+                    &pt,
+                    &weights,
+                    &inv_radius,
+                    axi,
+                    rho * wave_speed * wave_speed,
+                    np,
+                ),
+            },
+        });
         if let Some((i, m)) = mass
             .iter()
             .enumerate()
@@ -233,24 +258,9 @@ impl Simulation {
             rows.extend(edge_particles(Edge::XMin).into_iter().map(|j| (j, 0)));
         }
         let constraints = Constraints::new(rows, &nodal, &mass)?;
-        let material = HenckyJ2::new(
-            scene.material.youngs_modulus_pa,
-            scene.material.poisson_ratio,
-            scene.material.hardening,
-        );
-        let wave_speed = material.wave_speed(rho);
         let depth = SEARCH_DEPTH_SPACINGS * h[0].max(h[1]);
         let tools: Vec<Tool> = scene.tools.iter().map(|t| Tool::new(t, depth)).collect();
-        let mut v = vec![w.initial_velocity_m_per_s; np];
-        if let Some(c) = &constraints {
-            c.project(&mut v, &mass);
-        }
-        let initial = 0.5
-            * mass
-                .iter()
-                .zip(&v)
-                .map(|(m, v)| m * (v[0] * v[0] + v[1] * v[1]))
-                .sum::<Real>();
+        let (v, initial) = initial_motion(w.initial_velocity_m_per_s, constraints.as_ref(), &mass);
         let npts = points.positions.len();
         let stable_dt = h[0].min(h[1]) / wave_speed;
         let mut sim = Simulation {
@@ -283,12 +293,14 @@ impl Simulation {
                 stable_dt,
                 anchor_time: 0.0,
                 anchor_step: 0,
+                kinetic_to_internal_max: 0.0,
             },
             tools,
             out: vec![PointOut::initial(&material); npts],
             f_int: vec![[0.0; 2]; np],
             v_prev: v,
             critical_dt0: stable_dt,
+            mass_scaling: None,
             simd: true,
             team: Team::default(),
             ref_pos,
@@ -301,6 +313,9 @@ impl Simulation {
             },
         };
         sim.critical_dt0 = sim.measure_critical_step()?;
+        if let Some(plan) = scaling {
+            sim.scale_masses(plan)?;
+        }
         sim.stress_stage()?;
         sim.force_stage(None);
         sim.times = StageTimes {
@@ -564,10 +579,24 @@ impl Simulation {
         for (t, s) in self.tools.iter().zip(self.st.tools.iter_mut()) {
             *s = t.state;
         }
-        let tol = self.scene.checks.energy_balance_tol;
-        self.st
-            .energy
-            .check(tol, self.st.step, self.st.time, dt, self.st.stable_dt)?;
+        let checks = &self.scene.checks;
+        self.st.energy.check(
+            checks.energy_balance_tol,
+            self.st.step,
+            self.st.time,
+            dt,
+            self.st.stable_dt,
+        )?;
+        // 8. The quasi-static watch: kinetic against internal energy after the start-up.
+        if self.st.time >= checks.kinetic_to_internal_from * self.scene.time.end_s {
+            let ratio = self.st.energy.kinetic_to_internal();
+            self.st.kinetic_to_internal_max = self.st.kinetic_to_internal_max.max(ratio);
+            if let Some(bound) = checks.kinetic_to_internal_max {
+                self.st
+                    .energy
+                    .check_quasi_static(ratio, bound, self.st.step, self.st.time)?;
+            }
+        }
         let t5 = Instant::now();
         self.times.contact += t4 - t3;
         self.times.integration += (t2 - t1) + (t5 - t4);
@@ -719,4 +748,75 @@ impl Simulation {
             .as_ref()
             .map_or(0.0, |c| c.residual(&self.st.v))
     }
+
+    /// What mass scaling added, if the scene scales (`[time] mass_scaling`).
+    pub fn mass_scaling(&self) -> Option<MassScalingReport> {
+        self.mass_scaling
+    }
+
+    /// Largest ratio of the workpiece's kinetic to internal energy (-) since the
+    /// quasi-static watch began (`checks.kinetic_to_internal_from`); 0 before.
+    pub fn kinetic_to_internal_max(&self) -> Real {
+        self.st.kinetic_to_internal_max
+    }
+
+    /// A warning when a mass-scaled run's kinetic energy exceeded
+    /// [`QUASI_STATIC_WARNING`] of its internal energy after the start-up: the inertia that
+    /// mass scaling adds is no longer negligible, and forces and shapes carry it.
+    pub fn quasi_static_warning(&self) -> Option<String> {
+        let ratio = self.st.kinetic_to_internal_max;
+        (self.mass_scaling.is_some() && ratio > QUASI_STATIC_WARNING).then(|| {
+            format!(
+                "the kinetic energy reached {:.1} % of the internal energy (above {:.0} %): the added mass is not negligible; scale less or set checks.kinetic_to_internal_max to stop such runs",
+                100.0 * ratio,
+                100.0 * QUASI_STATIC_WARNING
+            )
+        })
+    }
+
+    /// Replaces the lumped masses (kg) and what depends on them: inverse masses, the
+    /// essential conditions' projection, the initial velocities projected onto them and
+    /// the initial kinetic energy.
+    fn set_masses(&mut self, mass: Vec<Real>) -> Result<()> {
+        if let Some(c) = &self.constraints {
+            self.constraints = Constraints::new(c.rows.clone(), &self.nodal, &mass)?;
+        }
+        let v0 = self.scene.workpiece.initial_velocity_m_per_s;
+        let (v, initial) = initial_motion(v0, self.constraints.as_ref(), &mass);
+        self.inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+        self.mass = mass;
+        self.st.v.clone_from(&v);
+        self.v_prev = v;
+        self.st.energy = Energy {
+            initial,
+            kinetic: initial,
+            ..Default::default()
+        };
+        Ok(())
+    }
+}
+
+/// Kinetic-to-internal energy ratio above which a mass-scaled run warns (-): forming is
+/// quasi-static while the kinetic energy stays a few per cent of the internal energy.
+pub const QUASI_STATIC_WARNING: Real = 0.05;
+
+/// The initial coefficient velocities (m/s): the workpiece's initial velocity `v0` projected
+/// onto the essential conditions with the masses `mass` (kg), and their kinetic energy
+/// `sum m_I |v_I|^2 / 2` (J).
+fn initial_motion(
+    v0: [Real; 2],
+    constraints: Option<&Constraints>,
+    mass: &[Real],
+) -> (Vec<[Real; 2]>, Real) {
+    let mut v = vec![v0; mass.len()];
+    if let Some(c) = constraints {
+        c.project(&mut v, mass);
+    }
+    let initial = 0.5
+        * mass
+            .iter()
+            .zip(&v)
+            .map(|(m, v)| m * (v[0] * v[0] + v[1] * v[1]))
+            .sum::<Real>();
+    (v, initial)
 }

@@ -35,4 +35,7 @@ pub struct State {
     pub anchor_time: Real,
     /// Step count at `anchor_time`.
     pub anchor_step: u64,
+    /// Largest kinetic-to-internal energy ratio since the quasi-static watch began (-).
+    #[serde(default)]
+    pub kinetic_to_internal_max: Real,
 }

@@ -43,6 +43,7 @@ pub fn patch(kin: Kinematics, n: usize, rule: IntegrationRule, support: f64) -> 
             end_s: 1e-6,
             dt_s: None,
             dt_safety: 0.5,
+            mass_scaling: None,
         },
         constraints: vec![],
         tools: vec![],
@@ -59,5 +60,22 @@ pub fn taylor(nx: usize, ny: usize, rule: IntegrationRule) -> Scene {
     s.workpiece.particles = [nx, ny];
     s.discretization.integration = rule;
     s.time.dt_s = None;
+    s
+}
+
+/// The shipped block forging with both tools at `speed` (m/s) through the full 300 mm
+/// stroke, adaptive steps at `dt_safety` 0.9, on a grid of `n` x `n` particles.
+pub fn block_at_press_speed(n: usize, speed: f64) -> Scene {
+    let text = include_str!("../../../scenes/block_forging.toml");
+    let mut s = Scene::from_str_named(text, "block_forging.toml").expect("shipped scene parses");
+    s.workpiece.particles = [n, n];
+    for t in &mut s.tools {
+        t.motion = Motion::Constant {
+            velocity_m_per_s: speed,
+        };
+    }
+    s.time.end_s = 0.15 / speed;
+    s.time.dt_s = None;
+    s.time.dt_safety = 0.9;
     s
 }
