@@ -7,6 +7,7 @@
 
 pub mod ffi;
 
+use rkforge_core::scene::MassScaling;
 use rkforge_core::{Error, IntegrationRule, Kinematics, Result, Scene, Simulation, State};
 use rkforge_model_description::{variable_table, xml, Binding, Causality, Variable};
 use serde::{Deserialize, Serialize};
@@ -39,6 +40,26 @@ pub struct Params {
     pub dt_fixed: f64,
     /// Coulomb coefficient of each tool.
     pub friction: Vec<f64>,
+    /// Uniform mass scaling factor, 1 for none.
+    pub mass_factor: f64,
+    /// Target step of selective mass scaling (s), 0 for none.
+    pub mass_target_dt: f64,
+}
+
+impl Params {
+    /// The scene's own values.
+    fn of(scene: &Scene) -> Params {
+        let scaling = scene.time.mass_scaling;
+        Params {
+            integration: scene.discretization.integration,
+            particles: scene.workpiece.particles,
+            dt_safety: scene.time.dt_safety,
+            dt_fixed: scene.time.dt_s.unwrap_or(0.0),
+            friction: scene.tools.iter().map(|t| t.friction).collect(),
+            mass_factor: scaling.and_then(|m| m.factor).unwrap_or(1.0),
+            mass_target_dt: scaling.and_then(|m| m.target_dt_s).unwrap_or(0.0),
+        }
+    }
 }
 
 /// A saved FMU state: everything needed to continue bit for bit, also in a fresh instance.
@@ -72,13 +93,7 @@ impl Instance {
     /// An instance of the scene given as TOML text; `label` names it in errors.
     pub fn new(scene_text: &str, label: &str) -> Result<Instance> {
         let scene = Scene::from_str_named(scene_text, label)?;
-        let params = Params {
-            integration: scene.discretization.integration,
-            particles: scene.workpiece.particles,
-            dt_safety: scene.time.dt_safety,
-            dt_fixed: scene.time.dt_s.unwrap_or(0.0),
-            friction: scene.tools.iter().map(|t| t.friction).collect(),
-        };
+        let params = Params::of(&scene);
         Ok(Instance {
             table: variable_table(&scene),
             guid: xml::guid(scene_text),
@@ -128,6 +143,11 @@ impl Instance {
         for (t, f) in s.tools.iter_mut().zip(&self.params.friction) {
             t.friction = *f;
         }
+        let (factor, target) = (self.params.mass_factor, self.params.mass_target_dt);
+        s.time.mass_scaling = (factor != 1.0 || target > 0.0).then_some(MassScaling {
+            factor: (factor != 1.0).then_some(factor),
+            target_dt_s: (target > 0.0).then_some(target),
+        });
         if let Some((key, msg)) = s.validate().into_iter().next() {
             return Err(request(format!(
                 "parameters give an invalid scene: `{key}`: {msg}"
@@ -194,15 +214,8 @@ impl Instance {
 
     /// `fmi2Reset`: back to the freshly instantiated state with the scene's own values.
     pub fn reset(&mut self) {
-        let scene = self.scene.clone();
-        self.params = Params {
-            integration: scene.discretization.integration,
-            particles: scene.workpiece.particles,
-            dt_safety: scene.time.dt_safety,
-            dt_fixed: scene.time.dt_s.unwrap_or(0.0),
-            friction: scene.tools.iter().map(|t| t.friction).collect(),
-        };
-        self.commands = vec![None; scene.tools.len()];
+        self.params = Params::of(&self.scene);
+        self.commands = vec![None; self.scene.tools.len()];
         self.sim = None;
         self.phase = Phase::Instantiated;
         self.start_time = 0.0;
@@ -251,6 +264,9 @@ impl Instance {
             Binding::MaxPlasticStrain => sim.max_plastic_strain(),
             Binding::KineticEnergy => sim.energy().kinetic,
             Binding::PlasticEnergy => sim.energy().plastic,
+            Binding::KineticToInternalMax => sim.kinetic_to_internal_max(),
+            Binding::MassScalingFactor => params.mass_factor,
+            Binding::MassScalingTarget => params.mass_target_dt,
             Binding::DtSafety => params.dt_safety,
             Binding::DtFixed => params.dt_fixed,
             Binding::Friction(k) => params.friction[k],
@@ -325,7 +341,13 @@ impl Instance {
             Binding::DtSafety if value > 0.0 && value <= 1.0 => self.params.dt_safety = value,
             Binding::DtFixed if value >= 0.0 => self.params.dt_fixed = value,
             Binding::Friction(k) if value >= 0.0 => self.params.friction[k] = value,
-            Binding::DtSafety | Binding::DtFixed | Binding::Friction(_) => {
+            Binding::MassScalingFactor if value >= 1.0 => self.params.mass_factor = value,
+            Binding::MassScalingTarget if value >= 0.0 => self.params.mass_target_dt = value,
+            Binding::DtSafety
+            | Binding::DtFixed
+            | Binding::Friction(_)
+            | Binding::MassScalingFactor
+            | Binding::MassScalingTarget => {
                 return Err(request(format!("`{}` = {value} is out of range", v.name)))
             }
             _ => return Err(request(format!("`{}` is not a Real variable", v.name))),
@@ -541,5 +563,31 @@ mod tests {
         let sim = i.simulation().unwrap();
         assert_eq!(sim.grid(), (5, 15));
         assert_eq!(sim.point_count(), 4 * 4 * 14);
+    }
+
+    /// `mass_scaling.factor` multiplies the masses (the critical step by its square root);
+    /// a factor below 1 is refused, and a factor together with a target step gives an
+    /// invalid scene at initialisation, naming the key.
+    #[test]
+    fn mass_scaling_parameters_scale_the_masses() {
+        let plain = ready();
+        let mut i = Instance::new(&scene_text(), "t").unwrap();
+        let (factor, target) = (
+            vr(&i, "mass_scaling.factor"),
+            vr(&i, "mass_scaling.target_dt"),
+        );
+        assert!(i.set_real(factor, 0.5).is_err());
+        i.set_real(factor, 100.0).unwrap();
+        i.enter_initialization().unwrap();
+        i.exit_initialization().unwrap();
+        let (a, b) = (plain.simulation().unwrap(), i.simulation().unwrap());
+        assert!((b.total_mass() / a.total_mass() - 100.0).abs() < 1e-9);
+        assert!((b.critical_dt0() / a.critical_dt0() - 10.0).abs() < 1e-4);
+        let mut both = Instance::new(&scene_text(), "t").unwrap();
+        both.set_real(factor, 4.0).unwrap();
+        both.set_real(target, 1e-7).unwrap();
+        both.enter_initialization().unwrap();
+        let err = both.exit_initialization().unwrap_err().to_string();
+        assert!(err.contains("`time.mass_scaling`"), "{err}");
     }
 }

@@ -61,6 +61,8 @@ pub enum Binding {
     KineticEnergy,
     /// Plastic dissipation (J).
     PlasticEnergy,
+    /// Largest kinetic-to-internal energy ratio after the start-up (-).
+    KineticToInternalMax,
     /// Integration rule name (`q4` or `q2`).
     Integration,
     /// Particles along x (or r).
@@ -71,6 +73,10 @@ pub enum Binding {
     DtSafety,
     /// Fixed time step (s); 0 for `dt_safety` times the stable step.
     DtFixed,
+    /// Uniform mass scaling factor (-); 1 for none.
+    MassScalingFactor,
+    /// Target step of selective mass scaling (s); 0 for none.
+    MassScalingTarget,
     /// Coulomb coefficient of tool `k` (-).
     Friction(usize),
 }
@@ -198,6 +204,12 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
             "plastic dissipation in the workpiece",
             Binding::PlasticEnergy,
         ),
+        (
+            "energy.kinetic_to_internal_max",
+            None,
+            "largest ratio of kinetic to internal energy after the start-up (quasi-static check)",
+            Binding::KineticToInternalMax,
+        ),
     ];
     for (name, unit, d, b) in outputs {
         push(
@@ -255,6 +267,25 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
         Some("s"),
         "fixed time step; 0 for dt_safety times the stable step".into(),
         Binding::DtFixed,
+    );
+    let scaling = scene.time.mass_scaling;
+    push(
+        "mass_scaling.factor".into(),
+        Parameter,
+        Fixed,
+        Kind::Real(Some(scaling.and_then(|m| m.factor).unwrap_or(1.0))),
+        None,
+        "uniform mass scaling factor; 1 for none".into(),
+        Binding::MassScalingFactor,
+    );
+    push(
+        "mass_scaling.target_dt".into(),
+        Parameter,
+        Fixed,
+        Kind::Real(Some(scaling.and_then(|m| m.target_dt_s).unwrap_or(0.0))),
+        Some("s"),
+        "target step of selective mass scaling; 0 for none".into(),
+        Binding::MassScalingTarget,
     );
     for (k, tool) in scene.tools.iter().enumerate() {
         push(
