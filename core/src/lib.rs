@@ -17,12 +17,14 @@ pub mod material;
 pub mod math;
 pub mod rk_shape;
 pub mod scene;
+pub mod scene_overrides;
 pub mod solver;
 pub mod team;
 pub mod tools;
 
 pub use error::{Error, Result};
 pub use scene::{IntegrationRule, Kinematics, Scene};
+pub use scene_overrides::SceneSource;
 pub use solver::{
     sample_times, Energy, Extents, Fields, Simulation, StageTimes, State, MAX_SAMPLES,
 };
