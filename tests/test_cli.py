@@ -7,7 +7,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from conftest import scene_variant
+from conftest import ROOT, scene_variant
 
 COARSE = {
     "particles = [21, 51]": "particles = [11, 26]",
@@ -197,3 +197,67 @@ def test_sweep_writes_csv_markdown_and_the_pareto_plot(rkforge_bin, tmp_path):
     assert (out / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     bad = subprocess.run([rkforge_bin, "sweep", str(scene), "--resolution", "11by26"], capture_output=True, text=True)
     assert bad.returncode == 1 and "--resolution `11by26`" in bad.stderr
+
+
+BLOCK_SHORT = {
+    "particles = [21, 21]": "particles = [9, 9]",
+    "end_s = 0.015": "end_s = 0.002",
+}
+
+
+def test_run_overrides_keys_by_their_dotted_path(rkforge_bin, tmp_path):
+    scene = tmp_path / "block.toml"
+    scene.write_text(scene_variant("block_forging.toml", BLOCK_SHORT))
+    runs = {}
+    for name, sets in [("base", []), ("slow", ["tools.top.motion.velocity_m_per_s=5.0",
+                                               "--set", "tools.top.friction=0"])]:
+        args = [rkforge_bin, "run", str(scene), "--out", str(tmp_path / name), "--quiet", "--no-frames"]
+        if sets:
+            args += ["--set", *sets]
+        proc = subprocess.run(args, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr
+        runs[name] = json.loads((tmp_path / name / "summary.json").read_text())
+    top = {n: next(t for t in s["tools"] if t["name"] == "top") for n, s in runs.items()}
+    # Half the speed over the same time: half the stroke.
+    assert top["slow"]["stroke_m"] == pytest.approx(top["base"]["stroke_m"] / 2, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    "arg, expected",
+    [
+        ("tools.middle.friction=0.1", ["override `tools.middle.friction`", "no entry of `tools` is named `middle`"]),
+        ("tools.top.frction=0.1", ["override `tools.top.frction`", "unknown field `frction`"]),
+        ("tools.top.friction=high", ["override `tools.top.friction`", "invalid type"]),
+        ("tools.top.friction=-1", ["override `tools.top.friction`", "must be zero or positive"]),
+        ("time.end_s", ["--set `time.end_s`: expected KEY=VALUE"]),
+    ],
+)
+def test_bad_overrides_name_the_dotted_key(rkforge_bin, tmp_path, arg, expected):
+    proc = subprocess.run([rkforge_bin, "run", "scenes/block_forging.toml", "--set", arg,
+                           "--out", str(tmp_path / "o"), "--quiet"],
+                          capture_output=True, text=True, timeout=60, cwd=ROOT)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr
+    for e in expected:
+        assert e in proc.stderr, (e, proc.stderr)
+
+
+def test_sweep_varies_scene_keys_over_a_grid(rkforge_bin, tmp_path):
+    scene = tmp_path / "block.toml"
+    scene.write_text(scene_variant("block_forging.toml", BLOCK_SHORT))
+    out = tmp_path / "sweep"
+    proc = subprocess.run([rkforge_bin, "sweep", str(scene), "--integration", "q2",
+                           "--set", "tools.top.friction=0.1,0.3",
+                           "--set", "tools.top.motion.velocity_m_per_s=10.0,5.0",
+                           "--out", str(out)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    with open(out / "sweep.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [(r["tools.top.friction"], r["tools.top.motion.velocity_m_per_s"]) for r in rows] == [
+        ("0.1", "10.0"), ("0.1", "5.0"), ("0.3", "10.0"), ("0.3", "5.0")]
+    assert all((r["nx"], r["ny"]) == ("9", "9") for r in rows)
+    # Each case's own run summary carries its overrides' effect.
+    for r in rows:
+        case = out / f"tools.top.friction={r['tools.top.friction']},tools.top.motion.velocity_m_per_s={r['tools.top.motion.velocity_m_per_s']}"
+        s = json.loads((case / "q2_9x9_0.5" / "summary.json").read_text())
+        top = next(t for t in s["tools"] if t["name"] == "top")
+        assert top["velocity_m_per_s"] == float(r["tools.top.motion.velocity_m_per_s"])

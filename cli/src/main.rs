@@ -10,7 +10,8 @@ mod run;
 mod sweep;
 
 use clap::{Parser, Subcommand};
-use rkforge_core::{IntegrationRule, Scene};
+use rkforge_core::scene_overrides::{parse_value, split_values};
+use rkforge_core::{IntegrationRule, Scene, SceneSource};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -44,8 +45,8 @@ enum Command {
 struct SweepArgs {
     /// Scene file (TOML).
     scene: PathBuf,
-    /// Particle grids, e.g. 11x26,21x51,41x101.
-    #[arg(long, value_delimiter = ',', required = true)]
+    /// Particle grids, e.g. 11x26,21x51,41x101 (default: the scene's grid).
+    #[arg(long, value_delimiter = ',')]
     resolution: Vec<String>,
     /// Integration rules, e.g. q4,q2,scni.
     #[arg(long, value_delimiter = ',', default_values_t = ["q4".to_string(), "q2".to_string(), "scni".to_string()])]
@@ -53,6 +54,10 @@ struct SweepArgs {
     /// Time-step safety factors (the scene's fixed step is replaced by these), e.g. 0.5,0.9.
     #[arg(long, value_delimiter = ',', default_values_t = [0.5])]
     dt_safety: Vec<f64>,
+    /// Scene keys to vary, by dotted path, with a list of values (repeatable; the grid of
+    /// all combinations), e.g. --set tools.top.friction=0.1,0.2.
+    #[arg(long = "set", value_name = "KEY=V1,V2,...")]
+    set: Vec<String>,
     /// Output folder (default: out/sweep_<scene name>/).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -93,6 +98,10 @@ struct RunArgs {
     /// Integration rule, overriding the scene's.
     #[arg(long, value_parser = ["q2", "q4", "scni"])]
     integration: Option<String>,
+    /// Override a scene key by its dotted path (repeatable), e.g.
+    /// --set tools.top.friction=0.1 --set time.end_s=2e-3; tools are addressed by name.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
     /// Output folder (default: out/<scene name>/).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -134,9 +143,29 @@ fn set_threads(n: Option<usize>) -> Result<(), String> {
     rkforge_core::set_threads(n).map_err(|e| e.to_string())
 }
 
+/// A `KEY=VALUE` argument of `--set`, split at the first `=`.
+fn key_value(arg: &str) -> Result<(&str, &str), String> {
+    arg.split_once('=')
+        .map(|(k, v)| (k.trim(), v))
+        .filter(|(k, _)| !k.is_empty())
+        .ok_or_else(|| format!("--set `{arg}`: expected KEY=VALUE, e.g. tools.top.friction=0.1"))
+}
+
+/// The scene file with the `--set KEY=VALUE` overrides of `rkforge run` applied.
+fn scene_with_overrides(path: &std::path::Path, sets: &[String]) -> Result<Scene, String> {
+    let mut source = SceneSource::from_file(path).map_err(|e| e.to_string())?;
+    for arg in sets {
+        let (key, value) = key_value(arg)?;
+        source
+            .set(key, parse_value(value))
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(source.scene().clone())
+}
+
 fn run_command(a: RunArgs) -> Result<(), String> {
     set_threads(a.threads)?;
-    let mut scene = Scene::from_file(&a.scene).map_err(|e| e.to_string())?;
+    let mut scene = scene_with_overrides(&a.scene, &a.set)?;
     if let Some(r) = a.integration.as_deref().and_then(IntegrationRule::parse) {
         scene = scene.with_integration(r);
     }
@@ -170,9 +199,44 @@ fn compare_command(a: CompareArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// The scenes of the `--set KEY=V1,V2` grid (every combination, the first key varying
+/// slowest), each validated before anything runs.
+fn sweep_cases(path: &std::path::Path, sets: &[String]) -> Result<Vec<sweep::Case>, String> {
+    let source = SceneSource::from_file(path).map_err(|e| e.to_string())?;
+    let mut cases = vec![sweep::Case {
+        inputs: Vec::new(),
+        scene: source.scene().clone(),
+    }];
+    let mut overrides: Vec<Vec<(String, toml::Value)>> = vec![Vec::new()];
+    for arg in sets {
+        let (key, values) = key_value(arg)?;
+        let mut next = Vec::new();
+        let mut next_overrides = Vec::new();
+        for (case, o) in cases.iter().zip(&overrides) {
+            for text in split_values(values) {
+                let mut o = o.clone();
+                o.push((key.to_string(), parse_value(text)));
+                let built = SceneSource::with_overrides(source.text(), source.file(), o.clone())
+                    .map_err(|e| e.to_string())?;
+                let mut inputs = case.inputs.clone();
+                inputs.push((key.to_string(), text.trim().to_string()));
+                next.push(sweep::Case {
+                    inputs,
+                    scene: built.scene().clone(),
+                });
+                next_overrides.push(o);
+            }
+        }
+        cases = next;
+        overrides = next_overrides;
+    }
+    Ok(cases)
+}
+
 fn sweep_command(a: SweepArgs) -> Result<(), String> {
     set_threads(a.threads)?;
-    let scene = Scene::from_file(&a.scene).map_err(|e| e.to_string())?;
+    let cases = sweep_cases(&a.scene, &a.set)?;
+    let scene = &cases[0].scene;
     let mut grids = Vec::new();
     for r in &a.resolution {
         let parsed = r.split_once('x').and_then(|(x, y)| {
@@ -200,10 +264,13 @@ fn sweep_command(a: SweepArgs) -> Result<(), String> {
     if let Some(s) = a.dt_safety.iter().find(|s| !(**s > 0.0 && **s <= 1.0)) {
         return Err(format!("--dt-safety {s}: must lie in (0, 1]"));
     }
+    if grids.is_empty() {
+        grids.push(scene.workpiece.particles);
+    }
     let out = a
         .out
         .unwrap_or_else(|| PathBuf::from("out").join(format!("sweep_{}", scene.name)));
-    let table = sweep::sweep(&scene, &grids, &rules, &a.dt_safety, &out)?;
+    let table = sweep::sweep(&cases, &grids, &rules, &a.dt_safety, &out)?;
     println!("{table}");
     println!("sweep.csv, sweep.md and sweep.png in {}", out.display());
     Ok(())

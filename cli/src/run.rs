@@ -1,14 +1,15 @@
 //! One run of a scene: the time loop, samples, frames and the files written.
 
-use crate::output::{self, plots, vtu, History};
+use crate::output::{plots, vtu, HistoryPlots};
 use indicatif::{ProgressBar, ProgressStyle};
 use rkforge_core::{Kinematics, Scene, Simulation};
 use rkforge_ros::record::Recorder;
-use serde_json::{json, Value};
+use rkforge_runner::Observer;
+use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// A frame kept for the stage plot: time (s), particle positions (m), plastic strain, tool outlines.
 type Shape = (f64, Vec<[f64; 2]>, Vec<f64>, Vec<Vec<[f64; 2]>>);
@@ -36,7 +37,7 @@ pub struct Report {
 impl Report {
     /// Our figures beside the scene's references, as a text table.
     pub fn table(&self) -> String {
-        output::reference_table(&self.scene, &self.summary)
+        rkforge_runner::reference_table(&self.scene, &self.summary)
     }
 
     /// Where the wall time went: each stage of `stage_seconds` with its share of the run.
@@ -77,96 +78,49 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     let wall = Instant::now();
     let mut sim = Simulation::new(scene).map_err(|e| e.to_string())?;
     let end = scene.time.end_s;
-    let interval = scene.output.history_interval_s.unwrap_or(end / 200.0);
     let frames = if opts.frames { scene.output.frames } else { 0 };
-    // Sample times (up to the end) and frame times k * end / frames, merged in order.
-    let mut schedule: Vec<(f64, bool, bool)> = rkforge_core::sample_times(end, interval)
-        .ok_or_else(|| format!("output.history_interval_s {interval:e} s: too many samples"))?
-        .into_iter()
-        .map(|t| (t, true, false))
-        .collect();
-    schedule.extend((1..=frames).map(|k| (end * k as f64 / frames as f64, false, true)));
-    schedule.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let bar = progress_bar(opts.progress, end);
-    let mut history = History::new(&sim);
-    let mut frame_list = Vec::new();
-    let mut stage_shapes = Vec::new();
-    let mut mcap = match &opts.mcap {
-        Some(path) => Some(Mcap::start(path, scene)?),
-        None => None,
+    let mut outputs = Outputs {
+        opts,
+        bar: progress_bar(opts.progress, end),
+        mcap: match &opts.mcap {
+            Some(path) => Some(Mcap::start(path, scene)?),
+            None => None,
+        },
+        frames: Vec::new(),
+        shapes: Vec::new(),
     };
-    // Wall time spent sampling and writing results (the `output` stage).
-    let mut output_time = Duration::ZERO;
+    let outcome = rkforge_runner::drive(&mut sim, frames, &mut outputs)?;
+    outputs.bar.finish_and_clear();
     let clock = Instant::now();
-    history.record(&mut sim);
-    if let Some(m) = &mut mcap {
-        m.record(&sim)?;
-    }
-    if frames > 0 {
-        write_frame(&sim, opts, &mut frame_list, &mut stage_shapes)?;
-    }
-    output_time += clock.elapsed();
-    let mut failure = None;
-    for (t, sample, frame) in schedule {
-        if let Some(e) = mcap.as_ref().and_then(|m| m.interrupted(&sim)) {
-            failure = Some(e);
-            break;
-        }
-        if t > sim.time() + 1e-12 * end {
-            if let Err(e) = sim.run_to(t, |_| {}) {
-                failure = Some(e.to_string());
-                break;
-            }
-        }
-        let clock = Instant::now();
-        if sample {
-            history.record(&mut sim);
-            if let Some(m) = &mut mcap {
-                m.record(&sim)?;
-            }
-        }
-        if frame {
-            write_frame(&sim, opts, &mut frame_list, &mut stage_shapes)?;
-        }
-        output_time += clock.elapsed();
-        bar.set_position((sim.time() / end * 1000.0) as u64);
-    }
-    bar.finish_and_clear();
-    let clock = Instant::now();
-    if failure.is_some() {
-        history.record(&mut sim);
-        if let Some(m) = &mut mcap {
-            m.record(&sim)?;
-        }
-    }
-    if let Some(m) = mcap {
+    if let Some(m) = outputs.mcap.take() {
         m.recorder.finish()?;
     }
-    history.write(&opts.out.join("history.csv"))?;
+    outcome.history.write(&opts.out.join("history.csv"))?;
     if frames > 0 {
-        vtu::write_pvd(&opts.out.join("frames.pvd"), &frame_list).map_err(|e| e.to_string())?;
+        vtu::write_pvd(&opts.out.join("frames.pvd"), &outputs.frames).map_err(|e| e.to_string())?;
     }
     // Plots come before the summary so that their time is in it; the summary is written
     // even when a plot fails, and the plot's error is returned after it.
     let plotted = if opts.frames {
-        history
+        outcome
+            .history
             .plots(&sim, &opts.out)
-            .and_then(|()| write_stages(&sim, opts, &stage_shapes))
+            .and_then(|()| write_stages(&sim, opts, &outputs.shapes))
     } else {
         Ok(())
     };
-    output_time += clock.elapsed();
-    let summary = output::summary(
+    let output_time = outcome.output_time + clock.elapsed();
+    let summary = rkforge_runner::summary(
         &sim,
         wall.elapsed().as_secs_f64(),
         output_time.as_secs_f64(),
-        failure.as_deref(),
+        outcome.failure.as_deref(),
     );
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     std::fs::write(opts.out.join("summary.json"), text)
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
     plotted?;
-    match failure {
+    match outcome.failure {
         Some(e) => Err(format!(
             "{e}\n(history and summary up to the failure are in {})",
             opts.out.display()
@@ -175,6 +129,39 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
             summary,
             scene: scene.clone(),
         }),
+    }
+}
+
+/// What `rkforge run` adds to the bare run: frames and the shapes of the stage plot, the
+/// MCAP recording and the progress bar.
+struct Outputs<'a> {
+    opts: &'a Options,
+    bar: ProgressBar,
+    mcap: Option<Mcap>,
+    /// Time and file of each VTK frame, for frames.pvd.
+    frames: Vec<(f64, String)>,
+    shapes: Vec<Shape>,
+}
+
+impl Observer for Outputs<'_> {
+    fn sample(&mut self, sim: &Simulation) -> Result<(), String> {
+        match &mut self.mcap {
+            Some(m) => m.record(sim),
+            None => Ok(()),
+        }
+    }
+
+    fn frame(&mut self, sim: &Simulation) -> Result<(), String> {
+        write_frame(sim, self.opts, &mut self.frames, &mut self.shapes)
+    }
+
+    fn stop(&self, sim: &Simulation) -> Option<String> {
+        self.mcap.as_ref().and_then(|m| m.interrupted(sim))
+    }
+
+    fn progress(&mut self, sim: &Simulation) {
+        let end = sim.scene().time.end_s;
+        self.bar.set_position((sim.time() / end * 1000.0) as u64);
     }
 }
 
@@ -310,17 +297,4 @@ fn write_stages(sim: &Simulation, opts: &Options, shapes: &[Shape]) -> Result<()
         axis_labels(sim),
         1e3,
     )
-}
-
-/// Used by the summary: the JSON object of one tool.
-pub fn tool_json(sim: &Simulation, k: usize) -> Value {
-    let t = &sim.tools()[k];
-    json!({
-        "name": t.name,
-        "stroke_m": t.state.stroke,
-        "velocity_m_per_s": t.state.velocity,
-        "force_N": t.state.force,
-        "axial_force_N": t.axial_force(),
-        "peak_force_N": t.state.peak_force,
-    })
 }

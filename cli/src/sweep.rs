@@ -70,14 +70,154 @@ fn extrapolate(v: &[f64], r: f64) -> (f64, f64) {
     (f + (f - c) / (r.powf(p) - 1.0), p)
 }
 
-/// Run the grid, write sweep.csv, sweep.md and sweep.png into `out`, return the table.
+/// One combination of the `--set` values: the keys and values as given, and its scene.
+pub struct Case {
+    /// `(dotted key, value as written)` in the order of the `--set` options.
+    pub inputs: Vec<(String, String)>,
+    /// The scene with these overrides.
+    pub scene: Scene,
+}
+
+/// The runs of one case, their error against the case's extrapolated reference and whether
+/// each is on the Pareto front.
+struct Assessed {
+    names: Vec<&'static str>,
+    rows: Vec<Row>,
+    errors: Vec<f64>,
+    pareto: Vec<bool>,
+    /// The reference and its uncertainty, and the Richardson orders, as text.
+    reference: String,
+    orders: String,
+}
+
+/// Run the grid for every case, write sweep.csv, sweep.md and sweep.png into `out`, return
+/// the table. Each case has its own reference (its physics differs); its runs go to
+/// `out/<key=value,...>/` when there are `--set` keys, else to `out/`.
 pub fn sweep(
-    scene: &Scene,
+    cases: &[Case],
     grids: &[[usize; 2]],
     rules: &[IntegrationRule],
     safeties: &[f64],
     out: &Path,
 ) -> Result<String, String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let keys: Vec<&str> = cases
+        .first()
+        .map(|c| c.inputs.iter().map(|(k, _)| k.as_str()).collect())
+        .unwrap_or_default();
+    let mut csv = String::new();
+    let mut md = format!(
+        "# Sweep of {}\n\n",
+        cases.first().map_or("", |c| c.scene.name.as_str())
+    );
+    let mut series = Vec::new();
+    for case in cases {
+        let label = case
+            .inputs
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect::<Vec<_>>()
+            .join(",");
+        let dir = if label.is_empty() {
+            out.to_path_buf()
+        } else {
+            out.join(label.replace(['/', '\\', ' ', '"', '\''], "_"))
+        };
+        let a = assess(&case.scene, grids, rules, safeties, &dir)?;
+        if csv.is_empty() {
+            for k in &keys {
+                let _ = write!(csv, "{k},");
+            }
+            csv.push_str("integration,nx,ny,dt_safety,steps,wall_s,memory_MB");
+            for n in &a.names {
+                let _ = write!(csv, ",{n}");
+            }
+            csv.push_str(",error_rel,pareto\n");
+        }
+        if !label.is_empty() {
+            let _ = write!(md, "## {label}\n\n");
+        }
+        let _ = write!(
+            md,
+            "Reference (extrapolated, +- uncertainty): {}\n\nRichardson orders: {}\n\n",
+            a.reference, a.orders
+        );
+        md.push_str("| rule | grid | dt_safety | steps | wall (s) | memory (MB) | error | Pareto |\n|---|---|---|---|---|---|---|---|\n");
+        for ((r, p), error) in a.rows.iter().zip(&a.pareto).zip(&a.errors) {
+            for (_, v) in &case.inputs {
+                let _ = write!(csv, "{v},");
+            }
+            let _ = write!(
+                csv,
+                "{},{},{},{},{},{:.6},{:.3}",
+                r.rule.name(),
+                r.grid[0],
+                r.grid[1],
+                r.safety,
+                r.steps,
+                r.wall,
+                r.memory
+            );
+            for v in &r.values {
+                let _ = write!(csv, ",{v:e}");
+            }
+            let _ = writeln!(csv, ",{error:e},{p}");
+            let _ = writeln!(
+                md,
+                "| {} | {}x{} | {} | {} | {:.2} | {:.1} | {:.2e} | {} |",
+                r.rule.name(),
+                r.grid[0],
+                r.grid[1],
+                r.safety,
+                r.steps,
+                r.wall,
+                r.memory,
+                error,
+                if *p { "yes" } else { "" }
+            );
+        }
+        md.push('\n');
+        for &rule in rules {
+            let (x, y) = a
+                .rows
+                .iter()
+                .zip(&a.errors)
+                .filter(|(r, _)| r.rule == rule)
+                .map(|(r, e)| (r.wall.log10(), e.max(1e-12).log10()))
+                .unzip();
+            let name = if label.is_empty() {
+                rule.name().to_string()
+            } else {
+                format!("{} {label}", rule.name())
+            };
+            series.push(plots::Series { label: name, x, y });
+        }
+    }
+    std::fs::write(out.join("sweep.csv"), &csv)
+        .map_err(|e| format!("cannot write sweep.csv: {e}"))?;
+    std::fs::write(out.join("sweep.md"), &md).map_err(|e| format!("cannot write sweep.md: {e}"))?;
+    plots::line_plot(
+        &out.join("sweep.png"),
+        &format!(
+            "{}: error against wall time",
+            cases.first().map_or("", |c| c.scene.name.as_str())
+        ),
+        "log10 wall time (s)",
+        "log10 relative error",
+        &series,
+        &[],
+    )?;
+    Ok(md)
+}
+
+/// Run the grid of one scene into `out` and assess every run.
+fn assess(
+    scene: &Scene,
+    grids: &[[usize; 2]],
+    rules: &[IntegrationRule],
+    safeties: &[f64],
+    out: &Path,
+) -> Result<Assessed, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let mut grids = grids.to_vec();
     grids.sort_by_key(|g| g[0] * g[1]);
@@ -157,73 +297,19 @@ pub fn sweep(
         .iter()
         .map(|a| !rows.iter().any(|b| b.wall < a.wall && error(b) < error(a)))
         .collect();
-    let mut csv = String::from("integration,nx,ny,dt_safety,steps,wall_s,memory_MB");
-    for n in &names {
-        let _ = write!(csv, ",{n}");
-    }
-    csv.push_str(",error_rel,pareto\n");
-    let mut md = format!(
-        "# Sweep of {}\n\nReference (extrapolated, +- uncertainty): {}\n\nRichardson orders: {orders}\n\n",
-        scene.name,
-        names
-            .iter()
-            .zip(reference.iter().zip(&uncertainty))
-            .map(|(n, (x, u))| format!("{n} = {x:.6e} +- {u:.1e}"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
-    md.push_str("| rule | grid | dt_safety | steps | wall (s) | memory (MB) | error | Pareto |\n|---|---|---|---|---|---|---|---|\n");
-    for (r, p) in rows.iter().zip(&pareto) {
-        let _ = write!(
-            csv,
-            "{},{},{},{},{},{:.6},{:.3}",
-            r.rule.name(),
-            r.grid[0],
-            r.grid[1],
-            r.safety,
-            r.steps,
-            r.wall,
-            r.memory
-        );
-        for v in &r.values {
-            let _ = write!(csv, ",{v:e}");
-        }
-        let _ = writeln!(csv, ",{:e},{}", error(r), p);
-        let _ = writeln!(
-            md,
-            "| {} | {}x{} | {} | {} | {:.2} | {:.1} | {:.2e} | {} |",
-            r.rule.name(),
-            r.grid[0],
-            r.grid[1],
-            r.safety,
-            r.steps,
-            r.wall,
-            r.memory,
-            error(r),
-            if *p { "yes" } else { "" }
-        );
-    }
-    std::fs::write(out.join("sweep.csv"), &csv)
-        .map_err(|e| format!("cannot write sweep.csv: {e}"))?;
-    std::fs::write(out.join("sweep.md"), &md).map_err(|e| format!("cannot write sweep.md: {e}"))?;
-    let series: Vec<plots::Series> = rules
+    let errors = rows.iter().map(error).collect();
+    let reference = names
         .iter()
-        .map(|&rule| {
-            let pts: Vec<&Row> = rows.iter().filter(|r| r.rule == rule).collect();
-            plots::Series {
-                label: rule.name().to_string(),
-                x: pts.iter().map(|r| r.wall.log10()).collect(),
-                y: pts.iter().map(|r| error(r).max(1e-12).log10()).collect(),
-            }
-        })
-        .collect();
-    plots::line_plot(
-        &out.join("sweep.png"),
-        &format!("{}: error against wall time", scene.name),
-        "log10 wall time (s)",
-        "log10 relative error",
-        &series,
-        &[],
-    )?;
-    Ok(md)
+        .zip(reference.iter().zip(&uncertainty))
+        .map(|(n, (x, u))| format!("{n} = {x:.6e} +- {u:.1e}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    Ok(Assessed {
+        names,
+        rows,
+        errors,
+        pareto,
+        reference,
+        orders,
+    })
 }

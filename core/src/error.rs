@@ -16,6 +16,10 @@ pub enum Error {
         key: String,
         message: String,
     },
+    /// A dotted-key override (`tools.top.friction`) that cannot be applied, or that gives
+    /// an invalid scene.
+    #[error("override `{key}`: {message}")]
+    Override { key: String, message: String },
     /// The particle layout does not support a well-posed RK approximation.
     #[error("shape functions: {0}")]
     ShapeFunctions(String),

@@ -22,6 +22,7 @@ pub mod math;
 pub mod rk_shape;
 pub mod sampling;
 pub mod scene;
+pub mod scene_overrides;
 pub mod solver;
 pub mod team;
 pub mod tools;
@@ -30,6 +31,7 @@ pub use error::{Error, Result};
 pub use geometry::Extents;
 pub use sampling::{sample_times, MAX_SAMPLES};
 pub use scene::{IntegrationRule, Kinematics, Scene};
+pub use scene_overrides::SceneSource;
 pub use solver::{Energy, Fields, MassScalingReport, Simulation, StageTimes, State};
 
 /// Size rayon's global pool, which runs the parallel stages, to `threads` worker threads

@@ -673,6 +673,12 @@ impl Scene {
         v
     }
 
+    /// Deserialise a scene from a TOML document (not yet validated); the error is toml's
+    /// message.
+    pub(crate) fn deserialize_table(doc: toml::Table) -> std::result::Result<Scene, String> {
+        Scene::deserialize(toml::Value::Table(doc)).map_err(|e| e.message().trim().to_string())
+    }
+
     /// The integration rule, overridable from outside (CLI, FMU parameter).
     pub fn with_integration(mut self, rule: IntegrationRule) -> Scene {
         self.discretization.integration = rule;
@@ -682,7 +688,7 @@ impl Scene {
 
 /// toml's message with the line, and the dotted key whose value holds the error when toml
 /// does not name it (a wrong type).
-fn syntax_message(text: &str, e: &toml::de::Error) -> String {
+pub(crate) fn syntax_message(text: &str, e: &toml::de::Error) -> String {
     let msg = e.message().trim().to_string();
     match e.span() {
         Some(span) => {

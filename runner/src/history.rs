@@ -1,0 +1,158 @@
+//! The time history of a run: one row per sample, written as history.csv.
+
+use rkforge_core::{Extents, Kinematics, Simulation};
+use std::path::Path;
+
+/// Time history: one row per sample.
+pub struct History {
+    columns: Vec<String>,
+    rows: Vec<Vec<f64>>,
+}
+
+/// Workpiece measures at one instant.
+pub(crate) struct Measures {
+    pub(crate) extents: Extents,
+    pub(crate) volume_change_rel: f64,
+}
+
+pub(crate) fn measures(sim: &Simulation) -> Measures {
+    Measures {
+        extents: sim.extents(),
+        volume_change_rel: sim.volume() / sim.reference_volume() - 1.0,
+    }
+}
+
+/// `radius_m` (axisymmetric: largest r) or `width_m` (plane strain: x extent).
+pub fn lateral(sim: &Simulation, e: &Extents) -> (&'static str, f64) {
+    match sim.scene().model.kinematics {
+        Kinematics::Axisymmetric => ("radius_m", e.x[1]),
+        Kinematics::PlaneStrain => ("width_m", e.x[1] - e.x[0]),
+    }
+}
+
+impl History {
+    /// Columns for the scene's tools.
+    pub fn new(sim: &Simulation) -> Self {
+        let mut columns = vec!["time_s".to_string(), "dt_s".to_string()];
+        for t in sim.tools() {
+            for c in [
+                "stroke_m",
+                "velocity_m_per_s",
+                "force_N",
+                "force_x_N",
+                "force_y_N",
+            ] {
+                columns.push(format!("{}.{c}", t.name));
+            }
+        }
+        let lat = lateral(sim, &sim.extents()).0;
+        for c in [
+            "x_min_m",
+            "x_max_m",
+            "y_min_m",
+            "y_max_m",
+            lat,
+            "height_m",
+            "volume_change_rel",
+            "max_plastic_strain",
+            "max_penetration_rel",
+        ] {
+            columns.push(format!("workpiece.{c}"));
+        }
+        for c in [
+            "kinetic_J",
+            "elastic_J",
+            "plastic_J",
+            "internal_J",
+            "contact_J",
+            "tool_work_J",
+            "balance_error_rel",
+        ] {
+            columns.push(format!("energy.{c}"));
+        }
+        History {
+            columns,
+            rows: Vec::new(),
+        }
+    }
+
+    /// Record the current state (also updates the run's largest penetration).
+    pub fn record(&mut self, sim: &mut Simulation) {
+        let pen = sim.measure_penetration();
+        let m = measures(sim);
+        let e = sim.energy();
+        let h = min_spacing(sim);
+        let mut row = vec![sim.time(), sim.state().dt_prev];
+        for t in sim.tools() {
+            row.extend([
+                t.state.stroke,
+                t.state.velocity,
+                t.axial_force(),
+                t.state.force[0],
+                t.state.force[1],
+            ]);
+        }
+        let x = m.extents;
+        row.extend([
+            x.x[0],
+            x.x[1],
+            x.y[0],
+            x.y[1],
+            lateral(sim, &x).1,
+            x.y[1] - x.y[0],
+            m.volume_change_rel,
+            sim.max_plastic_strain(),
+            pen / h,
+        ]);
+        row.extend([
+            e.kinetic,
+            e.elastic,
+            e.plastic,
+            e.internal(),
+            e.contact_work,
+            e.tool_work,
+            e.balance_error_rel(),
+        ]);
+        self.rows.push(row);
+    }
+
+    /// The column names: `time_s`, `dt_s`, per tool `<tool>.stroke_m` ..., `workpiece.*`,
+    /// `energy.*`.
+    pub fn columns(&self) -> &[String] {
+        &self.columns
+    }
+
+    /// The rows, one per sample, in column order.
+    pub fn rows(&self) -> &[Vec<f64>] {
+        &self.rows
+    }
+
+    /// The CSV text: a header line, then one line per row (shortest round-trip numbers).
+    pub fn to_csv(&self) -> String {
+        let mut s = self.columns.join(",");
+        s.push('\n');
+        for r in &self.rows {
+            let cells: Vec<String> = r.iter().map(|v| format!("{v:e}")).collect();
+            s.push_str(&cells.join(","));
+            s.push('\n');
+        }
+        s
+    }
+
+    /// Write as CSV with a header line.
+    pub fn write(&self, path: &Path) -> Result<(), String> {
+        std::fs::write(path, self.to_csv())
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+    }
+
+    /// The values of the column `name`, if there is one.
+    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
+        let k = self.columns.iter().position(|c| c == name)?;
+        Some(self.rows.iter().map(|r| r[k]).collect())
+    }
+}
+
+pub(crate) fn min_spacing(sim: &Simulation) -> f64 {
+    let h = sim.spacing();
+    h[0].min(h[1])
+}

@@ -1,0 +1,202 @@
+//! rkforge-runner: one run of a scene as the command line and the Python package both do
+//! it, so that their results are the same bits.
+//!
+//! A run steps a [`Simulation`] from sample to sample of its [`schedule`] (history rows
+//! every `output.history_interval_s`, frame times merged in), records a [`History`] row at
+//! each sample, and ends with the [`summary`]. What a caller adds at the samples and frames
+//! (files, plots, MCAP, a progress bar) goes through an [`Observer`].
+
+pub mod history;
+pub mod summary;
+
+pub use history::{lateral, History};
+pub use summary::{reference_table, summary, tool_json};
+
+use rkforge_core::{Scene, Simulation};
+use std::time::{Duration, Instant};
+
+/// One instant of the schedule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mark {
+    /// Time (s).
+    pub time: f64,
+    /// A history row is due.
+    pub sample: bool,
+    /// A frame is due.
+    pub frame: bool,
+}
+
+/// The instants a run stops at: the history's sample times up to the end, and `frames`
+/// frame times `k * end / frames`, merged in order.
+///
+/// # Errors
+///
+/// The scene's history interval gives more than [`rkforge_core::MAX_SAMPLES`] samples.
+pub fn schedule(scene: &Scene, frames: usize) -> Result<Vec<Mark>, String> {
+    let end = scene.time.end_s;
+    let interval = scene.output.history_interval_s.unwrap_or(end / 200.0);
+    let mut marks: Vec<Mark> = rkforge_core::sample_times(end, interval)
+        .ok_or_else(|| format!("output.history_interval_s {interval:e} s: too many samples"))?
+        .into_iter()
+        .map(|time| Mark {
+            time,
+            sample: true,
+            frame: false,
+        })
+        .collect();
+    marks.extend((1..=frames).map(|k| Mark {
+        time: end * k as f64 / frames as f64,
+        sample: false,
+        frame: true,
+    }));
+    marks.sort_by(|a, b| a.time.total_cmp(&b.time));
+    Ok(marks)
+}
+
+/// What a caller does at the instants of a run. Every method has a default that does nothing.
+pub trait Observer {
+    /// After each history row: at t = 0, at every sample, and once more after a failure.
+    ///
+    /// # Errors
+    ///
+    /// An output error, which ends the run at once.
+    fn sample(&mut self, _sim: &Simulation) -> Result<(), String> {
+        Ok(())
+    }
+    /// At t = 0 and at every frame time, when the run has frames.
+    ///
+    /// # Errors
+    ///
+    /// An output error, which ends the run at once.
+    fn frame(&mut self, _sim: &Simulation) -> Result<(), String> {
+        Ok(())
+    }
+    /// Asked before each stretch of steps: a reason to stop the run there (a signal).
+    fn stop(&self, _sim: &Simulation) -> Option<String> {
+        None
+    }
+    /// After each instant of the schedule.
+    fn progress(&mut self, _sim: &Simulation) {}
+}
+
+/// An observer that does nothing: the bare run.
+pub struct Quiet;
+
+impl Observer for Quiet {}
+
+/// What a run produced.
+pub struct Outcome {
+    /// One row per sample (and a last one after a failure).
+    pub history: History,
+    /// Why the run stopped before its end (divergence, a signal), if it did.
+    pub failure: Option<String>,
+    /// Wall time spent recording samples and in the observer's `sample` and `frame`.
+    pub output_time: Duration,
+}
+
+/// Run `sim` to its scene's end time with `frames` frames, recording the history.
+///
+/// A failure of the simulation ends the loop and is returned in the [`Outcome`] (with a
+/// last history row); an error of the observer is returned at once.
+///
+/// # Errors
+///
+/// The schedule is too long, or the observer failed.
+pub fn drive(
+    sim: &mut Simulation,
+    frames: usize,
+    observer: &mut impl Observer,
+) -> Result<Outcome, String> {
+    let end = sim.scene().time.end_s;
+    let marks = schedule(sim.scene(), frames)?;
+    let mut history = History::new(sim);
+    let mut output_time = Duration::ZERO;
+    let clock = Instant::now();
+    history.record(sim);
+    observer.sample(sim)?;
+    if frames > 0 {
+        observer.frame(sim)?;
+    }
+    output_time += clock.elapsed();
+    let mut failure = None;
+    for mark in marks {
+        if let Some(e) = observer.stop(sim) {
+            failure = Some(e);
+            break;
+        }
+        if mark.time > sim.time() + 1e-12 * end {
+            if let Err(e) = sim.run_to(mark.time, |_| {}) {
+                failure = Some(e.to_string());
+                break;
+            }
+        }
+        let clock = Instant::now();
+        if mark.sample {
+            history.record(sim);
+            observer.sample(sim)?;
+        }
+        if mark.frame {
+            observer.frame(sim)?;
+        }
+        output_time += clock.elapsed();
+        observer.progress(sim);
+    }
+    if failure.is_some() {
+        let clock = Instant::now();
+        history.record(sim);
+        observer.sample(sim)?;
+        output_time += clock.elapsed();
+    }
+    Ok(Outcome {
+        history,
+        failure,
+        output_time,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn block(end: &str) -> Scene {
+        let text = include_str!("../../scenes/block_forging.toml")
+            .replace("particles = [21, 21]", "particles = [7, 7]")
+            .replace("end_s = 0.015", &format!("end_s = {end}"));
+        Scene::from_str_named(&text, "block").unwrap()
+    }
+
+    #[test]
+    fn schedule_merges_frames_into_the_samples() {
+        let scene = block("0.0015");
+        let marks = schedule(&scene, 3).unwrap();
+        // history_interval_s = 0.15e-3: ten samples; three frames, the last on the end.
+        assert_eq!(marks.iter().filter(|m| m.sample).count(), 10);
+        assert_eq!(marks.iter().filter(|m| m.frame).count(), 3);
+        assert!(marks.windows(2).all(|w| w[0].time <= w[1].time));
+        // The last sample and the last frame fall on the end, up to rounding.
+        for last in [
+            marks.iter().rfind(|m| m.sample),
+            marks.iter().rfind(|m| m.frame),
+        ] {
+            let t = last.map_or(0.0, |m| m.time);
+            assert!((t - 0.0015).abs() < 1e-15, "{t}");
+        }
+    }
+
+    #[test]
+    fn a_run_records_every_sample_and_ends_on_time() {
+        let scene = block("0.0006");
+        let mut sim = Simulation::new(&scene).unwrap();
+        let outcome = drive(&mut sim, 0, &mut Quiet).unwrap();
+        assert!(outcome.failure.is_none());
+        let rows = outcome.history.rows();
+        assert_eq!(rows.len(), 5);
+        assert_eq!(rows.last().map(|r| r[0]), Some(0.0006));
+        assert_eq!(outcome.history.column("time_s").unwrap().len(), 5);
+        let csv = outcome.history.to_csv();
+        assert!(csv.starts_with("time_s,dt_s,top.stroke_m,"), "{csv}");
+        let s = summary(&sim, 1.0, 0.0, None);
+        assert_eq!(s["status"], "ok");
+        assert_eq!(s["end_time_s"], 0.0006);
+    }
+}

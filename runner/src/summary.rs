@@ -1,0 +1,175 @@
+//! The summary of a run (summary.json) and the table of our figures beside the scene's
+//! references.
+
+use crate::history::{lateral, measures, min_spacing};
+use rkforge_core::{Kinematics, Scene, Simulation};
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+
+/// The summary (summary.json): scene, discretisation, run, workpiece, energy, tools, contact,
+/// and the wall time of each stage (s); `output_s` is the time the caller spent sampling the
+/// history and writing files (history.csv, frames, plots, MCAP).
+pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>) -> Value {
+    let m = measures(sim);
+    let e = sim.energy();
+    let x = m.extents;
+    let (lat, lat_v) = lateral(sim, &x);
+    let mut workpiece = json!({
+        "height_m": x.y[1] - x.y[0],
+        "x_range_m": x.x,
+        "y_range_m": x.y,
+        "volume_change_rel": m.volume_change_rel,
+        "max_plastic_strain": sim.max_plastic_strain(),
+    });
+    workpiece[lat] = json!(lat_v);
+    let times = sim.times;
+    let scene = sim.scene();
+    json!({
+        "status": if error.is_some() { "error" } else { "ok" },
+        "error": error,
+        "scene": scene.name,
+        "kinematics": match scene.model.kinematics { Kinematics::Axisymmetric => "axisymmetric", Kinematics::PlaneStrain => "plane_strain" },
+        "integration": scene.discretization.integration.name(),
+        "support": scene.discretization.support,
+        "particles": sim.particle_count(),
+        "grid": [sim.grid().0, sim.grid().1],
+        "integration_points": sim.point_count(),
+        "steps": sim.steps(),
+        "end_time_s": sim.time(),
+        "wall_s": wall_s,
+        "threads": rayon::current_num_threads(),
+        "memory_bytes": sim.memory_bytes(),
+        "time_step": {
+            "fixed_s": scene.time.dt_s,
+            "dt_safety": scene.time.dt_safety,
+            "last_s": sim.state().dt_prev,
+            "critical_initial_s": sim.critical_dt0(),
+            "stable_estimate_now_s": sim.stable_dt(),
+        },
+        "workpiece": workpiece,
+        "energy": {
+            "initial_J": e.initial,
+            "kinetic_J": e.kinetic,
+            "elastic_J": e.elastic,
+            "internal_J": e.internal(),
+            "plastic_J": e.plastic,
+            "contact_J": e.contact_work,
+            "tool_work_J": e.tool_work,
+            "contact_interface_J": e.interface_gain(),
+            "balance_error_rel": e.balance_error_rel(),
+        },
+        "tools": (0..sim.tools().len()).map(|k| tool_json(sim, k)).collect::<Vec<_>>(),
+        "contact": {
+            "max_penetration_m": sim.max_penetration(),
+            "max_penetration_rel": sim.max_penetration() / min_spacing(sim),
+        },
+        "stage_seconds": {
+            "setup": times.setup.as_secs_f64(),
+            "shape_functions": times.shape_functions.as_secs_f64(),
+            "stress": times.stress.as_secs_f64(),
+            "internal_force": times.internal_force.as_secs_f64(),
+            "contact": times.contact.as_secs_f64(),
+            "integration": times.integration.as_secs_f64(),
+            "output": output_s,
+        },
+    })
+}
+
+/// Look up a dotted key such as `workpiece.radius_m` in the summary.
+fn lookup(summary: &Value, key: &str) -> Option<f64> {
+    key.split('.').try_fold(summary, |v, k| v.get(k))?.as_f64()
+}
+
+/// Our figures beside every reference of the scene, one column per referenced key.
+pub fn reference_table(scene: &Scene, summary: &Value) -> String {
+    let mut keys: Vec<&String> = Vec::new();
+    for r in &scene.reference {
+        for k in r.values.keys() {
+            if !keys.contains(&k) {
+                keys.push(k);
+            }
+        }
+    }
+    let steps = summary["steps"].as_u64().unwrap_or(0);
+    let wall = summary["wall_s"].as_f64().unwrap_or(0.0);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{} at t = {:.3e} s: {} rule, {} particles, {} integration points, {} steps, {:.2} s wall",
+        scene.name,
+        summary["end_time_s"].as_f64().unwrap_or(0.0),
+        summary["integration"].as_str().unwrap_or("?"),
+        summary["particles"],
+        summary["integration_points"],
+        steps,
+        wall
+    );
+    if keys.is_empty() {
+        return s;
+    }
+    let unit = |k: &str| {
+        if k.ends_with("_m") {
+            ("mm", 1e3)
+        } else {
+            ("", 1.0)
+        }
+    };
+    let _ = write!(s, "{:<40}", "");
+    for k in &keys {
+        let (u, _) = unit(k);
+        let name = k.rsplit('.').next().unwrap_or(k).trim_end_matches("_m");
+        let _ = write!(
+            s,
+            "{:>16}",
+            if u.is_empty() {
+                name.to_string()
+            } else {
+                format!("{name} ({u})")
+            }
+        );
+    }
+    s.push('\n');
+    let ours = format!("rkforge {}", summary["integration"].as_str().unwrap_or("?"));
+    let _ = write!(s, "{ours:<40}");
+    for k in &keys {
+        let (_, f) = unit(k);
+        match lookup(summary, k) {
+            Some(v) => {
+                let _ = write!(s, "{:>16.3}", v * f);
+            }
+            None => {
+                let _ = write!(s, "{:>16}", "-");
+            }
+        }
+    }
+    s.push('\n');
+    for r in &scene.reference {
+        let _ = write!(s, "{:<40}", r.source.chars().take(39).collect::<String>());
+        for k in &keys {
+            let (_, f) = unit(k);
+            match r.values.get(*k) {
+                Some(v) => {
+                    let _ = write!(s, "{:>16.3}", v * f);
+                }
+                None => {
+                    let _ = write!(s, "{:>16}", "-");
+                }
+            }
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// The JSON object of one tool in the summary.
+pub fn tool_json(sim: &Simulation, k: usize) -> Value {
+    let t = &sim.tools()[k];
+    json!({
+        "name": t.name,
+        "stroke_m": t.state.stroke,
+        "velocity_m_per_s": t.state.velocity,
+        "force_N": t.state.force,
+        "axial_force_N": t.axial_force(),
+        "peak_force_N": t.state.peak_force,
+    })
+}
