@@ -181,6 +181,9 @@ fn run_command(a: RunArgs) -> Result<(), String> {
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
     println!("{}", report.stages());
+    for w in report.summary["warnings"].as_array().into_iter().flatten() {
+        eprintln!("warning: {}", w.as_str().unwrap_or_default());
+    }
     println!("results in {}", opts.out.display());
     Ok(())
 }

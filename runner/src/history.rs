@@ -67,6 +67,7 @@ impl History {
             "contact_J",
             "tool_work_J",
             "balance_error_rel",
+            "kinetic_to_internal",
         ] {
             columns.push(format!("energy.{c}"));
         }
@@ -112,6 +113,7 @@ impl History {
             e.contact_work,
             e.tool_work,
             e.balance_error_rel(),
+            e.kinetic_to_internal(),
         ]);
         self.rows.push(row);
     }

@@ -57,7 +57,10 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>
             "tool_work_J": e.tool_work,
             "contact_interface_J": e.interface_gain(),
             "balance_error_rel": e.balance_error_rel(),
+            "kinetic_to_internal_max": sim.kinetic_to_internal_max(),
         },
+        "mass_scaling": sim.mass_scaling(),
+        "warnings": sim.quasi_static_warning().into_iter().collect::<Vec<_>>(),
         "tools": (0..sim.tools().len()).map(|k| tool_json(sim, k)).collect::<Vec<_>>(),
         "contact": {
             "max_penetration_m": sim.max_penetration(),
