@@ -175,9 +175,13 @@ def test_sigterm_finishes_the_file_of_the_node(rkforge_ros_bin, tmp_path):
     # 0.015 s of simulation at 0.003 simulated seconds per second: about 5 s of wall time.
     p = start_node(rkforge_ros_bin, scene, 152, "--record", str(path),
                    "--real-time-factor", "0.003")
+    # Wait for the start line (DDS is up, the run begins), then for about 30 samples.
+    start = p.stderr.readline()
+    assert start.startswith("rkforge-ros: scene"), start
     time.sleep(1.5)
     p.send_signal(signal.SIGTERM)
     _, err = p.communicate(timeout=30)
+    err = start + err
     assert p.returncode == 0, err
     assert "stopped by a signal" in err
     msgs = decoded(path)

@@ -1,7 +1,9 @@
 //! The ROS 2 node over DDS (`ros2-client`, RustDDS): publishers for the topics of
 //! [`topics`](crate::topics) with their standard DDS type names
 //! (`geometry_msgs::msg::dds_::WrenchStamped_`, ...) and QoS, and a `std_msgs/msg/Float64`
-//! subscription per movable tool for velocity commands.
+//! subscription per movable tool for velocity commands. The state topics a controller needs
+//! from the start (wrenches, joint states, markers, `/clock`) are transient local: a reader
+//! that matches after a sample was published still receives it.
 //!
 //! The messages are those of a [`Sample`], already CDR-encoded by [`msgs`](crate::msgs); they
 //! are handed to DDS as they are (see [`Payload`]), so the wire bytes equal the MCAP bytes.
@@ -120,18 +122,24 @@ fn type_name(message: &str) -> Result<MessageTypeName, String> {
 }
 
 /// The QoS of a topic: reliable (a full send window drops the sample rather than waiting) or
-/// best effort, volatile, keep last [`DEPTH`].
-fn qos(reliable: bool) -> QosProfile {
-    let reliability = if reliable {
+/// best effort; transient local (the samples held are sent to readers that match later) or
+/// volatile; keep last [`DEPTH`].
+fn qos(t: &Topic) -> QosProfile {
+    let reliability = if t.reliable {
         Reliability::Reliable {
             when_full: WhenFull::Fail,
         }
     } else {
         Reliability::BestEffort
     };
+    let durability = if t.latched {
+        Durability::TransientLocal
+    } else {
+        Durability::Volatile
+    };
     QosProfile {
         reliability,
-        durability: Durability::Volatile,
+        durability,
         history: History::KeepLast { depth: DEPTH },
         ..QosProfile::publisher_default()
     }
@@ -159,7 +167,7 @@ impl Node {
             let topic = create_topic(&node, t)?;
             if t.publish {
                 let p = node
-                    .create_publisher::<Payload>(&topic, Some(qos(t.reliable)))
+                    .create_publisher::<Payload>(&topic, Some(qos(t)))
                     .map_err(|e| format!("cannot publish {}: {e:?}", t.name))?;
                 publishers.push((t.name.clone(), p));
             } else {
@@ -169,7 +177,7 @@ impl Node {
                     .position(|s| t.name.ends_with(&format!("/{}/velocity_cmd", s.name)))
                     .ok_or_else(|| format!("no tool for command topic {}", t.name))?;
                 let sub = node
-                    .create_subscription::<Float64Wire>(&topic, Some(qos(true)))
+                    .create_subscription::<Float64Wire>(&topic, Some(qos(t)))
                     .map_err(|e| format!("cannot subscribe to {}: {e:?}", t.name))?;
                 inputs.push(CommandInput {
                     tool,
@@ -277,7 +285,7 @@ impl Node {
 /// The DDS topic (`rt/...`) of `t` with its standard type name.
 fn create_topic(node: &RosNode, t: &Topic) -> Result<DdsTopic, String> {
     let name = Name::parse(&t.name).map_err(|e| format!("topic name {}: {e:?}", t.name))?;
-    node.create_topic(&name, type_name(t.message)?, &qos(t.reliable))
+    node.create_topic(&name, type_name(t.message)?, &qos(t))
         .map_err(|e| format!("cannot create topic {}: {e:?}", t.name))
 }
 

@@ -29,6 +29,9 @@ pub struct Topic {
     pub publish: bool,
     /// Reliable (true) or best-effort (false) quality of service.
     pub reliable: bool,
+    /// Transient-local durability (latched): a reader that matches late still receives the
+    /// last samples the publisher holds (keep last 10). Volatile when false.
+    pub latched: bool,
 }
 
 /// Check a namespace against the ROS 2 rules: absolute, tokens of letters, digits and
@@ -80,6 +83,7 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
             schema: msgs::WRENCH_STAMPED_SCHEMA,
             publish: true,
             reliable: true,
+            latched: true,
         });
     }
     t.push(Topic {
@@ -88,6 +92,7 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
         schema: msgs::JOINT_STATE_SCHEMA,
         publish: true,
         reliable: true,
+        latched: true,
     });
     t.push(Topic {
         name: format!("{base}/workpiece"),
@@ -95,6 +100,7 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
         schema: msgs::POINT_CLOUD2_SCHEMA,
         publish: true,
         reliable: false,
+        latched: false,
     });
     t.push(Topic {
         name: format!("{base}/tool_markers"),
@@ -102,6 +108,7 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
         schema: msgs::MARKER_ARRAY_SCHEMA,
         publish: true,
         reliable: true,
+        latched: true,
     });
     t.push(Topic {
         name: "/clock".into(),
@@ -109,6 +116,7 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
         schema: msgs::CLOCK_SCHEMA,
         publish: true,
         reliable: true,
+        latched: true,
     });
     for tool in scene
         .tools
@@ -121,6 +129,7 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
             schema: msgs::FLOAT64_SCHEMA,
             publish: false,
             reliable: true,
+            latched: false,
         });
     }
     Ok(t)

@@ -65,10 +65,7 @@ impl Recorder {
                     id
                 }
             };
-            let metadata = BTreeMap::from([(
-                "offered_qos_profiles".to_owned(),
-                offered_qos(t.reliable).to_owned(),
-            )]);
+            let metadata = BTreeMap::from([("offered_qos_profiles".to_owned(), offered_qos(t))]);
             channels.push(
                 writer
                     .add_channel(schema, &t.name, "cdr", &metadata)
@@ -137,13 +134,15 @@ impl Recorder {
 }
 
 /// The `offered_qos_profiles` channel metadata rosbag2 writes (YAML), so that `ros2 bag play`
-/// offers the same reliability; keep last 10, volatile.
-fn offered_qos(reliable: bool) -> &'static str {
-    if reliable {
-        "- history: 1\n  depth: 10\n  reliability: 1\n  durability: 2\n  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n  avoid_ros_namespace_conventions: false"
-    } else {
-        "- history: 1\n  depth: 10\n  reliability: 2\n  durability: 2\n  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n  avoid_ros_namespace_conventions: false"
-    }
+/// offers the same QoS as the node: keep last 10, reliable (1) or best effort (2), transient
+/// local (1) or volatile (2).
+fn offered_qos(t: &Topic) -> String {
+    let reliability = if t.reliable { 1 } else { 2 };
+    let durability = if t.latched { 1 } else { 2 };
+    let forever = "\n    sec: 2147483647\n    nsec: 4294967295";
+    format!(
+        "- history: 1\n  depth: 10\n  reliability: {reliability}\n  durability: {durability}\n  deadline:{forever}\n  lifespan:{forever}\n  liveliness: 1\n  liveliness_lease_duration:{forever}\n  avoid_ros_namespace_conventions: false"
+    )
 }
 
 #[cfg(test)]
