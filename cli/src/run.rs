@@ -3,9 +3,9 @@
 use crate::output::{self, plots, vtu, History};
 use indicatif::{ProgressBar, ProgressStyle};
 use rkforge_core::{Kinematics, Scene, Simulation};
-use rkforge_ros::record::Recorder;
+use rkforge_ros::record::{Compression, Provenance, Recorder};
 use serde_json::{json, Value};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -22,8 +22,18 @@ pub struct Options {
     /// Write VTK frames and PNG plots.
     pub frames: bool,
     /// Record the ROS 2 topics of `rkforge-ros` (namespace `/rkforge`) at every history
-    /// sample to this MCAP file; SIGINT and SIGTERM then stop the run and finish the files.
-    pub mcap: Option<PathBuf>,
+    /// sample to an MCAP file; SIGINT and SIGTERM then stop the run and finish the files.
+    pub mcap: Option<McapOptions>,
+}
+
+/// Where and how to record MCAP.
+pub struct McapOptions {
+    /// The MCAP file.
+    pub path: PathBuf,
+    /// The scene file, attached to the recording.
+    pub scene_file: PathBuf,
+    /// Chunk compression.
+    pub compression: Compression,
 }
 
 /// What a finished run produced.
@@ -92,7 +102,7 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     let mut frame_list = Vec::new();
     let mut stage_shapes = Vec::new();
     let mut mcap = match &opts.mcap {
-        Some(path) => Some(Mcap::start(path, scene)?),
+        Some(m) => Some(Mcap::start(m, scene)?),
         None => None,
     };
     // Wall time spent sampling and writing results (the `output` stage).
@@ -139,9 +149,6 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
             m.record(&sim)?;
         }
     }
-    if let Some(m) = mcap {
-        m.recorder.finish()?;
-    }
     history.write(&opts.out.join("history.csv"))?;
     if frames > 0 {
         vtu::write_pvd(&opts.out.join("frames.pvd"), &frame_list).map_err(|e| e.to_string())?;
@@ -163,8 +170,11 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
         failure.as_deref(),
     );
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    std::fs::write(opts.out.join("summary.json"), text)
+    std::fs::write(opts.out.join("summary.json"), &text)
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
+    if let Some(m) = mcap {
+        m.recorder.finish(&text)?;
+    }
     plotted?;
     match failure {
         Some(e) => Err(format!(
@@ -185,10 +195,15 @@ struct Mcap {
 }
 
 impl Mcap {
-    fn start(path: &Path, scene: &Scene) -> Result<Mcap, String> {
+    fn start(opts: &McapOptions, scene: &Scene) -> Result<Mcap, String> {
         let topics = rkforge_ros::topics(scene, "/rkforge")?;
+        let provenance = Provenance {
+            scene,
+            scene_file: &opts.scene_file,
+            writer: "rkforge run",
+        };
         Ok(Mcap {
-            recorder: Recorder::create(path, &topics)?,
+            recorder: Recorder::create(&opts.path, &topics, &provenance, opts.compression)?,
             stop: rkforge_ros::signals::stop_flag()?,
         })
     }
