@@ -180,7 +180,7 @@ def test_the_file_holds_the_scene_and_the_summary_of_its_run(recorded):
         "kinematics": "plane_strain",
         "integration": "q2",
         "resolution": "8x8",
-        "end_time_s": "3e-3",
+        "time": '{"end_s":0.003,"dt_s":1e-6,"dt_safety":0.5}',
         "rkforge_version": "0.1.0",
         "writer": "rkforge run",
         "compression": compression,
@@ -194,7 +194,7 @@ def test_the_file_holds_the_scene_and_the_summary_of_its_run(recorded):
 
 
 def test_the_node_records_the_same_bytes_as_rkforge_run(recorded, rkforge_ros_bin, tmp_path):
-    rows, path, compression, _, _ = recorded
+    rows, path, compression, run_out, _ = recorded
     scene = small_block(tmp_path)
     out = tmp_path / "node.mcap"
     p = start_node(rkforge_ros_bin, scene, 151, "--record", str(out),
@@ -215,8 +215,8 @@ def test_the_node_records_the_same_bytes_as_rkforge_run(recorded, rkforge_ros_bi
     assert summary["status"] == "finished"
     assert summary["samples_published"] == len(rows)
     assert summary["time_s"] == rows[-1]["time_s"]
-    assert [t["stroke_m"] for t in summary["tools"]] == [rows[-1]["top.stroke_m"],
-                                                         rows[-1]["bottom.stroke_m"]]
+    # The node steps as `rkforge run --no-frames` does.
+    assert summary["steps"] == json.loads((run_out / "summary.json").read_text())["steps"]
     assert attachments(out) == {scene.name: ("application/toml", scene.read_bytes())}
 
 

@@ -196,8 +196,8 @@ fn run(a: &Args) -> Result<(), String> {
 }
 
 /// The run's summary as JSON, for the recording: status (`finished`, `stopped` by a signal,
-/// `error`), the error, final time, steps, samples published, messages dropped, the loop's
-/// wall time (s) and each tool's stroke, velocity and force.
+/// `error`), the error, final time, steps, samples published, messages dropped and the
+/// loop's wall time (s). The tools' final figures are the last sample's joint state.
 fn summary(
     sim: &Simulation,
     outcome: &Result<u64, String>,
@@ -210,19 +210,6 @@ fn summary(
         (Ok(_), true) => "stopped",
         (Ok(_), false) => "finished",
     };
-    let tools: Vec<_> = sim
-        .tools()
-        .iter()
-        .map(|t| {
-            json!({
-                "name": t.name,
-                "stroke_m": t.state.stroke,
-                "velocity_m_per_s": t.state.velocity,
-                "force_N": t.state.force,
-                "axial_force_N": t.axial_force(),
-            })
-        })
-        .collect();
     json!({
         "scene": sim.scene().name,
         "status": status,
@@ -232,7 +219,6 @@ fn summary(
         "samples_published": outcome.as_ref().ok(),
         "messages_dropped": dropped,
         "loop_wall_s": loop_wall,
-        "tools": tools,
     })
     .to_string()
 }

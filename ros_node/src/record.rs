@@ -3,7 +3,7 @@
 //! per topic (message encoding `cdr`), log and publish time = simulation time (ns).
 //!
 //! The file says what made it: a metadata record [`METADATA`] (scene, kinematics, integration
-//! rule, resolution, end time, rkforge version, the writing program) and the scene file as an
+//! rule, resolution, the scene's `[time]` table, rkforge version, the writing program) and the scene file as an
 //! attachment, both written first; at [`Recorder::finish`] a metadata record [`SUMMARY`]
 //! with the run's summary figures (JSON).
 //!
@@ -269,7 +269,11 @@ fn describe(
                 scene.discretization.integration.name().to_owned(),
             ),
             ("resolution", format!("{nx}x{ny}")),
-            ("end_time_s", format!("{:e}", scene.time.end_s)),
+            // The scene's [time] table: end time, step or safety factor, mass scaling.
+            (
+                "time",
+                serde_json::to_string(&scene.time).unwrap_or_else(|e| e.to_string()),
+            ),
             ("rkforge_version", env!("CARGO_PKG_VERSION").to_owned()),
             ("writer", writer.to_owned()),
             ("compression", compression.name().to_owned()),
@@ -389,6 +393,10 @@ mod tests {
         assert_eq!(run["kinematics"], "plane_strain");
         assert_eq!(run["rkforge_version"], env!("CARGO_PKG_VERSION"));
         assert_eq!(run["compression"], "zstd");
+        assert_eq!(
+            run["time"],
+            r#"{"end_s":0.015,"dt_s":1e-6,"dt_safety":0.5}"#
+        );
         assert_eq!(
             records[SUMMARY],
             BTreeMap::from([(SUMMARY_KEY.to_owned(), r#"{"steps": 3}"#.to_owned())])
