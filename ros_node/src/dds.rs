@@ -9,6 +9,7 @@
 //! are handed to DDS as they are (see [`Payload`]), so the wire bytes equal the MCAP bytes.
 
 use crate::frame::Sample;
+use crate::msgs::Float64;
 use crate::Topic;
 use rkforge_core::Scene;
 use ros2_client::dds::rustdds::Topic as DdsTopic;
@@ -16,7 +17,7 @@ use ros2_client::dds::{Context, ContextOptions, Node as RosNode, Publisher, Subs
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 use serde::ser::SerializeTuple;
-use serde::{Deserialize, Serialize, Serializer};
+use serde::{Serialize, Serializer};
 
 /// Largest `ROS_DOMAIN_ID` (the ROS 2 documentation's limit for the default port mapping).
 pub const MAX_DOMAIN_ID: u16 = 232;
@@ -77,13 +78,6 @@ impl Serialize for Payload {
     }
 }
 
-/// `std_msgs/msg/Float64` as the subscription deserializes it.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
-pub struct Float64Wire {
-    /// The value.
-    pub data: f64,
-}
-
 /// A velocity command for a tool.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Command {
@@ -97,7 +91,7 @@ pub struct Command {
 struct CommandInput {
     tool: usize,
     topic: String,
-    sub: Subscription<Float64Wire>,
+    sub: Subscription<Float64>,
     rejected: u64,
 }
 
@@ -177,7 +171,7 @@ impl Node {
                     .position(|s| t.name.ends_with(&format!("/{}/velocity_cmd", s.name)))
                     .ok_or_else(|| format!("no tool for command topic {}", t.name))?;
                 let sub = node
-                    .create_subscription::<Float64Wire>(&topic, Some(qos(t)))
+                    .create_subscription::<Float64>(&topic, Some(qos(t)))
                     .map_err(|e| format!("cannot subscribe to {}: {e:?}", t.name))?;
                 inputs.push(CommandInput {
                     tool,
@@ -292,6 +286,7 @@ fn create_topic(node: &RosNode, t: &Topic) -> Result<DdsTopic, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::msgs::{Clock, JointState, MarkerArray, PointCloud2, RosMessage, WrenchStamped};
 
     #[test]
     fn domain_ids_follow_ros2() {
@@ -309,6 +304,17 @@ mod tests {
     fn type_names_split_into_package_and_type() {
         let t = type_name("geometry_msgs/msg/WrenchStamped").unwrap();
         assert_eq!(t.dds_msg_type(), "geometry_msgs::msg::dds_::WrenchStamped_");
+        // ros2-client derives the DDS name the build script gives each message.
+        for (name, dds) in [
+            (WrenchStamped::TYPE_NAME, WrenchStamped::DDS_TYPE_NAME),
+            (JointState::TYPE_NAME, JointState::DDS_TYPE_NAME),
+            (PointCloud2::TYPE_NAME, PointCloud2::DDS_TYPE_NAME),
+            (MarkerArray::TYPE_NAME, MarkerArray::DDS_TYPE_NAME),
+            (Clock::TYPE_NAME, Clock::DDS_TYPE_NAME),
+            (Float64::TYPE_NAME, Float64::DDS_TYPE_NAME),
+        ] {
+            assert_eq!(type_name(name).unwrap().dds_msg_type(), dds);
+        }
         assert!(type_name("WrenchStamped").is_err());
     }
 }
