@@ -5,7 +5,9 @@ but publishes nothing.
 
 Variants, alternated over N rounds so that drifts in machine load hit all of them alike:
   run       rkforge run SCENE --no-frames --quiet                      (baseline)
-  mcap      rkforge run SCENE --no-frames --quiet --mcap FILE          (recording, no DDS)
+  mcap      rkforge run SCENE --no-frames --quiet --mcap FILE          (recording, no DDS;
+            zstd-compressed chunks, the default)
+  mcap-none the same with --mcap-compression none                      (uncompressed chunks)
   ros       rkforge-ros SCENE                                          (DDS, nobody subscribed)
   ros+peer  rkforge-ros SCENE, a Cyclone DDS peer subscribed to every topic (with --peer;
             needs the tests' virtual environment, e.g. .venv/bin/python scripts/bench_ros.py)
@@ -16,9 +18,11 @@ Three figures per run: the process's wall time (includes DDS start-up and the no
 linger after the last sample), the simulation loop's wall time (summary.json's wall_s for
 rkforge run; the "in X s wall" the node prints, from scene setup to the last sample), and the
 process's CPU time (user + system over all its threads, from wait4), which a busy machine
-disturbs least. Ratios are to the median of `run`.
+disturbs least. Ratios are to the median of `run`. The recording variants also print the
+size of their MCAP file.
 
   scripts/bench_ros.py [--runs 5] [--scene scenes/taylor_bar.toml] [--peer] [--threads N]
+                       [--variants run,mcap,mcap-none,ros-end,ros]
 """
 import argparse
 import json
@@ -75,6 +79,7 @@ def main():
     ap.add_argument("--scene", default=str(ROOT / "scenes" / "taylor_bar.toml"))
     ap.add_argument("--peer", action="store_true")
     ap.add_argument("--threads", type=int)
+    ap.add_argument("--variants", help="comma-separated subset of the variants (with run)")
     a = ap.parse_args()
     subprocess.run(["cargo", "build", "--release", "-q", "-p", "rkforge", "-p", "rkforge-ros"],
                    cwd=ROOT, check=True)
@@ -88,19 +93,27 @@ def main():
                                  ",".join(tools)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
         assert peer.stdout.readline().strip() == "ready"
     end = tomllib.loads(pathlib.Path(a.scene).read_text())["time"]["end_s"]
-    variants = ["run", "mcap", "ros-end", "ros+peer" if a.peer else "ros"]
+    variants = ["run", "mcap", "mcap-none", "ros-end", "ros+peer" if a.peer else "ros"]
+    if a.variants:
+        chosen = set(a.variants.replace("ros+peer", "ros").split(",")) | {"run"}
+        variants = [v for v in variants if v.replace("ros+peer", "ros") in chosen]
     proc = {v: [] for v in variants}
     loop = {v: [] for v in variants}
     cpu = {v: [] for v in variants}
+    size = {}
     try:
         for _ in range(a.runs):
             for v in variants:
-                if v in ("run", "mcap"):
-                    extra = ["--mcap", str(out / "b.mcap")] if v == "mcap" else []
+                if v in ("run", "mcap", "mcap-none"):
+                    mcap = out / f"{v}.mcap"
+                    extra = {"run": [], "mcap": ["--mcap", str(mcap)],
+                             "mcap-none": ["--mcap", str(mcap), "--mcap-compression", "none"]}[v]
                     w, c, _ = timed([BIN / "rkforge", "run", a.scene, "--no-frames", "--quiet",
                                      "--out", str(out / v), *threads, *extra])
                     s = json.loads((out / v / "summary.json").read_text())
                     loop[v].append(s["wall_s"])
+                    if extra:
+                        size[v] = mcap.stat().st_size
                 else:
                     rate = ["--publish-rate", repr(1.0 / end)] if v == "ros-end" else []
                     w, c, err = timed([BIN / "rkforge-ros", a.scene, *threads, *rate], env=env)
@@ -119,6 +132,8 @@ def main():
             m = statistics.median(d[v])
             key = {"process wall": "proc", "loop wall": "loop", "process CPU": "cpu"}[k]
             parts.append(f"{k} {m:6.3f} s ({min(d[v]):.3f}-{max(d[v]):.3f}) x{m / base[key]:.3f}")
+        if v in size:
+            parts.append(f"file {size[v] / 1e6:.2f} MB")
         print(f"  {v:9s} " + " | ".join(parts))
 
 

@@ -90,12 +90,14 @@ class Float64(IdlStruct, typename="std_msgs::msg::dds_::Float64_"):
     data: t.float64
 
 
-def qos(reliable=True):
-    """rclcpp's default (reliable, keep last 10, volatile) or best effort; plain CDR (XCDR1)
-    as rmw_cyclonedds_cpp writes it."""
+def qos(reliable=True, latched=False):
+    """rclcpp's default (reliable, keep last 10, volatile) or best effort; transient local
+    when `latched` (a reader that matches late still gets the samples the writer holds); plain
+    CDR (XCDR1) as rmw_cyclonedds_cpp writes it."""
     r = (Policy.Reliability.Reliable(max_blocking_time=1_000_000_000) if reliable
          else Policy.Reliability.BestEffort)
-    return Qos(r, Policy.History.KeepLast(10), Policy.Durability.Volatile,
+    d = Policy.Durability.TransientLocal if latched else Policy.Durability.Volatile
+    return Qos(r, Policy.History.KeepLast(10), d,
                Policy.DataRepresentation(use_cdrv0_representation=True))
 
 
@@ -105,8 +107,9 @@ class Peer:
     def __init__(self, domain):
         self.dp = DomainParticipant(domain)
 
-    def reader(self, topic, cls, reliable=True):
-        return DataReader(self.dp, Topic(self.dp, "rt" + topic, cls), qos=qos(reliable))
+    def reader(self, topic, cls, reliable=True, latched=False):
+        return DataReader(self.dp, Topic(self.dp, "rt" + topic, cls),
+                          qos=qos(reliable, latched))
 
     def writer(self, topic, cls):
         return DataWriter(self.dp, Topic(self.dp, "rt" + topic, cls), qos=qos(True))
@@ -118,10 +121,17 @@ def take(reader, n=50):
     return [s for s in reader.take(N=n) if not isinstance(s, InvalidSample)]
 
 
-def wait_matched(writer, timeout=20):
-    """Wait until the writer has found the node's reader: DDS topics are volatile, so what is
-    written before that is lost."""
+def wait_matched(writer, timeout=60):
+    """Wait until the writer has found the node's reader: the command topics are volatile, so
+    what is written before that is lost."""
     wait_until(lambda: writer.get_matched_subscriptions(), timeout, "the node's command reader")
+
+
+def wait_readers_matched(readers, timeout=60):
+    """Wait until each reader has found the node's writer (discovery can take seconds on a
+    busy machine)."""
+    for r in readers:
+        wait_until(lambda: r.get_matched_publications(), timeout, "the node's publisher")
 
 
 def stamp_ns(header):

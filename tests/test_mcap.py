@@ -1,7 +1,9 @@
 """MCAP recordings (`rkforge run --mcap`, `rkforge-ros --record`) read back by two independent
-readers, `mcap` + `mcap-ros2-support` and `rosbags`: every message decodes and the values match
-history.csv; SIGINT/SIGTERM finish the file; a killed process leaves a file readable up to its
-last chunk."""
+readers, `mcap` + `mcap-ros2-support` and `rosbags`, zstd-compressed (the default) and
+uncompressed: every message decodes and the values match history.csv; the metadata and the
+attached scene read back equal to the run's scene and summary; SIGINT/SIGTERM finish the file;
+a killed process leaves a file readable up to its last chunk."""
+import json
 import math
 import signal
 import struct
@@ -12,11 +14,11 @@ import pytest
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap.stream_reader import StreamReader
-from mcap.records import Message, Channel, Schema
+from mcap.records import Chunk, Message, Channel, Schema
 from mcap_ros2.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
 
-from ros_peer import history, run_history, small_block, start_node
+from ros_peer import ROOT, history, run_history, small_block, start_node
 
 TOPICS = {
     "/rkforge/top/wrench": "geometry_msgs/msg/WrenchStamped",
@@ -28,14 +30,50 @@ TOPICS = {
 }
 
 
-@pytest.fixture(scope="module")
-def recorded(rkforge_bin, tmp_path_factory):
-    """A short block forging run with --mcap: (history rows, path of the MCAP file)."""
+@pytest.fixture(scope="module", params=["zstd", "none"])
+def recorded(request, rkforge_bin, tmp_path_factory):
+    """A short block forging run with --mcap and the chunk compression of the parameter:
+    (history rows, path of the MCAP file, compression, the run's output folder, scene file)."""
     d = tmp_path_factory.mktemp("mcap")
     scene = small_block(d)
     path = d / "run.mcap"
-    rows = run_history(rkforge_bin, scene, d / "out", "--mcap", str(path))
-    return rows, path
+    rows = run_history(rkforge_bin, scene, d / "out", "--mcap", str(path),
+                       "--mcap-compression", request.param)
+    return rows, path, request.param, d / "out", scene
+
+
+def metadata(path):
+    """The metadata records of an MCAP file: {name: {key: value}}."""
+    with open(path, "rb") as f:
+        return {m.name: dict(m.metadata) for m in make_reader(f).iter_metadata()}
+
+
+def attachments(path):
+    """The attachments of an MCAP file: {name: (media type, bytes)}."""
+    with open(path, "rb") as f:
+        return {a.name: (a.media_type, bytes(a.data)) for a in make_reader(f).iter_attachments()}
+
+
+def complete_chunks(path):
+    """The number of chunks of a file being written that a stream reader reads whole."""
+    n = 0
+    try:
+        with open(path, "rb") as f:
+            for r in StreamReader(f, emit_chunks=True).records:
+                n += isinstance(r, Chunk)
+    except (McapError, EOFError, struct.error, ValueError, OSError):
+        pass  # the chunk being written
+    return n
+
+
+def wait_for_chunks(p, path, n, timeout=120):
+    """Wait until the file of process `p` holds `n` complete chunks (the process must still
+    be running)."""
+    t0 = time.monotonic()
+    while not path.exists() or complete_chunks(path) < n:
+        assert p.poll() is None, f"the run ended before its file had {n} complete chunks"
+        assert time.monotonic() - t0 < timeout, f"no {n} complete chunks after {timeout} s"
+        time.sleep(0.01)
 
 
 def decoded(path):
@@ -100,14 +138,15 @@ def check_against_history(msgs, rows, particles=64):
 
 
 def test_mcap_reader_decodes_every_message_and_matches_history(recorded):
-    rows, path = recorded
+    rows, path, compression, _, _ = recorded
     with open(path, "rb") as f:
         reader = make_reader(f)
         assert reader.get_header().profile == "ros2"
         summary = reader.get_summary()
         assert summary.statistics.message_count == len(rows) * len(TOPICS)
         assert summary.chunk_indexes, "the file is chunked and indexed"
-        assert all(ci.compression == "" for ci in summary.chunk_indexes)
+        expected = {"zstd": "zstd", "none": ""}[compression]
+        assert all(ci.compression == expected for ci in summary.chunk_indexes)
         assert {c.topic: summary.schemas[c.schema_id].name
                 for c in summary.channels.values()} == TOPICS
         assert {c.message_encoding for c in summary.channels.values()} == {"cdr"}
@@ -120,7 +159,7 @@ def test_mcap_reader_decodes_every_message_and_matches_history(recorded):
 
 
 def test_rosbags_decodes_every_message_and_matches_history(recorded):
-    rows, path = recorded
+    rows, path, _, _, _ = recorded
     msgs = []
     with AnyReader([path]) as reader:
         assert {c.topic: c.msgtype for c in reader.connections} == TOPICS
@@ -130,12 +169,37 @@ def test_rosbags_decodes_every_message_and_matches_history(recorded):
     check_against_history(msgs, rows)
 
 
+def test_the_file_holds_the_scene_and_the_summary_of_its_run(recorded):
+    rows, path, compression, out, scene = recorded
+    meta = metadata(path)
+    assert set(meta) == {"rkforge", "rkforge_summary"}
+    assert meta["rkforge"] == {
+        "scene": "block_forging",
+        "scene_file": scene.name,
+        "description": meta["rkforge"]["description"],
+        "kinematics": "plane_strain",
+        "integration": "q2",
+        "resolution": "8x8",
+        "time": '{"end_s":0.003,"dt_s":1e-6,"dt_safety":0.5}',
+        "rkforge_version": "0.1.0",
+        "writer": "rkforge run",
+        "compression": compression,
+    }
+    assert meta["rkforge"]["description"].startswith("Plane-strain block forging")
+    # The summary record is summary.json, byte for byte.
+    assert meta["rkforge_summary"] == {"summary_json": (out / "summary.json").read_text()}
+    summary = json.loads(meta["rkforge_summary"]["summary_json"])
+    assert summary["end_time_s"] == rows[-1]["time_s"]
+    assert attachments(path) == {scene.name: ("application/toml", scene.read_bytes())}
+
+
 def test_the_node_records_the_same_bytes_as_rkforge_run(recorded, rkforge_ros_bin, tmp_path):
-    rows, path = recorded
+    rows, path, compression, run_out, _ = recorded
     scene = small_block(tmp_path)
     out = tmp_path / "node.mcap"
-    p = start_node(rkforge_ros_bin, scene, 151, "--record", str(out))
-    _, err = p.communicate(timeout=60)
+    p = start_node(rkforge_ros_bin, scene, 151, "--record", str(out),
+                   "--record-compression", compression)
+    _, err = p.communicate(timeout=120)
     assert p.returncode == 0, err
     assert f"recorded {out}" in err
 
@@ -144,6 +208,16 @@ def test_the_node_records_the_same_bytes_as_rkforge_run(recorded, rkforge_ros_bi
             return [(c.topic, m.log_time, m.data) for _, c, m in make_reader(fh).iter_messages()]
 
     assert raw(out) == raw(path)
+    meta = metadata(out)
+    assert meta["rkforge"]["writer"] == "rkforge-ros"
+    assert meta["rkforge"]["compression"] == compression
+    summary = json.loads(meta["rkforge_summary"]["summary_json"])
+    assert summary["status"] == "finished"
+    assert summary["samples_published"] == len(rows)
+    assert summary["time_s"] == rows[-1]["time_s"]
+    # The node steps as `rkforge run --no-frames` does.
+    assert summary["steps"] == json.loads((run_out / "summary.json").read_text())["steps"]
+    assert attachments(out) == {scene.name: ("application/toml", scene.read_bytes())}
 
 
 def test_sigint_finishes_the_file_of_rkforge_run(rkforge_bin, tmp_path):
@@ -152,11 +226,8 @@ def test_sigint_finishes_the_file_of_rkforge_run(rkforge_bin, tmp_path):
     p = subprocess.Popen([rkforge_bin, "run", str(scene), "--no-frames", "--quiet",
                           "--out", str(tmp_path / "out"), "--mcap", str(path)],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    # Interrupt once the run is under way (the whole file is about 2 MB).
-    t0 = time.monotonic()
-    while (not path.exists() or path.stat().st_size < 200_000) and time.monotonic() - t0 < 30:
-        assert p.poll() is None, "the run ended before it could be interrupted"
-        time.sleep(0.01)
+    # Interrupt once the run is under way: its first chunk is written.
+    wait_for_chunks(p, path, 1)
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=30)
     assert p.returncode == 1 and "interrupted by a signal" in err, err
@@ -175,15 +246,22 @@ def test_sigterm_finishes_the_file_of_the_node(rkforge_ros_bin, tmp_path):
     # 0.015 s of simulation at 0.003 simulated seconds per second: about 5 s of wall time.
     p = start_node(rkforge_ros_bin, scene, 152, "--record", str(path),
                    "--real-time-factor", "0.003")
+    # Wait for the start line (DDS is up, the run begins), then for about 30 samples.
+    start = p.stderr.readline()
+    assert start.startswith("rkforge-ros: scene"), start
     time.sleep(1.5)
     p.send_signal(signal.SIGTERM)
     _, err = p.communicate(timeout=30)
+    err = start + err
     assert p.returncode == 0, err
     assert "stopped by a signal" in err
     msgs = decoded(path)
     clocks = [m for topic, _, m in msgs if topic == "/clock"]
     assert 3 <= len(clocks) < 101
     assert len(msgs) == len(clocks) * len(TOPICS)
+    summary = json.loads(metadata(path)["rkforge_summary"]["summary_json"])
+    assert summary["status"] == "stopped"
+    assert summary["samples_published"] == len(clocks)
 
 
 def test_a_killed_process_leaves_a_file_readable_to_its_last_chunk(rkforge_bin, tmp_path):
@@ -193,11 +271,8 @@ def test_a_killed_process_leaves_a_file_readable_to_its_last_chunk(rkforge_bin, 
                           "--out", str(tmp_path / "out"), "--mcap", str(path)],
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     # A chunk is closed after the sample that brings it to 512 KiB (or after 1 s of wall
-    # time), so it holds whole samples; the whole file is about 2 MB.
-    t0 = time.monotonic()
-    while (not path.exists() or path.stat().st_size < 600_000) and time.monotonic() - t0 < 30:
-        assert p.poll() is None, "the run ended before it could be killed"
-        time.sleep(0.01)
+    # time), so it holds whole samples; the whole run makes about four.
+    wait_for_chunks(p, path, 1)
     p.kill()
     p.wait()
     with open(path, "rb") as f:
@@ -231,3 +306,29 @@ def test_a_killed_process_leaves_a_file_readable_to_its_last_chunk(rkforge_bin, 
     assert len(messages) == clocks * len(TOPICS)
     times = [m.log_time for m in messages]
     assert times == sorted(times)
+
+
+def test_the_foxglove_layout_shows_recorded_topics_and_fields(recorded):
+    """The shipped layout's panels read topics and fields that a recording has."""
+    _, path, _, _, _ = recorded
+    layout = json.loads((ROOT / "ros_node" / "foxglove" / "rkforge_layout.json").read_text())
+    panels = layout["configById"]
+
+    def leaves(node):
+        return [node] if isinstance(node, str) else leaves(node["first"]) + leaves(node["second"])
+
+    assert sorted(leaves(layout["layout"])) == sorted(panels)
+    last = {topic: m for topic, _, m in decoded(path)}
+    view = panels["3D!rkforge"]
+    assert view["followTf"] == "rkforge" == last["/rkforge/workpiece"].header.frame_id
+    assert set(view["topics"]) == {"/rkforge/workpiece", "/rkforge/tool_markers"}
+    fields = [f.name for f in last["/rkforge/workpiece"].fields]
+    assert view["topics"]["/rkforge/workpiece"]["colorField"] == "plastic_strain" in fields
+    plots = [p for name, p in panels.items() if name.startswith("Plot!")]
+    paths = [p["value"] for plot in plots for p in plot["paths"]]
+    paths += [plot["xAxisPath"]["value"] for plot in plots if plot["xAxisVal"] == "custom"]
+    assert "/rkforge/tools.position[0]" in paths
+    for p in paths:
+        topic, field = p.split(".", 1)
+        name, index = field.rstrip("]").split("[")
+        assert isinstance(getattr(last[topic], name)[int(index)], float), p

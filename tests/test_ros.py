@@ -9,7 +9,7 @@ import pytest
 
 from ros_peer import (Clock, Float64, JointState, Peer, PointCloud2, WrenchStamped, run_history,
                       small_block, stamp_ns, start_node, take, wait_matched,
-                      wait_until)
+                      wait_readers_matched, wait_until)
 
 NS = "/rkforge"
 
@@ -20,10 +20,12 @@ class LockstepController:
 
     def __init__(self, domain, command, clouds=False):
         self.peer = Peer(domain)
-        self.tools = self.peer.reader(f"{NS}/tools", JointState)
-        self.wrenches = {n: self.peer.reader(f"{NS}/{n}/wrench", WrenchStamped)
+        # Transient local, as the node offers them: samples published before a reader
+        # matched still reach it.
+        self.tools = self.peer.reader(f"{NS}/tools", JointState, latched=True)
+        self.wrenches = {n: self.peer.reader(f"{NS}/{n}/wrench", WrenchStamped, latched=True)
                          for n in ["top", "bottom"]}
-        self.clock = self.peer.reader("/clock", Clock)
+        self.clock = self.peer.reader("/clock", Clock, latched=True)
         self.cloud = self.peer.reader(f"{NS}/workpiece", PointCloud2, reliable=False)
         self.cmd = {n: self.peer.writer(f"{NS}/{n}/velocity_cmd", Float64)
                     for n in ["top", "bottom"]}
@@ -33,8 +35,11 @@ class LockstepController:
         self.clouds = {}
         self.clocks = set()
 
-    def serve(self, node, timeout=60):
+    def serve(self, node, timeout=120):
         t0 = time.monotonic()
+        # Before its first answer the controller waits until every reader found the node
+        # (the node holds the first sample until then): nothing published is missed.
+        wait_readers_matched([self.tools, self.clock, *self.wrenches.values()])
         while node.poll() is None:
             assert time.monotonic() - t0 < timeout, "the lockstep run did not finish"
             for js in take(self.tools, 50):
@@ -92,6 +97,40 @@ def test_a_cyclone_dds_peer_reads_the_topics_with_history_values(rkforge_bin, rk
         assert min(p[1] for p in pts) == pytest.approx(row["workpiece.y_min_m"], abs=1e-7)
         assert max(p[1] for p in pts) == pytest.approx(row["workpiece.y_max_m"], abs=1e-7)
         assert max(p[3] for p in pts) >= 0.0
+
+
+def test_a_late_reader_gets_the_samples_published_before_it_joined(rkforge_ros_bin, tmp_path):
+    """Wrenches, joint states, markers and /clock are transient local (keep last 10): a
+    reader that matches after samples were published still receives them, whereas a volatile
+    reader created at the same moment only gets later ones."""
+    scene = small_block(tmp_path)
+    # 20 samples 0.5 s of wall time apart: readers created after the second sample match
+    # long before the first one leaves the publisher's last 10.
+    node = start_node(rkforge_ros_bin, scene, 169, "--real-time-factor", "0.0003")
+    try:
+        peer = Peer(169)
+        first = peer.reader("/clock", Clock)
+        seen = []
+        wait_until(lambda: seen.extend(c.clock.nanosec for c in take(first)) or
+                   any(n >= 150_000 for n in seen) or node.poll() is not None, 60,
+                   "the second sample")
+        assert node.poll() is None, "the run ended before the late readers joined"
+        known = max(seen)
+        latched = peer.reader(f"{NS}/top/wrench", WrenchStamped, latched=True)
+        volatile = peer.reader(f"{NS}/top/wrench", WrenchStamped)
+        wait_readers_matched([latched, volatile])
+        got = {"latched": [], "volatile": []}
+        wait_until(lambda: got["latched"].extend(stamp_ns(w.header) for w in take(latched)) or
+                   got["volatile"].extend(stamp_ns(w.header) for w in take(volatile)) or
+                   (got["latched"] and got["volatile"]) or node.poll() is not None, 60,
+                   "wrenches on both readers")
+        assert node.poll() is None, "the run ended before the late readers got a sample"
+        assert min(got["latched"]) == 0, "the latched reader got the first sample"
+        assert known in got["latched"]
+        assert min(got["volatile"]) > known, "a volatile reader only gets later samples"
+    finally:
+        node.terminate()
+        node.communicate(timeout=30)
 
 
 def test_the_stroke_follows_velocity_commands(rkforge_ros_bin, tmp_path):

@@ -118,6 +118,9 @@ struct RunArgs {
     /// sample to this MCAP file, without DDS.
     #[arg(long)]
     mcap: Option<PathBuf>,
+    /// Chunk compression of the MCAP file: `zstd` or `none`.
+    #[arg(long, default_value = "zstd")]
+    mcap_compression: rkforge_ros::record::Compression,
 }
 
 fn main() -> ExitCode {
@@ -176,7 +179,11 @@ fn run_command(a: RunArgs) -> Result<(), String> {
         out,
         progress: !a.quiet,
         frames: !a.no_frames,
-        mcap: a.mcap,
+        mcap: a.mcap.map(|path| run::McapOptions {
+            path,
+            scene_file: a.scene.clone(),
+            compression: a.mcap_compression,
+        }),
     };
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());

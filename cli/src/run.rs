@@ -3,10 +3,10 @@
 use crate::output::{plots, vtu, HistoryPlots};
 use indicatif::{ProgressBar, ProgressStyle};
 use rkforge_core::{Kinematics, Scene, Simulation};
-use rkforge_ros::record::Recorder;
+use rkforge_ros::record::{Compression, Provenance, Recorder};
 use rkforge_runner::Observer;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
@@ -23,8 +23,18 @@ pub struct Options {
     /// Write VTK frames and PNG plots.
     pub frames: bool,
     /// Record the ROS 2 topics of `rkforge-ros` (namespace `/rkforge`) at every history
-    /// sample to this MCAP file; SIGINT and SIGTERM then stop the run and finish the files.
-    pub mcap: Option<PathBuf>,
+    /// sample to an MCAP file; SIGINT and SIGTERM then stop the run and finish the files.
+    pub mcap: Option<McapOptions>,
+}
+
+/// Where and how to record MCAP.
+pub struct McapOptions {
+    /// The MCAP file.
+    pub path: PathBuf,
+    /// The scene file, attached to the recording.
+    pub scene_file: PathBuf,
+    /// Chunk compression.
+    pub compression: Compression,
 }
 
 /// What a finished run produced.
@@ -83,7 +93,7 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
         opts,
         bar: progress_bar(opts.progress, end),
         mcap: match &opts.mcap {
-            Some(path) => Some(Mcap::start(path, scene)?),
+            Some(m) => Some(Mcap::start(m, scene)?),
             None => None,
         },
         frames: Vec::new(),
@@ -92,9 +102,6 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     let outcome = rkforge_runner::drive(&mut sim, frames, &mut outputs)?;
     outputs.bar.finish_and_clear();
     let clock = Instant::now();
-    if let Some(m) = outputs.mcap.take() {
-        m.recorder.finish()?;
-    }
     outcome.history.write(&opts.out.join("history.csv"))?;
     if frames > 0 {
         vtu::write_pvd(&opts.out.join("frames.pvd"), &outputs.frames).map_err(|e| e.to_string())?;
@@ -117,8 +124,11 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
         outcome.failure.as_deref(),
     );
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    std::fs::write(opts.out.join("summary.json"), text)
+    std::fs::write(opts.out.join("summary.json"), &text)
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
+    if let Some(m) = outputs.mcap.take() {
+        m.recorder.finish(&text)?;
+    }
     plotted?;
     match outcome.failure {
         Some(e) => Err(format!(
@@ -172,10 +182,15 @@ struct Mcap {
 }
 
 impl Mcap {
-    fn start(path: &Path, scene: &Scene) -> Result<Mcap, String> {
+    fn start(opts: &McapOptions, scene: &Scene) -> Result<Mcap, String> {
         let topics = rkforge_ros::topics(scene, "/rkforge")?;
+        let provenance = Provenance {
+            scene,
+            scene_file: &opts.scene_file,
+            writer: "rkforge run",
+        };
         Ok(Mcap {
-            recorder: Recorder::create(path, &topics)?,
+            recorder: Recorder::create(&opts.path, &topics, &provenance, opts.compression)?,
             stop: rkforge_ros::signals::stop_flag()?,
         })
     }

@@ -17,11 +17,11 @@
 //! ```
 
 use clap::Parser;
-use rkforge_ros::dds::{domain_id_from_env, Float64Wire};
+use rkforge_ros::dds::domain_id_from_env;
+use rkforge_ros::msgs::{Float64, JointState, Time};
 use ros2_client::dds::{Context, Publisher};
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{ContextOptions, MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
-use serde::Deserialize;
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
@@ -54,36 +54,10 @@ struct Args {
     idle_timeout: f64,
 }
 
-/// `builtin_interfaces/msg/Time`.
-#[derive(Deserialize, Clone, Copy, PartialEq, Eq)]
-struct Time {
-    sec: i32,
-    nanosec: u32,
-}
-
-/// `std_msgs/msg/Header`.
-#[derive(Deserialize)]
-struct Header {
-    stamp: Time,
-    #[allow(dead_code)] // part of the wire layout
-    frame_id: String,
-}
-
-/// `sensor_msgs/msg/JointState`.
-#[derive(Deserialize)]
-struct JointState {
-    header: Header,
-    name: Vec<String>,
-    position: Vec<f64>,
-    #[allow(dead_code)] // part of the wire layout
-    velocity: Vec<f64>,
-    effort: Vec<f64>,
-}
-
 /// Publish velocity `v` (m/s) on every command topic.
-fn send(commands: &[Publisher<Float64Wire>], v: f64) {
+fn send(commands: &[Publisher<Float64>], v: f64) {
     for p in commands {
-        if p.publish(Float64Wire { data: v }).is_err() {
+        if p.publish(Float64 { data: v }).is_err() {
             eprintln!("warning: command {v} m/s not sent (send window full)");
         }
     }
@@ -136,7 +110,7 @@ fn main() -> Result<(), String> {
             )
             .map_err(|e| format!("{e:?}"))?;
         commands.push(
-            node.create_publisher::<Float64Wire>(&topic, Some(qos.clone()))
+            node.create_publisher::<Float64>(&topic, Some(qos.clone()))
                 .map_err(|e| format!("{e:?}"))?,
         );
     }

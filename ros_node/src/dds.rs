@@ -1,12 +1,15 @@
 //! The ROS 2 node over DDS (`ros2-client`, RustDDS): publishers for the topics of
 //! [`topics`](crate::topics) with their standard DDS type names
 //! (`geometry_msgs::msg::dds_::WrenchStamped_`, ...) and QoS, and a `std_msgs/msg/Float64`
-//! subscription per movable tool for velocity commands.
+//! subscription per movable tool for velocity commands. The state topics a controller needs
+//! from the start (wrenches, joint states, markers, `/clock`) are transient local: a reader
+//! that matches after a sample was published still receives it.
 //!
 //! The messages are those of a [`Sample`], already CDR-encoded by [`msgs`](crate::msgs); they
 //! are handed to DDS as they are (see [`Payload`]), so the wire bytes equal the MCAP bytes.
 
 use crate::frame::Sample;
+use crate::msgs::Float64;
 use crate::Topic;
 use rkforge_core::Scene;
 use ros2_client::dds::rustdds::Topic as DdsTopic;
@@ -14,7 +17,7 @@ use ros2_client::dds::{Context, ContextOptions, Node as RosNode, Publisher, Subs
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 use serde::ser::SerializeTuple;
-use serde::{Deserialize, Serialize, Serializer};
+use serde::{Serialize, Serializer};
 
 /// Largest `ROS_DOMAIN_ID` (the ROS 2 documentation's limit for the default port mapping).
 pub const MAX_DOMAIN_ID: u16 = 232;
@@ -75,13 +78,6 @@ impl Serialize for Payload {
     }
 }
 
-/// `std_msgs/msg/Float64` as the subscription deserializes it.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize)]
-pub struct Float64Wire {
-    /// The value.
-    pub data: f64,
-}
-
 /// A velocity command for a tool.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Command {
@@ -95,7 +91,7 @@ pub struct Command {
 struct CommandInput {
     tool: usize,
     topic: String,
-    sub: Subscription<Float64Wire>,
+    sub: Subscription<Float64>,
     rejected: u64,
 }
 
@@ -120,18 +116,24 @@ fn type_name(message: &str) -> Result<MessageTypeName, String> {
 }
 
 /// The QoS of a topic: reliable (a full send window drops the sample rather than waiting) or
-/// best effort, volatile, keep last [`DEPTH`].
-fn qos(reliable: bool) -> QosProfile {
-    let reliability = if reliable {
+/// best effort; transient local (the samples held are sent to readers that match later) or
+/// volatile; keep last [`DEPTH`].
+fn qos(t: &Topic) -> QosProfile {
+    let reliability = if t.reliable {
         Reliability::Reliable {
             when_full: WhenFull::Fail,
         }
     } else {
         Reliability::BestEffort
     };
+    let durability = if t.latched {
+        Durability::TransientLocal
+    } else {
+        Durability::Volatile
+    };
     QosProfile {
         reliability,
-        durability: Durability::Volatile,
+        durability,
         history: History::KeepLast { depth: DEPTH },
         ..QosProfile::publisher_default()
     }
@@ -159,7 +161,7 @@ impl Node {
             let topic = create_topic(&node, t)?;
             if t.publish {
                 let p = node
-                    .create_publisher::<Payload>(&topic, Some(qos(t.reliable)))
+                    .create_publisher::<Payload>(&topic, Some(qos(t)))
                     .map_err(|e| format!("cannot publish {}: {e:?}", t.name))?;
                 publishers.push((t.name.clone(), p));
             } else {
@@ -169,7 +171,7 @@ impl Node {
                     .position(|s| t.name.ends_with(&format!("/{}/velocity_cmd", s.name)))
                     .ok_or_else(|| format!("no tool for command topic {}", t.name))?;
                 let sub = node
-                    .create_subscription::<Float64Wire>(&topic, Some(qos(true)))
+                    .create_subscription::<Float64>(&topic, Some(qos(t)))
                     .map_err(|e| format!("cannot subscribe to {}: {e:?}", t.name))?;
                 inputs.push(CommandInput {
                     tool,
@@ -277,13 +279,14 @@ impl Node {
 /// The DDS topic (`rt/...`) of `t` with its standard type name.
 fn create_topic(node: &RosNode, t: &Topic) -> Result<DdsTopic, String> {
     let name = Name::parse(&t.name).map_err(|e| format!("topic name {}: {e:?}", t.name))?;
-    node.create_topic(&name, type_name(t.message)?, &qos(t.reliable))
+    node.create_topic(&name, type_name(t.message)?, &qos(t))
         .map_err(|e| format!("cannot create topic {}: {e:?}", t.name))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::msgs::{Clock, JointState, MarkerArray, PointCloud2, RosMessage, WrenchStamped};
 
     #[test]
     fn domain_ids_follow_ros2() {
@@ -301,6 +304,17 @@ mod tests {
     fn type_names_split_into_package_and_type() {
         let t = type_name("geometry_msgs/msg/WrenchStamped").unwrap();
         assert_eq!(t.dds_msg_type(), "geometry_msgs::msg::dds_::WrenchStamped_");
+        // ros2-client derives the DDS name the build script gives each message.
+        for (name, dds) in [
+            (WrenchStamped::TYPE_NAME, WrenchStamped::DDS_TYPE_NAME),
+            (JointState::TYPE_NAME, JointState::DDS_TYPE_NAME),
+            (PointCloud2::TYPE_NAME, PointCloud2::DDS_TYPE_NAME),
+            (MarkerArray::TYPE_NAME, MarkerArray::DDS_TYPE_NAME),
+            (Clock::TYPE_NAME, Clock::DDS_TYPE_NAME),
+            (Float64::TYPE_NAME, Float64::DDS_TYPE_NAME),
+        ] {
+            assert_eq!(type_name(name).unwrap().dds_msg_type(), dds);
+        }
         assert!(type_name("WrenchStamped").is_err());
     }
 }

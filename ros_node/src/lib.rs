@@ -1,7 +1,8 @@
 //! The ROS 2 interface of an rkforge scene: which topics a run publishes and subscribes to,
 //! with their standard message types, under a namespace validated by the ROS 2 naming rules.
 //!
-//! - [`msgs`]: the standard message definitions (schema texts) and their CDR encoding;
+//! - [`msgs`]: the standard messages, generated from the `.msg` files in `ros_node/msg`, and
+//!   their CDR encoding;
 //! - [`frame`]: the messages of one sample of a [`Simulation`](rkforge_core::Simulation);
 //! - [`record`]: the MCAP recorder (used by `rkforge-ros --record` and `rkforge run --mcap`);
 //! - [`signals`]: SIGINT and SIGTERM as a flag, so that a run stops and finishes its files;
@@ -14,6 +15,7 @@ pub mod msgs;
 pub mod record;
 pub mod signals;
 
+use msgs::RosMessage;
 use rkforge_core::scene::{Motion, Scene};
 
 /// A topic with its ROS 2 message type.
@@ -29,6 +31,9 @@ pub struct Topic {
     pub publish: bool,
     /// Reliable (true) or best-effort (false) quality of service.
     pub reliable: bool,
+    /// Transient-local durability (latched): a reader that matches late still receives the
+    /// last samples the publisher holds (keep last 10). Volatile when false.
+    pub latched: bool,
 }
 
 /// Check a namespace against the ROS 2 rules: absolute, tokens of letters, digits and
@@ -76,39 +81,44 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
     for tool in &scene.tools {
         t.push(Topic {
             name: format!("{base}/{}/wrench", tool.name),
-            message: msgs::WRENCH_STAMPED_TYPE,
-            schema: msgs::WRENCH_STAMPED_SCHEMA,
+            message: msgs::WrenchStamped::TYPE_NAME,
+            schema: msgs::WrenchStamped::SCHEMA,
             publish: true,
             reliable: true,
+            latched: true,
         });
     }
     t.push(Topic {
         name: format!("{base}/tools"),
-        message: msgs::JOINT_STATE_TYPE,
-        schema: msgs::JOINT_STATE_SCHEMA,
+        message: msgs::JointState::TYPE_NAME,
+        schema: msgs::JointState::SCHEMA,
         publish: true,
         reliable: true,
+        latched: true,
     });
     t.push(Topic {
         name: format!("{base}/workpiece"),
-        message: msgs::POINT_CLOUD2_TYPE,
-        schema: msgs::POINT_CLOUD2_SCHEMA,
+        message: msgs::PointCloud2::TYPE_NAME,
+        schema: msgs::PointCloud2::SCHEMA,
         publish: true,
         reliable: false,
+        latched: false,
     });
     t.push(Topic {
         name: format!("{base}/tool_markers"),
-        message: msgs::MARKER_ARRAY_TYPE,
-        schema: msgs::MARKER_ARRAY_SCHEMA,
+        message: msgs::MarkerArray::TYPE_NAME,
+        schema: msgs::MarkerArray::SCHEMA,
         publish: true,
         reliable: true,
+        latched: true,
     });
     t.push(Topic {
         name: "/clock".into(),
-        message: msgs::CLOCK_TYPE,
-        schema: msgs::CLOCK_SCHEMA,
+        message: msgs::Clock::TYPE_NAME,
+        schema: msgs::Clock::SCHEMA,
         publish: true,
         reliable: true,
+        latched: true,
     });
     for tool in scene
         .tools
@@ -117,10 +127,11 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
     {
         t.push(Topic {
             name: format!("{base}/{}/velocity_cmd", tool.name),
-            message: msgs::FLOAT64_TYPE,
-            schema: msgs::FLOAT64_SCHEMA,
+            message: msgs::Float64::TYPE_NAME,
+            schema: msgs::Float64::SCHEMA,
             publish: false,
             reliable: true,
+            latched: false,
         });
     }
     Ok(t)

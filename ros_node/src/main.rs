@@ -8,7 +8,8 @@ use clap::Parser;
 use rkforge_core::{Scene, Simulation, MAX_SAMPLES};
 use rkforge_ros::dds::{domain_id_from_env, Command, Node};
 use rkforge_ros::frame::{sample, Sample};
-use rkforge_ros::record::Recorder;
+use rkforge_ros::record::{Compression, Provenance, Recorder};
+use serde_json::json;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -42,6 +43,9 @@ struct Args {
     /// Also record every published message to this MCAP file.
     #[arg(long)]
     record: Option<PathBuf>,
+    /// Chunk compression of the MCAP file: `zstd` or `none`.
+    #[arg(long, default_value = "zstd")]
+    record_compression: Compression,
     /// Pace the run: simulated seconds per wall-clock second (default: as fast as possible).
     #[arg(long)]
     real_time_factor: Option<f64>,
@@ -115,7 +119,16 @@ fn run(a: &Args) -> Result<(), String> {
     let mut sim = Simulation::new(&scene).map_err(|e| e.to_string())?;
     let mut node = Node::new(domain, &a.namespace, &scene)?;
     let mut recorder = match &a.record {
-        Some(p) => Some(Recorder::create(p, &topics)?),
+        Some(p) => Some(Recorder::create(
+            p,
+            &topics,
+            &Provenance {
+                scene: &scene,
+                scene_file: &a.scene,
+                writer: "rkforge-ros",
+            },
+            a.record_compression,
+        )?),
         None => None,
     };
     let stop = rkforge_ros::signals::stop_flag()?;
@@ -152,7 +165,9 @@ fn run(a: &Args) -> Result<(), String> {
     });
     let loop_wall = wall.elapsed().as_secs_f64();
     std::thread::sleep(LINGER);
-    let finished = match recorder.map(Recorder::finish).transpose() {
+    let stopped = stop.load(Ordering::SeqCst);
+    let figures = summary(&sim, &outcome, stopped, node.dropped(), loop_wall);
+    let finished = match recorder.map(|r| r.finish(&figures)).transpose() {
         Ok(p) => p,
         Err(e) => return Err(outcome.err().map_or(e.clone(), |o| format!("{o}; {e}"))),
     };
@@ -174,10 +189,38 @@ fn run(a: &Args) -> Result<(), String> {
             eprintln!("rkforge-ros: {n} commands ignored on {topic}");
         }
     }
-    if stop.load(Ordering::SeqCst) {
+    if stopped {
         eprintln!("rkforge-ros: stopped by a signal");
     }
     Ok(())
+}
+
+/// The run's summary as JSON, for the recording: status (`finished`, `stopped` by a signal,
+/// `error`), the error, final time, steps, samples published, messages dropped and the
+/// loop's wall time (s). The tools' final figures are the last sample's joint state.
+fn summary(
+    sim: &Simulation,
+    outcome: &Result<u64, String>,
+    stopped: bool,
+    dropped: u64,
+    loop_wall: f64,
+) -> String {
+    let status = match (outcome, stopped) {
+        (Err(_), _) => "error",
+        (Ok(_), true) => "stopped",
+        (Ok(_), false) => "finished",
+    };
+    json!({
+        "scene": sim.scene().name,
+        "status": status,
+        "error": outcome.as_ref().err(),
+        "time_s": sim.time(),
+        "steps": sim.steps(),
+        "samples_published": outcome.as_ref().ok(),
+        "messages_dropped": dropped,
+        "loop_wall_s": loop_wall,
+    })
+    .to_string()
 }
 
 /// Sample times after t = 0, as `rkforge run` samples its history

@@ -2,20 +2,29 @@
 //! schema per message type (encoding `ros2msg`, the standard definition's text), one channel
 //! per topic (message encoding `cdr`), log and publish time = simulation time (ns).
 //!
-//! The file is chunked (uncompressed) and indexed. Chunks hold whole samples: a chunk is
-//! closed after the sample that brings it to [`CHUNK_BYTES`], or after the first sample once
-//! [`FLUSH_INTERVAL`] of wall time has passed since the last one, so a killed process leaves
-//! a file that stream readers read up to its last chunk, with every topic of every sample in
-//! it; [`Recorder::finish`] writes the summary and footer.
+//! The file says what made it: a metadata record [`METADATA`] (scene, kinematics, integration
+//! rule, resolution, the scene's `[time]` table, rkforge version, the writing program) and the scene file as an
+//! attachment, both written first; at [`Recorder::finish`] a metadata record [`SUMMARY`]
+//! with the run's summary figures (JSON).
+//!
+//! The file is chunked ([`Compression::Zstd`] by default, or uncompressed) and indexed.
+//! Chunks hold whole samples: a chunk is closed after the sample that brings it to
+//! [`CHUNK_BYTES`] (uncompressed), or after the first sample once [`FLUSH_INTERVAL`] of wall
+//! time has passed since the last one, so a killed process leaves a file that stream readers
+//! read up to its last chunk, with every topic of every sample in it;
+//! [`Recorder::finish`] writes the summary section and footer.
 
 use crate::frame::Sample;
 use crate::Topic;
-use mcap::records::MessageHeader;
-use mcap::{WriteOptions, Writer};
+use mcap::records::{MessageHeader, Metadata};
+use mcap::{Attachment, WriteOptions, Writer};
+use rkforge_core::{Kinematics, Scene};
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
+use std::str::FromStr;
 use std::time::{Duration, Instant};
 
 /// Size from which a chunk is written out at the end of the sample (bytes, uncompressed).
@@ -23,6 +32,64 @@ pub const CHUNK_BYTES: u64 = 512 * 1024;
 
 /// Wall time after which the chunk is written out at the end of the next sample.
 pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
+
+/// Name of the metadata record that describes the run (written when the file is created).
+pub const METADATA: &str = "rkforge";
+
+/// Name of the metadata record with the run's summary (written by [`Recorder::finish`]); its
+/// one key is [`SUMMARY_KEY`].
+pub const SUMMARY: &str = "rkforge_summary";
+
+/// The key of the summary's JSON text in the [`SUMMARY`] record.
+pub const SUMMARY_KEY: &str = "summary_json";
+
+/// Media type of the scene attachment.
+const SCENE_MEDIA_TYPE: &str = "application/toml";
+
+/// Chunk compression of a recording.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Compression {
+    /// Zstandard at its default level, on the recording thread.
+    #[default]
+    Zstd,
+    /// Uncompressed chunks.
+    None,
+}
+
+impl Compression {
+    /// The name used on the command line (`zstd`, `none`).
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Compression::Zstd => "zstd",
+            Compression::None => "none",
+        }
+    }
+}
+
+impl FromStr for Compression {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Compression, String> {
+        match s {
+            "zstd" => Ok(Compression::Zstd),
+            "none" => Ok(Compression::None),
+            _ => Err(format!("MCAP compression `{s}`: expected `zstd` or `none`")),
+        }
+    }
+}
+
+/// Where a recording comes from: written into the file's [`METADATA`] record and attachment.
+#[derive(Debug, Clone, Copy)]
+pub struct Provenance<'a> {
+    /// The scene as run (its integration rule may differ from the file's, e.g. after
+    /// `rkforge run --integration`).
+    pub scene: &'a Scene,
+    /// The scene file, attached as it is.
+    pub scene_file: &'a Path,
+    /// The program writing the file, e.g. `rkforge run`.
+    pub writer: &'a str,
+}
 
 /// Writes samples into an MCAP file.
 pub struct Recorder {
@@ -36,21 +103,58 @@ pub struct Recorder {
 }
 
 impl Recorder {
-    /// Create `path` with a schema and a channel for each published topic of `topics`
-    /// (subscriptions are skipped).
+    /// Create `path`: the [`METADATA`] record and the scene file as an attachment from
+    /// `provenance`, then a schema and a channel for each published topic of `topics`
+    /// (subscriptions are skipped); chunks compressed with `compression`.
     ///
     /// # Errors
     ///
-    /// The file cannot be created or written.
-    pub fn create(path: &Path, topics: &[Topic]) -> Result<Recorder, String> {
+    /// The scene file cannot be read, or `path` cannot be created or written.
+    pub fn create(
+        path: &Path,
+        topics: &[Topic],
+        provenance: &Provenance,
+        compression: Compression,
+    ) -> Result<Recorder, String> {
         let fail = |e: &dyn std::fmt::Display| format!("MCAP file {}: {e}", path.display());
+        let scene_text = std::fs::read(provenance.scene_file).map_err(|e| {
+            format!(
+                "MCAP file {}: cannot read the scene file {} to attach it: {e}",
+                path.display(),
+                provenance.scene_file.display()
+            )
+        })?;
         let file = File::create(path).map_err(|e| fail(&e))?;
         let mut writer = WriteOptions::new()
             .profile("ros2")
             .library(concat!("rkforge-ros ", env!("CARGO_PKG_VERSION")))
-            .compression(None)
+            .compression(match compression {
+                Compression::Zstd => Some(mcap::Compression::Zstd),
+                Compression::None => None,
+            })
+            // Compress on the recording thread: the solver's workers keep their cores.
+            .compression_threads(0)
             .chunk_size(None)
             .create(BufWriter::new(file))
+            .map_err(|e| fail(&e))?;
+        let name = provenance
+            .scene_file
+            .file_name()
+            .map_or_else(|| "scene.toml".into(), |n| n.to_string_lossy());
+        writer
+            .attach(&Attachment {
+                log_time: 0,
+                create_time: 0,
+                name: name.clone().into_owned(),
+                media_type: SCENE_MEDIA_TYPE.into(),
+                data: Cow::Borrowed(&scene_text),
+            })
+            .map_err(|e| fail(&e))?;
+        writer
+            .write_metadata(&Metadata {
+                name: METADATA.into(),
+                metadata: describe(provenance.scene, &name, provenance.writer, compression),
+            })
             .map_err(|e| fail(&e))?;
         let mut schemas: BTreeMap<&str, u16> = BTreeMap::new();
         let mut channels = Vec::new();
@@ -65,10 +169,7 @@ impl Recorder {
                     id
                 }
             };
-            let metadata = BTreeMap::from([(
-                "offered_qos_profiles".to_owned(),
-                offered_qos(t.reliable).to_owned(),
-            )]);
+            let metadata = BTreeMap::from([("offered_qos_profiles".to_owned(), offered_qos(t))]);
             channels.push(
                 writer
                     .add_channel(schema, &t.name, "cdr", &metadata)
@@ -123,27 +224,74 @@ impl Recorder {
         Ok(())
     }
 
-    /// Close the last chunk and write the summary (indexes, statistics) and the footer.
+    /// Close the last chunk, write the [`SUMMARY`] record with `summary` (JSON text) under
+    /// [`SUMMARY_KEY`], then the summary section (indexes, statistics) and the footer.
     ///
     /// # Errors
     ///
     /// The file cannot be written.
-    pub fn finish(mut self) -> Result<PathBuf, String> {
+    pub fn finish(mut self, summary: &str) -> Result<PathBuf, String> {
+        let fail = |e: mcap::McapError| format!("MCAP file {}: {e}", self.path.display());
         self.writer
-            .finish()
-            .map_err(|e| format!("MCAP file {}: {e}", self.path.display()))?;
+            .write_metadata(&Metadata {
+                name: SUMMARY.into(),
+                metadata: BTreeMap::from([(SUMMARY_KEY.to_owned(), summary.to_owned())]),
+            })
+            .map_err(fail)?;
+        self.writer.finish().map_err(fail)?;
         Ok(self.path.clone())
     }
 }
 
+/// The key-value pairs of the [`METADATA`] record.
+fn describe(
+    scene: &Scene,
+    scene_file: &str,
+    writer: &str,
+    compression: Compression,
+) -> BTreeMap<String, String> {
+    let [nx, ny] = scene.workpiece.particles;
+    BTreeMap::from(
+        [
+            ("scene", scene.name.clone()),
+            ("scene_file", scene_file.to_owned()),
+            ("description", scene.description.clone()),
+            (
+                "kinematics",
+                match scene.model.kinematics {
+                    Kinematics::PlaneStrain => "plane_strain",
+                    Kinematics::Axisymmetric => "axisymmetric",
+                }
+                .to_owned(),
+            ),
+            (
+                "integration",
+                scene.discretization.integration.name().to_owned(),
+            ),
+            ("resolution", format!("{nx}x{ny}")),
+            // The scene's [time] table: end time, step or safety factor, mass scaling.
+            (
+                "time",
+                serde_json::to_string(&scene.time).unwrap_or_else(|e| e.to_string()),
+            ),
+            ("rkforge_version", env!("CARGO_PKG_VERSION").to_owned()),
+            ("writer", writer.to_owned()),
+            ("compression", compression.name().to_owned()),
+        ]
+        .map(|(k, v)| (k.to_owned(), v)),
+    )
+}
+
 /// The `offered_qos_profiles` channel metadata rosbag2 writes (YAML), so that `ros2 bag play`
-/// offers the same reliability; keep last 10, volatile.
-fn offered_qos(reliable: bool) -> &'static str {
-    if reliable {
-        "- history: 1\n  depth: 10\n  reliability: 1\n  durability: 2\n  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n  avoid_ros_namespace_conventions: false"
-    } else {
-        "- history: 1\n  depth: 10\n  reliability: 2\n  durability: 2\n  deadline:\n    sec: 2147483647\n    nsec: 4294967295\n  lifespan:\n    sec: 2147483647\n    nsec: 4294967295\n  liveliness: 1\n  liveliness_lease_duration:\n    sec: 2147483647\n    nsec: 4294967295\n  avoid_ros_namespace_conventions: false"
-    }
+/// offers the same QoS as the node: keep last 10, reliable (1) or best effort (2), transient
+/// local (1) or volatile (2).
+fn offered_qos(t: &Topic) -> String {
+    let reliability = if t.reliable { 1 } else { 2 };
+    let durability = if t.latched { 1 } else { 2 };
+    let forever = "\n    sec: 2147483647\n    nsec: 4294967295";
+    format!(
+        "- history: 1\n  depth: 10\n  reliability: {reliability}\n  durability: {durability}\n  deadline:{forever}\n  lifespan:{forever}\n  liveliness: 1\n  liveliness_lease_duration:{forever}\n  avoid_ros_namespace_conventions: false"
+    )
 }
 
 #[cfg(test)]
@@ -152,47 +300,112 @@ mod tests {
     use crate::frame::sample;
     use rkforge_core::{Scene, Simulation};
 
+    /// Temporary file `rkforge_<name>_<pid>.<ext>`.
+    fn temp(name: &str, ext: &str) -> PathBuf {
+        std::env::temp_dir().join(format!("rkforge_{name}_{}.{ext}", std::process::id()))
+    }
+
     /// The MCAP bytes of `samples` samples of the scene `text` (at t = 0, then one per step)
     /// and the simulation at the last one; `name` keeps the temporary files of tests apart.
-    fn record(text: &str, name: &str, samples: usize) -> (Vec<u8>, Simulation) {
+    fn record(
+        text: &str,
+        name: &str,
+        samples: usize,
+        compression: Compression,
+    ) -> (Vec<u8>, Simulation) {
         let scene = Scene::from_str_named(text, "block").unwrap();
         let topics = crate::topics(&scene, "/rkforge").unwrap();
         let mut sim = Simulation::new(&scene).unwrap();
-        let path = std::env::temp_dir().join(format!("rkforge_{name}_{}.mcap", std::process::id()));
-        let mut rec = Recorder::create(&path, &topics).unwrap();
+        let (path, scene_file) = (temp(name, "mcap"), temp(name, "toml"));
+        std::fs::write(&scene_file, text).unwrap();
+        let provenance = Provenance {
+            scene: &scene,
+            scene_file: &scene_file,
+            writer: "test",
+        };
+        let mut rec = Recorder::create(&path, &topics, &provenance, compression).unwrap();
         rec.write(&sample(&sim)).unwrap();
         for _ in 1..samples {
             sim.step(None).unwrap();
             rec.write(&sample(&sim)).unwrap();
         }
-        rec.finish().unwrap();
+        rec.finish(r#"{"steps": 3}"#).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         std::fs::remove_file(&path).unwrap();
+        std::fs::remove_file(&scene_file).unwrap();
         (bytes, sim)
+    }
+
+    fn small_block() -> String {
+        include_str!("../../scenes/block_forging.toml")
+            .replace("particles = [21, 21]", "particles = [5, 5]")
     }
 
     #[test]
     fn a_recording_reads_back_with_every_message() {
-        let text = include_str!("../../scenes/block_forging.toml")
-            .replace("particles = [21, 21]", "particles = [5, 5]");
-        let (bytes, sim) = record(&text, "rec", 4);
+        for compression in [Compression::Zstd, Compression::None] {
+            let (bytes, sim) = record(&small_block(), "rec", 4, compression);
+            let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+            let stats = summary.stats.unwrap();
+            assert_eq!(stats.message_count, 4 * 6);
+            assert_eq!(stats.channel_count, 6);
+            assert_eq!(stats.schema_count, 5);
+            assert!(!summary.chunk_indexes.is_empty());
+            let expected = match compression {
+                Compression::Zstd => "zstd",
+                Compression::None => "",
+            };
+            assert!(summary
+                .chunk_indexes
+                .iter()
+                .all(|c| c.compression == expected));
+            let msgs: Vec<_> = mcap::MessageStream::new(&bytes)
+                .unwrap()
+                .map(Result::unwrap)
+                .collect();
+            assert_eq!(msgs.len(), 24);
+            let last = msgs.last().unwrap();
+            assert_eq!(last.channel.topic, "/clock");
+            assert_eq!(last.log_time, crate::frame::nanos(sim.time()));
+            let schema = last.channel.schema.as_ref().unwrap();
+            assert_eq!(schema.encoding, "ros2msg");
+            assert_eq!(schema.name, "rosgraph_msgs/msg/Clock");
+        }
+    }
+
+    #[test]
+    fn the_file_names_its_scene_and_summary_and_attaches_the_scene() {
+        let text = small_block();
+        let (bytes, _) = record(&text, "meta", 2, Compression::Zstd);
         let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-        let stats = summary.stats.unwrap();
-        assert_eq!(stats.message_count, 4 * 6);
-        assert_eq!(stats.channel_count, 6);
-        assert_eq!(stats.schema_count, 5);
-        assert!(!summary.chunk_indexes.is_empty());
-        let msgs: Vec<_> = mcap::MessageStream::new(&bytes)
-            .unwrap()
-            .map(Result::unwrap)
+        let records: BTreeMap<String, BTreeMap<String, String>> = summary
+            .metadata_indexes
+            .iter()
+            .map(|i| {
+                let m = mcap::read::metadata(&bytes, i).unwrap();
+                (m.name, m.metadata)
+            })
             .collect();
-        assert_eq!(msgs.len(), 24);
-        let last = msgs.last().unwrap();
-        assert_eq!(last.channel.topic, "/clock");
-        assert_eq!(last.log_time, crate::frame::nanos(sim.time()));
-        let schema = last.channel.schema.as_ref().unwrap();
-        assert_eq!(schema.encoding, "ros2msg");
-        assert_eq!(schema.name, "rosgraph_msgs/msg/Clock");
+        let run = &records[METADATA];
+        assert_eq!(run["scene"], "block_forging");
+        assert_eq!(run["integration"], "q2");
+        assert_eq!(run["resolution"], "5x5");
+        assert_eq!(run["kinematics"], "plane_strain");
+        assert_eq!(run["rkforge_version"], env!("CARGO_PKG_VERSION"));
+        assert_eq!(run["compression"], "zstd");
+        assert_eq!(
+            run["time"],
+            r#"{"end_s":0.015,"dt_s":1e-6,"dt_safety":0.5}"#
+        );
+        assert_eq!(
+            records[SUMMARY],
+            BTreeMap::from([(SUMMARY_KEY.to_owned(), r#"{"steps": 3}"#.to_owned())])
+        );
+        assert_eq!(summary.attachment_indexes.len(), 1);
+        let a = mcap::read::attachment(&bytes, &summary.attachment_indexes[0]).unwrap();
+        assert_eq!(a.name, format!("rkforge_meta_{}.toml", std::process::id()));
+        assert_eq!(a.media_type, "application/toml");
+        assert_eq!(&*a.data, text.as_bytes());
     }
 
     /// Chunks close between samples: no sample's messages straddle two chunks, so the
@@ -200,30 +413,68 @@ mod tests {
     #[test]
     fn chunks_hold_whole_samples() {
         let samples = 150;
-        let (bytes, _) = record(
-            include_str!("../../scenes/block_forging.toml"),
-            "chk",
-            samples,
-        );
-        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-        assert_eq!(summary.stats.unwrap().message_count, samples as u64 * 6);
-        let chunks = &summary.chunk_indexes;
-        assert!(chunks.len() >= 2, "{} chunks", chunks.len());
-        for pair in chunks.windows(2) {
-            assert!(pair[0].message_end_time < pair[1].message_start_time);
-            assert!(pair[0].uncompressed_size >= CHUNK_BYTES);
-            assert!(pair[0].uncompressed_size < CHUNK_BYTES + 64 * 1024);
-            assert_eq!(pair[0].message_index_offsets.len(), 6);
+        for compression in [Compression::Zstd, Compression::None] {
+            let (bytes, _) = record(
+                include_str!("../../scenes/block_forging.toml"),
+                "chk",
+                samples,
+                compression,
+            );
+            let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+            assert_eq!(summary.stats.unwrap().message_count, samples as u64 * 6);
+            let chunks = &summary.chunk_indexes;
+            assert!(chunks.len() >= 2, "{} chunks", chunks.len());
+            for pair in chunks.windows(2) {
+                assert!(pair[0].message_end_time < pair[1].message_start_time);
+                assert!(pair[0].uncompressed_size >= CHUNK_BYTES);
+                assert!(pair[0].uncompressed_size < CHUNK_BYTES + 64 * 1024);
+                assert_eq!(pair[0].message_index_offsets.len(), 6);
+            }
         }
     }
 
     #[test]
-    fn a_bad_sample_is_an_error() {
-        let path = std::env::temp_dir().join(format!("rkforge_bad_{}.mcap", std::process::id()));
+    fn compression_names_parse() {
+        assert_eq!("zstd".parse(), Ok(Compression::Zstd));
+        assert_eq!("none".parse(), Ok(Compression::None));
+        let e = "lz4".parse::<Compression>().unwrap_err();
+        assert!(e.contains("`lz4`: expected `zstd` or `none`"), "{e}");
+    }
+
+    #[test]
+    fn a_missing_scene_file_is_named() {
         let scene =
             Scene::from_str_named(include_str!("../../scenes/taylor_bar.toml"), "t").unwrap();
         let topics = crate::topics(&scene, "/rkforge").unwrap();
-        let mut rec = Recorder::create(&path, &topics).unwrap();
+        let provenance = Provenance {
+            scene: &scene,
+            scene_file: Path::new("no/such/scene.toml"),
+            writer: "test",
+        };
+        let path = temp("missing", "mcap");
+        let e = Recorder::create(&path, &topics, &provenance, Compression::Zstd)
+            .err()
+            .unwrap();
+        assert!(
+            e.contains("cannot read the scene file no/such/scene.toml"),
+            "{e}"
+        );
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn a_bad_sample_is_an_error() {
+        let text = include_str!("../../scenes/taylor_bar.toml");
+        let scene = Scene::from_str_named(text, "t").unwrap();
+        let topics = crate::topics(&scene, "/rkforge").unwrap();
+        let (path, scene_file) = (temp("bad", "mcap"), temp("bad", "toml"));
+        std::fs::write(&scene_file, text).unwrap();
+        let provenance = Provenance {
+            scene: &scene,
+            scene_file: &scene_file,
+            writer: "test",
+        };
+        let mut rec = Recorder::create(&path, &topics, &provenance, Compression::None).unwrap();
         let bad = Sample {
             time: 0.0,
             nanos: 0,
@@ -231,7 +482,8 @@ mod tests {
         };
         let e = rec.write(&bad).unwrap_err();
         assert!(e.contains("1 messages for 5 channels"), "{e}");
-        rec.finish().unwrap();
+        rec.finish("{}").unwrap();
         std::fs::remove_file(&path).unwrap();
+        std::fs::remove_file(&scene_file).unwrap();
     }
 }

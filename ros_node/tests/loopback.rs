@@ -3,9 +3,11 @@
 #![cfg(feature = "dds")]
 
 use rkforge_core::{Scene, Simulation};
-use rkforge_ros::dds::{Float64Wire, Node};
+use rkforge_ros::dds::Node;
 use rkforge_ros::frame::sample;
-use rkforge_ros::msgs::{CdrDecode, JointState as JointStateMsg, WrenchStamped as WrenchMsg};
+use rkforge_ros::msgs::{
+    CdrDecode, Float64, JointState as JointStateMsg, WrenchStamped as WrenchMsg,
+};
 use ros2_client::dds::Context;
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{ContextOptions, MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
@@ -100,7 +102,7 @@ fn a_second_node_reads_the_state_and_commands_a_tool() {
         .create_subscription::<WrenchStamped>(&wrench_topic, Some(qos()))
         .unwrap();
     let commands = peer
-        .create_publisher::<Float64Wire>(&cmd_topic, Some(qos()))
+        .create_publisher::<Float64>(&cmd_topic, Some(qos()))
         .unwrap();
 
     for _ in 0..30 {
@@ -127,7 +129,7 @@ fn a_second_node_reads_the_state_and_commands_a_tool() {
             wrench = Some(m);
         }
         for v in [f64::NAN, -1.25] {
-            let _ = commands.publish(Float64Wire { data: v });
+            let _ = commands.publish(Float64 { data: v });
         }
         received.extend(node.take_commands());
         std::thread::sleep(Duration::from_millis(20));

@@ -1,0 +1,400 @@
+//! Derives the message types from the standard definitions in `msg/<package>/msg/<Type>.msg`
+//! (the one source of every message): for each file a Rust struct with its constants and
+//! defaults, its CDR codec (`CdrMessage`, `CdrDecode`) and its `RosMessage` constants (type
+//! name, DDS type name, the `.msg` text and the full `ros2msg` schema as rosbag2 writes it).
+//! The generated code is included by `src/msgs.rs`.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The 80-`=` line rosbag2 puts between the definitions of a schema.
+const SEPARATOR: &str =
+    "================================================================================";
+
+/// ROS 2 primitive types: (name, Rust type, codec suffix of `write_*`/`read_*`, float?).
+const PRIMITIVES: [(&str, &str, &str, bool); 8] = [
+    ("bool", "bool", "bool", false),
+    ("byte", "u8", "u8", false),
+    ("uint8", "u8", "u8", false),
+    ("int32", "i32", "i32", false),
+    ("uint32", "u32", "u32", false),
+    ("float32", "f32", "f32", true),
+    ("float64", "f64", "f64", true),
+    ("string", "String", "string", false),
+];
+
+/// Primitive names rosbag2 does not treat as dependencies (all of ROS 2's, used or not).
+const ROS_PRIMITIVES: [&str; 14] = [
+    "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32",
+    "uint32", "int64", "uint64", "string",
+];
+
+/// Sequences the codec reads and writes: element type -> codec suffix.
+const SEQUENCES: [(&str, &str); 3] = [
+    ("uint8", "u8_seq"),
+    ("float64", "f64_seq"),
+    ("string", "string_seq"),
+];
+
+/// A field of a message: ROS type (`pkg/Type` for messages), name, sequence?, default.
+struct Field {
+    ty: String,
+    name: String,
+    seq: bool,
+    default: Option<String>,
+}
+
+/// One `.msg` file.
+struct Message {
+    /// `pkg/Type`, as rosbag2 names it after `MSG:`.
+    name: String,
+    path: PathBuf,
+    text: String,
+    fields: Vec<Field>,
+    /// (ROS type, name, value).
+    constants: Vec<(String, String, String)>,
+}
+
+impl Message {
+    fn package(&self) -> &str {
+        self.name.split('/').next().unwrap_or_default()
+    }
+
+    fn ident(&self) -> &str {
+        self.name.rsplit('/').next().unwrap_or_default()
+    }
+}
+
+fn primitive(ty: &str) -> Option<(&'static str, &'static str, bool)> {
+    PRIMITIVES
+        .iter()
+        .find(|p| p.0 == ty)
+        .map(|p| (p.1, p.2, p.3))
+}
+
+/// Parse the fields and constants of `text` (a `.msg` of package `package`).
+fn parse(path: &Path, package: &str, text: &str) -> (Vec<Field>, Vec<(String, String, String)>) {
+    let mut fields = Vec::new();
+    let mut constants = Vec::new();
+    for (k, line) in text.lines().enumerate() {
+        let at = || format!("{}:{}", path.display(), k + 1);
+        let code = line.split('#').next().unwrap_or_default().trim();
+        if code.is_empty() {
+            continue;
+        }
+        let (ty, rest) = code
+            .split_once(char::is_whitespace)
+            .unwrap_or_else(|| panic!("{}: a field needs a type and a name", at()));
+        let rest = rest.trim();
+        if let Some((name, value)) = rest.split_once('=') {
+            assert!(primitive(ty).is_some(), "{}: constant of type {ty}", at());
+            constants.push((
+                ty.to_owned(),
+                name.trim().to_owned(),
+                value.trim().to_owned(),
+            ));
+            continue;
+        }
+        let (base, seq) = match ty.strip_suffix("[]") {
+            Some(b) => (b, true),
+            None => (ty, false),
+        };
+        assert!(
+            !base.contains(['[', '<', '>']),
+            "{}: bounded and fixed-size arrays and strings are not supported",
+            at()
+        );
+        let base = if primitive(base).is_some() || base.contains('/') {
+            base.to_owned()
+        } else {
+            format!("{package}/{base}")
+        };
+        if seq && primitive(&base).is_some() {
+            assert!(
+                SEQUENCES.iter().any(|s| s.0 == base),
+                "{}: sequences of {base} are not supported",
+                at()
+            );
+        }
+        let mut words = rest.split_whitespace();
+        let name = words.next().unwrap_or_default().to_owned();
+        let default = words.next().map(str::to_owned);
+        assert!(
+            words.next().is_none(),
+            "{}: unexpected text after the default",
+            at()
+        );
+        fields.push(Field {
+            ty: base,
+            name,
+            seq,
+            default,
+        });
+    }
+    (fields, constants)
+}
+
+/// The field types rosbag2 finds in a `.msg` text (`LocalMessageDefinitionSource`): the first
+/// token of every line that starts (after blanks) with `[A-Za-z0-9_/]` and continues with
+/// blanks, array brackets stripped, primitives dropped, bare names qualified with `package`.
+fn dependencies(text: &str, package: &str) -> BTreeSet<String> {
+    let mut deps = BTreeSet::new();
+    for line in text.lines() {
+        let line = line.trim_start();
+        let token_len = line
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '/'))
+            .unwrap_or(line.len());
+        let (token, rest) = line.split_at(token_len);
+        let rest = match rest.strip_prefix('[') {
+            Some(r) => r.split_once(']').map_or("", |(_, after)| after),
+            None => rest,
+        };
+        if token.is_empty() || !rest.starts_with(char::is_whitespace) {
+            continue;
+        }
+        if ROS_PRIMITIVES.contains(&token) {
+            continue;
+        }
+        if token.contains('/') {
+            deps.insert(token.to_owned());
+        } else {
+            deps.insert(format!("{package}/{token}"));
+        }
+    }
+    deps
+}
+
+/// rosbag2's full text of `name` as Rust `concat!` arguments: the `.msg` text, then for each
+/// dependency not yet written, depth first in sorted order, a delimiter and its text.
+fn schema(name: &str, all: &BTreeMap<String, Message>, seen: &mut BTreeSet<String>) -> String {
+    let m = &all[name];
+    let mut out = format!("include_str!({:?}), ", m.path.display().to_string());
+    for dep in dependencies(&m.text, m.package()) {
+        assert!(all.contains_key(&dep), "{name} needs {dep}: no msg file");
+        if seen.insert(dep.clone()) {
+            let _ = write!(out, "{:?}, ", format!("\n{SEPARATOR}\nMSG: {dep}\n"));
+            out += &schema(&dep, all, seen);
+        }
+    }
+    out
+}
+
+/// Rust type of a field.
+fn rust_type(f: &Field, all: &BTreeMap<String, Message>) -> String {
+    let base = match primitive(&f.ty) {
+        Some((rust, _, _)) => rust.to_owned(),
+        None => all[&f.ty].ident().to_owned(),
+    };
+    if f.seq {
+        format!("Vec<{base}>")
+    } else {
+        base
+    }
+}
+
+/// Whether values of message `name` are plain data (`Copy`), and free of floats (`Eq`, `Hash`).
+fn traits(name: &str, all: &BTreeMap<String, Message>) -> (bool, bool) {
+    let (mut copy, mut eq) = (true, true);
+    for f in &all[name].fields {
+        let (c, e) = match primitive(&f.ty) {
+            Some((rust, _, float)) => (rust != "String", !float),
+            None => traits(&f.ty, all),
+        };
+        copy &= c && !f.seq;
+        eq &= e;
+    }
+    (copy, eq)
+}
+
+fn field_ident(name: &str) -> String {
+    if name == "type" {
+        "r#type".into()
+    } else {
+        name.into()
+    }
+}
+
+/// A `.msg` default or constant value as a Rust literal of `ty`.
+fn literal(ty: &str, value: &str) -> String {
+    match primitive(ty) {
+        Some((_, _, true)) => format!(
+            "{:?}",
+            value
+                .parse::<f64>()
+                .unwrap_or_else(|e| panic!("{value}: {e}"))
+        ),
+        Some(("bool", _, _)) => value.to_lowercase(),
+        _ => value.to_owned(),
+    }
+}
+
+fn generate(m: &Message, all: &BTreeMap<String, Message>) -> String {
+    let ident = m.ident();
+    let (copy, eq) = traits(&m.name, all);
+    let has_defaults = m.fields.iter().any(|f| f.default.is_some());
+    let (pkg, ty) = (m.package(), ident);
+    let mut derives = vec!["Debug", "Clone", "PartialEq"];
+    if copy {
+        derives.push("Copy");
+    }
+    if eq {
+        derives.extend(["Eq", "Hash"]);
+    }
+    if !has_defaults {
+        derives.push("Default");
+    }
+    let mut s = format!(
+        "/// `{pkg}/msg/{ty}`, generated from `msg/{pkg}/msg/{ty}.msg`.\n#[derive({})]\n\
+         #[cfg_attr(feature = \"dds\", derive(serde::Serialize, serde::Deserialize))]\npub struct {ident} {{\n",
+        derives.join(", ")
+    );
+    for f in &m.fields {
+        let decl = format!("{}{} {}", f.ty, if f.seq { "[]" } else { "" }, f.name);
+        let _ = writeln!(
+            s,
+            "    /// `{decl}`\n    pub {}: {},",
+            field_ident(&f.name),
+            rust_type(f, all)
+        );
+    }
+    s += "}\n\n";
+    if !m.constants.is_empty() {
+        let _ = writeln!(s, "impl {ident} {{");
+        for (cty, name, value) in &m.constants {
+            let rust = primitive(cty).map_or("", |p| p.0);
+            let _ = writeln!(
+                s,
+                "    /// `{cty} {name}={value}`\n    pub const {name}: {rust} = {};",
+                literal(cty, value)
+            );
+        }
+        s += "}\n\n";
+    }
+    if has_defaults {
+        let _ = writeln!(
+            s,
+            "impl Default for {ident} {{\n    /// The defaults of the definition.\n    fn default() -> Self {{\n        Self {{"
+        );
+        for f in &m.fields {
+            let value = f
+                .default
+                .as_deref()
+                .map_or_else(|| "Default::default()".to_owned(), |v| literal(&f.ty, v));
+            let _ = writeln!(s, "            {}: {value},", field_ident(&f.name));
+        }
+        s += "        }\n    }\n}\n\n";
+    }
+    let mut write = String::new();
+    let mut read = String::new();
+    for f in &m.fields {
+        let id = field_ident(&f.name);
+        match (primitive(&f.ty), f.seq) {
+            (Some((_, "string", _)), false) => {
+                let _ = writeln!(write, "        w.write_string(&self.{id});");
+                let _ = writeln!(read, "            {id}: r.read_string()?,");
+            }
+            (Some((_, suffix, _)), false) => {
+                let _ = writeln!(write, "        w.write_{suffix}(self.{id});");
+                let _ = writeln!(read, "            {id}: r.read_{suffix}()?,");
+            }
+            (Some(_), true) => {
+                let suffix = SEQUENCES.iter().find(|q| q.0 == f.ty).map_or("", |q| q.1);
+                let _ = writeln!(write, "        w.write_{suffix}(&self.{id});");
+                let _ = writeln!(read, "            {id}: r.read_{suffix}()?,");
+            }
+            (None, true) => {
+                let _ = writeln!(write, "        w.write_seq(&self.{id});");
+                let _ = writeln!(read, "            {id}: r.read_seq()?,");
+            }
+            (None, false) => {
+                let _ = writeln!(write, "        self.{id}.write_cdr(w);");
+                let _ = writeln!(read, "            {id}: CdrDecode::read_cdr(r)?,");
+            }
+        }
+    }
+    let w = if m.fields.is_empty() { "_w" } else { "w" };
+    let r = if m.fields.is_empty() { "_r" } else { "r" };
+    let _ = write!(
+        s,
+        "impl CdrMessage for {ident} {{\n    fn write_cdr(&self, {w}: &mut CdrWriter) {{\n{write}    }}\n}}\n\n\
+         impl CdrDecode for {ident} {{\n    fn read_cdr({r}: &mut CdrReader<'_>) -> Result<Self, CdrError> {{\n        Ok(Self {{\n{read}        }})\n    }}\n}}\n\n"
+    );
+    let full = schema(&m.name, all, &mut BTreeSet::new());
+    let _ = write!(
+        s,
+        "impl RosMessage for {ident} {{\n    const TYPE_NAME: &'static str = \"{pkg}/msg/{ty}\";\n    \
+         const DDS_TYPE_NAME: &'static str = \"{pkg}::msg::dds_::{ty}_\";\n    \
+         const DEFINITION: &'static str = include_str!({:?});\n    \
+         const SCHEMA: &'static str = concat!({full});\n}}\n\n",
+        m.path.display().to_string()
+    );
+    s
+}
+
+fn main() {
+    let root =
+        PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it")).join("msg");
+    println!("cargo:rerun-if-changed={}", root.display());
+    let mut all = BTreeMap::new();
+    let mut packages: Vec<_> = std::fs::read_dir(&root)
+        .expect("ros_node/msg holds the message definitions")
+        .map(|e| e.expect("readable msg directory").path())
+        .filter(|p| p.is_dir())
+        .collect();
+    packages.sort();
+    for dir in packages {
+        let package = dir
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default()
+            .to_owned();
+        let mut files: Vec<_> = std::fs::read_dir(dir.join("msg"))
+            .unwrap_or_else(|e| panic!("{}/msg: {e}", dir.display()))
+            .map(|e| e.expect("readable msg directory").path())
+            .filter(|p| p.extension().is_some_and(|x| x == "msg"))
+            .collect();
+        files.sort();
+        for path in files {
+            println!("cargo:rerun-if-changed={}", path.display());
+            let ty = path
+                .file_stem()
+                .and_then(|n| n.to_str())
+                .unwrap_or_default();
+            let text = std::fs::read_to_string(&path)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            let (fields, constants) = parse(&path, &package, &text);
+            let name = format!("{package}/{ty}");
+            all.insert(
+                name.clone(),
+                Message {
+                    name,
+                    path,
+                    text,
+                    fields,
+                    constants,
+                },
+            );
+        }
+    }
+    let mut idents = BTreeSet::new();
+    for m in all.values() {
+        assert!(
+            idents.insert(m.ident().to_owned()),
+            "two messages named {}",
+            m.ident()
+        );
+        for f in &m.fields {
+            assert!(
+                primitive(&f.ty).is_some() || all.contains_key(&f.ty),
+                "{}: field {} of unknown type {}",
+                m.name,
+                f.name,
+                f.ty
+            );
+        }
+    }
+    let code: String = all.values().map(|m| generate(m, &all)).collect();
+    let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it")).join("msgs.rs");
+    std::fs::write(&out, code).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
+}
