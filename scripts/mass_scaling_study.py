@@ -50,11 +50,12 @@ def scene_text(name, particles, speed, scaling, samples):
     return text.replace("[time]\n", time), tools, per_travel, strokes, end
 
 
-def run(binary, text, out):
+def run(binary, text, out, overrides):
     scene = out / "scene.toml"
     out.mkdir(parents=True, exist_ok=True)
     scene.write_text(text)
-    subprocess.run([binary, "run", str(scene), "--out", str(out), "--no-frames", "--quiet"],
+    sets = [arg for kv in overrides for arg in ("--set", kv)]
+    subprocess.run([binary, "run", str(scene), "--out", str(out), "--no-frames", "--quiet", *sets],
                    check=False, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     summary = json.loads((out / "summary.json").read_text())
     with open(out / "history.csv") as f:
@@ -79,6 +80,8 @@ def main():
     p.add_argument("--scaling", default="none,factor=1e2,factor=1e4,factor=1e6",
                    help="comma-separated: none, factor=F, target=DT_S")
     p.add_argument("--samples", type=int, default=300, help="history rows over the stroke")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="scene override for every run (rkforge run --set), repeatable")
     p.add_argument("--out", type=Path, required=True)
     a = p.parse_args()
     binary = os.environ.get("RKFORGE_BIN", str(ROOT / "target/release/rkforge"))
@@ -87,7 +90,7 @@ def main():
     curves = {}
     for scaling in a.scaling.split(","):
         text, tools, per_travel, strokes, end = scene_text(a.scene, particles, a.speed, scaling, a.samples)
-        summary, history = run(binary, text, a.out / scaling.replace("=", "_"))
+        summary, history = run(binary, text, a.out / scaling.replace("=", "_"), a.set)
         ms = summary.get("mass_scaling") or {}
         row = {
             "scaling": scaling,
@@ -113,7 +116,8 @@ def main():
         w.writeheader()
         w.writerows(rows)
     force_keys = [k for k in ref if k.startswith("force_at_")]
-    lines = [f"{a.scene} at {a.speed * 1e3:g} mm/s per tool, {a.particles}, dt_safety 0.9; "
+    lines = [f"{a.scene} at {a.speed * 1e3:g} mm/s per tool, {a.particles}, dt_safety 0.9"
+             f"{''.join(', ' + s for s in a.set)}; "
              f"reference: {ref['scaling']} ({ref['steps']} steps, {ref['wall_s']:.1f} s)", "",
              "| scaling | added mass | steps | wall (s) | wall / ref | KE/IE max | "
              + " | ".join(k[len('force_at_'):-2] + " force dev." for k in force_keys)

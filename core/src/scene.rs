@@ -315,10 +315,11 @@ pub struct Checks {
     /// warns above 5 %) but never stops the run.
     #[serde(default)]
     pub kinetic_to_internal_max: Option<Real>,
-    /// Start of the kinetic-to-internal watch as a fraction of `time.end_s` (-), in [0, 1):
-    /// the first contact accelerates the touched layer to the tool speed while the
-    /// internal energy is still small (the ratio is 0.26 at 1 % of the shipped block
-    /// forging's stroke and below 0.02 from 10 % on).
+    /// Start of the kinetic-to-internal watch (-), in [0, 1): this fraction of the time from
+    /// the first contact (t = 0 for a workpiece without tools) to `time.end_s`. The first
+    /// contact accelerates the touched layer to the tool speed while the internal energy is
+    /// still small (the ratio is 0.26 at 1 % of the shipped block forging's stroke and below
+    /// 0.02 from 10 % on).
     #[serde(default = "default_watch_from")]
     pub kinetic_to_internal_from: Real,
 }

@@ -139,3 +139,27 @@ fn mass_scaling_keys_are_checked() {
         );
     }
 }
+
+/// Bug (found driving the FMU with a crank press): the watch began at a fixed fraction of
+/// the end time, so a tool that reached the workpiece later met a kinetic energy above zero
+/// with no internal energy yet (an infinite ratio) and stopped the run at first contact.
+/// The start-up now counts from the first contact: tools 30 mm away from the block touch
+/// it after 1.2 s of the 2.4 s run, and a moderate scaling passes a 5 % bound.
+#[test]
+fn the_watch_starts_after_a_late_first_contact() {
+    let mut scene = block_at_press_speed(11, 0.025);
+    scene.time.end_s *= 0.4;
+    for t in &mut scene.tools {
+        for p in &mut t.points_m {
+            p[1] += 0.03 * p[1].signum();
+        }
+    }
+    scene.checks.kinetic_to_internal_max = Some(0.05);
+    scene.time.mass_scaling = uniform(1e3);
+    let mut sim = Simulation::new(&scene).unwrap();
+    sim.run_to(scene.time.end_s, |_| {}).unwrap();
+    let first = sim.state().first_contact_s.unwrap();
+    assert!((first - 1.2).abs() < 0.01, "first contact at {first} s");
+    let ratio = sim.kinetic_to_internal_max();
+    assert!(ratio > 0.0 && ratio < 0.05, "{ratio}");
+}

@@ -294,6 +294,7 @@ impl Simulation {
                 anchor_time: 0.0,
                 anchor_step: 0,
                 kinetic_to_internal_max: 0.0,
+                first_contact_s: None,
             },
             tools,
             out: vec![PointOut::initial(&material); npts],
@@ -588,7 +589,16 @@ impl Simulation {
             self.st.stable_dt,
         )?;
         // 8. The quasi-static watch: kinetic against internal energy after the start-up.
-        if self.st.time >= checks.kinetic_to_internal_from * self.scene.time.end_s {
+        if contact && self.st.first_contact_s.is_none() {
+            self.st.first_contact_s = Some(self.st.time);
+        }
+        let start = match (self.tools.is_empty(), self.st.first_contact_s) {
+            (true, _) => Some(0.0),
+            (false, first) => first,
+        };
+        let end = self.scene.time.end_s;
+        if start.is_some_and(|t0| self.st.time >= t0 + checks.kinetic_to_internal_from * (end - t0))
+        {
             let ratio = self.st.energy.kinetic_to_internal();
             self.st.kinetic_to_internal_max = self.st.kinetic_to_internal_max.max(ratio);
             if let Some(bound) = checks.kinetic_to_internal_max {

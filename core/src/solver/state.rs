@@ -38,4 +38,7 @@ pub struct State {
     /// Largest kinetic-to-internal energy ratio since the quasi-static watch began (-).
     #[serde(default)]
     pub kinetic_to_internal_max: Real,
+    /// Time of the first step with a contact force (s), where the watch's start-up begins.
+    #[serde(default)]
+    pub first_contact_s: Option<Real>,
 }
