@@ -22,7 +22,7 @@ import math
 import sys
 from dataclasses import dataclass, field
 
-from driver import argument_parser, report, run_from_command_line
+from driver import argument_parser, script
 
 BILLET_HEIGHT = 0.060  # m, scenes/press_upsetting.toml
 RAM_GAP = 0.150        # m, ram above the billet in the crank press's FMU
@@ -120,28 +120,32 @@ def bisect(f, lo=0.0, hi=math.pi):
     return (lo + hi) / 2
 
 
-def main(argv=None):
-    p = argument_parser(__doc__.split("\n\n")[0], step=2e-4, target_dt=2e-5, ram_gap_m=RAM_GAP)
-    p.add_argument("--shut-height", type=float, default=0.040,
-                   help="billet height at BDC (m); 0.030 overloads the press")
-    args = p.parse_args(argv)
-    press = CrankPress(shut_height=args.shut_height)
-    e0 = press.flywheel_energy()
-    hist = run_from_command_line(args, press, 10.0)
-    print(f"start at {math.degrees(press.theta0):.1f} deg from TDC, {hist['t'][-1]:.3f} s of press "
-          f"time, crank at {math.degrees(press.theta):.1f} deg")
-    print(f"largest force {hist['force'].max() / 1e6:.3f} MN, billet height "
-          f"{hist['height'][-1] * 1e3:.2f} mm; flywheel energy {e0 / 1e3:.2f} -> "
-          f"{press.flywheel_energy() / 1e3:.2f} kJ, work on the billet "
-          f"{hist['tool_work'][-1] / 1e3:.2f} kJ")
+def summary(press, hist):
+    """What the run shows, in words."""
+    lines = [f"start at {math.degrees(press.theta0):.1f} deg from TDC, {hist['t'][-1]:.3f} s of "
+             f"press time, crank at {math.degrees(press.theta):.1f} deg",
+             f"largest force {hist['force'].max() / 1e6:.3f} MN, billet height "
+             f"{hist['height'][-1] * 1e3:.2f} mm; flywheel energy "
+             f"{hist['flywheel_energy'][0] / 1e3:.2f} -> {press.flywheel_energy() / 1e3:.2f} kJ, "
+             f"work on the billet {hist['tool_work'][-1] / 1e3:.2f} kJ"]
     if press.overload:
         theta, f, allowed = press.overload
-        print(f"OVERLOAD at {math.degrees(math.pi - theta):.2f} deg before BDC: {f / 1e6:.3f} MN "
-              f"> {allowed / 1e6:.3f} MN allowed")
+        lines.append(f"OVERLOAD at {math.degrees(math.pi - theta):.2f} deg before BDC: "
+                     f"{f / 1e6:.3f} MN > {allowed / 1e6:.3f} MN allowed")
     if press.stall is not None:
-        print(f"STALL: the flywheel stopped at {math.degrees(math.pi - press.stall):.2f} deg "
-              "before BDC")
-    report(hist, args, "crank press")
+        lines.append(f"STALL: the flywheel stopped at {math.degrees(math.pi - press.stall):.2f} "
+                     "deg before BDC")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    p = argument_parser(__doc__, step=2e-4, time=10.0, target_dt=2e-5, ram_gap_m=RAM_GAP)
+    p.add_argument("--shut-height", type=float, default=0.040,
+                   help="billet height at BDC (m); 0.030 overloads the press")
+    p.add_argument("--inertia", type=float, default=3.0e4,
+                   help="flywheel inertia referred to the crankshaft (kg m^2)")
+    script(p, argv, lambda a: CrankPress(shut_height=a.shut_height, inertia=a.inertia), summary,
+           "crank press")
 
 
 if __name__ == "__main__":

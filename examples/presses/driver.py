@@ -11,9 +11,10 @@ Coupling (one communication step of length h, press time t_k -> t_k + h):
 3. the plant integrates its equations over the step with F held at that value.
 
 The plant sees the force only at the communication points, one value per step, while the
-workpiece received the solver's work. The difference, the coupling error, is of order
-h |dF/dt| / F per step and shrinks linearly with h; the tests measure it as the mismatch
-between the plant's energy balance and `energy.tool_work`.
+workpiece received the solver's work. The difference, the coupling error, grows with
+h |dF/dt| / F; the tests measure it as the mismatch between the plant's energy balance and
+`energy.tool_work` (for the hammer's 3 ms blows: 1.4-1.9 % per blow at h = 100 us, below
+0.4 % at 40 us and less).
 """
 import argparse
 import ctypes
@@ -168,11 +169,12 @@ def simulate(path, plant, h, t_max, nx, ny, factor=1.0, target_dt=0.0):
         slave.close()
 
 
-def argument_parser(description, step, target_dt=None, ram_gap_m=0.0, nx=6, ny=16):
-    """Command-line options shared by the press scripts, for an FMU of the billet with the ram
-    `ram_gap_m` (m) above it; `--target-dt` (selective mass scaling) when `target_dt` (s) is
-    given as its default."""
-    p = argparse.ArgumentParser(description=description,
+def argument_parser(doc, step, time, target_dt=None, ram_gap_m=0.0, nx=6, ny=16):
+    """Command-line options shared by the press scripts (described by the first paragraph of
+    `doc`), for an FMU of the billet with the ram `ram_gap_m` (m) above it, with defaults for
+    the communication step and the press time (s); `--target-dt` (selective mass scaling)
+    when `target_dt` (s) is given as its default."""
+    p = argparse.ArgumentParser(description=doc.split("\n\n")[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.set_defaults(ram_gap=ram_gap_m, target_dt=0.0)
     where = "on the billet" if ram_gap_m == 0 else f"{ram_gap_m * 1e3:g} mm above the billet"
@@ -181,6 +183,8 @@ def argument_parser(description, step, target_dt=None, ram_gap_m=0.0, nx=6, ny=1
     p.add_argument("--nx", type=int, default=nx, help="particles along r")
     p.add_argument("--ny", type=int, default=ny, help="particles along z")
     p.add_argument("--step", type=float, default=step, help="communication step (s)")
+    p.add_argument("--time", type=float, default=time,
+                   help="largest press time (s); the press may finish earlier")
     if target_dt is not None:
         p.add_argument("--target-dt", type=float, default=target_dt,
                        help="selective mass scaling: target solver step (s), 0 for none")
@@ -190,13 +194,19 @@ def argument_parser(description, step, target_dt=None, ram_gap_m=0.0, nx=6, ny=1
     return p
 
 
-def run_from_command_line(args, plant, t_max):
-    """`simulate` with the command line's FMU (or one built for it), step and resolution."""
+def script(parser, argv, make_plant, summarise, title):
+    """A press script: parses `argv` with `parser`, makes the plant from the arguments, runs
+    it against the FMU given (or built), prints `summarise(plant, history)` and writes the
+    CSV and the plot asked for."""
+    args = parser.parse_args(argv)
+    plant = make_plant(args)
     with tempfile.TemporaryDirectory() as d:
         path = args.fmu or build_fmu(upsetting_scene(args.ram_gap),
                                      pathlib.Path(d) / "press_upsetting.fmu")
-        return simulate(path, plant, args.step, t_max, args.nx, args.ny,
+        hist = simulate(path, plant, args.step, args.time, args.nx, args.ny,
                         target_dt=args.target_dt)
+    print(summarise(plant, hist))
+    report(hist, args, title)
 
 
 def report(history, args, title):

@@ -13,7 +13,7 @@ rate-independent, so the pause between blows does not matter).
 import sys
 from dataclasses import dataclass, field
 
-from driver import argument_parser, report, run_from_command_line
+from driver import argument_parser, script
 
 
 @dataclass
@@ -79,22 +79,24 @@ class Hammer:
         return {"blow": len(self.blows)}
 
 
+def summary(hammer, hist):
+    """What the run shows, in words: each blow's energy account."""
+    lines = [f"blow energy {hammer.ram_mass * hammer.impact_speed ** 2 / 2 / 1e3:.3f} kJ"]
+    for k, b in enumerate(hammer.blows, 1):
+        if b.height is not None:
+            lost = b.kinetic_energy_lost(hammer.ram_mass)
+            lines.append(f"blow {k}: work on the billet {b.work / 1e3:.4f} kJ, ram energy lost "
+                         f"{lost / 1e3:.4f} kJ ({(b.work / lost - 1) * 100:+.2f} %), rebound "
+                         f"{b.v_end:.3f} m/s, height {b.height * 1e3:.2f} mm")
+    return "\n".join(lines)
+
+
 def main(argv=None):
-    p = argument_parser(__doc__.split("\n\n")[0], step=1e-5)
+    p = argument_parser(__doc__, step=1e-5, time=1.0)
     p.add_argument("--target-height", type=float, default=0.045, help="billet height (m)")
     p.add_argument("--impact-speed", type=float, default=5.0, help="v0 (m/s)")
-    args = p.parse_args(argv)
-    hammer = Hammer(target_height=args.target_height, impact_speed=args.impact_speed)
-    hist = run_from_command_line(args, hammer, 1.0)
-    print(f"blow energy {hammer.ram_mass * hammer.impact_speed ** 2 / 2 / 1e3:.3f} kJ")
-    for k, b in enumerate(hammer.blows, 1):
-        if b.height is None:
-            continue
-        lost = b.kinetic_energy_lost(hammer.ram_mass)
-        print(f"blow {k}: work on the billet {b.work / 1e3:.4f} kJ, ram energy lost "
-              f"{lost / 1e3:.4f} kJ ({(b.work / lost - 1) * 100:+.2f} %), rebound "
-              f"{b.v_end:.3f} m/s, height {b.height * 1e3:.2f} mm")
-    report(hist, args, "hammer")
+    script(p, argv, lambda a: Hammer(target_height=a.target_height, impact_speed=a.impact_speed),
+           summary, "hammer")
 
 
 if __name__ == "__main__":

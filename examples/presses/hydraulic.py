@@ -9,11 +9,10 @@ The ram starts at rest on the billet with the cylinder unpressurised (p = 0).
 
     python examples/presses/hydraulic.py --plot hydraulic.png
 """
-import math
 import sys
 from dataclasses import dataclass
 
-from driver import argument_parser, report, run_from_command_line
+from driver import argument_parser, script
 
 
 @dataclass
@@ -59,19 +58,20 @@ class HydraulicPress:
         return {"pressure": self.p}
 
 
+def summary(press, hist):
+    """What the run shows, in words."""
+    reached = hist["t"][hist["force"] >= 0.98 * press.tonnage]
+    stall = f"{reached[0]:.3f} s" if reached.size else "never"
+    return (f"free speed Q/A = {press.free_speed * 1e3:.2f} mm/s, tonnage p_relief A = "
+            f"{press.tonnage / 1e6:.3f} MN\nforce at 98 % of the tonnage: {stall}; at t = "
+            f"{hist['t'][-1]:.3f} s: force {hist['force'][-1] / 1e6:.3f} MN, ram speed "
+            f"{hist['v'][-1] * 1e3:.3f} mm/s, stroke {hist['stroke'][-1] * 1e3:.2f} mm, billet "
+            f"height {hist['height'][-1] * 1e3:.2f} mm")
+
+
 def main(argv=None):
-    p = argument_parser(__doc__.split("\n\n")[0], step=2e-4, target_dt=2e-5)
-    p.add_argument("--time", type=float, default=1.6, help="press time (s)")
-    args = p.parse_args(argv)
-    press = HydraulicPress()
-    hist = run_from_command_line(args, press, args.time)
-    stall = next((t for t, f in zip(hist["t"], hist["force"]) if f >= 0.98 * press.tonnage), math.nan)
-    print(f"free speed Q/A = {press.free_speed * 1e3:.2f} mm/s, tonnage p_relief A = "
-          f"{press.tonnage / 1e6:.3f} MN")
-    print(f"force reached 98 % of the tonnage at t = {stall:.3f} s; at t = {hist['t'][-1]:.3f} s: "
-          f"force {hist['force'][-1] / 1e6:.3f} MN, ram speed {hist['v'][-1] * 1e3:.3f} mm/s, "
-          f"stroke {hist['stroke'][-1] * 1e3:.2f} mm, billet height {hist['height'][-1] * 1e3:.2f} mm")
-    report(hist, args, "hydraulic press")
+    p = argument_parser(__doc__, step=2e-4, time=1.6, target_dt=2e-5)
+    script(p, argv, lambda args: HydraulicPress(), summary, "hydraulic press")
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ import math
 import sys
 from dataclasses import dataclass
 
-from driver import argument_parser, report, run_from_command_line
+from driver import argument_parser, script
 
 
 @dataclass
@@ -44,20 +44,20 @@ class ScrewPress:
         return {"omega": self.omega, "flywheel_energy": self.flywheel_energy()}
 
 
+def summary(press, hist):
+    """What the run shows, in words."""
+    e0, work = hist["flywheel_energy"][0], hist["tool_work"][-1]
+    return (f"flywheel energy {e0 / 1e3:.3f} kJ, ram speed at contact {hist['v'][0]:.3f} m/s\n"
+            f"the flywheel stopped after {hist['t'][-1] * 1e3:.2f} ms at a stroke of "
+            f"{hist['stroke'][-1] * 1e3:.2f} mm; work on the billet {work / 1e3:.4f} kJ "
+            f"({(work / e0 - 1) * 100:+.2f} % of the flywheel energy), largest force "
+            f"{hist['force'].max() / 1e6:.3f} MN, billet height {hist['height'][-1] * 1e3:.2f} mm")
+
+
 def main(argv=None):
-    p = argument_parser(__doc__.split("\n\n")[0], step=1e-4, target_dt=2e-6)
+    p = argument_parser(__doc__, step=1e-4, time=1.0, target_dt=2e-6)
     p.add_argument("--omega", type=float, default=12.0, help="flywheel speed at contact (rad/s)")
-    args = p.parse_args(argv)
-    press = ScrewPress(omega=args.omega)
-    e0 = press.flywheel_energy()
-    hist = run_from_command_line(args, press, 1.0)
-    print(f"flywheel energy {e0 / 1e3:.3f} kJ, ram speed at contact "
-          f"{hist['v'][0]:.3f} m/s")
-    print(f"the flywheel stopped after {hist['t'][-1] * 1e3:.2f} ms at a stroke of "
-          f"{hist['stroke'][-1] * 1e3:.2f} mm; work on the billet {hist['tool_work'][-1] / 1e3:.4f} kJ "
-          f"({(hist['tool_work'][-1] / e0 - 1) * 100:+.2f} % of the flywheel energy), largest "
-          f"force {hist['force'].max() / 1e6:.3f} MN, billet height {hist['height'][-1] * 1e3:.2f} mm")
-    report(hist, args, "screw press")
+    script(p, argv, lambda a: ScrewPress(omega=a.omega), summary, "screw press")
 
 
 if __name__ == "__main__":
