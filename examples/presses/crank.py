@@ -22,7 +22,7 @@ import math
 import sys
 from dataclasses import dataclass, field
 
-from driver import argument_parser, script
+from driver import argument_parser, require_positive, script
 
 BILLET_HEIGHT = 0.060  # m, scenes/press_upsetting.toml
 RAM_GAP = 0.150        # m, ram above the billet in the crank press's FMU
@@ -60,7 +60,11 @@ class CrankPress:
     stall: float = None              # crank angle where the flywheel stopped, if it did
 
     def __post_init__(self):
+        require_positive(self, "crank_radius", "rod_length", "strokes_per_minute", "inertia",
+                         "rated_force", "rated_angle", "shut_height")
         r, l = self.crank_radius, self.rod_length
+        if r >= l:
+            raise ValueError(f"CrankPress.crank_radius = {r} must be shorter than rod_length = {l}")
         s0 = 2 * r - self.ram_gap - (BILLET_HEIGHT - self.shut_height)
         if not 0.0 <= s0 < 2 * r:
             raise ValueError(f"ram_gap {self.ram_gap} m and shut_height {self.shut_height} m do "

@@ -18,6 +18,7 @@ h |dF/dt| / F; the tests measure it as the mismatch between the plant's energy b
 """
 import argparse
 import ctypes
+import math
 import os
 import pathlib
 import subprocess
@@ -26,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 from fmpy.logging import addLoggerProxy
@@ -165,8 +167,21 @@ def simulate(path, plant, h, t_max, nx, ny, factor=1.0, target_dt=0.0):
     slave = Slave(path, params=fmu_params(nx, ny, factor, target_dt))
     try:
         return co_simulate(slave, plant, h, t_max)
+    except FMICallException as e:
+        raise RuntimeError(f"the FMU failed in the step from t = {slave.t:.6g} s: "
+                           f"{slave.last_error()}") from e
     finally:
         slave.close()
+
+
+def require_positive(plant, *names):
+    """Raises ValueError naming each parameter of `plant` (a dataclass) that is not a positive
+    finite number."""
+    values = {n: getattr(plant, n) for n in names}
+    bad = [f"{type(plant).__name__}.{n} = {x!r}" for n, x in values.items()
+           if not (isinstance(x, (int, float)) and 0 < x < math.inf)]
+    if bad:
+        raise ValueError("must be positive and finite: " + ", ".join(bad))
 
 
 def argument_parser(doc, step, time, target_dt=None, ram_gap_m=0.0, nx=6, ny=16):

@@ -13,7 +13,7 @@ rate-independent, so the pause between blows does not matter).
 import sys
 from dataclasses import dataclass, field
 
-from driver import argument_parser, script
+from driver import argument_parser, require_positive, script
 
 
 @dataclass
@@ -50,6 +50,8 @@ class Hammer:
     lifting_to: float = None      # stroke the ram is lifted to (m), between blows
 
     def __post_init__(self):
+        require_positive(self, "ram_mass", "impact_speed", "target_height", "gap", "lift_speed",
+                         "max_blows")
         self.v = self.impact_speed
         self.blows.append(Blow(self.v, 0.0))
 

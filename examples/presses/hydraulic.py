@@ -12,7 +12,7 @@ The ram starts at rest on the billet with the cylinder unpressurised (p = 0).
 import sys
 from dataclasses import dataclass
 
-from driver import argument_parser, script
+from driver import argument_parser, require_positive, script
 
 
 @dataclass
@@ -28,6 +28,12 @@ class HydraulicPress:
     substeps: int = 20              # plant steps per communication step
     v: float = 0.0                  # ram velocity (m/s, downward)
     p: float = 0.0                  # cylinder pressure (Pa)
+
+    def __post_init__(self):
+        require_positive(self, "flow", "area", "oil_volume", "bulk_modulus", "relief_pressure",
+                         "ram_mass", "substeps")
+        if self.damping < 0:
+            raise ValueError(f"HydraulicPress.damping = {self.damping!r} must not be negative")
 
     @property
     def tonnage(self):

@@ -14,7 +14,7 @@ import math
 import sys
 from dataclasses import dataclass
 
-from driver import argument_parser, script
+from driver import argument_parser, require_positive, script
 
 
 @dataclass
@@ -24,6 +24,9 @@ class ScrewPress:
     lead: float = 0.25            # screw lead p, ram travel per turn (m)
     omega: float = 12.0           # flywheel speed w at contact (rad/s): 2.88 kJ, v = 0.48 m/s
     stopped_at: float = None      # stroke where the flywheel stopped (m)
+
+    def __post_init__(self):
+        require_positive(self, "inertia", "lead", "omega")
 
     def flywheel_energy(self):
         return self.inertia * self.omega ** 2 / 2
