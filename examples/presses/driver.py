@@ -124,6 +124,7 @@ class Outputs:
     stroke: float     # ram displacement, downward positive (m)
     tool_work: float  # work the ram delivered since the start (J)
     height: float     # billet height (m)
+    kinetic_to_internal_max: float  # the FMU's quasi-static watch (-)
 
 
 def co_simulate(slave, plant, h, t_max):
@@ -132,8 +133,8 @@ def co_simulate(slave, plant, h, t_max):
     the ram velocity for the next step), `advance(outputs, h)`, `finished()` and `state()`
     (a dict of its own quantities). Returns the history as a dict of arrays: `t` (s), `v`
     (m/s, held over the step ending at t), `force` (N), `stroke` (m), `tool_work` (J),
-    `height` (m) and the plant's quantities, one row per communication point, the first at
-    t = 0."""
+    `height` (m), `kinetic_to_internal_max` (-) and the plant's quantities, one row per
+    communication point, the first at t = 0."""
     out = read_outputs(slave)
     rows = [{"t": 0.0, "v": plant.velocity(h), **vars(out), **plant.state()}]
     n = 0
@@ -150,8 +151,9 @@ def co_simulate(slave, plant, h, t_max):
 
 def read_outputs(slave):
     """The FMU outputs a plant needs."""
-    f, s, w, height = slave.get("ram.force", "ram.stroke", "energy.tool_work", "workpiece.height")
-    return Outputs(force=-f, stroke=s, tool_work=w, height=height)
+    f, s, w, height, ratio = slave.get("ram.force", "ram.stroke", "energy.tool_work",
+                                       "workpiece.height", "energy.kinetic_to_internal_max")
+    return Outputs(force=-f, stroke=s, tool_work=w, height=height, kinetic_to_internal_max=ratio)
 
 
 def fmu_params(nx, ny, factor=1.0, target_dt=0.0):
