@@ -2,10 +2,13 @@
 import os
 import pathlib
 import subprocess
+import sys
 
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+# The FMU driver and the press plants of examples/presses are imported by the FMU tests.
+sys.path.insert(0, str(ROOT / "examples" / "presses"))
 
 
 @pytest.fixture(scope="session")

@@ -1,7 +1,6 @@
 """The rkforge FMU through fmpy: validation, simulation against `rkforge run`, process-control
 loops that drive the press, rollback and serialization, bad inputs, and threads."""
 import csv
-import ctypes
 import math
 import shutil
 import subprocess
@@ -9,14 +8,12 @@ import threading
 
 import numpy as np
 import pytest
-from fmpy import calloc, extract, free, read_model_description, simulate_fmu
-from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
-from fmpy.logging import addLoggerProxy
 from fmpy.validation import validate_fmu
 
 from conftest import ROOT
+from driver import Slave
 
 SCENES = ["taylor_bar", "block_forging", "wheel_forging"]
 
@@ -31,57 +28,6 @@ def fmus(rkforge_bin, tmp_path_factory):
                        check=True, capture_output=True, text=True)
         paths[s] = str(p)
     return paths
-
-
-class Slave:
-    """One FMU instance driven step by step, with its log messages captured."""
-
-    def __init__(self, path, name="rkforge", params=None, unzip=None, init=True):
-        self.md = read_model_description(path)
-        self.dir = unzip or extract(path)
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.messages = []
-
-        def logger(env, instance, status, category, message):
-            self.messages.append((status, message.decode()))
-
-        self.callbacks = fmi2CallbackFunctions()
-        self.callbacks.logger = fmi2CallbackLoggerTYPE(logger)
-        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(ctypes.byref(self.callbacks))
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(callbacks=self.callbacks, loggingOn=True)
-        self.t = 0.0
-        if init:
-            self.fmu.setupExperiment(startTime=0.0)
-            for k, v in (params or {}).items():
-                if isinstance(v, str):
-                    self.fmu.setString([self.vr[k]], [v])
-                elif isinstance(v, int):
-                    self.fmu.setInteger([self.vr[k]], [v])
-                else:
-                    self.fmu.setReal([self.vr[k]], [v])
-            self.fmu.enterInitializationMode()
-            self.fmu.exitInitializationMode()
-
-    def step(self, h):
-        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
-        self.t += h
-
-    def get(self, *names):
-        return self.fmu.getReal([self.vr[n] for n in names])
-
-    def set(self, name, value):
-        self.fmu.setReal([self.vr[name]], [value])
-
-    def last_error(self):
-        return self.messages[-1][1] if self.messages else ""
-
-    def close(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
 
 
 COARSE = {"resolution.nx": 11, "resolution.ny": 11, "dt_fixed": 0.0}

@@ -61,6 +61,9 @@ pub enum Binding {
     KineticEnergy,
     /// Plastic dissipation (J).
     PlasticEnergy,
+    /// Work delivered by the tools' motion since the start, `int F . v_tool dt` summed over
+    /// the tools (J): what a press delivers to the workpiece.
+    ToolWork,
     /// Largest kinetic-to-internal energy ratio after the start-up (-).
     KineticToInternalMax,
     /// Integration rule name (`q4` or `q2`).
@@ -203,6 +206,12 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
             Some("J"),
             "plastic dissipation in the workpiece",
             Binding::PlasticEnergy,
+        ),
+        (
+            "energy.tool_work",
+            Some("J"),
+            "work delivered by the tools' motion since the start, summed over the tools",
+            Binding::ToolWork,
         ),
         (
             "energy.kinetic_to_internal_max",
