@@ -90,6 +90,129 @@ class Float64(IdlStruct, typename="std_msgs::msg::dds_::Float64_"):
     data: t.float64
 
 
+@dataclass
+class ParameterValue(IdlStruct, typename="rcl_interfaces::msg::dds_::ParameterValue_"):
+    type: t.uint8
+    bool_value: bool
+    integer_value: t.int64
+    double_value: t.float64
+    string_value: str
+    byte_array_value: t.sequence[t.uint8]
+    bool_array_value: t.sequence[bool]
+    integer_array_value: t.sequence[t.int64]
+    double_array_value: t.sequence[t.float64]
+    string_array_value: t.sequence[str]
+
+
+def parameter_value(v):
+    """A ParameterValue of a bool (type 1) or a float (type 3)."""
+    kind = 1 if isinstance(v, bool) else 3
+    return ParameterValue(kind, v if kind == 1 else False, 0, v if kind == 3 else 0.0, "",
+                          [], [], [], [], [])
+
+
+@dataclass
+class Parameter(IdlStruct, typename="rcl_interfaces::msg::dds_::Parameter_"):
+    name: str
+    value: ParameterValue
+
+
+@dataclass
+class SetParametersResult(IdlStruct, typename="rcl_interfaces::msg::dds_::SetParametersResult_"):
+    successful: bool
+    reason: str
+
+
+@dataclass
+class FloatingPointRange(IdlStruct, typename="rcl_interfaces::msg::dds_::FloatingPointRange_"):
+    from_value: t.float64
+    to_value: t.float64
+    step: t.float64
+
+
+@dataclass
+class IntegerRange(IdlStruct, typename="rcl_interfaces::msg::dds_::IntegerRange_"):
+    from_value: t.int64
+    to_value: t.int64
+    step: t.uint64
+
+
+@dataclass
+class ParameterDescriptor(IdlStruct, typename="rcl_interfaces::msg::dds_::ParameterDescriptor_"):
+    name: str
+    type: t.uint8
+    description: str
+    additional_constraints: str
+    read_only: bool
+    dynamic_typing: bool
+    floating_point_range: t.sequence[FloatingPointRange, 1]
+    integer_range: t.sequence[IntegerRange, 1]
+
+
+# Requests and replies as rmw_cyclonedds_cpp puts them on the wire: a header of the client's
+# GUID (its last 8 bytes) and a 64-bit sequence number, then the standard request or reply.
+@dataclass
+class ListParametersRequest(IdlStruct,
+                            typename="rcl_interfaces::srv::dds_::ListParameters_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    prefixes: t.sequence[str]
+    depth: t.uint64
+
+
+@dataclass
+class ListParametersReply(IdlStruct,
+                          typename="rcl_interfaces::srv::dds_::ListParameters_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    names: t.sequence[str]
+    prefixes: t.sequence[str]
+
+
+@dataclass
+class GetParametersRequest(IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameters_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    names: t.sequence[str]
+
+
+@dataclass
+class GetParametersReply(IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameters_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    values: t.sequence[ParameterValue]
+
+
+@dataclass
+class SetParametersRequest(IdlStruct, typename="rcl_interfaces::srv::dds_::SetParameters_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    parameters: t.sequence[Parameter]
+
+
+@dataclass
+class SetParametersReply(IdlStruct, typename="rcl_interfaces::srv::dds_::SetParameters_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    results: t.sequence[SetParametersResult]
+
+
+@dataclass
+class DescribeParametersRequest(IdlStruct,
+                                typename="rcl_interfaces::srv::dds_::DescribeParameters_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    names: t.sequence[str]
+
+
+@dataclass
+class DescribeParametersReply(IdlStruct,
+                              typename="rcl_interfaces::srv::dds_::DescribeParameters_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    descriptors: t.sequence[ParameterDescriptor]
+
+
 def qos(reliable=True, latched=False):
     """rclcpp's default (reliable, keep last 10, volatile) or best effort; transient local
     when `latched` (a reader that matches late still gets the samples the writer holds); plain
@@ -113,6 +236,32 @@ class Peer:
 
     def writer(self, topic, cls):
         return DataWriter(self.dp, Topic(self.dp, "rt" + topic, cls), qos=qos(True))
+
+
+class ServiceClient:
+    """Calls service `name` (e.g. `/rkforge/rkforge/get_parameters`) of a ROS 2 node as an
+    rmw_cyclonedds_cpp client does: requests on `rq<name>Request`, replies on
+    `rr<name>Reply`, matched by sequence number."""
+
+    GUID = 0x0123456789ABCDEF
+
+    def __init__(self, peer, name, request, reply):
+        self.request = request
+        self.writer = DataWriter(peer.dp, Topic(peer.dp, f"rq{name}Request", request),
+                                 qos=qos(True))
+        self.reader = DataReader(peer.dp, Topic(peer.dp, f"rr{name}Reply", reply), qos=qos(True))
+        self.seq = 0
+
+    def call(self, *fields, timeout=60):
+        """Send a request with `fields` after the header; the reply to it."""
+        wait_matched(self.writer, timeout)
+        wait_until(lambda: self.reader.get_matched_publications(), timeout, "the reply writer")
+        self.seq += 1
+        self.writer.write(self.request(self.GUID, self.seq, *fields))
+        got = []
+        wait_until(lambda: got.extend(r for r in take(self.reader) if r.seq == self.seq) or got,
+                   timeout, f"the reply to request {self.seq}")
+        return got[0]
 
 
 def take(reader, n=50):

@@ -7,9 +7,12 @@ import time
 
 import pytest
 
-from ros_peer import (Clock, Float64, JointState, Peer, PointCloud2, WrenchStamped, run_history,
-                      small_block, stamp_ns, start_node, take, wait_matched,
-                      wait_readers_matched, wait_until)
+from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest, Float64,
+                      GetParametersReply, GetParametersRequest, JointState,
+                      ListParametersReply, ListParametersRequest, Parameter, Peer, PointCloud2,
+                      ServiceClient, SetParametersReply, SetParametersRequest, WrenchStamped,
+                      parameter_value, run_history, small_block, stamp_ns, start_node, take,
+                      wait_matched, wait_readers_matched, wait_until)
 
 NS = "/rkforge"
 
@@ -131,6 +134,63 @@ def test_a_late_reader_gets_the_samples_published_before_it_joined(rkforge_ros_b
     finally:
         node.terminate()
         node.communicate(timeout=30)
+
+
+def test_parameters_are_listed_read_set_and_refused_with_a_reason(rkforge_ros_bin, tmp_path):
+    """The run-time settings through the standard rcl_interfaces services, called as an
+    rmw_cyclonedds_cpp client calls them: a lockstep run waits (nobody commands) until the
+    peer switches lockstep off, then runs to its end."""
+    scene = small_block(tmp_path)
+    node = start_node(rkforge_ros_bin, scene, 170, "--lockstep")
+    try:
+        peer = Peer(170)
+        base = "/rkforge/rkforge"
+        list_ = ServiceClient(peer, f"{base}/list_parameters", ListParametersRequest,
+                              ListParametersReply)
+        get = ServiceClient(peer, f"{base}/get_parameters", GetParametersRequest,
+                            GetParametersReply)
+        set_ = ServiceClient(peer, f"{base}/set_parameters", SetParametersRequest,
+                             SetParametersReply)
+        describe = ServiceClient(peer, f"{base}/describe_parameters", DescribeParametersRequest,
+                                 DescribeParametersReply)
+        names = ["lockstep", "publish_rate", "real_time_factor"]
+        assert list(list_.call([], 0).names) == names
+
+        def values():
+            got = get.call(names + ["no_such"]).values
+            assert [v.type for v in got] == [1, 3, 3, 0]
+            return got[0].bool_value, got[1].double_value, got[2].double_value
+
+        # One sample per history interval (0.15 ms) of the scene; 0 = as fast as possible.
+        assert values() == (True, pytest.approx(1 / 0.15e-3), 0.0)
+        d = {x.name: x for x in describe.call(names).descriptors}
+        assert d["publish_rate"].read_only and not d["lockstep"].read_only
+        assert d["real_time_factor"].type == 3
+        refused = set_.call([Parameter("real_time_factor", parameter_value(-1.0)),
+                             Parameter("publish_rate", parameter_value(100.0)),
+                             Parameter("lockstep", parameter_value(2.0)),
+                             Parameter("speed", parameter_value(1.0))]).results
+        assert [r.successful for r in refused] == [False] * 4
+        assert "real_time_factor -1: must be finite and >= 0" in refused[0].reason
+        assert "publish_rate is read only" in refused[1].reason
+        assert "lockstep is a bool" in refused[2].reason
+        assert "no parameter `speed`" in refused[3].reason
+        assert node.poll() is None, "the node lives on"
+        assert values() == (True, pytest.approx(1 / 0.15e-3), 0.0)
+        ok = set_.call([Parameter("real_time_factor", parameter_value(0.5))]).results
+        assert [(r.successful, r.reason) for r in ok] == [(True, "")]
+        assert values()[2] == 0.5
+        assert node.poll() is None, "lockstep holds the run: nobody commands"
+        ok = set_.call([Parameter("real_time_factor", parameter_value(0.0)),
+                        Parameter("lockstep", parameter_value(False))]).results
+        assert [r.successful for r in ok] == [True, True]
+        _, err = node.communicate(timeout=120)
+        assert node.returncode == 0, err
+        assert "published 21 samples" in err
+    finally:
+        if node.poll() is None:
+            node.kill()
+            node.communicate()
 
 
 def test_the_stroke_follows_velocity_commands(rkforge_ros_bin, tmp_path):

@@ -10,6 +10,7 @@
 
 use crate::frame::Sample;
 use crate::msgs::Float64;
+use crate::params::{Parameters, Settings};
 use crate::Topic;
 use rkforge_core::Scene;
 use ros2_client::dds::rustdds::Topic as DdsTopic;
@@ -98,6 +99,7 @@ struct CommandInput {
 /// The rkforge node: publishers and command subscriptions on one DDS domain.
 pub struct Node {
     publishers: Vec<(String, Publisher<Payload>)>,
+    parameters: Parameters,
     inputs: Vec<CommandInput>,
     dropped: u64,
     // Declared last: dropped after the publishers and subscriptions that belong to it.
@@ -119,14 +121,19 @@ fn type_name(message: &str) -> Result<MessageTypeName, String> {
 /// best effort; transient local (the samples held are sent to readers that match later) or
 /// volatile; keep last [`DEPTH`].
 fn qos(t: &Topic) -> QosProfile {
-    let reliability = if t.reliable {
+    qos_of(t.reliable, t.latched)
+}
+
+/// The QoS of [`qos`] from the two choices.
+fn qos_of(reliable: bool, latched: bool) -> QosProfile {
+    let reliability = if reliable {
         Reliability::Reliable {
             when_full: WhenFull::Fail,
         }
     } else {
         Reliability::BestEffort
     };
-    let durability = if t.latched {
+    let durability = if latched {
         Durability::TransientLocal
     } else {
         Durability::Volatile
@@ -153,7 +160,13 @@ impl Node {
         let name = NodeName::new(ns, "rkforge")
             .map_err(|e| format!("node name `rkforge` in namespace `{ns}`: {e:?}"))?;
         let mut node = context
-            .new_node(name, NodeOptions::new().enable_rosout(false))
+            .new_node(
+                name,
+                NodeOptions::new()
+                    .enable_rosout(false)
+                    // Served below in the request/reply mapping of rmw_cyclonedds_cpp.
+                    .start_parameter_services(false),
+            )
             .map_err(|e| format!("cannot create the ROS 2 node: {e:?}"))?;
         let mut publishers = Vec::new();
         let mut inputs = Vec::new();
@@ -181,8 +194,11 @@ impl Node {
                 });
             }
         }
+        // Services: reliable and volatile, as rmw's default for services.
+        let parameters = Parameters::new(&mut node, ns, "rkforge", &qos_of(true, false))?;
         Ok(Node {
             publishers,
+            parameters,
             inputs,
             dropped: 0,
             _node: node,
@@ -210,6 +226,12 @@ impl Node {
             }
         }
         Ok(())
+    }
+
+    /// Answer the parameter requests received since the last call (see
+    /// [`params`](crate::params)); true if a setting changed.
+    pub fn serve_parameters(&self, settings: &mut Settings) -> bool {
+        self.parameters.serve(settings)
     }
 
     /// Messages not published because DDS could not take them.

@@ -8,6 +8,7 @@ use clap::Parser;
 use rkforge_core::{Scene, Simulation, MAX_SAMPLES};
 use rkforge_ros::dds::{domain_id_from_env, Command, Node};
 use rkforge_ros::frame::{sample, Sample};
+use rkforge_ros::params::Settings;
 use rkforge_ros::record::{Compression, Provenance, Recorder};
 use serde_json::json;
 use std::path::PathBuf;
@@ -153,9 +154,13 @@ fn run(a: &Args) -> Result<(), String> {
             recorder: recorder.as_mut(),
             to_sim: &to_sim,
             stop: &stop,
-            lockstep: a.lockstep,
-            real_time_factor: a.real_time_factor,
-            start: Instant::now(),
+            settings: Settings {
+                real_time_factor: a.real_time_factor,
+                lockstep: a.lockstep,
+                publish_rate: 1.0 / interval,
+            },
+            pace: (Instant::now(), 0.0),
+            time: 0.0,
             end,
         };
         let r = main.serve(&from_sim);
@@ -297,9 +302,13 @@ struct MainLoop<'a> {
     recorder: Option<&'a mut Recorder>,
     to_sim: &'a Sender<ToSim>,
     stop: &'a AtomicBool,
-    lockstep: bool,
-    real_time_factor: Option<f64>,
-    start: Instant,
+    /// Lockstep, pacing and rate, changed at run time through the parameter services.
+    settings: Settings,
+    /// Pacing starts from this wall instant at this simulation time (s); set again when a
+    /// setting changes.
+    pace: (Instant, f64),
+    /// Time of the last sample (s).
+    time: f64,
     end: f64,
 }
 
@@ -314,7 +323,8 @@ impl MainLoop<'_> {
                     if self.stop.load(Ordering::SeqCst) {
                         return Ok(published);
                     }
-                    if !self.lockstep {
+                    self.poll_parameters();
+                    if !self.settings.lockstep {
                         self.forward_commands()?;
                     }
                     continue;
@@ -323,6 +333,7 @@ impl MainLoop<'_> {
             };
             match msg {
                 FromSim::Sample(s) => {
+                    self.time = s.time;
                     self.emit(&s)?;
                     published += 1;
                     if !self.wait(&s)? {
@@ -352,6 +363,13 @@ impl MainLoop<'_> {
         Ok(())
     }
 
+    /// Answer parameter requests; pacing restarts from now when a setting changed.
+    fn poll_parameters(&mut self) {
+        if self.node.serve_parameters(&mut self.settings) {
+            self.pace = (Instant::now(), self.time);
+        }
+    }
+
     fn forward_commands(&mut self) -> Result<(), String> {
         for c in self.node.take_commands() {
             self.send(ToSim::Command(c))?;
@@ -362,30 +380,35 @@ impl MainLoop<'_> {
     /// After a sample: keep to the real-time factor, and in lockstep wait for a command for
     /// every movable tool (the last one of each tool applies). False if a signal arrived.
     fn wait(&mut self, s: &Sample) -> Result<bool, String> {
-        if let Some(r) = self.real_time_factor {
-            let due = self.start + Duration::from_secs_f64(s.time / r);
-            while Instant::now() < due {
-                if self.stop.load(Ordering::SeqCst) {
-                    return Ok(false);
-                }
-                if !self.lockstep {
-                    self.forward_commands()?;
-                }
-                std::thread::sleep(POLL.min(due.saturating_duration_since(Instant::now())));
+        while let Some(r) = self.settings.real_time_factor {
+            let (wall, sim) = self.pace;
+            let due = wall + Duration::from_secs_f64(((s.time - sim) / r).max(0.0));
+            if Instant::now() >= due {
+                break;
             }
+            if self.stop.load(Ordering::SeqCst) {
+                return Ok(false);
+            }
+            self.poll_parameters();
+            if !self.settings.lockstep {
+                self.forward_commands()?;
+            }
+            std::thread::sleep(POLL.min(due.saturating_duration_since(Instant::now())));
         }
         // After the last sample there is no period left to command.
-        if !self.lockstep || s.time >= self.end * (1.0 - 1e-12) {
+        if !self.settings.lockstep || s.time >= self.end * (1.0 - 1e-12) {
             self.forward_commands()?;
             return Ok(!self.stop.load(Ordering::SeqCst));
         }
         let tools = self.node.commanded_tools();
         let mut latest: Vec<Option<f64>> = vec![None; tools.len()];
         let mut last_publish = Instant::now();
-        while latest.iter().any(Option::is_none) {
+        // Until every movable tool has a command, or lockstep is switched off.
+        while self.settings.lockstep && latest.iter().any(Option::is_none) {
             if self.stop.load(Ordering::SeqCst) {
                 return Ok(false);
             }
+            self.poll_parameters();
             for c in self.node.take_commands() {
                 if let Some(k) = tools.iter().position(|&t| t == c.tool) {
                     latest[k] = Some(c.velocity);
