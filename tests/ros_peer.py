@@ -213,6 +213,107 @@ class DescribeParametersReply(IdlStruct,
     descriptors: t.sequence[ParameterDescriptor]
 
 
+@dataclass
+class SimResult(IdlStruct, typename="simulation_interfaces::msg::dds_::Result_"):
+    result: t.uint8
+    error_message: str
+
+
+@dataclass
+class SimulationState(IdlStruct, typename="simulation_interfaces::msg::dds_::SimulationState_"):
+    state: t.uint8
+
+
+@dataclass
+class SimulatorFeatures(IdlStruct,
+                        typename="simulation_interfaces::msg::dds_::SimulatorFeatures_"):
+    features: t.sequence[t.uint16]
+    spawn_formats: t.sequence[str]
+    custom_info: str
+
+
+# Requests without fields carry the one byte ROS 2's IDL gives an empty structure.
+@dataclass
+class GetSimulatorFeaturesRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulatorFeatures_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    structure_needs_at_least_one_member: t.uint8
+
+
+@dataclass
+class GetSimulatorFeaturesReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulatorFeatures_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    features: SimulatorFeatures
+
+
+@dataclass
+class GetSimulationStateRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulationState_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    structure_needs_at_least_one_member: t.uint8
+
+
+@dataclass
+class GetSimulationStateReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulationState_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    state: SimulationState
+    result: SimResult
+
+
+@dataclass
+class SetSimulationStateRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::SetSimulationState_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    state: SimulationState
+
+
+@dataclass
+class SetSimulationStateReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::SetSimulationState_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    result: SimResult
+
+
+@dataclass
+class ResetSimulationRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::ResetSimulation_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    scope: t.uint8
+
+
+@dataclass
+class ResetSimulationReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::ResetSimulation_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    result: SimResult
+
+
+@dataclass
+class StepSimulationRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::StepSimulation_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    steps: t.uint64
+
+
+@dataclass
+class StepSimulationReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::StepSimulation_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    result: SimResult
+
+
 def qos(reliable=True, latched=False):
     """rclcpp's default (reliable, keep last 10, volatile) or best effort; transient local
     when `latched` (a reader that matches late still gets the samples the writer holds); plain
@@ -264,6 +365,41 @@ class ServiceClient:
         return got[0]
 
 
+class Simulator:
+    """A client of the node's simulation_interfaces services under namespace `ns`."""
+
+    PLAYING, PAUSED, STOPPED, QUITTING = 1, 2, 0, 3
+
+    def __init__(self, peer, ns="/rkforge"):
+        def client(service, request, reply):
+            return ServiceClient(peer, f"{ns}/{service}", request, reply)
+
+        self.features = client("get_simulator_features", GetSimulatorFeaturesRequest,
+                               GetSimulatorFeaturesReply)
+        self.get_state = client("get_simulation_state", GetSimulationStateRequest,
+                                GetSimulationStateReply)
+        self.set_state = client("set_simulation_state", SetSimulationStateRequest,
+                                SetSimulationStateReply)
+        self.reset_ = client("reset_simulation", ResetSimulationRequest, ResetSimulationReply)
+        self.step_ = client("step_simulation", StepSimulationRequest, StepSimulationReply)
+
+    def state(self):
+        return self.get_state.call(0).state.state
+
+    def set(self, state):
+        """SetSimulationState: (result code, error message)."""
+        r = self.set_state.call(SimulationState(state)).result
+        return r.result, r.error_message
+
+    def reset(self, scope=0):
+        r = self.reset_.call(scope).result
+        return r.result, r.error_message
+
+    def step(self, steps):
+        r = self.step_.call(steps).result
+        return r.result, r.error_message
+
+
 def take(reader, n=50):
     """Valid samples only: Cyclone also hands over "invalid samples" that carry no data, only
     an instance state change (e.g. when the writer of the node goes away)."""
@@ -284,7 +420,9 @@ def wait_readers_matched(readers, timeout=60):
 
 
 def stamp_ns(header):
-    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+    """A Header's stamp, or a Clock's time, in nanoseconds."""
+    t = getattr(header, "stamp", None) or header.clock
+    return t.sec * 1_000_000_000 + t.nanosec
 
 
 def history(path):

@@ -10,7 +10,8 @@ import pytest
 from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest, Float64,
                       GetParametersReply, GetParametersRequest, JointState,
                       ListParametersReply, ListParametersRequest, Parameter, Peer, PointCloud2,
-                      ServiceClient, SetParametersReply, SetParametersRequest, WrenchStamped,
+                      ServiceClient, SetParametersReply, SetParametersRequest, Simulator,
+                      WrenchStamped,
                       parameter_value, run_history, small_block, stamp_ns, start_node, take,
                       wait_matched, wait_readers_matched, wait_until)
 
@@ -187,6 +188,108 @@ def test_parameters_are_listed_read_set_and_refused_with_a_reason(rkforge_ros_bi
         _, err = node.communicate(timeout=120)
         assert node.returncode == 0, err
         assert "published 21 samples" in err
+    finally:
+        if node.poll() is None:
+            node.kill()
+            node.communicate()
+
+
+def test_simulation_interfaces_pause_step_and_refuse_with_standard_codes(rkforge_ros_bin,
+                                                                          tmp_path):
+    """The peer calls the simulation_interfaces services with their standard types. The
+    block forging has a fixed step of 1 us, so N steps from a sample move the time by N us;
+    in lockstep with nobody commanding, playing holds the first sample (no race)."""
+    scene = small_block(tmp_path)
+    node = start_node(rkforge_ros_bin, scene, 171, "--lockstep", "--hold-at-end")
+    try:
+        peer = Peer(171)
+        sim = Simulator(peer)
+        features = sim.features.call(0).features
+        # Reset, state getting, setting and pausing, single and multiple steps.
+        assert sorted(features.features) == [20, 24, 25, 26, 31, 32]
+        assert sim.state() == sim.PLAYING
+        assert sim.set(sim.PAUSED) == (1, "")
+        assert sim.state() == sim.PAUSED
+        # A late joiner sees the held time on /clock (transient local).
+        clock = peer.reader("/clock", Clock, latched=True)
+        tools = peer.reader(f"{NS}/tools", JointState, latched=True)
+        clocks = []
+        wait_until(lambda: clocks.extend(stamp_ns(c) for c in take(clock)) or clocks, 60,
+                   "/clock while paused")
+        assert set(clocks) == {0}
+        stamps = []
+
+        def stamp_seen(ns):
+            wait_until(lambda: stamps.extend(stamp_ns(js.header) for js in take(tools)) or
+                       ns in stamps, 60, f"a joint state at {ns} ns")
+
+        assert sim.step(10) == (1, "")
+        stamp_seen(10_000)
+        # Across the sample time 150 us: 145 steps more end at 155 us.
+        assert sim.step(145) == (1, "")
+        stamp_seen(155_000)
+        assert stamps[-1] == 155_000 and sim.state() == sim.PAUSED
+        # Refused with the standard codes, and the node lives on.
+        assert sim.step(0)[0] == 4  # RESULT_OPERATION_FAILED
+        assert sim.set(9) == (4, "unknown simulation state 9")
+        assert sim.set(4)[0] == 0  # STATE_NO_WORLD: RESULT_FEATURE_UNSUPPORTED
+        assert sim.set(sim.PAUSED)[0] == 101  # ALREADY_IN_TARGET_STATE
+        assert sim.reset(1)[0] == 0  # SCOPE_TIME alone: RESULT_FEATURE_UNSUPPORTED
+        assert sim.set(sim.PLAYING) == (1, "")
+        code, message = sim.step(1)
+        assert (code, message) == (4, "StepSimulation needs the simulation paused")
+        assert node.poll() is None
+        # Stopped: back to the initial state, held.
+        assert sim.set(sim.STOPPED) == (1, "")
+        assert sim.state() == sim.STOPPED
+        stamp_seen(0)
+        assert stamps[-1] == 0
+        assert sim.set(sim.QUITTING) == (1, "")
+        _, err = node.communicate(timeout=60)
+        assert node.returncode == 0, err
+    finally:
+        if node.poll() is None:
+            node.kill()
+            node.communicate()
+
+
+def test_reset_gives_bit_identical_episodes(rkforge_bin, rkforge_ros_bin, tmp_path):
+    """Two episodes after ResetSimulation, played to the end, publish the same joint states,
+    bit for bit, as a fresh `rkforge run`."""
+    scene = small_block(tmp_path)
+    rows = run_history(rkforge_bin, scene, tmp_path / "out")
+    expected = [(round(r["time_s"] * 1e9), [r["top.stroke_m"], r["bottom.stroke_m"]],
+                 [r["top.force_N"], r["bottom.force_N"]]) for r in rows]
+    # 3 ms of simulation at 0.01 simulated seconds per second: 0.3 s per episode.
+    node = start_node(rkforge_ros_bin, scene, 172, "--hold-at-end", "--real-time-factor", "0.01")
+    try:
+        peer = Peer(172)
+        sim = Simulator(peer)
+        tools = peer.reader(f"{NS}/tools", JointState, latched=True)
+        wait_readers_matched([tools])
+
+        def play_to_end():
+            got = []
+            wait_until(lambda: got.extend(take(tools)) or sim.state() == sim.PAUSED, 120,
+                       "the end of the episode")
+            got.extend(take(tools))
+            return got
+
+        play_to_end()  # the first episode, from start-up: its beginning may precede the peer
+        episodes = []
+        for _ in range(2):
+            assert sim.reset() == (1, "")
+            assert sim.state() == sim.PAUSED, "a reset keeps the state"
+            assert sim.set(sim.PLAYING) == (1, "")
+            got = play_to_end()
+            episodes.append([(stamp_ns(js.header), list(js.position), list(js.effort))
+                             for js in got])
+        assert episodes[0] == expected
+        assert episodes[1] == expected
+        assert sim.set(sim.PLAYING)[0] == 102  # at the end time: STATE_TRANSITION_ERROR
+        assert sim.set(sim.QUITTING) == (1, "")
+        _, err = node.communicate(timeout=60)
+        assert node.returncode == 0, err
     finally:
         if node.poll() is None:
             node.kill()

@@ -7,8 +7,11 @@
 //! - [`record`]: the MCAP recorder (used by `rkforge-ros --record` and `rkforge run --mcap`);
 //! - [`signals`]: SIGINT and SIGTERM as a flag, so that a run stops and finishes its files;
 //! - `dds` (feature `dds`, on by default): the ROS 2 node over DDS (`ros2-client`);
-//! - `params` (feature `dds`): the node's run-time settings as ROS 2 parameters.
+//! - `params` (feature `dds`): the node's run-time settings as ROS 2 parameters;
+//! - `control` (feature `dds`): the `simulation_interfaces` services (reset, step, pause).
 
+#[cfg(feature = "dds")]
+pub mod control;
 #[cfg(feature = "dds")]
 pub mod dds;
 pub mod frame;

@@ -11,7 +11,8 @@
 //!
 //! A refused value is answered with `successful = false` and the reason.
 
-use ros2_client::dds::{Node, Server, ServiceMapping};
+use crate::dds::server;
+use ros2_client::dds::{Node, Server};
 use ros2_client::parameters::raw::{
     FloatingPointRange, Parameter, ParameterDescriptor, ParameterType, ParameterValue,
     SetParametersResult,
@@ -21,7 +22,7 @@ use ros2_client::rcl_interfaces::{
     GetParametersResponse, ListParametersRequest, ListParametersResponse, ListParametersResult,
     SetParametersRequest, SetParametersResponse,
 };
-use ros2_client::{Message, Name, QosProfile, ServiceTypeName};
+use ros2_client::QosProfile;
 
 /// The settings that parameters change while the node runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,29 +46,6 @@ pub struct Parameters {
     describe: Server<DescribeParametersRequest, DescribeParametersResponse>,
 }
 
-/// The server of service `base/service` of type `rcl_interfaces/srv/<ty>`.
-fn server<Req, Resp>(
-    node: &mut Node,
-    base: &str,
-    service: &str,
-    ty: &str,
-    qos: &QosProfile,
-) -> Result<Server<Req, Resp>, String>
-where
-    Req: Message + Clone + 'static,
-    Resp: Message + 'static,
-{
-    let name = Name::new(base, service).map_err(|e| format!("service {base}/{service}: {e:?}"))?;
-    node.create_server(
-        ServiceMapping::Cyclone,
-        &name,
-        &ServiceTypeName::new("rcl_interfaces", ty),
-        qos.clone(),
-        qos.clone(),
-    )
-    .map_err(|e| format!("cannot serve {base}/{service}: {e:?}"))
-}
-
 impl Parameters {
     /// Serve the parameter services of node `node_name` in namespace `ns` (topics
     /// `rq/<ns>/<node_name>/<service>Request` and `rr/...Reply`) with QoS `qos` for requests
@@ -84,13 +62,35 @@ impl Parameters {
     ) -> Result<Parameters, String> {
         let base = format!("{}/{node_name}", ns.trim_end_matches('/'));
         Ok(Parameters {
-            list: server(node, &base, "list_parameters", "ListParameters", qos)?,
-            get: server(node, &base, "get_parameters", "GetParameters", qos)?,
-            set: server(node, &base, "set_parameters", "SetParameters", qos)?,
+            list: server(
+                node,
+                &base,
+                "list_parameters",
+                "rcl_interfaces",
+                "ListParameters",
+                qos,
+            )?,
+            get: server(
+                node,
+                &base,
+                "get_parameters",
+                "rcl_interfaces",
+                "GetParameters",
+                qos,
+            )?,
+            set: server(
+                node,
+                &base,
+                "set_parameters",
+                "rcl_interfaces",
+                "SetParameters",
+                qos,
+            )?,
             describe: server(
                 node,
                 &base,
                 "describe_parameters",
+                "rcl_interfaces",
                 "DescribeParameters",
                 qos,
             )?,
