@@ -5,6 +5,7 @@ import csv
 import os
 import subprocess
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import cyclonedds.idl.types as t
@@ -453,6 +454,25 @@ def start_node(rkforge_ros_bin, scene, domain, *args):
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
     return subprocess.Popen([rkforge_ros_bin, str(scene), *args], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@contextmanager
+def running_node(rkforge_ros_bin, scene, domain, *args):
+    """`start_node` for a `with` block: the node is killed if the block leaves it running."""
+    node = start_node(rkforge_ros_bin, scene, domain, *args)
+    try:
+        yield node
+    finally:
+        if node.poll() is None:
+            node.kill()
+            node.communicate()
+
+
+def quit_node(sim, node):
+    """End the node with SetSimulationState(STATE_QUITTING); it exits with status 0."""
+    assert sim.set(sim.QUITTING) == (1, "")
+    _, err = node.communicate(timeout=60)
+    assert node.returncode == 0, err
 
 
 def wait_until(cond, timeout, what):

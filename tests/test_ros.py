@@ -12,8 +12,9 @@ from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest,
                       ListParametersReply, ListParametersRequest, Parameter, Peer, PointCloud2,
                       ServiceClient, SetParametersReply, SetParametersRequest, Simulator,
                       WrenchStamped,
-                      parameter_value, run_history, small_block, stamp_ns, start_node, take,
-                      wait_matched, wait_readers_matched, wait_until)
+                      parameter_value, quit_node, run_history, running_node, small_block,
+                      stamp_ns, start_node, take, wait_matched, wait_readers_matched,
+                      wait_until)
 
 NS = "/rkforge"
 
@@ -142,8 +143,7 @@ def test_parameters_are_listed_read_set_and_refused_with_a_reason(rkforge_ros_bi
     rmw_cyclonedds_cpp client calls them: a lockstep run waits (nobody commands) until the
     peer switches lockstep off, then runs to its end."""
     scene = small_block(tmp_path)
-    node = start_node(rkforge_ros_bin, scene, 170, "--lockstep")
-    try:
+    with running_node(rkforge_ros_bin, scene, 170, "--lockstep") as node:
         peer = Peer(170)
         base = "/rkforge/rkforge"
         list_ = ServiceClient(peer, f"{base}/list_parameters", ListParametersRequest,
@@ -188,10 +188,6 @@ def test_parameters_are_listed_read_set_and_refused_with_a_reason(rkforge_ros_bi
         _, err = node.communicate(timeout=120)
         assert node.returncode == 0, err
         assert "published 21 samples" in err
-    finally:
-        if node.poll() is None:
-            node.kill()
-            node.communicate()
 
 
 def test_simulation_interfaces_pause_step_and_refuse_with_standard_codes(rkforge_ros_bin,
@@ -200,8 +196,7 @@ def test_simulation_interfaces_pause_step_and_refuse_with_standard_codes(rkforge
     block forging has a fixed step of 1 us, so N steps from a sample move the time by N us;
     in lockstep with nobody commanding, playing holds the first sample (no race)."""
     scene = small_block(tmp_path)
-    node = start_node(rkforge_ros_bin, scene, 171, "--lockstep", "--hold-at-end")
-    try:
+    with running_node(rkforge_ros_bin, scene, 171, "--lockstep", "--hold-at-end") as node:
         peer = Peer(171)
         sim = Simulator(peer)
         features = sim.features.call(0).features
@@ -244,13 +239,7 @@ def test_simulation_interfaces_pause_step_and_refuse_with_standard_codes(rkforge
         assert sim.state() == sim.STOPPED
         stamp_seen(0)
         assert stamps[-1] == 0
-        assert sim.set(sim.QUITTING) == (1, "")
-        _, err = node.communicate(timeout=60)
-        assert node.returncode == 0, err
-    finally:
-        if node.poll() is None:
-            node.kill()
-            node.communicate()
+        quit_node(sim, node)
 
 
 def test_reset_gives_bit_identical_episodes(rkforge_bin, rkforge_ros_bin, tmp_path):
@@ -261,8 +250,8 @@ def test_reset_gives_bit_identical_episodes(rkforge_bin, rkforge_ros_bin, tmp_pa
     expected = [(round(r["time_s"] * 1e9), [r["top.stroke_m"], r["bottom.stroke_m"]],
                  [r["top.force_N"], r["bottom.force_N"]]) for r in rows]
     # 3 ms of simulation at 0.01 simulated seconds per second: 0.3 s per episode.
-    node = start_node(rkforge_ros_bin, scene, 172, "--hold-at-end", "--real-time-factor", "0.01")
-    try:
+    with running_node(rkforge_ros_bin, scene, 172, "--hold-at-end",
+                      "--real-time-factor", "0.01") as node:
         peer = Peer(172)
         sim = Simulator(peer)
         tools = peer.reader(f"{NS}/tools", JointState, latched=True)
@@ -287,13 +276,7 @@ def test_reset_gives_bit_identical_episodes(rkforge_bin, rkforge_ros_bin, tmp_pa
         assert episodes[0] == expected
         assert episodes[1] == expected
         assert sim.set(sim.PLAYING)[0] == 102  # at the end time: STATE_TRANSITION_ERROR
-        assert sim.set(sim.QUITTING) == (1, "")
-        _, err = node.communicate(timeout=60)
-        assert node.returncode == 0, err
-    finally:
-        if node.poll() is None:
-            node.kill()
-            node.communicate()
+        quit_node(sim, node)
 
 
 def test_the_stroke_follows_velocity_commands(rkforge_ros_bin, tmp_path):
