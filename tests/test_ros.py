@@ -243,15 +243,16 @@ def test_simulation_interfaces_pause_step_and_refuse_with_standard_codes(rkforge
 
 
 def test_reset_gives_bit_identical_episodes(rkforge_bin, rkforge_ros_bin, tmp_path):
-    """Two episodes after ResetSimulation, played to the end, publish the same joint states,
-    bit for bit, as a fresh `rkforge run`."""
+    """Two episodes after ResetSimulation (one reset at the end time, one in the middle of an
+    episode) publish the same joint states, bit for bit, as a fresh `rkforge run`, paced
+    from t = 0 again."""
     scene = small_block(tmp_path)
     rows = run_history(rkforge_bin, scene, tmp_path / "out")
     expected = [(round(r["time_s"] * 1e9), [r["top.stroke_m"], r["bottom.stroke_m"]],
                  [r["top.force_N"], r["bottom.force_N"]]) for r in rows]
-    # 3 ms of simulation at 0.01 simulated seconds per second: 0.3 s per episode.
+    # 3 ms of simulation at 0.003 simulated seconds per second: 1 s per episode.
     with running_node(rkforge_ros_bin, scene, 172, "--hold-at-end",
-                      "--real-time-factor", "0.01") as node:
+                      "--real-time-factor", "0.003") as node:
         peer = Peer(172)
         sim = Simulator(peer)
         tools = peer.reader(f"{NS}/tools", JointState, latched=True)
@@ -264,17 +265,32 @@ def test_reset_gives_bit_identical_episodes(rkforge_bin, rkforge_ros_bin, tmp_pa
             got.extend(take(tools))
             return got
 
+        def states(got):
+            return [(stamp_ns(js.header), list(js.position), list(js.effort)) for js in got]
+
         play_to_end()  # the first episode, from start-up: its beginning may precede the peer
-        episodes = []
-        for _ in range(2):
-            assert sim.reset() == (1, "")
-            assert sim.state() == sim.PAUSED, "a reset keeps the state"
-            assert sim.set(sim.PLAYING) == (1, "")
-            got = play_to_end()
-            episodes.append([(stamp_ns(js.header), list(js.position), list(js.effort))
-                             for js in got])
-        assert episodes[0] == expected
-        assert episodes[1] == expected
+        # A reset at the end time, while paused, then played.
+        assert sim.reset() == (1, "")
+        assert sim.state() == sim.PAUSED, "a reset keeps the state"
+        assert sim.set(sim.PLAYING) == (1, "")
+        first = states(play_to_end())
+        # A reset in the middle of an episode, while playing: it plays on from t = 0.
+        assert sim.reset() == (1, "")
+        assert sim.set(sim.PLAYING) == (1, "")
+        before = []
+        wait_until(lambda: before.extend(take(tools)) or
+                   any(stamp_ns(js.header) >= 1_500_000 for js in before), 60, "t = 1.5 ms")
+        t0 = time.monotonic()
+        assert sim.reset() == (1, "")
+        assert sim.state() == sim.PLAYING
+        got = before + play_to_end()
+        # Paced from t = 0 again: 3 ms at 0.003 take 1 s of wall time (0.5 s if the pacing
+        # went on from the time before the reset).
+        assert time.monotonic() - t0 > 0.9
+        restart = max(k for k, js in enumerate(got) if stamp_ns(js.header) == 0)
+        second = states(got[restart:])
+        assert first == expected
+        assert second == expected
         assert sim.set(sim.PLAYING)[0] == 102  # at the end time: STATE_TRANSITION_ERROR
         quit_node(sim, node)
 

@@ -578,6 +578,8 @@ impl MainLoop<'_> {
                         };
                         *at_end = end;
                         taken = steps;
+                        // Pacing goes on from the new time (after a reset: from t = 0).
+                        self.pace = (Instant::now(), self.time);
                     }
                     if let Request::Step(_, n) = r {
                         let steps = taken;
