@@ -1,4 +1,5 @@
-//! Derives the message types from the standard definitions in `msg/<package>/msg/<Type>.msg`
+//! Derives the message and service types from the standard definitions in
+//! `msg/<package>/msg/<Type>.msg` and `msg/<package>/srv/<Service>.srv`
 //! (the one source of every message): for each file a Rust struct with its constants and
 //! defaults, its CDR codec (`CdrMessage`, `CdrDecode`) and its `RosMessage` constants (type
 //! name, DDS type name, the `.msg` text and the full `ros2msg` schema as rosbag2 writes it).
@@ -13,12 +14,14 @@ const SEPARATOR: &str =
     "================================================================================";
 
 /// ROS 2 primitive types: (name, Rust type, codec suffix of `write_*`/`read_*`, float?).
-const PRIMITIVES: [(&str, &str, &str, bool); 8] = [
+const PRIMITIVES: [(&str, &str, &str, bool); 10] = [
     ("bool", "bool", "bool", false),
     ("byte", "u8", "u8", false),
     ("uint8", "u8", "u8", false),
+    ("uint16", "u16", "u16", false),
     ("int32", "i32", "i32", false),
     ("uint32", "u32", "u32", false),
+    ("uint64", "u64", "u64", false),
     ("float32", "f32", "f32", true),
     ("float64", "f64", "f64", true),
     ("string", "String", "string", false),
@@ -31,11 +34,15 @@ const ROS_PRIMITIVES: [&str; 14] = [
 ];
 
 /// Sequences the codec reads and writes: element type -> codec suffix.
-const SEQUENCES: [(&str, &str); 3] = [
+const SEQUENCES: [(&str, &str); 4] = [
     ("uint8", "u8_seq"),
+    ("uint16", "u16_seq"),
     ("float64", "f64_seq"),
     ("string", "string_seq"),
 ];
+
+/// Type names of Rust's prelude, which a message type must not shadow.
+const RUST_PRELUDE: [&str; 5] = ["Box", "Option", "Result", "String", "Vec"];
 
 /// A field of a message: ROS type (`pkg/Type` for messages), name, sequence?, default.
 struct Field {
@@ -45,11 +52,15 @@ struct Field {
     default: Option<String>,
 }
 
-/// One `.msg` file.
+/// One `.msg` file, or the request or response part of a `.srv` file.
 struct Message {
-    /// `pkg/Type`, as rosbag2 names it after `MSG:`.
+    /// `pkg/Type`, as rosbag2 names it after `MSG:` (`pkg/Service_Request` for a part of a
+    /// service).
     name: String,
     path: PathBuf,
+    /// `msg`, or `srv` for a part of a service.
+    kind: &'static str,
+    /// The text: all of a `.msg`, the lines before or after the `---` of a `.srv`.
     text: String,
     fields: Vec<Field>,
     /// (ROS type, name, value).
@@ -61,8 +72,20 @@ impl Message {
         self.name.split('/').next().unwrap_or_default()
     }
 
-    fn ident(&self) -> &str {
+    /// The type's name after `pkg/<kind>/`.
+    fn type_name(&self) -> &str {
         self.name.rsplit('/').next().unwrap_or_default()
+    }
+
+    /// The Rust name: the type's, `Service_Request` written `ServiceRequest`, and names of
+    /// Rust's prelude (`simulation_interfaces/msg/Result`) with the suffix `Msg`.
+    fn ident(&self) -> String {
+        let ident = self.type_name().replace('_', "");
+        if RUST_PRELUDE.contains(&ident.as_str()) {
+            ident + "Msg"
+        } else {
+            ident
+        }
     }
 }
 
@@ -165,15 +188,15 @@ fn dependencies(text: &str, package: &str) -> BTreeSet<String> {
     deps
 }
 
-/// rosbag2's full text of `name` as Rust `concat!` arguments: the `.msg` text, then for each
+/// rosbag2's full text of `name`: the `.msg` text, then for each
 /// dependency not yet written, depth first in sorted order, a delimiter and its text.
 fn schema(name: &str, all: &BTreeMap<String, Message>, seen: &mut BTreeSet<String>) -> String {
     let m = &all[name];
-    let mut out = format!("include_str!({:?}), ", m.path.display().to_string());
+    let mut out = m.text.clone();
     for dep in dependencies(&m.text, m.package()) {
         assert!(all.contains_key(&dep), "{name} needs {dep}: no msg file");
         if seen.insert(dep.clone()) {
-            let _ = write!(out, "{:?}, ", format!("\n{SEPARATOR}\nMSG: {dep}\n"));
+            let _ = write!(out, "\n{SEPARATOR}\nMSG: {dep}\n");
             out += &schema(&dep, all, seen);
         }
     }
@@ -184,7 +207,7 @@ fn schema(name: &str, all: &BTreeMap<String, Message>, seen: &mut BTreeSet<Strin
 fn rust_type(f: &Field, all: &BTreeMap<String, Message>) -> String {
     let base = match primitive(&f.ty) {
         Some((rust, _, _)) => rust.to_owned(),
-        None => all[&f.ty].ident().to_owned(),
+        None => all[&f.ty].ident(),
     };
     if f.seq {
         format!("Vec<{base}>")
@@ -230,10 +253,15 @@ fn literal(ty: &str, value: &str) -> String {
 }
 
 fn generate(m: &Message, all: &BTreeMap<String, Message>) -> String {
-    let ident = m.ident();
+    let ident = &m.ident();
     let (copy, eq) = traits(&m.name, all);
     let has_defaults = m.fields.iter().any(|f| f.default.is_some());
-    let (pkg, ty) = (m.package(), ident);
+    let (pkg, kind, ty) = (m.package(), m.kind, m.type_name());
+    let file = m
+        .path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or_default();
     let mut derives = vec!["Debug", "Clone", "PartialEq"];
     if copy {
         derives.push("Copy");
@@ -245,7 +273,7 @@ fn generate(m: &Message, all: &BTreeMap<String, Message>) -> String {
         derives.push("Default");
     }
     let mut s = format!(
-        "/// `{pkg}/msg/{ty}`, generated from `msg/{pkg}/msg/{ty}.msg`.\n#[derive({})]\n\
+        "/// `{pkg}/{kind}/{ty}`, generated from `msg/{pkg}/{kind}/{file}`.\n#[derive({})]\n\
          #[cfg_attr(feature = \"dds\", derive(serde::Serialize, serde::Deserialize))]\npub struct {ident} {{\n",
         derives.join(", ")
     );
@@ -323,11 +351,12 @@ fn generate(m: &Message, all: &BTreeMap<String, Message>) -> String {
     let full = schema(&m.name, all, &mut BTreeSet::new());
     let _ = write!(
         s,
-        "impl RosMessage for {ident} {{\n    const TYPE_NAME: &'static str = \"{pkg}/msg/{ty}\";\n    \
-         const DDS_TYPE_NAME: &'static str = \"{pkg}::msg::dds_::{ty}_\";\n    \
-         const DEFINITION: &'static str = include_str!({:?});\n    \
-         const SCHEMA: &'static str = concat!({full});\n}}\n\n",
-        m.path.display().to_string()
+        "impl RosMessage for {ident} {{\n    const TYPE_NAME: &'static str = \"{pkg}/{kind}/{ty}\";\n    \
+         const DDS_TYPE_NAME: &'static str = \"{pkg}::{kind}::dds_::{ty}_\";\n    \
+         const DEFINITION: &'static str = {:?};\n    \
+         const SCHEMA: &'static str = {full:?};\n}}\n\n\
+         #[cfg(feature = \"dds\")]\nimpl ros2_client::Message for {ident} {{}}\n\n",
+        m.text
     );
     s
 }
@@ -349,41 +378,55 @@ fn main() {
             .and_then(|n| n.to_str())
             .unwrap_or_default()
             .to_owned();
-        let mut files: Vec<_> = std::fs::read_dir(dir.join("msg"))
-            .unwrap_or_else(|e| panic!("{}/msg: {e}", dir.display()))
-            .map(|e| e.expect("readable msg directory").path())
-            .filter(|p| p.extension().is_some_and(|x| x == "msg"))
-            .collect();
-        files.sort();
-        for path in files {
-            println!("cargo:rerun-if-changed={}", path.display());
-            let ty = path
-                .file_stem()
-                .and_then(|n| n.to_str())
-                .unwrap_or_default();
-            let text = std::fs::read_to_string(&path)
-                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-            let (fields, constants) = parse(&path, &package, &text);
-            let name = format!("{package}/{ty}");
-            all.insert(
-                name.clone(),
-                Message {
-                    name,
-                    path,
-                    text,
-                    fields,
-                    constants,
-                },
-            );
+        for kind in ["msg", "srv"] {
+            let Ok(entries) = std::fs::read_dir(dir.join(kind)) else {
+                continue;
+            };
+            let mut files: Vec<_> = entries
+                .map(|e| e.expect("readable msg directory").path())
+                .filter(|p| p.extension().is_some_and(|x| x == kind))
+                .collect();
+            files.sort();
+            for path in files {
+                println!("cargo:rerun-if-changed={}", path.display());
+                let ty = path
+                    .file_stem()
+                    .and_then(|n| n.to_str())
+                    .unwrap_or_default();
+                let text = std::fs::read_to_string(&path)
+                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                let parts = if kind == "msg" {
+                    vec![(ty.to_owned(), text)]
+                } else {
+                    let (request, response) = text
+                        .split_once("\n---\n")
+                        .unwrap_or_else(|| panic!("{}: no `---` line", path.display()));
+                    vec![
+                        (format!("{ty}_Request"), format!("{request}\n")),
+                        (format!("{ty}_Response"), response.to_owned()),
+                    ]
+                };
+                for (ty, text) in parts {
+                    let (fields, constants) = parse(&path, &package, &text);
+                    let name = format!("{package}/{ty}");
+                    all.insert(
+                        name.clone(),
+                        Message {
+                            name,
+                            path: path.clone(),
+                            kind,
+                            text,
+                            fields,
+                            constants,
+                        },
+                    );
+                }
+            }
         }
     }
     let mut idents = BTreeSet::new();
     for m in all.values() {
-        assert!(
-            idents.insert(m.ident().to_owned()),
-            "two messages named {}",
-            m.ident()
-        );
+        assert!(idents.insert(m.ident()), "two messages named {}", m.ident());
         for f in &m.fields {
             assert!(
                 primitive(&f.ty).is_some() || all.contains_key(&f.ty),

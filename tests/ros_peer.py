@@ -5,6 +5,7 @@ import csv
 import os
 import subprocess
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import cyclonedds.idl.types as t
@@ -90,6 +91,230 @@ class Float64(IdlStruct, typename="std_msgs::msg::dds_::Float64_"):
     data: t.float64
 
 
+@dataclass
+class ParameterValue(IdlStruct, typename="rcl_interfaces::msg::dds_::ParameterValue_"):
+    type: t.uint8
+    bool_value: bool
+    integer_value: t.int64
+    double_value: t.float64
+    string_value: str
+    byte_array_value: t.sequence[t.uint8]
+    bool_array_value: t.sequence[bool]
+    integer_array_value: t.sequence[t.int64]
+    double_array_value: t.sequence[t.float64]
+    string_array_value: t.sequence[str]
+
+
+def parameter_value(v):
+    """A ParameterValue of a bool (type 1) or a float (type 3)."""
+    kind = 1 if isinstance(v, bool) else 3
+    return ParameterValue(kind, v if kind == 1 else False, 0, v if kind == 3 else 0.0, "",
+                          [], [], [], [], [])
+
+
+@dataclass
+class Parameter(IdlStruct, typename="rcl_interfaces::msg::dds_::Parameter_"):
+    name: str
+    value: ParameterValue
+
+
+@dataclass
+class SetParametersResult(IdlStruct, typename="rcl_interfaces::msg::dds_::SetParametersResult_"):
+    successful: bool
+    reason: str
+
+
+@dataclass
+class FloatingPointRange(IdlStruct, typename="rcl_interfaces::msg::dds_::FloatingPointRange_"):
+    from_value: t.float64
+    to_value: t.float64
+    step: t.float64
+
+
+@dataclass
+class IntegerRange(IdlStruct, typename="rcl_interfaces::msg::dds_::IntegerRange_"):
+    from_value: t.int64
+    to_value: t.int64
+    step: t.uint64
+
+
+@dataclass
+class ParameterDescriptor(IdlStruct, typename="rcl_interfaces::msg::dds_::ParameterDescriptor_"):
+    name: str
+    type: t.uint8
+    description: str
+    additional_constraints: str
+    read_only: bool
+    dynamic_typing: bool
+    floating_point_range: t.sequence[FloatingPointRange, 1]
+    integer_range: t.sequence[IntegerRange, 1]
+
+
+# Requests and replies as rmw_cyclonedds_cpp puts them on the wire: a header of the client's
+# GUID (its last 8 bytes) and a 64-bit sequence number, then the standard request or reply.
+@dataclass
+class ListParametersRequest(IdlStruct,
+                            typename="rcl_interfaces::srv::dds_::ListParameters_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    prefixes: t.sequence[str]
+    depth: t.uint64
+
+
+@dataclass
+class ListParametersReply(IdlStruct,
+                          typename="rcl_interfaces::srv::dds_::ListParameters_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    names: t.sequence[str]
+    prefixes: t.sequence[str]
+
+
+@dataclass
+class GetParametersRequest(IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameters_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    names: t.sequence[str]
+
+
+@dataclass
+class GetParametersReply(IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameters_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    values: t.sequence[ParameterValue]
+
+
+@dataclass
+class SetParametersRequest(IdlStruct, typename="rcl_interfaces::srv::dds_::SetParameters_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    parameters: t.sequence[Parameter]
+
+
+@dataclass
+class SetParametersReply(IdlStruct, typename="rcl_interfaces::srv::dds_::SetParameters_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    results: t.sequence[SetParametersResult]
+
+
+@dataclass
+class DescribeParametersRequest(IdlStruct,
+                                typename="rcl_interfaces::srv::dds_::DescribeParameters_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    names: t.sequence[str]
+
+
+@dataclass
+class DescribeParametersReply(IdlStruct,
+                              typename="rcl_interfaces::srv::dds_::DescribeParameters_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    descriptors: t.sequence[ParameterDescriptor]
+
+
+@dataclass
+class SimResult(IdlStruct, typename="simulation_interfaces::msg::dds_::Result_"):
+    result: t.uint8
+    error_message: str
+
+
+@dataclass
+class SimulationState(IdlStruct, typename="simulation_interfaces::msg::dds_::SimulationState_"):
+    state: t.uint8
+
+
+@dataclass
+class SimulatorFeatures(IdlStruct,
+                        typename="simulation_interfaces::msg::dds_::SimulatorFeatures_"):
+    features: t.sequence[t.uint16]
+    spawn_formats: t.sequence[str]
+    custom_info: str
+
+
+# Requests without fields carry the one byte ROS 2's IDL gives an empty structure.
+@dataclass
+class GetSimulatorFeaturesRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulatorFeatures_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    structure_needs_at_least_one_member: t.uint8
+
+
+@dataclass
+class GetSimulatorFeaturesReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulatorFeatures_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    features: SimulatorFeatures
+
+
+@dataclass
+class GetSimulationStateRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulationState_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    structure_needs_at_least_one_member: t.uint8
+
+
+@dataclass
+class GetSimulationStateReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulationState_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    state: SimulationState
+    result: SimResult
+
+
+@dataclass
+class SetSimulationStateRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::SetSimulationState_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    state: SimulationState
+
+
+@dataclass
+class SetSimulationStateReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::SetSimulationState_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    result: SimResult
+
+
+@dataclass
+class ResetSimulationRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::ResetSimulation_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    scope: t.uint8
+
+
+@dataclass
+class ResetSimulationReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::ResetSimulation_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    result: SimResult
+
+
+@dataclass
+class StepSimulationRequest(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::StepSimulation_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    steps: t.uint64
+
+
+@dataclass
+class StepSimulationReply(
+        IdlStruct, typename="simulation_interfaces::srv::dds_::StepSimulation_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    result: SimResult
+
+
 def qos(reliable=True, latched=False):
     """rclcpp's default (reliable, keep last 10, volatile) or best effort; transient local
     when `latched` (a reader that matches late still gets the samples the writer holds); plain
@@ -115,6 +340,67 @@ class Peer:
         return DataWriter(self.dp, Topic(self.dp, "rt" + topic, cls), qos=qos(True))
 
 
+class ServiceClient:
+    """Calls service `name` (e.g. `/rkforge/rkforge/get_parameters`) of a ROS 2 node as an
+    rmw_cyclonedds_cpp client does: requests on `rq<name>Request`, replies on
+    `rr<name>Reply`, matched by sequence number."""
+
+    GUID = 0x0123456789ABCDEF
+
+    def __init__(self, peer, name, request, reply):
+        self.request = request
+        self.writer = DataWriter(peer.dp, Topic(peer.dp, f"rq{name}Request", request),
+                                 qos=qos(True))
+        self.reader = DataReader(peer.dp, Topic(peer.dp, f"rr{name}Reply", reply), qos=qos(True))
+        self.seq = 0
+
+    def call(self, *fields, timeout=60):
+        """Send a request with `fields` after the header; the reply to it."""
+        wait_matched(self.writer, timeout)
+        wait_until(lambda: self.reader.get_matched_publications(), timeout, "the reply writer")
+        self.seq += 1
+        self.writer.write(self.request(self.GUID, self.seq, *fields))
+        got = []
+        wait_until(lambda: got.extend(r for r in take(self.reader) if r.seq == self.seq) or got,
+                   timeout, f"the reply to request {self.seq}")
+        return got[0]
+
+
+class Simulator:
+    """A client of the node's simulation_interfaces services under namespace `ns`."""
+
+    PLAYING, PAUSED, STOPPED, QUITTING = 1, 2, 0, 3
+
+    def __init__(self, peer, ns="/rkforge"):
+        def client(service, request, reply):
+            return ServiceClient(peer, f"{ns}/{service}", request, reply)
+
+        self.features = client("get_simulator_features", GetSimulatorFeaturesRequest,
+                               GetSimulatorFeaturesReply)
+        self.get_state = client("get_simulation_state", GetSimulationStateRequest,
+                                GetSimulationStateReply)
+        self.set_state = client("set_simulation_state", SetSimulationStateRequest,
+                                SetSimulationStateReply)
+        self.reset_ = client("reset_simulation", ResetSimulationRequest, ResetSimulationReply)
+        self.step_ = client("step_simulation", StepSimulationRequest, StepSimulationReply)
+
+    def state(self):
+        return self.get_state.call(0).state.state
+
+    def set(self, state):
+        """SetSimulationState: (result code, error message)."""
+        r = self.set_state.call(SimulationState(state)).result
+        return r.result, r.error_message
+
+    def reset(self, scope=0):
+        r = self.reset_.call(scope).result
+        return r.result, r.error_message
+
+    def step(self, steps):
+        r = self.step_.call(steps).result
+        return r.result, r.error_message
+
+
 def take(reader, n=50):
     """Valid samples only: Cyclone also hands over "invalid samples" that carry no data, only
     an instance state change (e.g. when the writer of the node goes away)."""
@@ -135,7 +421,9 @@ def wait_readers_matched(readers, timeout=60):
 
 
 def stamp_ns(header):
-    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+    """A Header's stamp, or a Clock's time, in nanoseconds."""
+    t = getattr(header, "stamp", None) or header.clock
+    return t.sec * 1_000_000_000 + t.nanosec
 
 
 def history(path):
@@ -166,6 +454,25 @@ def start_node(rkforge_ros_bin, scene, domain, *args):
     env = {**os.environ, "ROS_DOMAIN_ID": str(domain)}
     return subprocess.Popen([rkforge_ros_bin, str(scene), *args], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@contextmanager
+def running_node(rkforge_ros_bin, scene, domain, *args):
+    """`start_node` for a `with` block: the node is killed if the block leaves it running."""
+    node = start_node(rkforge_ros_bin, scene, domain, *args)
+    try:
+        yield node
+    finally:
+        if node.poll() is None:
+            node.kill()
+            node.communicate()
+
+
+def quit_node(sim, node):
+    """End the node with SetSimulationState(STATE_QUITTING); it exits with status 0."""
+    assert sim.set(sim.QUITTING) == (1, "")
+    _, err = node.communicate(timeout=60)
+    assert node.returncode == 0, err
 
 
 def wait_until(cond, timeout, what):

@@ -7,9 +7,14 @@ import time
 
 import pytest
 
-from ros_peer import (Clock, Float64, JointState, Peer, PointCloud2, WrenchStamped, run_history,
-                      small_block, stamp_ns, start_node, take, wait_matched,
-                      wait_readers_matched, wait_until)
+from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest, Float64,
+                      GetParametersReply, GetParametersRequest, JointState,
+                      ListParametersReply, ListParametersRequest, Parameter, Peer, PointCloud2,
+                      ServiceClient, SetParametersReply, SetParametersRequest, Simulator,
+                      WrenchStamped,
+                      parameter_value, quit_node, run_history, running_node, small_block,
+                      stamp_ns, start_node, take, wait_matched, wait_readers_matched,
+                      wait_until)
 
 NS = "/rkforge"
 
@@ -131,6 +136,163 @@ def test_a_late_reader_gets_the_samples_published_before_it_joined(rkforge_ros_b
     finally:
         node.terminate()
         node.communicate(timeout=30)
+
+
+def test_parameters_are_listed_read_set_and_refused_with_a_reason(rkforge_ros_bin, tmp_path):
+    """The run-time settings through the standard rcl_interfaces services, called as an
+    rmw_cyclonedds_cpp client calls them: a lockstep run waits (nobody commands) until the
+    peer switches lockstep off, then runs to its end."""
+    scene = small_block(tmp_path)
+    with running_node(rkforge_ros_bin, scene, 170, "--lockstep") as node:
+        peer = Peer(170)
+        base = "/rkforge/rkforge"
+        list_ = ServiceClient(peer, f"{base}/list_parameters", ListParametersRequest,
+                              ListParametersReply)
+        get = ServiceClient(peer, f"{base}/get_parameters", GetParametersRequest,
+                            GetParametersReply)
+        set_ = ServiceClient(peer, f"{base}/set_parameters", SetParametersRequest,
+                             SetParametersReply)
+        describe = ServiceClient(peer, f"{base}/describe_parameters", DescribeParametersRequest,
+                                 DescribeParametersReply)
+        names = ["lockstep", "publish_rate", "real_time_factor"]
+        assert list(list_.call([], 0).names) == names
+
+        def values():
+            got = get.call(names + ["no_such"]).values
+            assert [v.type for v in got] == [1, 3, 3, 0]
+            return got[0].bool_value, got[1].double_value, got[2].double_value
+
+        # One sample per history interval (0.15 ms) of the scene; 0 = as fast as possible.
+        assert values() == (True, pytest.approx(1 / 0.15e-3), 0.0)
+        d = {x.name: x for x in describe.call(names).descriptors}
+        assert d["publish_rate"].read_only and not d["lockstep"].read_only
+        assert d["real_time_factor"].type == 3
+        refused = set_.call([Parameter("real_time_factor", parameter_value(-1.0)),
+                             Parameter("publish_rate", parameter_value(100.0)),
+                             Parameter("lockstep", parameter_value(2.0)),
+                             Parameter("speed", parameter_value(1.0))]).results
+        assert [r.successful for r in refused] == [False] * 4
+        assert "real_time_factor -1: must be finite and >= 0" in refused[0].reason
+        assert "publish_rate is read only" in refused[1].reason
+        assert "lockstep is a bool" in refused[2].reason
+        assert "no parameter `speed`" in refused[3].reason
+        assert node.poll() is None, "the node lives on"
+        assert values() == (True, pytest.approx(1 / 0.15e-3), 0.0)
+        ok = set_.call([Parameter("real_time_factor", parameter_value(0.5))]).results
+        assert [(r.successful, r.reason) for r in ok] == [(True, "")]
+        assert values()[2] == 0.5
+        assert node.poll() is None, "lockstep holds the run: nobody commands"
+        ok = set_.call([Parameter("real_time_factor", parameter_value(0.0)),
+                        Parameter("lockstep", parameter_value(False))]).results
+        assert [r.successful for r in ok] == [True, True]
+        _, err = node.communicate(timeout=120)
+        assert node.returncode == 0, err
+        assert "published 21 samples" in err
+
+
+def test_simulation_interfaces_pause_step_and_refuse_with_standard_codes(rkforge_ros_bin,
+                                                                          tmp_path):
+    """The peer calls the simulation_interfaces services with their standard types. The
+    block forging has a fixed step of 1 us, so N steps from a sample move the time by N us;
+    in lockstep with nobody commanding, playing holds the first sample (no race)."""
+    scene = small_block(tmp_path)
+    with running_node(rkforge_ros_bin, scene, 171, "--lockstep", "--hold-at-end") as node:
+        peer = Peer(171)
+        sim = Simulator(peer)
+        features = sim.features.call(0).features
+        # Reset, state getting, setting and pausing, single and multiple steps.
+        assert sorted(features.features) == [20, 24, 25, 26, 31, 32]
+        assert sim.state() == sim.PLAYING
+        assert sim.set(sim.PAUSED) == (1, "")
+        assert sim.state() == sim.PAUSED
+        # A late joiner sees the held time on /clock (transient local).
+        clock = peer.reader("/clock", Clock, latched=True)
+        tools = peer.reader(f"{NS}/tools", JointState, latched=True)
+        clocks = []
+        wait_until(lambda: clocks.extend(stamp_ns(c) for c in take(clock)) or clocks, 60,
+                   "/clock while paused")
+        assert set(clocks) == {0}
+        stamps = []
+
+        def stamp_seen(ns):
+            wait_until(lambda: stamps.extend(stamp_ns(js.header) for js in take(tools)) or
+                       ns in stamps, 60, f"a joint state at {ns} ns")
+
+        assert sim.step(10) == (1, "")
+        stamp_seen(10_000)
+        # Across the sample time 150 us: 145 steps more end at 155 us.
+        assert sim.step(145) == (1, "")
+        stamp_seen(155_000)
+        assert stamps[-1] == 155_000 and sim.state() == sim.PAUSED
+        # Refused with the standard codes, and the node lives on.
+        assert sim.step(0)[0] == 4  # RESULT_OPERATION_FAILED
+        assert sim.set(9) == (4, "unknown simulation state 9")
+        assert sim.set(4)[0] == 0  # STATE_NO_WORLD: RESULT_FEATURE_UNSUPPORTED
+        assert sim.set(sim.PAUSED)[0] == 101  # ALREADY_IN_TARGET_STATE
+        assert sim.reset(1)[0] == 0  # SCOPE_TIME alone: RESULT_FEATURE_UNSUPPORTED
+        assert sim.set(sim.PLAYING) == (1, "")
+        code, message = sim.step(1)
+        assert (code, message) == (4, "StepSimulation needs the simulation paused")
+        assert node.poll() is None
+        # Stopped: back to the initial state, held.
+        assert sim.set(sim.STOPPED) == (1, "")
+        assert sim.state() == sim.STOPPED
+        stamp_seen(0)
+        assert stamps[-1] == 0
+        quit_node(sim, node)
+
+
+def test_reset_gives_bit_identical_episodes(rkforge_bin, rkforge_ros_bin, tmp_path):
+    """Two episodes after ResetSimulation (one reset at the end time, one in the middle of an
+    episode) publish the same joint states, bit for bit, as a fresh `rkforge run`, paced
+    from t = 0 again."""
+    scene = small_block(tmp_path)
+    rows = run_history(rkforge_bin, scene, tmp_path / "out")
+    expected = [(round(r["time_s"] * 1e9), [r["top.stroke_m"], r["bottom.stroke_m"]],
+                 [r["top.force_N"], r["bottom.force_N"]]) for r in rows]
+    # 3 ms of simulation at 0.003 simulated seconds per second: 1 s per episode.
+    with running_node(rkforge_ros_bin, scene, 172, "--hold-at-end",
+                      "--real-time-factor", "0.003") as node:
+        peer = Peer(172)
+        sim = Simulator(peer)
+        tools = peer.reader(f"{NS}/tools", JointState, latched=True)
+        wait_readers_matched([tools])
+
+        def play_to_end():
+            got = []
+            wait_until(lambda: got.extend(take(tools)) or sim.state() == sim.PAUSED, 120,
+                       "the end of the episode")
+            got.extend(take(tools))
+            return got
+
+        def states(got):
+            return [(stamp_ns(js.header), list(js.position), list(js.effort)) for js in got]
+
+        play_to_end()  # the first episode, from start-up: its beginning may precede the peer
+        # A reset at the end time, while paused, then played.
+        assert sim.reset() == (1, "")
+        assert sim.state() == sim.PAUSED, "a reset keeps the state"
+        assert sim.set(sim.PLAYING) == (1, "")
+        first = states(play_to_end())
+        # A reset in the middle of an episode, while playing: it plays on from t = 0.
+        assert sim.reset() == (1, "")
+        assert sim.set(sim.PLAYING) == (1, "")
+        before = []
+        wait_until(lambda: before.extend(take(tools)) or
+                   any(stamp_ns(js.header) >= 1_500_000 for js in before), 60, "t = 1.5 ms")
+        t0 = time.monotonic()
+        assert sim.reset() == (1, "")
+        assert sim.state() == sim.PLAYING
+        got = before + play_to_end()
+        # Paced from t = 0 again: 3 ms at 0.003 take 1 s of wall time (0.5 s if the pacing
+        # went on from the time before the reset).
+        assert time.monotonic() - t0 > 0.9
+        restart = max(k for k, js in enumerate(got) if stamp_ns(js.header) == 0)
+        second = states(got[restart:])
+        assert first == expected
+        assert second == expected
+        assert sim.set(sim.PLAYING)[0] == 102  # at the end time: STATE_TRANSITION_ERROR
+        quit_node(sim, node)
 
 
 def test_the_stroke_follows_velocity_commands(rkforge_ros_bin, tmp_path):

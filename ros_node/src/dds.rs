@@ -8,14 +8,21 @@
 //! The messages are those of a [`Sample`], already CDR-encoded by [`msgs`](crate::msgs); they
 //! are handed to DDS as they are (see [`Payload`]), so the wire bytes equal the MCAP bytes.
 
+use crate::control::{Request, Services};
 use crate::frame::Sample;
 use crate::msgs::Float64;
+use crate::msgs::ResultMsg;
+use crate::params::{Parameters, Settings};
 use crate::Topic;
 use rkforge_core::Scene;
 use ros2_client::dds::rustdds::Topic as DdsTopic;
-use ros2_client::dds::{Context, ContextOptions, Node as RosNode, Publisher, Subscription};
+use ros2_client::dds::{
+    Context, ContextOptions, Node as RosNode, Publisher, Server, ServiceMapping, Subscription,
+};
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
-use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
+use ros2_client::{
+    Message, MessageTypeName, Name, NodeName, NodeOptions, QosProfile, ServiceTypeName,
+};
 use serde::ser::SerializeTuple;
 use serde::{Serialize, Serializer};
 
@@ -98,6 +105,8 @@ struct CommandInput {
 /// The rkforge node: publishers and command subscriptions on one DDS domain.
 pub struct Node {
     publishers: Vec<(String, Publisher<Payload>)>,
+    parameters: Parameters,
+    services: Services,
     inputs: Vec<CommandInput>,
     dropped: u64,
     // Declared last: dropped after the publishers and subscriptions that belong to it.
@@ -119,14 +128,19 @@ fn type_name(message: &str) -> Result<MessageTypeName, String> {
 /// best effort; transient local (the samples held are sent to readers that match later) or
 /// volatile; keep last [`DEPTH`].
 fn qos(t: &Topic) -> QosProfile {
-    let reliability = if t.reliable {
+    qos_of(t.reliable, t.latched)
+}
+
+/// The QoS of [`qos`] from the two choices.
+fn qos_of(reliable: bool, latched: bool) -> QosProfile {
+    let reliability = if reliable {
         Reliability::Reliable {
             when_full: WhenFull::Fail,
         }
     } else {
         Reliability::BestEffort
     };
-    let durability = if t.latched {
+    let durability = if latched {
         Durability::TransientLocal
     } else {
         Durability::Volatile
@@ -153,7 +167,13 @@ impl Node {
         let name = NodeName::new(ns, "rkforge")
             .map_err(|e| format!("node name `rkforge` in namespace `{ns}`: {e:?}"))?;
         let mut node = context
-            .new_node(name, NodeOptions::new().enable_rosout(false))
+            .new_node(
+                name,
+                NodeOptions::new()
+                    .enable_rosout(false)
+                    // Served below in the request/reply mapping of rmw_cyclonedds_cpp.
+                    .start_parameter_services(false),
+            )
             .map_err(|e| format!("cannot create the ROS 2 node: {e:?}"))?;
         let mut publishers = Vec::new();
         let mut inputs = Vec::new();
@@ -181,8 +201,13 @@ impl Node {
                 });
             }
         }
+        // Services: reliable and volatile, as rmw's default for services.
+        let parameters = Parameters::new(&mut node, ns, "rkforge", &qos_of(true, false))?;
+        let services = Services::new(&mut node, ns, &qos_of(true, false))?;
         Ok(Node {
             publishers,
+            parameters,
+            services,
             inputs,
             dropped: 0,
             _node: node,
@@ -210,6 +235,24 @@ impl Node {
             }
         }
         Ok(())
+    }
+
+    /// Answer the parameter requests received since the last call (see
+    /// [`params`](crate::params)); true if a setting changed.
+    pub fn serve_parameters(&self, settings: &mut Settings) -> bool {
+        self.parameters.serve(settings)
+    }
+
+    /// Answer the simulator feature and state queries (the simulation is in `state`, a
+    /// `SimulationState` value) and return the other `simulation_interfaces` requests
+    /// received since the last call (see [`control`](crate::control)).
+    pub fn poll_services(&self, state: u8) -> Vec<Request> {
+        self.services.poll(state)
+    }
+
+    /// Answer a request returned by [`Node::poll_services`].
+    pub fn answer(&self, request: Request, result: ResultMsg) {
+        self.services.answer(request, result);
     }
 
     /// Messages not published because DDS could not take them.
@@ -274,6 +317,36 @@ impl Node {
             .map(|i| (i.topic.clone(), i.rejected))
             .collect()
     }
+}
+
+/// The server of service `base/service` of type `package/srv/ty`, in the request/reply
+/// mapping of `rmw_cyclonedds_cpp` (a header of the client's GUID and a sequence number
+/// before the request or reply).
+///
+/// # Errors
+///
+/// A bad service name, or DDS could not create the server.
+pub(crate) fn server<Req, Resp>(
+    node: &mut RosNode,
+    base: &str,
+    service: &str,
+    package: &str,
+    ty: &str,
+    qos: &QosProfile,
+) -> Result<Server<Req, Resp>, String>
+where
+    Req: Message + Clone + 'static,
+    Resp: Message + 'static,
+{
+    let name = Name::new(base, service).map_err(|e| format!("service {base}/{service}: {e:?}"))?;
+    node.create_server(
+        ServiceMapping::Cyclone,
+        &name,
+        &ServiceTypeName::new(package, ty),
+        qos.clone(),
+        qos.clone(),
+    )
+    .map_err(|e| format!("cannot serve {base}/{service}: {e:?}"))
 }
 
 /// The DDS topic (`rt/...`) of `t` with its standard type name.

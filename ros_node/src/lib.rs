@@ -6,12 +6,18 @@
 //! - [`frame`]: the messages of one sample of a [`Simulation`](rkforge_core::Simulation);
 //! - [`record`]: the MCAP recorder (used by `rkforge-ros --record` and `rkforge run --mcap`);
 //! - [`signals`]: SIGINT and SIGTERM as a flag, so that a run stops and finishes its files;
-//! - `dds` (feature `dds`, on by default): the ROS 2 node over DDS (`ros2-client`).
+//! - `dds` (feature `dds`, on by default): the ROS 2 node over DDS (`ros2-client`);
+//! - `params` (feature `dds`): the node's run-time settings as ROS 2 parameters;
+//! - `control` (feature `dds`): the `simulation_interfaces` services (reset, step, pause).
 
+#[cfg(feature = "dds")]
+pub mod control;
 #[cfg(feature = "dds")]
 pub mod dds;
 pub mod frame;
 pub mod msgs;
+#[cfg(feature = "dds")]
+pub mod params;
 pub mod record;
 pub mod signals;
 

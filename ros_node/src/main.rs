@@ -6,8 +6,11 @@
 
 use clap::Parser;
 use rkforge_core::{Scene, Simulation, MAX_SAMPLES};
+use rkforge_ros::control::{self, check_reset, check_step, transition, Request, Transition};
 use rkforge_ros::dds::{domain_id_from_env, Command, Node};
 use rkforge_ros::frame::{sample, Sample};
+use rkforge_ros::msgs::{ResultMsg, SimulationState};
+use rkforge_ros::params::Settings;
 use rkforge_ros::record::{Compression, Provenance, Recorder};
 use serde_json::json;
 use std::path::PathBuf;
@@ -60,6 +63,10 @@ struct Args {
     /// Worker threads (default: all cores); results are identical for any count.
     #[arg(long)]
     threads: Option<usize>,
+    /// At the end time, pause and keep serving (for ResetSimulation and further episodes)
+    /// instead of ending the node.
+    #[arg(long)]
+    hold_at_end: bool,
 }
 
 /// From the main thread to the simulation.
@@ -68,14 +75,20 @@ enum ToSim {
     Command(Command),
     /// Go on to the next sample.
     Continue,
+    /// Take this many solver steps (fewer if the end time comes first), then a sample.
+    Step(u64),
+    /// Back to the scene's initial state, then a sample.
+    Reset,
     /// Stop now (a signal arrived).
     Stop,
 }
 
 /// From the simulation to the main thread.
 enum FromSim {
-    /// The state at a sample time; the simulation waits for [`ToSim::Continue`].
-    Sample(Sample),
+    /// The state after an order (at a sample time for [`ToSim::Continue`]): whether it is
+    /// the end time, and the solver steps the order took. The simulation waits for the next
+    /// order.
+    Sample(Sample, bool, u64),
     /// The step failed; the last sample is the state reached.
     Failed(String, Box<Sample>),
 }
@@ -147,16 +160,25 @@ fn run(a: &Args) -> Result<(), String> {
     let outcome = std::thread::scope(|s| {
         let sim = &mut sim;
         let schedule = &schedule;
-        s.spawn(move || rayon::scope(move |_| simulate(sim, schedule, &sim_rx, &sim_tx)));
+        let scene = &scene;
+        s.spawn(move || {
+            rayon::scope(move |_| simulate(sim, scene, schedule, &sim_rx, &sim_tx));
+        });
         let mut main = MainLoop {
             node: &mut node,
             recorder: recorder.as_mut(),
             to_sim: &to_sim,
             stop: &stop,
-            lockstep: a.lockstep,
-            real_time_factor: a.real_time_factor,
-            start: Instant::now(),
-            end,
+            settings: Settings {
+                real_time_factor: a.real_time_factor,
+                lockstep: a.lockstep,
+                publish_rate: 1.0 / interval,
+            },
+            pace: (Instant::now(), 0.0),
+            time: 0.0,
+            state: SimulationState::STATE_PLAYING,
+            hold_at_end: a.hold_at_end,
+            current: None,
         };
         let r = main.serve(&from_sim);
         // Unblock the simulation whatever happened (it may be gone already).
@@ -236,108 +258,181 @@ fn schedule(end: f64, interval: f64) -> Result<Vec<f64>, String> {
     })
 }
 
-/// The simulation thread: a sample at t = 0 and at each time of `schedule`, stepping as
-/// `Simulation::run_to` does (the last step of each interval shortened to land on it), and
-/// commands applied between steps as they come.
-fn simulate(sim: &mut Simulation, schedule: &[f64], rx: &Receiver<ToSim>, tx: &Sender<FromSim>) {
-    // Apply the pending messages; false once told to stop or the main thread is gone.
-    let apply = |sim: &mut Simulation, msg: ToSim| -> Option<bool> {
-        match msg {
-            ToSim::Command(c) => {
-                if let Err(e) = sim.set_tool_velocity(c.tool, c.velocity) {
-                    eprintln!("warning: command ignored: {e}");
-                }
-                None
-            }
-            ToSim::Continue => Some(true),
-            ToSim::Stop => Some(false),
+/// The simulation thread: a sample at t = 0, then one after each order of the main thread:
+/// [`ToSim::Continue`] steps to the next time of `schedule` as `Simulation::run_to` does
+/// (the last step of each interval shortened to land on it), [`ToSim::Step`] takes N of
+/// those steps, [`ToSim::Reset`] rebuilds the simulation from `scene` (the same bits as at
+/// start). Commands apply between steps as they come.
+fn simulate(
+    sim: &mut Simulation,
+    scene: &Scene,
+    schedule: &[f64],
+    rx: &Receiver<ToSim>,
+    tx: &Sender<FromSim>,
+) {
+    // Index of the next sample time.
+    let mut next = 0;
+    let mut steps = 0;
+    loop {
+        let at_end = next >= schedule.len();
+        if tx
+            .send(FromSim::Sample(sample(sim), at_end, steps))
+            .is_err()
+        {
+            return;
         }
-    };
-    // Hand a sample over and wait for the go-ahead.
-    let handover = |sim: &mut Simulation| -> bool {
-        if tx.send(FromSim::Sample(sample(sim))).is_err() {
-            return false;
-        }
-        loop {
+        let order = loop {
             match rx.recv() {
-                Ok(msg) => {
-                    if let Some(go) = apply(sim, msg) {
-                        return go;
+                Ok(ToSim::Command(c)) => command(sim, c),
+                Ok(order) => break order,
+                Err(_) => return,
+            }
+        };
+        let limit = match order {
+            ToSim::Continue => u64::MAX,
+            ToSim::Step(n) => n,
+            ToSim::Reset => {
+                match Simulation::new(scene) {
+                    Ok(s) => *sim = s,
+                    Err(e) => {
+                        let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
+                        return;
                     }
                 }
-                Err(_) => return false,
+                next = 0;
+                steps = 0;
+                continue;
             }
-        }
-    };
-    if !handover(sim) {
-        return;
-    }
-    for &t in schedule {
-        while sim.time() < t - 1e-12 * t.abs() {
+            ToSim::Command(_) | ToSim::Stop => return,
+        };
+        steps = 0;
+        while steps < limit && next < schedule.len() {
             while let Ok(msg) = rx.try_recv() {
-                if apply(sim, msg) == Some(false) {
-                    return;
+                match msg {
+                    ToSim::Command(c) => command(sim, c),
+                    _ => return,
                 }
             }
-            let dt = t - sim.time();
-            if let Err(e) = sim.step(Some(dt)) {
+            let t = schedule[next];
+            if let Err(e) = sim.step(Some(t - sim.time())) {
                 let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
                 return;
             }
-        }
-        if !handover(sim) {
-            return;
+            steps += 1;
+            if sim.time() >= t - 1e-12 * t.abs() {
+                next += 1;
+                if limit == u64::MAX {
+                    break;
+                }
+            }
         }
     }
 }
 
-/// The main thread's side: DDS, MCAP, pacing and commands.
+/// Apply a velocity command (a bad one is reported and ignored).
+fn command(sim: &mut Simulation, c: Command) {
+    if let Err(e) = sim.set_tool_velocity(c.tool, c.velocity) {
+        eprintln!("warning: command ignored: {e}");
+    }
+}
+
+/// The main thread's side: DDS, MCAP, pacing, commands, parameters and the simulation
+/// services.
 struct MainLoop<'a> {
     node: &'a mut Node,
     recorder: Option<&'a mut Recorder>,
     to_sim: &'a Sender<ToSim>,
     stop: &'a AtomicBool,
-    lockstep: bool,
-    real_time_factor: Option<f64>,
-    start: Instant,
-    end: f64,
+    /// Lockstep, pacing and rate, changed at run time through the parameter services.
+    settings: Settings,
+    /// Pacing starts from this wall instant at this simulation time (s); set again when a
+    /// setting changes or the simulation resumes.
+    pace: (Instant, f64),
+    /// Time of the last sample (s).
+    time: f64,
+    /// The `SimulationState`: playing, paused or stopped.
+    state: u8,
+    /// At the end time, pause instead of ending.
+    hold_at_end: bool,
+    /// The last sample published.
+    current: Option<Sample>,
+}
+
+/// How a wait for the go-ahead ended.
+#[derive(PartialEq)]
+enum Go {
+    /// Step on to the next sample.
+    On,
+    /// The state changed (paused, stopped, reset or stepped): decide again.
+    Again,
+    /// End the node (a signal or `STATE_QUITTING`).
+    Quit,
 }
 
 impl MainLoop<'_> {
-    /// Serve samples until the simulation ends; the number of samples published.
+    /// Serve samples until the end (or a signal, or `STATE_QUITTING`); the number of
+    /// samples published.
     fn serve(&mut self, from_sim: &Receiver<FromSim>) -> Result<u64, String> {
         let mut published = 0;
+        let Some((mut at_end, _)) = self.receive(from_sim, &mut published)? else {
+            return Ok(published);
+        };
         loop {
-            let msg = match from_sim.recv_timeout(POLL) {
-                Ok(m) => m,
-                Err(RecvTimeoutError::Timeout) => {
-                    if self.stop.load(Ordering::SeqCst) {
-                        return Ok(published);
-                    }
-                    if !self.lockstep {
-                        self.forward_commands()?;
-                    }
-                    continue;
+            match self.go(from_sim, &mut published, &mut at_end)? {
+                Go::Quit => return Ok(published),
+                Go::Again => continue,
+                Go::On => {}
+            }
+            if at_end {
+                if !self.hold_at_end {
+                    self.forward_commands()?;
+                    return Ok(published);
                 }
-                Err(RecvTimeoutError::Disconnected) => return Ok(published),
-            };
-            match msg {
-                FromSim::Sample(s) => {
-                    self.emit(&s)?;
-                    published += 1;
-                    if !self.wait(&s)? {
-                        return Ok(published);
-                    }
-                    self.send(ToSim::Continue)?;
-                }
-                FromSim::Failed(e, s) => {
-                    self.emit(&s)?;
-                    return Err(format!("the simulation failed: {e}"));
-                }
+                self.state = SimulationState::STATE_PAUSED;
+                continue;
+            }
+            self.send(ToSim::Continue)?;
+            match self.receive(from_sim, &mut published)? {
+                Some((end, _)) => at_end = end,
+                None => return Ok(published),
             }
         }
     }
 
+    /// Wait for the next sample (forwarding commands unless in lockstep), publish and record
+    /// it: whether it is the end time, and the steps it took; `None` if a signal came first.
+    fn receive(
+        &mut self,
+        from_sim: &Receiver<FromSim>,
+        published: &mut u64,
+    ) -> Result<Option<(bool, u64)>, String> {
+        loop {
+            match from_sim.recv_timeout(POLL) {
+                Ok(FromSim::Sample(s, at_end, steps)) => {
+                    self.time = s.time;
+                    self.emit(&s)?;
+                    *published += 1;
+                    self.current = Some(s);
+                    return Ok(Some((at_end, steps)));
+                }
+                Ok(FromSim::Failed(e, s)) => {
+                    self.emit(&s)?;
+                    return Err(format!("the simulation failed: {e}"));
+                }
+                Err(RecvTimeoutError::Timeout) => {
+                    if self.stop.load(Ordering::SeqCst) {
+                        return Ok(None);
+                    }
+                    if !self.settings.lockstep {
+                        self.forward_commands()?;
+                    }
+                }
+                Err(RecvTimeoutError::Disconnected) => {
+                    return Err("the simulation thread ended unexpectedly".into())
+                }
+            }
+        }
+    }
     fn send(&self, m: ToSim) -> Result<(), String> {
         self.to_sim
             .send(m)
@@ -352,6 +447,13 @@ impl MainLoop<'_> {
         Ok(())
     }
 
+    /// Answer parameter requests; pacing restarts from now when a setting changed.
+    fn poll_parameters(&mut self) {
+        if self.node.serve_parameters(&mut self.settings) {
+            self.pace = (Instant::now(), self.time);
+        }
+    }
+
     fn forward_commands(&mut self) -> Result<(), String> {
         for c in self.node.take_commands() {
             self.send(ToSim::Command(c))?;
@@ -359,50 +461,142 @@ impl MainLoop<'_> {
         Ok(())
     }
 
-    /// After a sample: keep to the real-time factor, and in lockstep wait for a command for
-    /// every movable tool (the last one of each tool applies). False if a signal arrived.
-    fn wait(&mut self, s: &Sample) -> Result<bool, String> {
-        if let Some(r) = self.real_time_factor {
-            let due = self.start + Duration::from_secs_f64(s.time / r);
-            while Instant::now() < due {
-                if self.stop.load(Ordering::SeqCst) {
-                    return Ok(false);
-                }
-                if !self.lockstep {
-                    self.forward_commands()?;
-                }
-                std::thread::sleep(POLL.min(due.saturating_duration_since(Instant::now())));
-            }
-        }
-        // After the last sample there is no period left to command.
-        if !self.lockstep || s.time >= self.end * (1.0 - 1e-12) {
-            self.forward_commands()?;
-            return Ok(!self.stop.load(Ordering::SeqCst));
-        }
+    /// After a sample: answer parameter and simulation requests; while playing, keep to the
+    /// real-time factor and in lockstep wait for a command for every movable tool (the last
+    /// one of each tool applies); while paused or stopped, hold the time.
+    fn go(
+        &mut self,
+        from_sim: &Receiver<FromSim>,
+        published: &mut u64,
+        at_end: &mut bool,
+    ) -> Result<Go, String> {
         let tools = self.node.commanded_tools();
         let mut latest: Vec<Option<f64>> = vec![None; tools.len()];
         let mut last_publish = Instant::now();
-        while latest.iter().any(Option::is_none) {
+        loop {
             if self.stop.load(Ordering::SeqCst) {
-                return Ok(false);
+                return Ok(Go::Quit);
+            }
+            self.poll_parameters();
+            if let Some(go) = self.requests(from_sim, published, at_end)? {
+                return Ok(go);
+            }
+            if self.state != SimulationState::STATE_PLAYING {
+                if !self.settings.lockstep {
+                    self.forward_commands()?;
+                }
+                std::thread::sleep(POLL);
+                continue;
+            }
+            if let Some(r) = self.settings.real_time_factor {
+                let (wall, sim) = self.pace;
+                let due = wall + Duration::from_secs_f64(((self.time - sim) / r).max(0.0));
+                if Instant::now() < due {
+                    if !self.settings.lockstep {
+                        self.forward_commands()?;
+                    }
+                    std::thread::sleep(POLL.min(due.saturating_duration_since(Instant::now())));
+                    continue;
+                }
+            }
+            // After the last sample there is no period left to command.
+            if !self.settings.lockstep || *at_end {
+                self.forward_commands()?;
+                return Ok(Go::On);
             }
             for c in self.node.take_commands() {
                 if let Some(k) = tools.iter().position(|&t| t == c.tool) {
                     latest[k] = Some(c.velocity);
                 }
             }
+            if latest.iter().all(Option::is_some) {
+                for (&tool, v) in tools.iter().zip(&latest) {
+                    if let Some(velocity) = *v {
+                        self.send(ToSim::Command(Command { tool, velocity }))?;
+                    }
+                }
+                return Ok(Go::On);
+            }
             if last_publish.elapsed() >= REPUBLISH {
-                self.node.publish(s)?;
+                if let Some(s) = &self.current {
+                    self.node.publish(s)?;
+                }
                 last_publish = Instant::now();
             }
             std::thread::sleep(POLL);
         }
-        for (&tool, v) in tools.iter().zip(latest) {
-            if let Some(velocity) = v {
-                self.send(ToSim::Command(Command { tool, velocity }))?;
-            }
+    }
+
+    /// Carry out and answer the `simulation_interfaces` requests received; what the caller
+    /// does next if one changed the state or the sample.
+    fn requests(
+        &mut self,
+        from_sim: &Receiver<FromSim>,
+        published: &mut u64,
+        at_end: &mut bool,
+    ) -> Result<Option<Go>, String> {
+        let mut next = None;
+        for r in self.node.poll_services(self.state) {
+            let outcome = match r {
+                Request::SetState(_, target) => {
+                    transition(self.state, target, *at_end).map(|t| match t {
+                        Transition::Play => {
+                            self.state = SimulationState::STATE_PLAYING;
+                            self.pace = (Instant::now(), self.time);
+                            Go::Again
+                        }
+                        Transition::Pause => {
+                            self.state = SimulationState::STATE_PAUSED;
+                            Go::Again
+                        }
+                        Transition::Stop => {
+                            self.state = SimulationState::STATE_STOPPED;
+                            Go::Again
+                        }
+                        Transition::Quit => Go::Quit,
+                    })
+                }
+                Request::Reset(_, scope) => check_reset(scope).map(|()| Go::Again),
+                Request::Step(_, n) => check_step(self.state, n, *at_end).map(|()| Go::Again),
+            };
+            let result = match outcome {
+                Err(refused) => refused,
+                Ok(go) => {
+                    let stop = matches!(r, Request::SetState(_, SimulationState::STATE_STOPPED));
+                    let mut result = control::result(ResultMsg::RESULT_OK, "");
+                    let order = match r {
+                        Request::Step(_, n) => Some(ToSim::Step(n)),
+                        Request::Reset(..) => Some(ToSim::Reset),
+                        Request::SetState(..) if stop => Some(ToSim::Reset),
+                        Request::SetState(..) => None,
+                    };
+                    let mut taken = 0;
+                    if let Some(order) = order {
+                        self.send(order)?;
+                        let Some((end, steps)) = self.receive(from_sim, published)? else {
+                            return Ok(Some(Go::Quit));
+                        };
+                        *at_end = end;
+                        taken = steps;
+                        // Pacing goes on from the new time (after a reset: from t = 0).
+                        self.pace = (Instant::now(), self.time);
+                    }
+                    if let Request::Step(_, n) = r {
+                        let steps = taken;
+                        if steps < n {
+                            result = control::result(
+                                ResultMsg::RESULT_OPERATION_FAILED,
+                                &format!("stopped at the end time after {steps} of {n} steps"),
+                            );
+                        }
+                    }
+                    next = Some(if next == Some(Go::Quit) { Go::Quit } else { go });
+                    result
+                }
+            };
+            self.node.answer(r, result);
         }
-        Ok(true)
+        Ok(next)
     }
 }
 

@@ -82,6 +82,18 @@ impl CdrWriter {
         self.buf.push(u8::from(v));
     }
 
+    /// A `uint16`, aligned to 2.
+    pub fn write_u16(&mut self, v: u16) {
+        self.align(2);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
+    /// A `uint64`, aligned to 8.
+    pub fn write_u64(&mut self, v: u64) {
+        self.align(8);
+        self.buf.extend_from_slice(&v.to_le_bytes());
+    }
+
     /// An `int32`, aligned to 4.
     pub fn write_i32(&mut self, v: i32) {
         self.align(4);
@@ -125,6 +137,18 @@ impl CdrWriter {
     pub fn write_u8_seq(&mut self, v: &[u8]) {
         self.write_len(v.len());
         self.buf.extend_from_slice(v);
+    }
+
+    /// A `uint16[]`: `u32` count then the values.
+    ///
+    /// # Panics
+    ///
+    /// If there are more than `u32::MAX` values.
+    pub fn write_u16_seq(&mut self, v: &[u16]) {
+        self.write_len(v.len());
+        for &x in v {
+            self.write_u16(x);
+        }
     }
 
     /// A `float64[]`: `u32` count then the values, aligned to 8 when there is at least one.
@@ -332,6 +356,24 @@ impl<'a> CdrReader<'a> {
         self.read_u8().map(|b| b != 0)
     }
 
+    /// A `uint16`.
+    ///
+    /// # Errors
+    ///
+    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
+    pub fn read_u16(&mut self) -> Result<u16, CdrError> {
+        self.take_le().map(u16::from_le_bytes)
+    }
+
+    /// A `uint64`.
+    ///
+    /// # Errors
+    ///
+    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
+    pub fn read_u64(&mut self) -> Result<u64, CdrError> {
+        self.take_le().map(u64::from_le_bytes)
+    }
+
     /// A `float32`.
     ///
     /// # Errors
@@ -406,6 +448,16 @@ impl<'a> CdrReader<'a> {
     pub fn read_u8_seq(&mut self) -> Result<Vec<u8>, CdrError> {
         let count = self.read_count(1)?;
         self.take(count).map(<[u8]>::to_vec)
+    }
+
+    /// A `uint16[]`.
+    ///
+    /// # Errors
+    ///
+    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
+    pub fn read_u16_seq(&mut self) -> Result<Vec<u16>, CdrError> {
+        let count = self.read_count(2)?;
+        (0..count).map(|_| self.read_u16()).collect()
     }
 
     /// A sequence of messages.
@@ -565,16 +617,17 @@ mod tests {
     const SEPARATOR: &str =
         "================================================================================";
 
-    /// Every `.msg` file under `ros_node/msg`, read here: `pkg/Type` -> text.
-    fn msg_files() -> BTreeMap<String, String> {
+    /// Every `.msg` (`kind` "msg") or `.srv` file under `ros_node/msg`, read here:
+    /// `pkg/Type` -> text.
+    fn msg_files(kind: &str) -> BTreeMap<String, String> {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("msg");
         let mut files = BTreeMap::new();
         for pkg in std::fs::read_dir(&root).unwrap() {
             let pkg = pkg.unwrap().path();
-            if !pkg.is_dir() {
+            let Ok(entries) = std::fs::read_dir(pkg.join(kind)) else {
                 continue;
-            }
-            for f in std::fs::read_dir(pkg.join("msg")).unwrap() {
+            };
+            for f in entries {
                 let f = f.unwrap().path();
                 let name = format!(
                     "{}/{}",
@@ -623,8 +676,8 @@ mod tests {
     /// the dependency it names.
     #[test]
     fn schemas_are_the_msg_files_of_the_type_and_its_dependencies() {
-        let files = msg_files();
-        assert_eq!(files.len(), 20);
+        let files = msg_files("msg");
+        assert_eq!(files.len(), 23);
         for (type_name, dds, definition, schema) in topic_types() {
             let (pkg, ty) = type_name.split_once("/msg/").unwrap();
             let short = format!("{pkg}/{ty}");
@@ -654,6 +707,44 @@ mod tests {
             }
             assert!(schema.ends_with('\n'));
         }
+    }
+
+    /// Each service's request and response definitions are the parts of its `.srv` file,
+    /// with the standard type names.
+    #[test]
+    fn services_are_their_srv_files() {
+        fn parts<Q: RosMessage, R: RosMessage>() -> (String, String, String, String) {
+            let (pkg, ty) = Q::TYPE_NAME.split_once("/srv/").unwrap();
+            let name = format!("{pkg}/{}", ty.trim_end_matches("_Request"));
+            assert_eq!(
+                R::TYPE_NAME,
+                format!("{pkg}/srv/{}_Response", &name[pkg.len() + 1..])
+            );
+            assert_eq!(
+                Q::DDS_TYPE_NAME,
+                format!("{pkg}::srv::dds_::{}_Request_", &name[pkg.len() + 1..])
+            );
+            let text = format!("{}---\n{}", Q::DEFINITION, R::DEFINITION);
+            (name, text, Q::SCHEMA.to_owned(), R::SCHEMA.to_owned())
+        }
+        let files = msg_files("srv");
+        let services = [
+            parts::<GetSimulatorFeaturesRequest, GetSimulatorFeaturesResponse>(),
+            parts::<GetSimulationStateRequest, GetSimulationStateResponse>(),
+            parts::<SetSimulationStateRequest, SetSimulationStateResponse>(),
+            parts::<ResetSimulationRequest, ResetSimulationResponse>(),
+            parts::<StepSimulationRequest, StepSimulationResponse>(),
+        ];
+        assert_eq!(files.len(), services.len());
+        let msgs = msg_files("msg");
+        for (name, text, _, response_schema) in &services {
+            assert_eq!(*text, files[name], "{name}");
+            for (dep, section) in &sections(response_schema)[1..] {
+                assert_eq!(*section, msgs[dep.unwrap()], "{name}: {dep:?}");
+            }
+        }
+        assert_eq!(StepSimulationRequest::default().steps, 1);
+        assert_eq!(ResultMsg::RESULT_OK, 1);
     }
 
     /// The dependencies in rosbag2's order: depth first, each level sorted by qualified name.
