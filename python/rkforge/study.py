@@ -98,6 +98,7 @@ def study(
     retries: int = 2,
     progress: bool = True,
     on_case: Optional[Callable[[int, dict], None]] = None,
+    timeout: Optional[float] = None,
 ) -> pd.DataFrame:
     """Run ``scene`` once per case and return one row per case.
 
@@ -106,13 +107,15 @@ def study(
     the other; with a ``distributed.Client`` each case is a Dask task (``pure=False``, a
     unique key, ``retries`` for cases that raise; cases on a worker that dies are
     rescheduled by the scheduler). ``progress`` shows a tqdm bar; ``on_case(index, result)``
-    is called as each case finishes.
+    is called as each case finishes. ``timeout`` (s) bounds the wait for the cluster's
+    results (``TimeoutError`` past it).
 
     Columns: ``case`` (its index), the inputs (named by their dotted keys), ``status``
     ("ok" or "error"), ``error`` (the error text), ``wall_s`` (the run's wall time as
     summary.json has it), ``case_wall_s`` (the case's wall time on its worker, Python
     included), then the summary's figures (:func:`figures`). A failed case is a row with
-    its error. Every case's history DataFrame is in ``result.attrs["histories"][case]``.
+    its error. The last column, ``history``, holds each case's history DataFrame (None for
+    a case whose scene was refused).
     """
     explicit = expand(cases)
     keys: List[str] = []
@@ -141,7 +144,7 @@ def study(
                 f = client.submit(run_case, scene, case, integration, threads,
                                   key=f"rkforge-case-{i}-{token}", pure=False, retries=retries)
                 futures[f] = i
-            for future in as_completed(futures):
+            for future in as_completed(futures, timeout=timeout):
                 i = futures[future]
                 try:
                     result = future.result()
@@ -163,5 +166,6 @@ def study(
         row.update(figures(r["summary"]))
         rows.append(row)
     table = pd.DataFrame(rows)
-    table.attrs["histories"] = {i: results[i]["history"] for i in range(len(explicit))}
+    table["history"] = pd.Series([results[i]["history"] for i in range(len(explicit))],
+                                 index=table.index, dtype=object)
     return table
