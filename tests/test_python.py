@@ -237,3 +237,29 @@ def test_a_failed_run_raises_with_its_summary_and_history():
         rkforge.run(unstable)
     summary, history = rkforge.run(scene, check=False)
     assert summary["status"] == "error" and summary["error"] == str(e.value)
+
+
+def test_read_mcap_gives_the_history_columns_and_the_point_clouds(rkforge_bin, tmp_path):
+    src, changes = SCENES["block"]
+    path = tmp_path / src
+    path.write_text(scene_variant(src, changes))
+    out, mcap = tmp_path / "out", tmp_path / "run.mcap"
+    proc = subprocess.run([rkforge_bin, "run", str(path), "--out", str(out), "--quiet", "--no-frames",
+                           "--mcap", str(mcap)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    history = read_history(out / "history.csv")
+    rec = rkforge.read_mcap(mcap)
+    tools = [f"{t}.{c}" for t in ("top", "bottom")
+             for c in ("stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N")]
+    assert list(rec.history.columns) == ["time_s", *tools]
+    assert len(rec.history) == len(history)
+    # Log times are the sample times rounded to the nanosecond.
+    assert np.abs(rec.history["time_s"].to_numpy() - history["time_s"].to_numpy()).max() < 1e-9
+    assert_same_history(rec.history[tools], history[tools])
+    assert len(rec.clouds) == len(history) and np.array_equal(rec.cloud_times_s, rec.history["time_s"])
+    for cloud, (_, row) in zip(rec.clouds, history.iterrows()):
+        assert set(cloud) == {"x", "y", "z", "plastic_strain", "von_mises"}
+        assert cloud["x"].shape == (81,) and cloud["x"].dtype == np.float32
+        assert cloud["x"].min() == pytest.approx(row["workpiece.x_min_m"], abs=1e-6)
+        assert cloud["y"].max() == pytest.approx(row["workpiece.y_max_m"], abs=1e-6)
+        assert cloud["plastic_strain"].max() <= row["workpiece.max_plastic_strain"] + 1e-6
