@@ -104,6 +104,24 @@ impl Simulation {
             })
         })
     }
+
+    /// A dict of tool name -> `value(sim, tool index)`.
+    fn per_tool<'py>(
+        &self,
+        py: Python<'py>,
+        value: fn(&rkforge_core::Simulation, usize) -> f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let values = self.with(py, |s| {
+            Ok((0..s.sim.tools().len())
+                .map(|k| (s.sim.tools()[k].name.clone(), value(&s.sim, k)))
+                .collect::<Vec<_>>())
+        })?;
+        let d = PyDict::new(py);
+        for (name, v) in values {
+            d.set_item(name, v)?;
+        }
+        Ok(d)
+    }
 }
 
 #[pymethods]
@@ -186,34 +204,12 @@ impl Simulation {
 
     /// Force of the workpiece on each tool along the tool's axis (N), by tool name.
     fn tool_forces<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let values = self.with(py, |s| {
-            Ok(s.sim
-                .tools()
-                .iter()
-                .map(|t| (t.name.clone(), t.axial_force()))
-                .collect::<Vec<_>>())
-        })?;
-        let d = PyDict::new(py);
-        for (name, v) in values {
-            d.set_item(name, v)?;
-        }
-        Ok(d)
+        self.per_tool(py, |sim, k| sim.tools()[k].axial_force())
     }
 
     /// Stroke of each tool along its axis (m), by tool name.
     fn tool_strokes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let values = self.with(py, |s| {
-            Ok(s.sim
-                .tools()
-                .iter()
-                .map(|t| (t.name.clone(), t.state.stroke))
-                .collect::<Vec<_>>())
-        })?;
-        let d = PyDict::new(py);
-        for (name, v) in values {
-            d.set_item(name, v)?;
-        }
-        Ok(d)
+        self.per_tool(py, |sim, k| sim.tools()[k].state.stroke)
     }
 
     /// Record a history row now, as `rkforge run` does at its samples (this also updates
