@@ -6,6 +6,7 @@ import json
 import pickle
 import subprocess
 import threading
+import time
 
 import numpy as np
 import pandas as pd
@@ -263,3 +264,32 @@ def test_read_mcap_gives_the_history_columns_and_the_point_clouds(rkforge_bin, t
         assert cloud["x"].min() == pytest.approx(row["workpiece.x_min_m"], abs=1e-6)
         assert cloud["y"].max() == pytest.approx(row["workpiece.y_max_m"], abs=1e-6)
         assert cloud["plastic_strain"].max() <= row["workpiece.max_plastic_strain"] + 1e-6
+
+
+def test_stepping_releases_the_gil():
+    """While a simulation steps in one thread, Python code runs in another: the main thread
+    counts the iterations it makes in the middle half of the worker's run (none if the GIL
+    were held during the run; a thread switch just before or after the call can only add
+    iterations near its ends)."""
+    scene = block_scene()
+    scene.set("workpiece.particles", [17, 17])
+    scene.set("time.end_s", 0.008)
+    sim = rkforge.Simulation(scene)
+    marks = {}
+
+    def work():
+        marks["start"] = time.perf_counter()
+        sim.run_to(0.008)
+        marks["end"] = time.perf_counter()
+
+    worker = threading.Thread(target=work)
+    ticks = []
+    worker.start()
+    while worker.is_alive():
+        ticks.append(time.perf_counter())
+    worker.join()
+    quarter = (marks["end"] - marks["start"]) / 4
+    during = [t for t in ticks if marks["start"] + quarter < t < marks["end"] - quarter]
+    assert len(during) > 100, (len(during), 4 * quarter)
+    assert pickle.loads(pickle.dumps(rkforge.SceneError("x"))).args == ("x",)
+    assert rkforge.SceneError.__module__ == "rkforge"

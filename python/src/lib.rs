@@ -14,19 +14,19 @@ use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 create_exception!(
-    _rkforge,
+    rkforge,
     SceneError,
     PyValueError,
     "A scene that cannot be read or is not valid: the key and its line, or the dotted key of an override, are named."
 );
 create_exception!(
-    _rkforge,
+    rkforge,
     StateError,
     PyValueError,
     "A saved state that cannot be restored (corrupt, or saved from another scene)."
 );
 create_exception!(
-    _rkforge,
+    rkforge,
     SimulationError,
     PyRuntimeError,
     "A simulation that failed: divergence, energy balance or stability, with the step and time named."
