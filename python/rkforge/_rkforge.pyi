@@ -1,0 +1,100 @@
+"""Type stubs of the Rust extension ``rkforge._rkforge``."""
+from os import PathLike
+from typing import Any, Dict, List, Optional, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+class SceneError(ValueError):
+    """A scene that cannot be read or is not valid: the key and its line, or the dotted key
+    of an override, are named."""
+
+class StateError(ValueError):
+    """A saved state that cannot be restored (corrupt, or saved from another scene)."""
+
+class SimulationError(RuntimeError):
+    """A simulation that failed: divergence, energy balance or stability, with the step and
+    time named. From :func:`rkforge.run`, it carries ``summary`` and ``history``."""
+
+    summary: Dict[str, Any]
+    history: Any
+
+Value = Union[bool, int, float, str, List[Any], Tuple[Any, ...], Dict[str, Any]]
+
+class Scene:
+    """A validated scene: its text, and overrides set by dotted key."""
+
+    @staticmethod
+    def from_file(path: Union[str, PathLike[str]]) -> Scene:
+        """Read and validate a scene file (TOML). Raises SceneError naming key and line."""
+    @staticmethod
+    def from_toml(text: str, name: str = "<scene text>") -> Scene:
+        """Parse and validate scene text; ``name`` stands for the file in error messages."""
+    def set(self, key: str, value: Value) -> None:
+        """Override the key at a dotted path, e.g. ``set("tools.top.friction", 0.1)``; tools
+        by name (or ``tools[1]``). Validated at once like a file: SceneError names the key,
+        TypeError a value that cannot be a TOML value; on error the scene is unchanged."""
+    def copy(self) -> Scene:
+        """A copy with its own overrides."""
+    @property
+    def name(self) -> str:
+        """The scene's name."""
+    @property
+    def tools(self) -> List[str]:
+        """The names of the tools, in scene order."""
+    @property
+    def overrides(self) -> List[Tuple[str, Value]]:
+        """The overrides set so far, as (dotted key, value) pairs in order."""
+    @property
+    def text(self) -> str:
+        """The scene text as read (without the overrides)."""
+    def to_toml(self) -> str:
+        """The validated scene with its overrides, as TOML."""
+    def sample_times(self) -> List[float]:
+        """The times (s) at which ``rkforge run --no-frames`` records history rows after
+        t = 0."""
+
+class Simulation:
+    """A simulation of a scene, stepped from Python with the GIL released."""
+
+    def __init__(self, scene: Scene, integration: Optional[str] = None, threads: Optional[int] = None) -> None:
+        """Set up the discretisation; ``integration`` ("q4", "q2", "scni") overrides the
+        scene's rule, ``threads`` gives the simulation its own pool of that many threads."""
+    def step(self) -> float:
+        """One time step; returns the new time (s). SimulationError on divergence."""
+    def run_to(self, t: float) -> float:
+        """Step until the time reaches ``t`` (s), the last step shortened to land on it."""
+    def set_tool_velocity(self, name: str, velocity: float) -> None:
+        """Command the velocity (m/s, along its axis) of the tool ``name`` from the next step
+        on. ValueError for an unknown or fixed tool or a non-finite velocity."""
+    @property
+    def time(self) -> float:
+        """Time (s)."""
+    @property
+    def steps(self) -> int:
+        """Steps taken."""
+    def tool_forces(self) -> Dict[str, float]:
+        """Force of the workpiece on each tool along the tool's axis (N), by tool name."""
+    def tool_strokes(self) -> Dict[str, float]:
+        """Stroke of each tool along its axis (m), by tool name."""
+    def sample(self) -> Dict[str, float]:
+        """Record a history row now, as ``rkforge run`` does at its samples."""
+    def tools(self) -> List[Dict[str, Any]]:
+        """Every tool as in summary.json."""
+    def fields(self) -> Dict[str, npt.NDArray[np.float64]]:
+        """Particle fields: ``positions``, ``displacement``, ``velocity`` (n, 2);
+        ``plastic_strain``, ``von_mises`` (n,)."""
+    def save_state(self) -> bytes:
+        """The whole changing state with its scene, as bytes."""
+    def restore_state(self, state: bytes) -> None:
+        """Restore a state of a simulation of the same scene (StateError otherwise)."""
+    def summary(self) -> Dict[str, Any]:
+        """The summary as summary.json has it."""
+
+def run_scene(
+    scene: Scene, integration: Optional[str] = None, threads: Optional[int] = None
+) -> Tuple[Dict[str, Any], List[str], npt.NDArray[np.float64], Optional[str]]:
+    """The whole run as ``rkforge run --no-frames``: summary, history columns and rows,
+    failure."""

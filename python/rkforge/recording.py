@@ -1,0 +1,83 @@
+"""Offline analysis of MCAP recordings (``rkforge run --mcap``, ``rkforge-ros --record``)."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List
+
+import numpy as np
+import pandas as pd
+
+#: numpy types of the PointCloud2 field datatypes (sensor_msgs/PointField).
+_POINT_TYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
+
+
+@dataclass
+class Recording:
+    """What a recording holds.
+
+    ``history``: one row per sample, ``time_s`` and per tool the history's columns
+    ``<tool>.stroke_m``, ``<tool>.velocity_m_per_s``, ``<tool>.force_N`` (along its axis),
+    ``<tool>.force_x_N``, ``<tool>.force_y_N``. ``clouds``: per sample, the particles as a
+    dict of numpy arrays (``x``, ``y``, ``z``, ``plastic_strain``, ``von_mises``; float32 as
+    recorded), at the times ``cloud_times_s``.
+    """
+
+    history: pd.DataFrame
+    clouds: List[Dict[str, np.ndarray]] = field(default_factory=list)
+    cloud_times_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+def _cloud(msg) -> Dict[str, np.ndarray]:
+    dtype = np.dtype({
+        "names": [f.name for f in msg.fields],
+        "formats": [("<" if not msg.is_bigendian else ">") + _POINT_TYPES[f.datatype] for f in msg.fields],
+        "offsets": [f.offset for f in msg.fields],
+        "itemsize": msg.point_step,
+    })
+    points = np.frombuffer(bytes(msg.data), dtype=dtype, count=msg.width * msg.height)
+    return {name: points[name].copy() for name in dtype.names}
+
+
+def read_mcap(path, namespace: str = "/rkforge") -> Recording:
+    """Read a recording of the rkforge topics under ``namespace``: the tools' joint states
+    and wrenches as history columns, the workpiece point clouds as numpy arrays.
+
+    Compressed chunks (lz4, zstd) are read by the ``mcap`` reader; times are the messages'
+    log times (simulation time, ns) in seconds.
+    """
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    ns = namespace.rstrip("/")
+    rows: Dict[int, Dict[str, float]] = {}
+    clouds, cloud_times = [], []
+    with open(path, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        for _, channel, message, msg in reader.iter_decoded_messages(log_time_order=True):
+            topic = channel.topic
+            if topic == f"{ns}/tools":
+                row = rows.setdefault(message.log_time, {})
+                for k, name in enumerate(msg.name):
+                    row[f"{name}.stroke_m"] = msg.position[k]
+                    row[f"{name}.velocity_m_per_s"] = msg.velocity[k]
+                    row[f"{name}.force_N"] = msg.effort[k]
+            elif topic.startswith(f"{ns}/") and topic.endswith("/wrench"):
+                name = topic[len(ns) + 1:-len("/wrench")]
+                row = rows.setdefault(message.log_time, {})
+                row[f"{name}.force_x_N"] = msg.wrench.force.x
+                row[f"{name}.force_y_N"] = msg.wrench.force.y
+            elif topic == f"{ns}/workpiece":
+                clouds.append(_cloud(msg))
+                cloud_times.append(message.log_time * 1e-9)
+    times = sorted(rows)
+    history = pd.DataFrame([{"time_s": t * 1e-9, **rows[t]} for t in times])
+    if len(history.columns) > 1:
+        tools = []
+        for c in history.columns[1:]:
+            name = c.rsplit(".", 1)[0]
+            if name not in tools:
+                tools.append(name)
+        suffixes = ["stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N"]
+        order = ["time_s"] + [f"{t}.{s}" for t in tools for s in suffixes if f"{t}.{s}" in history.columns]
+        history = history[order]
+    return Recording(history=history, clouds=clouds, cloud_times_s=np.array(cloud_times))

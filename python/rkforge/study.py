@@ -1,0 +1,171 @@
+"""Parameter studies: a grid or a list of dotted-key overrides, run locally or on Dask."""
+from __future__ import annotations
+
+import itertools
+import math
+import time
+import uuid
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
+
+import pandas as pd
+
+Cases = Union[Mapping[str, Sequence[Any]], Sequence[Mapping[str, Any]]]
+
+#: Summary keys that are not figures of the case (timing and the machine it ran on).
+_NOT_FIGURES = ("stage_seconds", "threads", "wall_s", "error", "status")
+
+
+def expand(cases: Cases) -> List[Dict[str, Any]]:
+    """The explicit cases of a study: a dict of dotted key -> list of values gives every
+    combination (the first key varying slowest, as ``rkforge sweep --set``); a list of dicts
+    is taken as it is."""
+    if isinstance(cases, Mapping):
+        keys = list(cases)
+        for k in keys:
+            if isinstance(cases[k], (str, bytes)) or not isinstance(cases[k], Sequence):
+                raise TypeError(f"cases[{k!r}] must be a list of values, got {type(cases[k]).__name__}")
+        return [dict(zip(keys, combo)) for combo in itertools.product(*(cases[k] for k in keys))]
+    out = []
+    for i, case in enumerate(cases):
+        if not isinstance(case, Mapping):
+            raise TypeError(f"cases[{i}] must be a dict of dotted key -> value, got {type(case).__name__}")
+        out.append(dict(case))
+    return out
+
+
+def run_case(scene, overrides: Dict[str, Any], integration: Optional[str], threads: Optional[int]) -> dict:
+    """One case: the scene with ``overrides`` run to its end. Never raises: a bad override
+    or a failed run gives ``status`` "error" and the error text."""
+    from . import run  # the package is imported on Dask workers too
+
+    start = time.perf_counter()
+    summary, history, error = None, None, None
+    try:
+        case_scene = scene.copy()
+        for key, value in overrides.items():
+            case_scene.set(key, value)
+        summary, history = run(case_scene, integration=integration, threads=threads, check=False)
+        error = summary.get("error")
+    except Exception as e:  # noqa: BLE001 - a case's error becomes its row
+        error = f"{type(e).__name__}: {e}"
+    return {
+        "summary": summary,
+        "history": history,
+        "status": "ok" if error is None else "error",
+        "error": error,
+        "case_wall_s": time.perf_counter() - start,
+    }
+
+
+def figures(summary: Optional[dict]) -> Dict[str, Any]:
+    """The summary's figures as flat columns: nested keys dotted (``workpiece.height_m``),
+    tools by name (``tools.top.peak_force_N``), pairs split (``tools.top.force_N[0]``)."""
+    flat: Dict[str, Any] = {}
+
+    def walk(prefix: str, value: Any) -> None:
+        if isinstance(value, dict):
+            for k, v in value.items():
+                walk(f"{prefix}.{k}" if prefix else k, v)
+        elif isinstance(value, list) and all(isinstance(t, dict) and "name" in t for t in value) and value:
+            for t in value:
+                walk(f"{prefix}.{t['name']}", {k: v for k, v in t.items() if k != "name"})
+        elif isinstance(value, list):
+            for i, v in enumerate(value):
+                walk(f"{prefix}[{i}]", v)
+        else:
+            flat[prefix] = value
+
+    if summary is not None:
+        walk("", {k: v for k, v in summary.items() if k not in _NOT_FIGURES})
+    return flat
+
+
+def _bar(total: int, progress: bool):
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, unit="case", desc="rkforge study")
+
+
+def study(
+    scene,
+    cases: Cases,
+    client=None,
+    *,
+    integration: Optional[str] = None,
+    threads: Optional[int] = None,
+    retries: int = 2,
+    progress: bool = True,
+    on_case: Optional[Callable[[int, dict], None]] = None,
+    timeout: Optional[float] = None,
+) -> pd.DataFrame:
+    """Run ``scene`` once per case and return one row per case.
+
+    ``cases`` is a dict of dotted key -> list of values (the full grid, first key slowest)
+    or a list of dicts (explicit cases). Without ``client`` the cases run here, one after
+    the other; with a ``distributed.Client`` each case is a Dask task (``pure=False``, a
+    unique key, ``retries`` for cases that raise; cases on a worker that dies are
+    rescheduled by the scheduler). ``progress`` shows a tqdm bar; ``on_case(index, result)``
+    is called as each case finishes. ``timeout`` (s) bounds the wait for the cluster's
+    results (``TimeoutError`` past it).
+
+    Columns: ``case`` (its index), the inputs (named by their dotted keys), ``status``
+    ("ok" or "error"), ``error`` (the error text), ``wall_s`` (the run's wall time as
+    summary.json has it), ``case_wall_s`` (the case's wall time on its worker, Python
+    included), then the summary's figures (:func:`figures`). A failed case is a row with
+    its error. The last column, ``history``, holds each case's history DataFrame (None for
+    a case whose scene was refused).
+    """
+    explicit = expand(cases)
+    keys: List[str] = []
+    for case in explicit:
+        keys.extend(k for k in case if k not in keys)
+    results: Dict[int, dict] = {}
+    bar = _bar(len(explicit), progress)
+
+    def done(i: int, result: dict) -> None:
+        results[i] = result
+        if bar is not None:
+            bar.update(1)
+        if on_case is not None:
+            on_case(i, result)
+
+    try:
+        if client is None:
+            for i, case in enumerate(explicit):
+                done(i, run_case(scene, case, integration, threads))
+        else:
+            from distributed import as_completed
+
+            token = uuid.uuid4().hex
+            futures = {}
+            for i, case in enumerate(explicit):
+                f = client.submit(run_case, scene, case, integration, threads,
+                                  key=f"rkforge-case-{i}-{token}", pure=False, retries=retries)
+                futures[f] = i
+            for future in as_completed(futures, timeout=timeout):
+                i = futures[future]
+                try:
+                    result = future.result()
+                except Exception as e:  # noqa: BLE001 - a lost case becomes its row
+                    result = {"summary": None, "history": None, "status": "error",
+                              "error": f"{type(e).__name__}: {e}", "case_wall_s": math.nan}
+                done(i, result)
+    finally:
+        if bar is not None:
+            bar.close()
+    rows = []
+    for i, case in enumerate(explicit):
+        r = results[i]
+        summary = r["summary"] or {}
+        row = {"case": i}
+        row.update({k: case.get(k) for k in keys})
+        row.update(status=r["status"], error=r["error"], wall_s=summary.get("wall_s", math.nan),
+                   case_wall_s=r["case_wall_s"])
+        row.update(figures(r["summary"]))
+        rows.append(row)
+    table = pd.DataFrame(rows)
+    table["history"] = pd.Series([results[i]["history"] for i in range(len(explicit))],
+                                 index=table.index, dtype=object)
+    return table

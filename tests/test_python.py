@@ -1,0 +1,295 @@
+"""The Python package `rkforge`: results equal to the command line's bit for bit (also
+after a saved state is restored), simulations on threads, and bad input as Python
+exceptions."""
+import csv
+import json
+import pickle
+import subprocess
+import threading
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import rkforge
+from conftest import ROOT, scene_variant
+
+#: Summary keys that hold timings or the machine's thread count, not results.
+TIMING = ("wall_s", "stage_seconds", "threads")
+
+SCENES = {
+    "block": ("block_forging.toml", {"particles = [21, 21]": "particles = [9, 9]",
+                                      "end_s = 0.015": "end_s = 0.002"}),
+    "taylor": ("taylor_bar.toml", {"particles = [21, 51]": "particles = [11, 26]",
+                                   "end_s = 80.0e-6": "end_s = 20.0e-6"}),
+}
+
+
+def results(summary):
+    return {k: v for k, v in summary.items() if k not in TIMING}
+
+
+def read_history(path):
+    """history.csv as a DataFrame of exact floats (the CLI writes round-trip numbers)."""
+    with open(path) as f:
+        rows = list(csv.reader(f))
+    return pd.DataFrame([[float(x) for x in r] for r in rows[1:]], columns=rows[0])
+
+
+@pytest.fixture(scope="module", params=sorted(SCENES))
+def cli_run(request, rkforge_bin, tmp_path_factory):
+    """A scene file and what `rkforge run --no-frames` wrote for it."""
+    src, changes = SCENES[request.param]
+    tmp = tmp_path_factory.mktemp(request.param)
+    path = tmp / src
+    path.write_text(scene_variant(src, changes))
+    out = tmp / "out"
+    proc = subprocess.run([rkforge_bin, "run", str(path), "--out", str(out), "--quiet", "--no-frames"],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return path, json.loads((out / "summary.json").read_text()), read_history(out / "history.csv")
+
+
+def assert_same_history(a, b):
+    assert list(a.columns) == list(b.columns)
+    assert a.shape == b.shape
+    # Bit for bit: every value equal, compared as the raw float64 bits.
+    assert np.array_equal(a.to_numpy().view(np.uint64), b.to_numpy().view(np.uint64))
+
+
+def test_run_equals_the_command_line_bit_for_bit(cli_run):
+    path, cli_summary, cli_history = cli_run
+    summary, history = rkforge.run(rkforge.Scene.from_file(path))
+    assert results(summary) == results(cli_summary)
+    assert_same_history(history, cli_history)
+
+
+def stepped(scene, times, sim=None, rows=None):
+    """Step a Simulation to each time, recording a history row there."""
+    sim = sim or rkforge.Simulation(scene)
+    rows = rows if rows is not None else [sim.sample()]
+    end = times[-1]
+    for t in times:
+        if t > sim.time + 1e-12 * end:
+            sim.run_to(t)
+        rows.append(sim.sample())
+    return sim, rows
+
+
+def test_stepping_a_simulation_to_the_sample_times_gives_the_same_bits(cli_run):
+    path, cli_summary, cli_history = cli_run
+    scene = rkforge.Scene.from_file(path)
+    sim, rows = stepped(scene, scene.sample_times())
+    assert_same_history(pd.DataFrame(rows), cli_history)
+    assert results(sim.summary()) == results(cli_summary)
+
+
+def test_a_restored_state_continues_bit_for_bit(cli_run):
+    path, cli_summary, cli_history = cli_run
+    scene = rkforge.Scene.from_file(path)
+    times = scene.sample_times()
+    half = len(times) // 2
+    first, rows = stepped(scene, times[:half])
+    saved = first.save_state()
+    # Continue in a new simulation from the saved state (and let the first one run on).
+    second = rkforge.Simulation(scene, threads=1)
+    second.restore_state(saved)
+    sim, rows = stepped(scene, times[half:], sim=second, rows=rows)
+    assert_same_history(pd.DataFrame(rows), cli_history)
+    assert results(sim.summary()) == results(cli_summary)
+    # The state also goes back in time in the simulation it came from.
+    stepped(scene, times[half:], sim=first, rows=[])
+    first.restore_state(saved)
+    _, again = stepped(scene, times[half:], sim=first, rows=list(rows[: half + 1]))
+    assert_same_history(pd.DataFrame(again), cli_history)
+
+
+def block_scene():
+    src, changes = SCENES["block"]
+    return rkforge.Scene.from_toml(scene_variant(src, changes), "block.toml")
+
+
+def test_simulations_on_threads_give_the_bits_of_a_serial_run():
+    scene = block_scene()
+    speeds = [5.0, 10.0, 15.0]
+    serial = {}
+    for v in speeds:
+        s = scene.copy()
+        s.set("tools.top.motion.velocity_m_per_s", v)
+        serial[v] = rkforge.run(s)
+    threaded = {}
+
+    def work(v):
+        s = scene.copy()
+        s.set("tools.top.motion.velocity_m_per_s", v)
+        threaded[v] = rkforge.run(s, threads=1)
+
+    threads = [threading.Thread(target=work, args=(v,)) for v in speeds]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=600)
+    for v in speeds:
+        assert results(threaded[v][0]) == results(serial[v][0])
+        assert_same_history(threaded[v][1], serial[v][1])
+    # Different speeds, different results: the override reached the run.
+    assert serial[5.0][1]["top.stroke_m"].iloc[-1] != serial[10.0][1]["top.stroke_m"].iloc[-1]
+
+
+def test_fields_tools_and_commands():
+    scene = block_scene()
+    sim = rkforge.Simulation(scene, integration="q4")
+    assert sim.summary()["integration"] == "q4"
+    sim.set_tool_velocity("top", 4.0)
+    sim.set_tool_velocity("bottom", 0.0)
+    sim.run_to(1e-3)
+    assert sim.time == 1e-3
+    strokes = sim.tool_strokes()
+    assert strokes["top"] == pytest.approx(4.0e-3, rel=1e-9) and strokes["bottom"] == 0.0
+    forces = sim.tool_forces()
+    assert set(forces) == {"top", "bottom"} and forces["top"] < 0
+    f = sim.fields()
+    assert f["positions"].shape == (81, 2) and f["plastic_strain"].shape == (81,)
+    assert np.allclose(f["positions"] - f["displacement"], sim.fields()["positions"] - f["displacement"])
+    assert f["von_mises"].max() > 0 and np.isfinite(f["velocity"]).all()
+    tools = sim.tools()
+    assert [t["name"] for t in tools] == ["top", "bottom"] and tools[0]["axial_force_N"] == forces["top"]
+    steps = sim.steps
+    assert sim.step() > 1e-3 and sim.steps == steps + 1
+
+
+def test_scenes_pickle_with_their_overrides():
+    scene = block_scene()
+    scene.set("tools.top.friction", 0.3)
+    scene.set("workpiece.particles", [7, 7])
+    back = pickle.loads(pickle.dumps(scene))
+    assert back == scene and back.overrides == [("tools.top.friction", 0.3), ("workpiece.particles", [7, 7])]
+    assert "friction = 0.3" in back.to_toml()
+
+
+@pytest.mark.parametrize(
+    "key, value, error, words",
+    [
+        ("tools.top.frction", 0.1, rkforge.SceneError, ["tools.top.frction", "unknown field `frction`"]),
+        ("tools.middle.friction", 0.1, rkforge.SceneError, ["no entry of `tools` is named `middle`"]),
+        ("tools.top.friction", "high", rkforge.SceneError, ["tools.top.friction", "invalid type"]),
+        ("tools.top.friction", object(), TypeError, ["tools.top.friction", "object"]),
+        ("material.poisson_ratio", 0.5, rkforge.SceneError, ["material.poisson_ratio", "(-1, 0.5)"]),
+        ("tools.top.friction", float("nan"), rkforge.SceneError, ["tools.top.friction", "must be zero or positive"]),
+        ("time.end_s.x", 1, rkforge.SceneError, ["`time.end_s` is a number, not a table"]),
+    ],
+)
+def test_bad_overrides_raise_naming_the_key(key, value, error, words):
+    scene = block_scene()
+    with pytest.raises(error) as e:
+        scene.set(key, value)
+    for w in words:
+        assert w in str(e.value), (w, str(e.value))
+    assert scene.overrides == []
+
+
+def test_bad_input_raises_and_the_interpreter_lives_on(tmp_path):
+    with pytest.raises(rkforge.SceneError, match="bad.toml: line 30: `material.poisson_ratio`: invalid type"):
+        src, changes = SCENES["block"]
+        text = scene_variant(src, changes).replace("poisson_ratio = 0.35", 'poisson_ratio = "soft"')
+        rkforge.Scene.from_toml(text, "bad.toml")
+    with pytest.raises(rkforge.SceneError, match="cannot read"):
+        rkforge.Scene.from_file(tmp_path / "nope.toml")
+    scene = block_scene()
+    sim = rkforge.Simulation(scene)
+    with pytest.raises(ValueError, match="not finite"):
+        sim.set_tool_velocity("top", float("nan"))
+    with pytest.raises(ValueError, match="no tool named `middle`"):
+        sim.set_tool_velocity("middle", 1.0)
+    with pytest.raises(ValueError, match="finite"):
+        sim.run_to(float("nan"))
+    with pytest.raises(ValueError, match="integration `q9`"):
+        rkforge.Simulation(scene, integration="q9")
+    with pytest.raises(ValueError, match="threads must be at least 1"):
+        rkforge.Simulation(scene, threads=0)
+    other = scene.copy()
+    other.set("tools.top.friction", 0.05)
+    with pytest.raises(rkforge.StateError, match="other settings"):
+        sim.restore_state(rkforge.Simulation(other).save_state())
+    taylor = rkforge.Scene.from_file(ROOT / "scenes" / "taylor_bar.toml")
+    with pytest.raises(rkforge.StateError, match="saved from scene `taylor_bar`, not `block_forging`"):
+        sim.restore_state(rkforge.Simulation(taylor).save_state())
+    with pytest.raises(rkforge.StateError, match="not a saved rkforge state"):
+        sim.restore_state(b"\x00garbage")
+    # Still usable after every refusal.
+    sim.run_to(2e-4)
+    assert sim.time == pytest.approx(2e-4, rel=1e-12)
+
+
+def test_a_failed_run_raises_with_its_summary_and_history():
+    scene = block_scene()
+    # An energy bound that the second step breaks.
+    scene.set("checks.energy_balance_tol", 1e-9)
+    with pytest.raises(rkforge.SimulationError) as e:
+        rkforge.run(scene)
+    assert e.value.summary["status"] == "error" and "energy balance error" in str(e.value)
+    # The row at t = 0 and the last state.
+    assert len(e.value.history) == 2 and e.value.history["time_s"].iloc[-1] > 0
+    # A step above the stable step is refused at setup, before any history.
+    unstable = block_scene()
+    unstable.set("time.dt_s", 2e-5)
+    with pytest.raises(rkforge.SimulationError, match="exceeds the stable step"):
+        rkforge.run(unstable)
+    summary, history = rkforge.run(scene, check=False)
+    assert summary["status"] == "error" and summary["error"] == str(e.value)
+
+
+def test_read_mcap_gives_the_history_columns_and_the_point_clouds(rkforge_bin, tmp_path):
+    src, changes = SCENES["block"]
+    path = tmp_path / src
+    path.write_text(scene_variant(src, changes))
+    out, mcap = tmp_path / "out", tmp_path / "run.mcap"
+    proc = subprocess.run([rkforge_bin, "run", str(path), "--out", str(out), "--quiet", "--no-frames",
+                           "--mcap", str(mcap)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    history = read_history(out / "history.csv")
+    rec = rkforge.read_mcap(mcap)
+    tools = [f"{t}.{c}" for t in ("top", "bottom")
+             for c in ("stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N")]
+    assert list(rec.history.columns) == ["time_s", *tools]
+    assert len(rec.history) == len(history)
+    # Log times are the sample times rounded to the nanosecond.
+    assert np.abs(rec.history["time_s"].to_numpy() - history["time_s"].to_numpy()).max() < 1e-9
+    assert_same_history(rec.history[tools], history[tools])
+    assert len(rec.clouds) == len(history) and np.array_equal(rec.cloud_times_s, rec.history["time_s"])
+    for cloud, (_, row) in zip(rec.clouds, history.iterrows()):
+        assert set(cloud) == {"x", "y", "z", "plastic_strain", "von_mises"}
+        assert cloud["x"].shape == (81,) and cloud["x"].dtype == np.float32
+        assert cloud["x"].min() == pytest.approx(row["workpiece.x_min_m"], abs=1e-6)
+        assert cloud["y"].max() == pytest.approx(row["workpiece.y_max_m"], abs=1e-6)
+        assert cloud["plastic_strain"].max() <= row["workpiece.max_plastic_strain"] + 1e-6
+
+
+def test_stepping_releases_the_gil():
+    """While a simulation steps in one thread, Python code runs in another: the main thread
+    counts the iterations it makes in the middle half of the worker's run (none if the GIL
+    were held during the run; a thread switch just before or after the call can only add
+    iterations near its ends)."""
+    scene = block_scene()
+    scene.set("workpiece.particles", [17, 17])
+    scene.set("time.end_s", 0.008)
+    sim = rkforge.Simulation(scene)
+    marks = {}
+
+    def work():
+        marks["start"] = time.perf_counter()
+        sim.run_to(0.008)
+        marks["end"] = time.perf_counter()
+
+    worker = threading.Thread(target=work)
+    ticks = []
+    worker.start()
+    while worker.is_alive():
+        ticks.append(time.perf_counter())
+    worker.join()
+    quarter = (marks["end"] - marks["start"]) / 4
+    during = [t for t in ticks if marks["start"] + quarter < t < marks["end"] - quarter]
+    assert len(during) > 100, (len(during), 4 * quarter)
+    assert pickle.loads(pickle.dumps(rkforge.SceneError("x"))).args == ("x",)
+    assert rkforge.SceneError.__module__ == "rkforge"

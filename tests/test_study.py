@@ -1,0 +1,166 @@
+"""`rkforge.study`: parameter studies run locally and on a Dask cluster whose scheduler and
+two workers are separate processes started with the `dask` command-line tools on the
+loopback interface; the same rows bit for bit, and a worker killed mid-study loses nothing."""
+import json
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import threading
+
+import pandas as pd
+import pytest
+
+import rkforge
+from conftest import scene_variant
+
+distributed = pytest.importorskip("distributed")
+
+#: Columns that hold timings (not results) and the histories (compared one by one).
+TIMES = ["wall_s", "case_wall_s", "history"]
+
+#: Friction x press speed: 8 cases of a coarse block forging, about a second each.
+CASES = {
+    "tools.top.friction": [0.1, 0.3],
+    "tools.top.motion.velocity_m_per_s": [5.0, 7.5, 10.0, 12.5],
+}
+
+#: Generous: both cores may be busy with other work.
+TIMEOUT = 900
+
+
+def block_scene():
+    text = scene_variant("block_forging.toml", {"particles = [21, 21]": "particles = [17, 17]",
+                                                 "end_s = 0.015": "end_s = 0.008"})
+    return rkforge.Scene.from_toml(text, "block.toml")
+
+
+def results(table):
+    return table.drop(columns=TIMES)
+
+
+def assert_same_histories(a, b):
+    assert len(a) == len(b)
+    for ha, hb in zip(a["history"], b["history"]):
+        pd.testing.assert_frame_equal(ha, hb, check_exact=True)
+
+
+@pytest.fixture(scope="module")
+def local():
+    """The study run here, one case after the other."""
+    return rkforge.study(block_scene(), CASES, progress=False)
+
+
+class Cluster:
+    """A scheduler and two single-threaded workers, each its own `dask` process."""
+
+    def __init__(self, tmp):
+        dask = str(pathlib.Path(sys.executable).parent / "dask")
+        self.file = tmp / "scheduler.json"
+        self.logs = []
+        self.scheduler = self.start([dask, "scheduler", "--host", "127.0.0.1", "--port", "0",
+                                     "--no-dashboard", "--scheduler-file", str(self.file)], tmp / "scheduler.log")
+        self.workers = [
+            self.start([dask, "worker", "--scheduler-file", str(self.file), "--host", "127.0.0.1",
+                        "--nthreads", "1", "--no-nanny", "--no-dashboard", "--local-directory", str(tmp / f"w{k}")],
+                       tmp / f"worker{k}.log")
+            for k in range(2)
+        ]
+        # Client waits for the scheduler file and connects; then we wait for both workers.
+        self.client = distributed.Client(scheduler_file=str(self.file), timeout=TIMEOUT)
+        self.client.wait_for_workers(2, timeout=TIMEOUT)
+
+    def start(self, args, log):
+        f = open(log, "w")
+        self.logs.append(f)
+        return subprocess.Popen(args, stdout=f, stderr=subprocess.STDOUT, start_new_session=True)
+
+    def worker_pids(self):
+        """Scheduler address -> pid of each connected worker."""
+        return self.client.run(os.getpid)
+
+    def close(self):
+        self.client.close()
+        for p in self.workers + [self.scheduler]:
+            if p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+        for p in self.workers + [self.scheduler]:
+            try:
+                p.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+        for f in self.logs:
+            f.close()
+
+
+@pytest.fixture
+def cluster(tmp_path):
+    c = Cluster(tmp_path)
+    yield c
+    c.close()
+
+
+def test_a_study_is_a_grid_of_rows_with_inputs_figures_and_histories(local):
+    assert len(local) == 8
+    assert list(local["tools.top.friction"]) == [0.1] * 4 + [0.3] * 4
+    assert list(local["tools.top.motion.velocity_m_per_s"]) == [5.0, 7.5, 10.0, 12.5] * 2
+    assert (local["status"] == "ok").all() and local["error"].isna().all()
+    # Faster presses stroke further in the same time; the history holds every sample.
+    strokes = local["tools.top.stroke_m"]
+    assert strokes.iloc[0] < strokes.iloc[1] < strokes.iloc[2] < strokes.iloc[3]
+    for i, h in enumerate(local["history"]):
+        assert h["top.stroke_m"].iloc[-1] == strokes.iloc[i]
+        assert h["time_s"].iloc[-1] == local["end_time_s"].iloc[i]
+    # Friction changes the result at the same speed.
+    width = local["workpiece.width_m"]
+    assert all(width.iloc[k] != width.iloc[k + 4] for k in range(4))
+
+
+def test_failed_cases_are_rows_with_their_error():
+    table = rkforge.study(block_scene(), [
+        {"tools.top.friction": 0.2},
+        {"tools.top.friction": -1.0},
+        {"checks.energy_balance_tol": 1e-9},
+        {"tools.middle.friction": 0.1},
+    ], progress=False)
+    assert list(table["status"]) == ["ok", "error", "error", "error"]
+    assert "must be zero or positive" in table["error"][1]
+    assert "energy balance error" in table["error"][2]
+    assert "no entry of `tools` is named `middle`" in table["error"][3]
+    # The diverged run keeps its history up to the failure; the refused scenes have none.
+    assert len(table["history"][2]) == 2 and table["history"][1] is None
+
+
+def test_the_study_on_a_dask_cluster_gives_the_local_rows_bit_for_bit(cluster, local):
+    remote = rkforge.study(block_scene(), CASES, client=cluster.client, timeout=TIMEOUT)
+    pd.testing.assert_frame_equal(results(remote), results(local), check_exact=True)
+    assert_same_histories(remote, local)
+
+
+def test_a_worker_killed_mid_study_loses_no_case(cluster, local):
+    ours = {p.pid for p in cluster.workers}
+    pids = cluster.worker_pids()
+    assert set(pids.values()) == ours
+    killed = {}
+    lock = threading.Lock()
+
+    def on_case(i, result):
+        # At the first finished case, kill a worker that is running another case.
+        with lock:
+            if killed:
+                return
+            for addr, keys in cluster.client.processing().items():
+                pid = pids.get(addr)
+                if keys and pid in ours:
+                    os.kill(pid, signal.SIGKILL)
+                    killed.update(pid=pid, running=list(keys))
+                    return
+
+    remote = rkforge.study(block_scene(), CASES, client=cluster.client, progress=False,
+                           on_case=on_case, timeout=TIMEOUT)
+    assert killed, "no worker was running a case when the first one finished"
+    assert len(cluster.client.scheduler_info()["workers"]) == 1
+    pd.testing.assert_frame_equal(results(remote), results(local), check_exact=True)
+    assert_same_histories(remote, local)
