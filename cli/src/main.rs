@@ -10,7 +10,7 @@ mod run;
 mod sweep;
 
 use clap::{Parser, Subcommand};
-use rkforge_core::scene_overrides::{parse_value, split_values};
+use rkforge_core::scene_overrides::{parse_value, split_arg, split_values};
 use rkforge_core::{IntegrationRule, Scene, SceneSource};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -146,22 +146,11 @@ fn set_threads(n: Option<usize>) -> Result<(), String> {
     rkforge_core::set_threads(n).map_err(|e| e.to_string())
 }
 
-/// A `KEY=VALUE` argument of `--set`, split at the first `=`.
-fn key_value(arg: &str) -> Result<(&str, &str), String> {
-    arg.split_once('=')
-        .map(|(k, v)| (k.trim(), v))
-        .filter(|(k, _)| !k.is_empty())
-        .ok_or_else(|| format!("--set `{arg}`: expected KEY=VALUE, e.g. tools.top.friction=0.1"))
-}
-
 /// The scene file with the `--set KEY=VALUE` overrides of `rkforge run` applied.
 fn scene_with_overrides(path: &std::path::Path, sets: &[String]) -> Result<Scene, String> {
     let mut source = SceneSource::from_file(path).map_err(|e| e.to_string())?;
     for arg in sets {
-        let (key, value) = key_value(arg)?;
-        source
-            .set(key, parse_value(value))
-            .map_err(|e| e.to_string())?;
+        source.set_arg(arg).map_err(|e| e.to_string())?;
     }
     Ok(source.scene().clone())
 }
@@ -219,7 +208,7 @@ fn sweep_cases(path: &std::path::Path, sets: &[String]) -> Result<Vec<sweep::Cas
     }];
     let mut overrides: Vec<Vec<(String, toml::Value)>> = vec![Vec::new()];
     for arg in sets {
-        let (key, values) = key_value(arg)?;
+        let (key, values) = split_arg(arg).map_err(|e| e.to_string())?;
         let mut next = Vec::new();
         let mut next_overrides = Vec::new();
         for (case, o) in cases.iter().zip(&overrides) {

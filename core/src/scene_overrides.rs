@@ -79,6 +79,17 @@ impl SceneSource {
         Ok(())
     }
 
+    /// Applies one command-line override `KEY=VALUE` (`--set`), the value read as by
+    /// [`parse_value`].
+    ///
+    /// # Errors
+    ///
+    /// `arg` is not `KEY=VALUE`, or as [`SceneSource::set`].
+    pub fn set_arg(&mut self, arg: &str) -> Result<()> {
+        let (key, value) = split_arg(arg)?;
+        self.set(key, parse_value(value))
+    }
+
     /// The validated scene.
     pub fn scene(&self) -> &Scene {
         &self.scene
@@ -98,6 +109,22 @@ impl SceneSource {
     pub fn overrides(&self) -> &[(String, Value)] {
         &self.overrides
     }
+}
+
+/// Splits a command-line override `KEY=VALUE` into its key (trimmed) and value text.
+///
+/// # Errors
+///
+/// No `=`, or an empty key.
+pub fn split_arg(arg: &str) -> Result<(&str, &str)> {
+    arg.split_once('=')
+        .map(|(k, v)| (k.trim(), v))
+        .filter(|(k, _)| !k.is_empty())
+        .ok_or_else(|| {
+            Error::Request(format!(
+                "--set `{arg}`: expected KEY=VALUE, e.g. tools.top.friction=0.1"
+            ))
+        })
 }
 
 /// A value as written on a command line: TOML (`0.1`, `[11, 26]`, `"q4"`, `true`,

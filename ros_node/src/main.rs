@@ -5,7 +5,7 @@
 //! and forwards velocity commands, which the simulation applies before its next step.
 
 use clap::Parser;
-use rkforge_core::{Scene, Simulation, MAX_SAMPLES};
+use rkforge_core::{Scene, SceneSource, Simulation, MAX_SAMPLES};
 use rkforge_ros::control::{self, check_reset, check_step, transition, Request, Transition};
 use rkforge_ros::dds::{domain_id_from_env, Command, Node};
 use rkforge_ros::frame::{sample, Sample};
@@ -40,6 +40,10 @@ const REPUBLISH: Duration = Duration::from_millis(250);
 struct Args {
     /// Scene file (TOML).
     scene: PathBuf,
+    /// Override a scene key by its dotted path, e.g. `--set time.mass_scaling.factor=1e4`
+    /// or `--set tools.top.friction=0.1` (repeatable; as `rkforge run --set`).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
     /// Namespace of the topics.
     #[arg(long, default_value = "/rkforge")]
     namespace: String,
@@ -117,7 +121,11 @@ fn run(a: &Args) -> Result<(), String> {
     positive("--real-time-factor", a.real_time_factor)?;
     positive("--publish-rate", a.publish_rate)?;
     rkforge_core::set_threads(a.threads).map_err(|e| e.to_string())?;
-    let scene = Scene::from_file(&a.scene).map_err(|e| e.to_string())?;
+    let mut source = SceneSource::from_file(&a.scene).map_err(|e| e.to_string())?;
+    for arg in &a.set {
+        source.set_arg(arg).map_err(|e| e.to_string())?;
+    }
+    let scene = source.scene().clone();
     let topics = rkforge_ros::topics(&scene, &a.namespace)?;
     let domain = domain_id_from_env()?;
     let end = scene.time.end_s;
