@@ -174,7 +174,7 @@ pub struct TimeSpec {
     #[serde(default = "default_safety")]
     pub dt_safety: Real,
     /// Added mass that lengthens the explicit step; none when absent.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mass_scaling: Option<MassScaling>,
 }
 
@@ -187,12 +187,12 @@ pub struct TimeSpec {
 #[serde(deny_unknown_fields)]
 pub struct MassScaling {
     /// Uniform: every particle's mass times `factor` (-), at least 1.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub factor: Option<Real>,
     /// Selective (as LS-DYNA's DT2MS): mass is added only to the particles whose local
     /// step is below what it takes for the run's step, `dt_safety` times the critical
     /// step of the undeformed discretisation, to reach `target_dt_s` (s).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_dt_s: Option<Real>,
 }
 

@@ -406,6 +406,20 @@ mod tests {
         assert_eq!(a.name, format!("rkforge_meta_{}.toml", std::process::id()));
         assert_eq!(a.media_type, "application/toml");
         assert_eq!(&*a.data, text.as_bytes());
+        // A mass-scaled scene says so in the same record.
+        let scaled = text.replace("[time]\n", "[time]\nmass_scaling = { factor = 100.0 }\n");
+        let (scaled_bytes, _) = record(&scaled, "meta_scaled", 2, Compression::Zstd);
+        let scaled_summary = mcap::Summary::read(&scaled_bytes).unwrap().unwrap();
+        let time = scaled_summary
+            .metadata_indexes
+            .iter()
+            .map(|i| mcap::read::metadata(&scaled_bytes, i).unwrap())
+            .find(|m| m.name == METADATA)
+            .map(|m| m.metadata["time"].clone());
+        assert_eq!(
+            time.as_deref(),
+            Some(r#"{"end_s":0.015,"dt_s":1e-6,"dt_safety":0.5,"mass_scaling":{"factor":100.0}}"#)
+        );
     }
 
     /// Chunks close between samples: no sample's messages straddle two chunks, so the
