@@ -77,7 +77,11 @@ impl Instance {
             particles: scene.workpiece.particles,
             dt_safety: scene.time.dt_safety,
             dt_fixed: scene.time.dt_s.unwrap_or(0.0),
-            friction: scene.tools.iter().map(|t| t.friction).collect(),
+            friction: scene
+                .tools
+                .iter()
+                .map(|t| t.friction.coefficient())
+                .collect(),
         };
         Ok(Instance {
             table: variable_table(&scene),
@@ -126,7 +130,7 @@ impl Instance {
         s.time.dt_safety = self.params.dt_safety;
         s.time.dt_s = (self.params.dt_fixed > 0.0).then_some(self.params.dt_fixed);
         for (t, f) in s.tools.iter_mut().zip(&self.params.friction) {
-            t.friction = *f;
+            t.friction = t.friction.with_coefficient(*f);
         }
         if let Some((key, msg)) = s.validate().into_iter().next() {
             return Err(request(format!(
@@ -200,7 +204,11 @@ impl Instance {
             particles: scene.workpiece.particles,
             dt_safety: scene.time.dt_safety,
             dt_fixed: scene.time.dt_s.unwrap_or(0.0),
-            friction: scene.tools.iter().map(|t| t.friction).collect(),
+            friction: scene
+                .tools
+                .iter()
+                .map(|t| t.friction.coefficient())
+                .collect(),
         };
         self.commands = vec![None; scene.tools.len()];
         self.sim = None;

@@ -261,7 +261,7 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
             format!("{}.friction", tool.name),
             Parameter,
             Fixed,
-            Kind::Real(Some(tool.friction)),
+            Kind::Real(Some(tool.friction.coefficient())),
             None,
             format!("Coulomb friction coefficient of tool {}", tool.name),
             Binding::Friction(k),

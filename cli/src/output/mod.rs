@@ -67,6 +67,11 @@ impl History {
         ] {
             columns.push(format!("workpiece.{c}"));
         }
+        for f in &sim.scene().output.faces {
+            for c in FACE_KEYS {
+                columns.push(format!("workpiece.face_{}.{c}", f.name()));
+            }
+        }
         for c in [
             "kinetic_J",
             "elastic_J",
@@ -112,6 +117,9 @@ impl History {
             sim.max_plastic_strain(),
             pen / h,
         ]);
+        for &f in &sim.scene().output.faces {
+            row.extend(face_values(sim, f));
+        }
         row.extend([
             e.kinetic,
             e.elastic,
@@ -265,6 +273,15 @@ impl History {
     }
 }
 
+/// The bounds of a followed face (`[output] faces`), as history columns and summary keys.
+const FACE_KEYS: [&str; 4] = ["x_min_m", "x_max_m", "y_min_m", "y_max_m"];
+
+/// The values of [`FACE_KEYS`] for the particles that started on edge `f`.
+fn face_values(sim: &Simulation, f: rkforge_core::scene::Edge) -> [f64; 4] {
+    let e = sim.face_extents(f);
+    [e.x[0], e.x[1], e.y[0], e.y[1]]
+}
+
 fn min_spacing(sim: &Simulation) -> f64 {
     let h = sim.spacing();
     h[0].min(h[1])
@@ -286,6 +303,12 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>
         "max_plastic_strain": sim.max_plastic_strain(),
     });
     workpiece[lat] = json!(lat_v);
+    for &f in &sim.scene().output.faces {
+        let keys = FACE_KEYS.iter().map(|k| k.to_string());
+        let face: serde_json::Map<String, Value> =
+            keys.zip(face_values(sim, f).map(|v| json!(v))).collect();
+        workpiece[format!("face_{}", f.name())] = Value::Object(face);
+    }
     let times = sim.times;
     let scene = sim.scene();
     json!({

@@ -35,4 +35,8 @@ pub struct State {
     pub anchor_time: Real,
     /// Step count at `anchor_time`.
     pub anchor_step: u64,
+    /// Which boundary particles are held on which tool without separation
+    /// (`[boundary index * tools + tool]`; empty when every tool separates).
+    #[serde(default)]
+    pub held: Vec<bool>,
 }

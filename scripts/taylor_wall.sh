@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Taylor bar convergence against the finite-element benchmark (docs/accuracy.md, issue 17):
+# each grid and rule with the rkforge wall (particles may lift off, `separation = true`)
+# and the FE wall (`separation = false`: a particle that reached the wall stays on it),
+# adaptive step (dt_safety 0.5). Prints one table row per run: the bar's largest radius
+# and height, the impact-face radius (largest r of the particles that started on z = 0)
+# and the free-face length (largest z of the particles that started on the top face), and
+# the largest distance of an impact-face particle from the wall (z = 0) at the end.
+#   scripts/taylor_wall.sh                                  (81 x 201 runs take minutes each)
+#   GRIDS="21,51 41,101" RULES="scni" WALLS="false" scripts/taylor_wall.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release -q -p rkforge
+out=${OUT:-$(mktemp -d)}
+mkdir -p "$out"
+echo "| grid | rule | wall | steps | wall time (s) | radius (mm) | height (mm) | impact-face radius (mm) | free-face length (mm) | impact face off the wall (um) |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
+for grid in ${GRIDS:-21,51 41,101 81,201}; do
+  g=${grid/,/, }
+  for sep in ${WALLS:-true false}; do
+    for rule in ${RULES:-scni q2}; do
+      while [ -n "${QUIET_FILE:-}" ] && [ -e "$QUIET_FILE" ]; do sleep 30; done
+      name="${grid/,/x}_${rule}_sep_$sep"
+      sed -e "s/^particles = .*/particles = [$g]/" -e "s/^dt_s = .*/dt_safety = 0.5/" \
+          -e "s/^friction = 0.0/friction = 0.0\nseparation = $sep/" \
+          -e "s/^frames = .*/frames = 0\nfaces = [\"y_min\", \"y_max\"]/" \
+          scenes/taylor_bar.toml > "$out/$name.toml"
+      ./target/release/rkforge run "$out/$name.toml" --integration "$rule" --out "$out/$name" --quiet --no-frames > /dev/null
+      python3 -c "
+import json
+s = json.load(open('$out/$name/summary.json'))
+w = s['workpiece']
+a, b = w['face_y_min'], w['face_y_max']
+print(f\"| ${grid/,/x} | $rule | {'lift-off' if '$sep' == 'true' else 'FE (held)'} | {s['steps']} | {s['wall_s']:.1f} | {w['radius_m']*1e3:.4f} | {w['height_m']*1e3:.4f} | {a['x_max_m']*1e3:.4f} | {b['y_max_m']*1e3:.4f} | {max(abs(a['y_min_m']), abs(a['y_max_m']))*1e6:.2f} |\")"
+    done
+  done
+done
