@@ -35,3 +35,33 @@ print(f\"| ${grid/,/x} | $rule | {'lift-off' if '$sep' == 'true' else 'FE (held)
     done
   done
 done
+# Richardson extrapolation from the three finest grids of each rule and wall: observed
+# order p = log2((f1 - f2) / (f2 - f3)), limit f3 + (f3 - f2) / (2^p - 1); the uncertainty
+# is the distance of the finest run from its limit.
+python3 - "$out" ${GRIDS:-21,51 41,101 81,201} <<'PY'
+import json, math, os, sys
+out, grids = sys.argv[1], [g.replace(',', 'x') for g in sys.argv[2:]]
+print()
+print("| rule | wall | quantity | grids | observed order | extrapolated (mm) | finest - extrapolated (mm) | against FE (7.226 / 21.42 mm) |")
+print("|---|---|---|---|---|---|---|---|")
+for sep in ("true", "false"):
+    for rule in ("scni", "q2"):
+        runs = []
+        for g in grids:
+            p = os.path.join(out, f"{g}_{rule}_sep_{sep}", "summary.json")
+            if os.path.exists(p):
+                w = json.load(open(p))["workpiece"]
+                runs.append((g, w["face_y_min"]["x_max_m"] * 1e3, w["face_y_max"]["y_max_m"] * 1e3))
+        if len(runs) < 3:
+            continue
+        runs = runs[-3:]
+        for k, (name, fe) in enumerate((("impact-face radius", 7.226), ("free-face length", 21.42))):
+            f1, f2, f3 = (r[k + 1] for r in runs)
+            wall = "lift-off" if sep == "true" else "FE (held)"
+            if (f1 - f2) * (f2 - f3) <= 0:
+                print(f"| {rule} | {wall} | {name} | {'/'.join(r[0] for r in runs)} | not monotone | - | - | finest {100 * (f3 / fe - 1):+.2f} % |")
+                continue
+            p = math.log2((f1 - f2) / (f2 - f3))
+            lim = f3 + (f3 - f2) / (2 ** p - 1)
+            print(f"| {rule} | {wall} | {name} | {'/'.join(r[0] for r in runs)} | {p:.2f} | {lim:.4f} | {f3 - lim:+.4f} | {100 * (lim / fe - 1):+.2f} % (finest {100 * (f3 / fe - 1):+.2f} %) |")
+PY
