@@ -852,4 +852,40 @@ motion = { kind = "fixed" }
             assert!(e.contains(key) && e.contains(&format!(":{line}:")), "{e}");
         }
     }
+
+    #[test]
+    fn friction_laws_and_their_errors_name_key_and_line() {
+        let with = |f: &str| {
+            GOOD.replace(
+                "motion = { kind = \"fixed\" }",
+                &format!("motion = {{ kind = \"fixed\" }}\n{f}"),
+            )
+        };
+        let s = Scene::from_str_named(&with("friction = 0.2"), "s.toml").unwrap();
+        assert_eq!(s.tools[0].friction, Friction::Coulomb { mu: 0.2 });
+        assert!(s.tools[0].separation);
+        let s = Scene::from_str_named(
+            &with("friction = { model = \"shear\", m = 0.3 }\nseparation = false"),
+            "s.toml",
+        )
+        .unwrap();
+        assert_eq!(s.tools[0].friction, Friction::Shear { m: 0.3 });
+        assert!(!s.tools[0].separation);
+        let e = err(&with("friction = { model = \"shear\", m = 1.5 }"));
+        assert!(
+            e.contains("tools[0].friction.m") && e.contains(":22:"),
+            "{e}"
+        );
+        let e = err(&with(
+            "friction = { model = \"capped\", mu = -0.1, m = 0.5 }",
+        ));
+        assert!(
+            e.contains("tools[0].friction.mu") && e.contains(":22:"),
+            "{e}"
+        );
+        let e = err(&with("friction = -0.1"));
+        assert!(e.contains("tools[0].friction") && e.contains(":22:"), "{e}");
+        let e = err(&with("friction = { model = \"sticky\", m = 0.5 }"));
+        assert!(e.contains("line 22") && e.contains("sticky"), "{e}");
+    }
 }
