@@ -61,6 +61,24 @@ pub struct Body<'a> {
     pub depth_m: Real,
 }
 
+impl Body<'_> {
+    /// Predicted position `x_J = X_J + sum_I N_I(X_J) (d_I + dt v*_I)` (m) and velocity
+    /// `v_J = sum_I N_I(X_J) v*_I` (m/s) of particle `j`.
+    fn predicted(&self, j: usize, dt: Real) -> [[Real; 2]; 2] {
+        let (d, v, nodal) = (self.d, self.v, self.nodal);
+        let (mut x, mut vj) = (self.reference[j], [0.0; 2]);
+        for e in nodal.row(j) {
+            let i = nodal.index[e] as usize;
+            let n = nodal.n[e];
+            x[0] += n * (d[i][0] + dt * v[i][0]);
+            x[1] += n * (d[i][1] + dt * v[i][1]);
+            vj[0] += n * v[i][0];
+            vj[1] += n * v[i][1];
+        }
+        [x, vj]
+    }
+}
+
 /// The contact forces of the last step, and what the stage keeps from step to step to skip
 /// boundary particles that cannot reach a tool. None of the latter is state: dropping it
 /// ([`Contact::forget`], as a restore does) only makes the next step evaluate every
@@ -217,8 +235,6 @@ impl Contact {
             nodal,
             reference,
             mass,
-            d,
-            v,
             spacing,
             ..
         } = *body;
@@ -244,17 +260,8 @@ impl Contact {
                 if skip && *c > 0.0 {
                     continue;
                 }
-                let j = boundary[k] as usize;
-                let (mut x, mut vj) = (reference[j], [0.0; 2]);
-                for e in nodal.row(j) {
-                    let i = nodal.index[e] as usize;
-                    let n = nodal.n[e];
-                    x[0] += n * (d[i][0] + dt * v[i][0]);
-                    x[1] += n * (d[i][1] + dt * v[i][1]);
-                    vj[0] += n * v[i][0];
-                    vj[1] += n * v[i][1];
-                }
-                *m = [x, vj];
+                *m = body.predicted(boundary[k] as usize, dt);
+                let x = m[0];
                 let gap = bounds.iter().fold(Real::INFINITY, |g, b| {
                     let dx = (b.x[0] - x[0]).max(x[0] - b.x[1]);
                     let dy = (b.y[0] - x[1]).max(x[1] - b.y[1]);
@@ -340,21 +347,10 @@ impl Contact {
         dt: Real,
     ) -> Interface {
         let nb = body.boundary.len();
-        let predicted = |k: usize| {
-            let j = body.boundary[k] as usize;
-            let mut x = body.reference[j];
-            for e in body.nodal.row(j) {
-                let i = body.nodal.index[e] as usize;
-                let n = body.nodal.n[e];
-                x[0] += n * (body.d[i][0] + dt * body.v[i][0]);
-                x[1] += n * (body.d[i][1] + dt * body.v[i][1]);
-            }
-            x
-        };
         let tangent = [-normal[1], normal[0]];
         let mut area = 0.0;
         for other in [(k + nb - 1) % nb, (k + 1) % nb] {
-            let y = predicted(other);
+            let y = body.predicted(body.boundary[other] as usize, dt)[0];
             let mid = [0.5 * (x[0] + y[0]), 0.5 * (x[1] + y[1])];
             let length = ((mid[0] - x[0]) * tangent[0] + (mid[1] - x[1]) * tangent[1]).abs();
             area += match body.kinematics {
