@@ -57,6 +57,12 @@ fn held_particles_survive_a_restore() {
     assert!(saved.held.iter().any(|&h| h));
     a.run_to(40e-6, |_| {}).unwrap();
     let mut b = Simulation::new(&scene).unwrap();
+    let mut no_held = saved.clone();
+    no_held.held.clear();
+    assert!(
+        b.restore(no_held).is_err(),
+        "a state without the held set is refused"
+    );
     b.restore(saved).unwrap();
     b.run_to(40e-6, |_| {}).unwrap();
     assert_eq!(a.state(), b.state());

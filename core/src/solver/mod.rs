@@ -443,6 +443,7 @@ impl Simulation {
             || st.v.len() != self.st.v.len()
             || st.points.len() != self.st.points.len()
             || st.tools.len() != self.st.tools.len()
+            || st.held.len() != self.st.held.len()
         {
             return Err(Error::State(
                 "the saved state belongs to another discretisation".into(),
