@@ -8,7 +8,8 @@ step count of each run. Writes study.csv, study.md and (with matplotlib) force_s
 
     scripts/mass_scaling_study.py block --particles 21x21 --speed 0.025 \\
         --scaling none,factor=1e2,factor=1e4,factor=1e6,target=2e-4 --out out/mass_scaling_block
-    scripts/mass_scaling_study.py wheel --particles 15x15 --speed 0.02 ...
+    scripts/mass_scaling_study.py wheel --particles 12x12 --speed 0.02 ...
+    scripts/mass_scaling_study.py ring --particles 21x14 --speed 0.01 ...
 
 Uses target/release/rkforge (or $RKFORGE_BIN). Runs go one after the other; the wall
 times are each run's own `wall_s`.
@@ -29,6 +30,7 @@ SCENES = {
     # scene file, moving tools, total stroke per unit tool travel, strokes to compare (m)
     "block": ("scenes/block_forging.toml", ["top", "bottom"], 2.0, [0.03, 0.1, 0.2, 0.3]),
     "wheel": ("scenes/wheel_forging.toml", ["punch"], 1.0, [0.005, 0.01, 0.015, 0.02]),
+    "ring": ("scenes/ring_compression.toml", ["platen"], 1.0, [0.001, 0.0025, 0.004, 0.005]),
 }
 
 
@@ -38,6 +40,8 @@ def scene_text(name, particles, speed, scaling, samples):
     end = strokes[-1] / per_travel / speed
     text = re.sub(r"(?m)^particles = .*$", f"particles = [{particles[0]}, {particles[1]}]", text)
     text = re.sub(r"velocity_m_per_s = [0-9.eE+-]+", f"velocity_m_per_s = {speed!r}", text)
+    text = re.sub(r'motion = \{ kind = "table".*\}',
+                  f'motion = {{ kind = "constant", velocity_m_per_s = {speed!r} }}', text)
     text = re.sub(r"(?m)^end_s = .*$", f"end_s = {end!r}", text)
     text = re.sub(r"(?m)^dt_s = .*$", "", text)
     text = re.sub(r"(?m)^history_interval_s = .*$", f"history_interval_s = {end / samples!r}", text)

@@ -6,10 +6,12 @@
 mod compare;
 mod fmu;
 mod output;
+mod ring_chart;
 mod run;
 mod sweep;
 
 use clap::{Parser, Subcommand};
+use rkforge_core::scene::Friction;
 use rkforge_core::scene_overrides::{parse_value, split_arg, split_values};
 use rkforge_core::{IntegrationRule, Scene, SceneSource};
 use std::path::PathBuf;
@@ -39,6 +41,27 @@ enum Command {
     Fmu(FmuArgs),
     /// Run a grid of resolutions, rules and time-step safety factors; error against wall time.
     Sweep(SweepArgs),
+    /// Friction calibration chart of a ring compression scene: inner diameter decrease
+    /// against height reduction per friction law (ring_chart.csv and ring_chart.png).
+    RingChart(RingChartArgs),
+}
+
+#[derive(clap::Args)]
+struct RingChartArgs {
+    /// Ring scene file (TOML), e.g. scenes/ring_compression.toml.
+    scene: PathBuf,
+    /// Shear friction factors m, one curve each.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.0, 0.1, 0.2, 0.4, 0.6, 1.0])]
+    m: Vec<f64>,
+    /// Coulomb coefficients mu, one curve each.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.05, 0.1, 0.2])]
+    mu: Vec<f64>,
+    /// Output folder (default: out/ring_chart/).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
 }
 
 #[derive(clap::Args)]
@@ -130,6 +153,7 @@ fn main() -> ExitCode {
         Some(Command::Run(a)) => run_command(a),
         Some(Command::Compare(a)) => compare_command(a),
         Some(Command::Sweep(a)) => sweep_command(a),
+        Some(Command::RingChart(a)) => ring_chart_command(a),
         Some(Command::Fmu(a)) => fmu::pack(&a.scene, &a.out)
             .map(|id| println!("wrote {} (model identifier {id})", a.out.display())),
     };
@@ -181,6 +205,29 @@ fn run_command(a: RunArgs) -> Result<(), String> {
         eprintln!("warning: {}", w.as_str().unwrap_or_default());
     }
     println!("results in {}", opts.out.display());
+    Ok(())
+}
+
+fn ring_chart_command(a: RingChartArgs) -> Result<(), String> {
+    set_threads(a.threads)?;
+    let scene = Scene::from_file(&a.scene).map_err(|e| e.to_string())?;
+    let laws: Vec<Friction> =
+        a.m.iter()
+            .map(|&m| Friction::Shear { m })
+            .chain(a.mu.iter().map(|&mu| Friction::Coulomb { mu }))
+            .collect();
+    for (k, law) in laws.iter().enumerate() {
+        if let Some((_, message)) = law.validate().into_iter().next() {
+            let option = if k < a.m.len() { "--m" } else { "--mu" };
+            return Err(format!("{option} {}: {message}", law.coefficient()));
+        }
+    }
+    let out = a
+        .out
+        .unwrap_or_else(|| PathBuf::from("out").join("ring_chart"));
+    let curves = ring_chart::chart(&scene, &laws, &out)?;
+    print!("{}", ring_chart::csv(&curves));
+    println!("ring_chart.csv and ring_chart.png in {}", out.display());
     Ok(())
 }
 

@@ -8,12 +8,29 @@
 //! force of eqs. 4-6 (N), spread to the coefficients with eq. 7, `f_I += N_I(X_J) f_J`, and
 //! the tool takes the reaction. Particles that cannot have reached a tool's search box are
 //! skipped ([`Contact`]), with the bits of evaluating every one.
+//!
+//! A tool without separation holds every particle that has penetrated it: from then on the
+//! particle's signed gap is taken on either side of the surface, so the normal force pulls a
+//! particle that moved off back onto it. Like the paper's push, the pull acts on the
+//! particle's physical position `x_J` (RK shape functions do not interpolate: the
+//! coefficients `d_I` alone say nothing about where the particle is) and is spread with
+//! eq. 7.
+//!
+//! The shear friction factor needs each slave's flow stress and contact area
+//! ([`Interface`]): the flow stress of the integration point nearest to the particle's
+//! reference position, and the area of its tributary boundary, half of each boundary
+//! segment to its ring neighbours at their predicted positions, projected on the tool's
+//! tangent (times the depth in plane strain, times `2 pi r` at each half segment's middle in
+//! axisymmetry, so a particle on the axis has the disc `pi (l / 2)^2`).
 
 use crate::geometry::{bounds_of, Extents};
+use crate::material::{Hardening, PointState};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
+use crate::scene::Kinematics;
 use crate::team::{part, particle_phase, Parts, Team};
-use crate::tools::{penalty_force, Tool};
+use crate::tools::{penalty_force, Interface, Tool};
+use std::f64::consts::PI;
 
 /// Boundary particles handled by one task of the contact stage's interpolation.
 const BOUNDARY_BLOCK: usize = 32;
@@ -34,6 +51,32 @@ pub struct Body<'a> {
     pub v: &'a [[Real; 2]],
     /// Particle spacings (m).
     pub spacing: [Real; 2],
+    /// Integration point histories (the flow stress of the shear friction factor).
+    pub points: &'a [PointState],
+    /// The hardening law giving the flow stress.
+    pub hardening: &'a Hardening,
+    /// Plane strain (areas per `depth_m`) or axisymmetry (areas of whole rings).
+    pub kinematics: Kinematics,
+    /// Depth of a plane-strain model (m).
+    pub depth_m: Real,
+}
+
+impl Body<'_> {
+    /// Predicted position `x_J = X_J + sum_I N_I(X_J) (d_I + dt v*_I)` (m) and velocity
+    /// `v_J = sum_I N_I(X_J) v*_I` (m/s) of particle `j`.
+    fn predicted(&self, j: usize, dt: Real) -> [[Real; 2]; 2] {
+        let (d, v, nodal) = (self.d, self.v, self.nodal);
+        let (mut x, mut vj) = (self.reference[j], [0.0; 2]);
+        for e in nodal.row(j) {
+            let i = nodal.index[e] as usize;
+            let n = nodal.n[e];
+            x[0] += n * (d[i][0] + dt * v[i][0]);
+            x[1] += n * (d[i][1] + dt * v[i][1]);
+            vj[0] += n * v[i][0];
+            vj[1] += n * v[i][1];
+        }
+        [x, vj]
+    }
 }
 
 /// The contact forces of the last step, and what the stage keeps from step to step to skip
@@ -65,13 +108,40 @@ pub struct Contact {
     /// Skip the particles with a positive clearance (false only in the test that compares
     /// against evaluating all of them).
     pub(crate) skip: bool,
+    /// The integration point nearest to each boundary particle's reference position (only
+    /// when a tool's friction law needs the flow stress).
+    nearest_point: Vec<u32>,
 }
 
 impl Contact {
-    /// The stage for a workpiece of `particles` particles whose `boundary` particles have
-    /// the rows of `nodal`; every particle is evaluated at the first step.
-    pub fn new(boundary: &[u32], nodal: &ShapeTable, particles: usize) -> Contact {
+    /// The stage for a workpiece whose `boundary` particles have the rows of `nodal`, with
+    /// reference particle positions `reference` (m) and integration points at `points` (m);
+    /// `flow_stress` when a tool's friction law needs it. Every particle is evaluated at the
+    /// first step.
+    pub fn new(
+        boundary: &[u32],
+        nodal: &ShapeTable,
+        reference: &[[Real; 2]],
+        points: &[[Real; 2]],
+        flow_stress: bool,
+    ) -> Contact {
+        let nearest_point = if flow_stress {
+            boundary
+                .iter()
+                .map(|&j| {
+                    let x = reference[j as usize];
+                    let d2 = |p: &[Real; 2]| (p[0] - x[0]).powi(2) + (p[1] - x[1]).powi(2);
+                    (0..points.len())
+                        .min_by(|&a, &b| d2(&points[a]).total_cmp(&d2(&points[b])))
+                        .unwrap_or(0) as u32
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let particles = reference.len();
         Contact {
+            nearest_point,
             force: vec![[0.0; 2]; particles],
             sum_abs: boundary
                 .iter()
@@ -112,6 +182,9 @@ impl Contact {
     /// corrector's step. A boundary particle is interpolated only when it may be in a tool's
     /// search box: its clearance to the boxes, measured when last interpolated, shrinks each
     /// step by `S_J du + box_move` and while it stays positive the particle is skipped.
+    /// `held[k * tools + t]` says whether boundary particle `k` is held on tool `t` (a tool
+    /// without separation; empty when every tool separates); a particle that penetrates such
+    /// a tool is held from then on.
     /// Fills [`Contact::force`] and each tool's force (N); returns whether any force acts and
     /// the work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
     pub fn stage(
@@ -119,6 +192,7 @@ impl Contact {
         team: &Team,
         tools: &mut [Tool],
         body: &Body<'_>,
+        held: &mut [bool],
         dt: Real,
         dt_avg: Real,
     ) -> (bool, Real) {
@@ -161,9 +235,8 @@ impl Contact {
             nodal,
             reference,
             mass,
-            d,
-            v,
             spacing,
+            ..
         } = *body;
         let (np, nb) = (reference.len(), boundary.len());
         let du = self.update_move + self.predicted_moves[0] + self.predicted_moves[1];
@@ -187,17 +260,8 @@ impl Contact {
                 if skip && *c > 0.0 {
                     continue;
                 }
-                let j = boundary[k] as usize;
-                let (mut x, mut vj) = (reference[j], [0.0; 2]);
-                for e in nodal.row(j) {
-                    let i = nodal.index[e] as usize;
-                    let n = nodal.n[e];
-                    x[0] += n * (d[i][0] + dt * v[i][0]);
-                    x[1] += n * (d[i][1] + dt * v[i][1]);
-                    vj[0] += n * v[i][0];
-                    vj[1] += n * v[i][1];
-                }
-                *m = [x, vj];
+                *m = body.predicted(boundary[k] as usize, dt);
+                let x = m[0];
                 let gap = bounds.iter().fold(Real::INFINITY, |g, b| {
                     let dx = (b.x[0] - x[0]).max(x[0] - b.x[1]);
                     let dy = (b.y[0] - x[1]).max(x[1] - b.y[1]);
@@ -207,28 +271,48 @@ impl Contact {
             }
         });
         let mut any = false;
-        for ((&j, &[x, vj]), &c) in boundary.iter().zip(&self.motion).zip(&self.clearance) {
+        let ntools = tools.len();
+        for (k, ((&j, &[x, vj]), &c)) in boundary
+            .iter()
+            .zip(&self.motion)
+            .zip(&self.clearance)
+            .enumerate()
+        {
             if self.skip && c > 0.0 {
                 continue;
             }
             let j = j as usize;
-            for (k, tool) in tools.iter_mut().enumerate() {
-                let b = &bounds[k];
+            for (t, tool) in tools.iter_mut().enumerate() {
+                let b = &bounds[t];
                 if x[0] < b.x[0] || x[0] > b.x[1] || x[1] < b.y[0] || x[1] > b.y[1] {
                     continue;
                 }
-                let Some(pen) = tool.penetration(x) else {
+                let hold = (!tool.separation).then(|| &mut held[k * ntools + t]);
+                let below = match &hold {
+                    Some(h) if **h => -tool.depth,
+                    _ => 0.0,
+                };
+                let Some(pen) = tool.gap_above(x, below) else {
                     continue;
                 };
+                if let Some(h) = hold {
+                    *h = true;
+                }
                 let vt = [
                     tool.axis[0] * tool.state.velocity,
                     tool.axis[1] * tool.state.velocity,
                 ];
+                let at = if tool.friction.needs_flow_stress() {
+                    self.interface(body, k, x, pen.normal, dt)
+                } else {
+                    Interface::default()
+                };
                 let f = penalty_force(
                     mass[j],
                     pen,
                     [vj[0] - vt[0], vj[1] - vt[1]],
-                    tool.friction,
+                    &tool.friction,
+                    at,
                     dt,
                     dt_avg,
                 );
@@ -250,5 +334,34 @@ impl Contact {
         }
         self.boxes = bounds;
         (any, tool_work)
+    }
+
+    /// Flow stress and contact area of boundary particle `k` at its predicted position `x`
+    /// (m) on a tool surface with normal `normal` ([`Interface`]; see the module doc).
+    fn interface(
+        &self,
+        body: &Body<'_>,
+        k: usize,
+        x: [Real; 2],
+        normal: [Real; 2],
+        dt: Real,
+    ) -> Interface {
+        let nb = body.boundary.len();
+        let tangent = [-normal[1], normal[0]];
+        let mut area = 0.0;
+        for other in [(k + nb - 1) % nb, (k + 1) % nb] {
+            let y = body.predicted(body.boundary[other] as usize, dt)[0];
+            let mid = [0.5 * (x[0] + y[0]), 0.5 * (x[1] + y[1])];
+            let length = ((mid[0] - x[0]) * tangent[0] + (mid[1] - x[1]) * tangent[1]).abs();
+            area += match body.kinematics {
+                Kinematics::PlaneStrain => length * body.depth_m,
+                Kinematics::Axisymmetric => PI * length * (x[0] + mid[0]).max(0.0),
+            };
+        }
+        let eps_p = body.points[self.nearest_point[k] as usize].eps_p;
+        Interface {
+            flow_stress: body.hardening.flow_stress(eps_p),
+            area,
+        }
     }
 }

@@ -7,6 +7,7 @@
 //! line; nothing here panics on user input.
 
 use crate::error::{Error, Result};
+pub use crate::friction::Friction;
 use crate::material::Hardening;
 use crate::math::Real;
 use serde::{Deserialize, Serialize};
@@ -214,6 +215,29 @@ pub enum Edge {
     YMax,
 }
 
+impl Edge {
+    /// The edge's name in scene files and outputs (`x_min`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            Edge::XMin => "x_min",
+            Edge::XMax => "x_max",
+            Edge::YMin => "y_min",
+            Edge::YMax => "y_max",
+        }
+    }
+
+    /// The particles on this edge of an `nx` x `ny` grid numbered row by row.
+    pub fn particles(self, nx: usize, ny: usize) -> Vec<u32> {
+        let id = |i: usize, j: usize| (j * nx + i) as u32;
+        match self {
+            Edge::XMin => (0..ny).map(|j| id(0, j)).collect(),
+            Edge::XMax => (0..ny).map(|j| id(nx - 1, j)).collect(),
+            Edge::YMin => (0..nx).map(|i| id(i, 0)).collect(),
+            Edge::YMax => (0..nx).map(|i| id(i, ny - 1)).collect(),
+        }
+    }
+}
+
 /// A displacement component.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -272,9 +296,20 @@ pub struct ToolSpec {
     pub axis: [Real; 2],
     /// Motion along the axis.
     pub motion: Motion,
-    /// Coulomb friction coefficient (-).
+    /// Friction law of the interface ([`Friction`]): a number is a Coulomb coefficient,
+    /// a table names the model (`{ model = "shear", m = 0.3 }`); default frictionless.
     #[serde(default)]
-    pub friction: Real,
+    pub friction: Friction,
+    /// Whether a particle may leave the tool again (the default). `false` is the wall of
+    /// the finite-element benchmarks (Simo 1992): a particle that reached the tool stays on
+    /// it, its normal force pulling as well as pushing, and slides along it under the
+    /// friction law.
+    #[serde(default = "default_separation")]
+    pub separation: bool,
+}
+
+fn default_separation() -> bool {
+    true
 }
 
 /// What is recorded.
@@ -287,6 +322,11 @@ pub struct OutputSpec {
     /// Number of VTK frames and shape plots over the run (0 for none).
     #[serde(default = "default_frames")]
     pub frames: usize,
+    /// Workpiece edges whose particles are followed: for each, the bounds of the physical
+    /// positions of the particles that started on it (e.g. `["y_min", "y_max"]` for the
+    /// Taylor bar's impact-face radius and free-face length).
+    #[serde(default)]
+    pub faces: Vec<Edge>,
 }
 
 fn default_frames() -> usize {
@@ -298,6 +338,7 @@ impl Default for OutputSpec {
         OutputSpec {
             history_interval_s: None,
             frames: default_frames(),
+            faces: Vec::new(),
         }
     }
 }
@@ -584,11 +625,9 @@ impl Scene {
                 &key("axis"),
                 format!("must be a unit vector, got {:?} (length {an})", tool.axis),
             );
-            check(
-                tool.friction.is_finite() && tool.friction >= 0.0,
-                &key("friction"),
-                format!("must be zero or positive, got {}", tool.friction),
-            );
+            for (suffix, message) in tool.friction.validate() {
+                check(false, &key(&format!("friction{suffix}")), message);
+            }
             match &tool.motion {
                 Motion::Fixed => {}
                 Motion::Constant { velocity_m_per_s } => check(
@@ -890,5 +929,41 @@ motion = { kind = "fixed" }
             let e = err(&GOOD.replace(from, to));
             assert!(e.contains(key) && e.contains(&format!(":{line}:")), "{e}");
         }
+    }
+
+    #[test]
+    fn friction_laws_and_their_errors_name_key_and_line() {
+        let with = |f: &str| {
+            GOOD.replace(
+                "motion = { kind = \"fixed\" }",
+                &format!("motion = {{ kind = \"fixed\" }}\n{f}"),
+            )
+        };
+        let s = Scene::from_str_named(&with("friction = 0.2"), "s.toml").unwrap();
+        assert_eq!(s.tools[0].friction, Friction::Coulomb { mu: 0.2 });
+        assert!(s.tools[0].separation);
+        let s = Scene::from_str_named(
+            &with("friction = { model = \"shear\", m = 0.3 }\nseparation = false"),
+            "s.toml",
+        )
+        .unwrap();
+        assert_eq!(s.tools[0].friction, Friction::Shear { m: 0.3 });
+        assert!(!s.tools[0].separation);
+        let e = err(&with("friction = { model = \"shear\", m = 1.5 }"));
+        assert!(
+            e.contains("tools[0].friction.m") && e.contains(":22:"),
+            "{e}"
+        );
+        let e = err(&with(
+            "friction = { model = \"capped\", mu = -0.1, m = 0.5 }",
+        ));
+        assert!(
+            e.contains("tools[0].friction.mu") && e.contains(":22:"),
+            "{e}"
+        );
+        let e = err(&with("friction = -0.1"));
+        assert!(e.contains("tools[0].friction") && e.contains(":22:"), "{e}");
+        let e = err(&with("friction = { model = \"sticky\", m = 0.5 }"));
+        assert!(e.contains("line 22") && e.contains("sticky"), "{e}");
     }
 }

@@ -362,13 +362,13 @@ friction = 0.2
     #[test]
     fn tools_are_addressed_by_name_and_index() {
         let s = with("tools.top.friction", "0.1").unwrap();
-        assert_eq!(s.scene().tools[1].friction, 0.1);
-        assert_eq!(s.scene().tools[0].friction, 0.0);
+        assert_eq!(s.scene().tools[1].friction.coefficient(), 0.1);
+        assert_eq!(s.scene().tools[0].friction.coefficient(), 0.0);
         // An integer where a number is expected, as in a file.
         let s = with("tools.top.friction", "1").unwrap();
-        assert_eq!(s.scene().tools[1].friction, 1.0);
+        assert_eq!(s.scene().tools[1].friction.coefficient(), 1.0);
         let s = with("tools[0].friction", "0.3").unwrap();
-        assert_eq!(s.scene().tools[0].friction, 0.3);
+        assert_eq!(s.scene().tools[0].friction.coefficient(), 0.3);
         let s = with("tools.top.motion.velocity_m_per_s", "-2.5").unwrap();
         assert_eq!(
             s.scene().tools[1].motion,
@@ -399,7 +399,7 @@ friction = 0.2
         assert!(s.set("tools.top.friction", Value::Float(-1.0)).is_err());
         assert_eq!(s, before);
         s.set("time.end_s", Value::Float(2e-6)).unwrap();
-        assert_eq!(s.scene().tools[1].friction, 0.4);
+        assert_eq!(s.scene().tools[1].friction.coefficient(), 0.4);
         assert_eq!(s.scene().time.end_s, 2e-6);
     }
 

@@ -5,11 +5,14 @@
 //! whose predicted physical position lies behind a segment by the gap `g_J > 0`:
 //! - normal force (eq. 4): `f_n = m_s g / dt^2` along the segment normal `n` (N);
 //! - stick force (eq. 6): `f_st = -m_s v_TR / dt`, `v_TR` the tangential relative velocity;
-//! - Coulomb friction (eq. 5): `f_f = -min(mu f_n, |f_st|) v_TR / |v_TR|`;
+//! - friction (eq. 5): `f_f = -min(b, |f_st|) v_TR / |v_TR|` with the bound `b` of the
+//!   tool's law ([`Friction`]): `mu f_n` (Coulomb, the paper's), `m k A` (shear friction
+//!   factor) or `min(mu f_n, m k A)`;
 //! - the particle force is spread to the RK coefficients (eq. 7): `f_I += f_J N_I(X_J)`.
 //!
 //! The force on the tool is the reaction: minus the sum of the slave forces.
 
+use crate::friction::Friction;
 use crate::math::Real;
 use crate::scene::{Motion, ToolSpec};
 use serde::{Deserialize, Serialize};
@@ -25,8 +28,10 @@ pub struct Tool {
     pub axis: [Real; 2],
     /// Scene motion.
     pub motion: Motion,
-    /// Coulomb coefficient.
-    pub friction: Real,
+    /// Friction law of the interface.
+    pub friction: Friction,
+    /// Whether particles may leave the tool (false: a particle that reached it stays on it).
+    pub separation: bool,
     /// Moving state (saved with the simulation state).
     pub state: ToolState,
     /// Segment bins in the tool's own coordinates.
@@ -70,6 +75,7 @@ impl Tool {
             axis: spec.axis,
             motion: spec.motion.clone(),
             friction: spec.friction,
+            separation: spec.separation,
             state: ToolState {
                 velocity: v0,
                 ..Default::default()
@@ -81,12 +87,19 @@ impl Tool {
 
     /// The penetration of the point `x` (m) into the tool in its current position.
     pub fn penetration(&self, x: [Real; 2]) -> Option<Penetration> {
+        self.gap_above(x, 0.0)
+    }
+
+    /// The signed gap of the point `x` (m) when it lies between `below` (m, exclusive; a
+    /// negative value reaches in front of the surface) and the search depth behind it.
+    pub fn gap_above(&self, x: [Real; 2], below: Real) -> Option<Penetration> {
         let s = self.state.stroke;
         let local = [x[0] - s * self.axis[0], x[1] - s * self.axis[1]];
-        penetration(
+        gap_within(
             &self.points0,
             self.bins.candidates(local),
             local,
+            below,
             self.depth,
         )
     }
@@ -138,6 +151,8 @@ impl Tool {
 }
 
 /// A slave point's penetration of a tool: gap (m, > 0 inside) and push direction.
+/// A particle held on a tool without separation may have a negative gap: the normal
+/// force `m g / dt^2` then pulls it back onto the surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Penetration {
     /// Gap `g` (m): distance from the point to the tool surface, the point being inside.
@@ -228,6 +243,19 @@ pub fn penetration(
     x: [Real; 2],
     depth: Real,
 ) -> Option<Penetration> {
+    gap_within(verts, candidates, x, 0.0, depth)
+}
+
+/// As [`penetration`], for a gap in `(below, depth]` other than zero (`below` < 0 reaches
+/// in front of the surface); the push direction still points from the surface's outside
+/// into the workpiece (the segment normal on a face).
+pub fn gap_within(
+    verts: &[[Real; 2]],
+    candidates: &[u32],
+    x: [Real; 2],
+    below: Real,
+    depth: Real,
+) -> Option<Penetration> {
     let normal = |k: usize| {
         let (a, b) = (verts[k], verts[k + 1]);
         let len = (b[0] - a[0]).hypot(b[1] - a[1]);
@@ -273,7 +301,7 @@ pub fn penetration(
     }
     let (signed, c, side, face) = best?;
     let gap = -signed;
-    (gap > 0.0 && gap <= depth).then(|| Penetration {
+    (gap > below && gap <= depth && gap != 0.0).then(|| Penetration {
         gap,
         normal: if face {
             side
@@ -283,27 +311,42 @@ pub fn penetration(
     })
 }
 
+/// What the shear friction factor needs of a slave particle: its flow stress and contact
+/// area.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Interface {
+    /// Current flow stress `sigma_y` of the particle's material (Pa).
+    pub flow_stress: Real,
+    /// Contact area `A` of the particle (m^2): its tributary length along the tool times
+    /// the depth in plane strain, times `2 pi r` in axisymmetry.
+    pub area: Real,
+}
+
 /// Paper eqs. 4-6: contact force on a slave of mass `m` (kg) with gap `g` (m) along the
-/// normal `n`, tangential relative velocity taken from `v_rel` (m/s), friction `mu`, and
-/// the step factor `dt2 = dt * dt_avg` (s^2; `dt^2` at constant step) and `dt_avg` (s).
+/// normal `n`, tangential relative velocity taken from `v_rel` (m/s), the tool's
+/// `friction` law with the particle's flow stress and area `at`, and the step factor
+/// `dt2 = dt * dt_avg` (s^2; `dt^2` at constant step) and `dt_avg` (s). The tangential
+/// force is the law's bound, at most the stick force `m |v_TR| / dt_avg` that stops the
+/// sliding in one step: it never reverses the sliding, so it only dissipates.
 pub fn penalty_force(
     m: Real,
     pen: Penetration,
     v_rel: [Real; 2],
-    mu: Real,
+    friction: &Friction,
+    at: Interface,
     dt_step: Real,
     dt_avg: Real,
 ) -> [Real; 2] {
     let n = pen.normal;
     let fn_ = m * pen.gap / (dt_step * dt_avg);
     let mut f = [fn_ * n[0], fn_ * n[1]];
-    if mu > 0.0 {
+    if !friction.is_frictionless() {
         let vn = v_rel[0] * n[0] + v_rel[1] * n[1];
         let vt = [v_rel[0] - vn * n[0], v_rel[1] - vn * n[1]];
         let vt_norm = (vt[0] * vt[0] + vt[1] * vt[1]).sqrt();
         if vt_norm > 0.0 {
             let stick = m * vt_norm / dt_avg;
-            let ff = (mu * fn_).min(stick);
+            let ff = friction.bound(fn_, at.flow_stress, at.area).min(stick);
             f[0] -= ff * vt[0] / vt_norm;
             f[1] -= ff * vt[1] / vt_norm;
         }
@@ -436,16 +479,115 @@ mod tests {
         let (m, dt) = (2.0, 1e-3);
         let fn_ = m * 1e-3 / (dt * dt);
         // Fast sliding: Coulomb bound.
-        let f = penalty_force(m, pen, [5.0, 0.0], 0.3, dt, dt);
+        let c = Friction::Coulomb { mu: 0.3 };
+        let at = Interface::default();
+        let f = penalty_force(m, pen, [5.0, 0.0], &c, at, dt, dt);
         assert!(
             (f[1] - fn_).abs() < 1e-9 && (f[0] + 0.3 * fn_).abs() < 1e-9,
             "{f:?}"
         );
         // Slow sliding: the stick force m v / dt is smaller and wins.
-        let f = penalty_force(m, pen, [1e-4, 0.0], 0.3, dt, dt);
+        let f = penalty_force(m, pen, [1e-4, 0.0], &c, at, dt, dt);
         assert!((f[0] + m * 1e-4 / dt).abs() < 1e-12, "{f:?}");
         // Frictionless: no tangential force.
-        assert_eq!(penalty_force(m, pen, [5.0, 0.0], 0.0, dt, dt)[0], 0.0);
+        let none = Friction::Coulomb { mu: 0.0 };
+        assert_eq!(penalty_force(m, pen, [5.0, 0.0], &none, at, dt, dt)[0], 0.0);
+    }
+
+    #[test]
+    fn shear_and_capped_friction_slide_at_their_bound_and_stick_below_it() {
+        // A 1 mm^2 contact area on a material flowing at 300 MPa: k A = 173.2 N.
+        let pen = Penetration {
+            gap: 1e-6,
+            normal: [0.0, 1.0],
+        };
+        let (m, dt): (Real, Real) = (1e-3, 1e-6);
+        let fn_ = m * 1e-6 / (dt * dt);
+        let at = Interface {
+            flow_stress: 300e6,
+            area: 1e-6,
+        };
+        let ka: Real = 300e6 / 3.0_f64.sqrt() * 1e-6;
+        let laws = [
+            (Friction::Shear { m: 0.4 }, 0.4 * ka),
+            (
+                Friction::Capped { mu: 0.1, m: 0.4 },
+                (0.1 * fn_).min(0.4 * ka),
+            ),
+            (
+                Friction::Capped { mu: 0.5, m: 0.4 },
+                (0.5 * fn_).min(0.4 * ka),
+            ),
+        ];
+        for (law, bound) in laws {
+            for v in [
+                [5.0, 0.0],
+                [-3.0, 2.0],
+                [0.0, -1e3],
+                [1e-6, 0.0],
+                [-2e-7, 7.0],
+            ] {
+                let f = penalty_force(m, pen, v, &law, at, dt, dt);
+                let vt = v[0];
+                // Never above the bound nor the stick force; never along the sliding (no
+                // energy created: f_t v_t <= 0).
+                let stick = m * vt.abs() / dt;
+                assert!(
+                    f[0].abs() <= bound.min(stick) * (1.0 + 1e-15),
+                    "{law:?} {v:?} {f:?}"
+                );
+                assert!(f[0] * vt <= 0.0, "{law:?} {v:?} {f:?}");
+                // The normal force is untouched by friction.
+                assert_eq!(f[1], fn_);
+                if stick > bound {
+                    assert!(
+                        (f[0].abs() - bound).abs() <= 1e-12 * bound,
+                        "{law:?} slides at its bound"
+                    );
+                } else {
+                    // Sticking: the force stops the sliding in this step, m v + f dt = 0.
+                    assert!(
+                        (m * vt + f[0] * dt).abs() <= 1e-15 * m * vt.abs().max(1.0),
+                        "{law:?} sticks"
+                    );
+                }
+            }
+        }
+        // m = 0 and a bonded particle under tension (negative gap) carry no Coulomb friction.
+        let none = penalty_force(m, pen, [5.0, 0.0], &Friction::Shear { m: 0.0 }, at, dt, dt);
+        assert_eq!(none[0], 0.0);
+        let pull = Penetration {
+            gap: -1e-7,
+            normal: [0.0, 1.0],
+        };
+        let f = penalty_force(
+            m,
+            pull,
+            [5.0, 0.0],
+            &Friction::Coulomb { mu: 0.3 },
+            at,
+            dt,
+            dt,
+        );
+        assert!(f[1] < 0.0 && f[0] == 0.0, "{f:?}");
+        let f = penalty_force(m, pull, [5.0, 0.0], &Friction::Shear { m: 0.3 }, at, dt, dt);
+        assert!(
+            (f[0] + 0.3 * ka).abs() < 1e-12 * ka,
+            "shear friction needs no pressure: {f:?}"
+        );
+    }
+
+    #[test]
+    fn a_held_particle_in_front_of_the_wall_is_pulled_back() {
+        let wall = [[0.0, 0.0], [1.0, 0.0]];
+        let all = [0u32];
+        let p = gap_within(&wall, &all, [0.5, 0.01], -0.1, 0.1).unwrap();
+        assert!(
+            (p.gap + 0.01).abs() < 1e-15 && close(p.normal, [0.0, 1.0]),
+            "{p:?}"
+        );
+        assert!(gap_within(&wall, &all, [0.5, 0.2], -0.1, 0.1).is_none());
+        assert!(gap_within(&wall, &all, [0.5, 0.0], -0.1, 0.1).is_none());
     }
 
     #[test]
@@ -457,7 +599,8 @@ mod tests {
             motion: Motion::Table {
                 points: vec![[0.0, 0.0], [1.0, 10.0], [2.0, -10.0]],
             },
-            friction: 0.0,
+            friction: Friction::default(),
+            separation: true,
         };
         let mut t = Tool::new(&spec, 0.1);
         assert_eq!(t.velocity_at(-1.0), 0.0);

@@ -116,7 +116,7 @@ fn block_forging_friction_0_05_and_1() {
         s.time.dt_s = None;
         s.time.end_s = 0.01;
         for t in s.tools.iter_mut() {
-            t.friction = mu;
+            t.friction = rkforge_core::scene::Friction::Coulomb { mu };
         }
         let mut sim = run(&s);
         sane(&sim, 0.01, 0.01);

@@ -55,7 +55,11 @@ impl Params {
             particles: scene.workpiece.particles,
             dt_safety: scene.time.dt_safety,
             dt_fixed: scene.time.dt_s.unwrap_or(0.0),
-            friction: scene.tools.iter().map(|t| t.friction).collect(),
+            friction: scene
+                .tools
+                .iter()
+                .map(|t| t.friction.coefficient())
+                .collect(),
             mass_factor: scaling.and_then(|m| m.factor).unwrap_or(1.0),
             mass_target_dt: scaling.and_then(|m| m.target_dt_s).unwrap_or(0.0),
         }
@@ -141,7 +145,7 @@ impl Instance {
         s.time.dt_safety = self.params.dt_safety;
         s.time.dt_s = (self.params.dt_fixed > 0.0).then_some(self.params.dt_fixed);
         for (t, f) in s.tools.iter_mut().zip(&self.params.friction) {
-            t.friction = *f;
+            t.friction = t.friction.with_coefficient(*f);
         }
         let (factor, target) = (self.params.mass_factor, self.params.mass_target_dt);
         s.time.mass_scaling = (factor != 1.0 || target > 0.0).then_some(MassScaling {

@@ -9,7 +9,7 @@
 
 pub mod xml;
 
-use rkforge_core::scene::{Kinematics, Motion, Scene};
+use rkforge_core::scene::{Friction, Kinematics, Motion, Scene};
 
 /// FMI 2.0 causality.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -301,9 +301,17 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
             format!("{}.friction", tool.name),
             Parameter,
             Fixed,
-            Kind::Real(Some(tool.friction)),
+            Kind::Real(Some(tool.friction.coefficient())),
             None,
-            format!("Coulomb friction coefficient of tool {}", tool.name),
+            format!(
+                "friction of tool {}: {}",
+                tool.name,
+                match tool.friction {
+                    Friction::Shear { .. } => "shear friction factor m (tau = m k)",
+                    Friction::Capped { .. } => "Coulomb coefficient mu, capped by m k",
+                    Friction::Coulomb { .. } => "Coulomb coefficient mu",
+                }
+            ),
             Binding::Friction(k),
         );
     }

@@ -59,6 +59,11 @@ impl History {
         ] {
             columns.push(format!("workpiece.{c}"));
         }
+        for f in &sim.scene().output.faces {
+            for c in FACE_KEYS {
+                columns.push(format!("workpiece.face_{}.{c}", f.name()));
+            }
+        }
         for c in [
             "kinetic_J",
             "elastic_J",
@@ -105,6 +110,9 @@ impl History {
             sim.max_plastic_strain(),
             pen / h,
         ]);
+        for &f in &sim.scene().output.faces {
+            row.extend(face_values(sim, f));
+        }
         row.extend([
             e.kinetic,
             e.elastic,
@@ -152,6 +160,15 @@ impl History {
         let k = self.columns.iter().position(|c| c == name)?;
         Some(self.rows.iter().map(|r| r[k]).collect())
     }
+}
+
+/// The bounds of a followed face (`[output] faces`), as history columns and summary keys.
+pub(crate) const FACE_KEYS: [&str; 4] = ["x_min_m", "x_max_m", "y_min_m", "y_max_m"];
+
+/// The values of [`FACE_KEYS`] for the particles that started on edge `f` (m).
+pub(crate) fn face_values(sim: &Simulation, f: rkforge_core::scene::Edge) -> [f64; 4] {
+    let e = sim.face_extents(f);
+    [e.x[0], e.x[1], e.y[0], e.y[1]]
 }
 
 pub(crate) fn min_spacing(sim: &Simulation) -> f64 {

@@ -1,7 +1,7 @@
 //! The summary of a run (summary.json) and the table of our figures beside the scene's
 //! references.
 
-use crate::history::{lateral, measures, min_spacing};
+use crate::history::{face_values, lateral, measures, min_spacing, FACE_KEYS};
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -22,6 +22,12 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>
         "max_plastic_strain": sim.max_plastic_strain(),
     });
     workpiece[lat] = json!(lat_v);
+    for &f in &sim.scene().output.faces {
+        let keys = FACE_KEYS.iter().map(|k| k.to_string());
+        let face: serde_json::Map<String, Value> =
+            keys.zip(face_values(sim, f).map(|v| json!(v))).collect();
+        workpiece[format!("face_{}", f.name())] = Value::Object(face);
+    }
     let times = sim.times;
     let scene = sim.scene();
     json!({

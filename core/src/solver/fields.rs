@@ -5,6 +5,7 @@
 use super::Simulation;
 use crate::geometry::{bounds, enclosed_volume, Extents};
 use crate::math::Real;
+use crate::scene::Edge;
 
 /// Particle fields for output frames.
 #[derive(Debug, Clone, Default)]
@@ -79,6 +80,22 @@ impl Simulation {
         }
         self.st.max_penetration = self.st.max_penetration.max(worst);
         worst
+    }
+
+    /// Bounds of the physical positions of the particles that started on `edge` (m): for
+    /// the Taylor bar, `YMin`'s largest x is the impact-face radius and `YMax`'s largest y
+    /// the free-face length.
+    pub fn face_extents(&self, edge: Edge) -> Extents {
+        let x: Vec<[Real; 2]> = edge
+            .particles(self.nx, self.ny)
+            .into_iter()
+            .map(|j| {
+                let j = j as usize;
+                let u = self.nodal.interpolate(j, &self.st.d);
+                [self.ref_pos[j][0] + u[0], self.ref_pos[j][1] + u[1]]
+            })
+            .collect();
+        bounds(&x)
     }
 
     /// Particle fields for output: physical positions, displacements and velocities;

@@ -236,14 +236,7 @@ impl Simulation {
         boundary.extend((0..nx - 1).rev().map(|i| id(i, ny - 1)));
         boundary.extend((1..ny - 1).rev().map(|j| id(0, j)));
         // Essential conditions: user edges, plus the axis of an axisymmetric body.
-        let edge_particles = |e: Edge| -> Vec<u32> {
-            match e {
-                Edge::XMin => (0..ny).map(|j| id(0, j)).collect(),
-                Edge::XMax => (0..ny).map(|j| id(nx - 1, j)).collect(),
-                Edge::YMin => (0..nx).map(|i| id(i, 0)).collect(),
-                Edge::YMax => (0..nx).map(|i| id(i, ny - 1)).collect(),
-            }
-        };
+        let edge_particles = |e: Edge| e.particles(nx, ny);
         let mut rows = Vec::new();
         for c in &scene.constraints {
             for comp in &c.fix {
@@ -263,6 +256,10 @@ impl Simulation {
         let (v, initial) = initial_motion(w.initial_velocity_m_per_s, constraints.as_ref(), &mass);
         let npts = points.positions.len();
         let stable_dt = h[0].min(h[1]) / wave_speed;
+        let held = match tools.iter().all(|t| t.separation) {
+            true => Vec::new(),
+            false => vec![false; boundary.len() * tools.len()],
+        };
         let mut sim = Simulation {
             material,
             nx,
@@ -273,7 +270,13 @@ impl Simulation {
             weights,
             inv_radius,
             scatter,
-            contact: Contact::new(&boundary, &nodal, np),
+            contact: Contact::new(
+                &boundary,
+                &nodal,
+                &ref_pos,
+                &points.positions,
+                tools.iter().any(|t| t.friction.needs_flow_stress()),
+            ),
             boundary,
             constraints,
             st: State {
@@ -295,6 +298,7 @@ impl Simulation {
                 anchor_step: 0,
                 kinetic_to_internal_max: 0.0,
                 first_contact_s: None,
+                held,
             },
             tools,
             out: vec![PointOut::initial(&material); npts],
@@ -455,6 +459,7 @@ impl Simulation {
             || st.v.len() != self.st.v.len()
             || st.points.len() != self.st.points.len()
             || st.tools.len() != self.st.tools.len()
+            || st.held.len() != self.st.held.len()
         {
             return Err(Error::State(
                 "the saved state belongs to another discretisation".into(),
@@ -508,10 +513,19 @@ impl Simulation {
             d: &self.st.d,
             v: &self.st.v,
             spacing: self.spacing,
+            points: &self.st.points,
+            hardening: &self.material.hardening,
+            kinematics: self.scene.model.kinematics,
+            depth_m: self.scene.model.depth_m,
         };
-        let (contact, tool_work) =
-            self.contact
-                .stage(&self.team, &mut self.tools, &body, dt_full, dt_avg);
+        let (contact, tool_work) = self.contact.stage(
+            &self.team,
+            &mut self.tools,
+            &body,
+            &mut self.st.held,
+            dt_full,
+            dt_avg,
+        );
         let t4 = Instant::now();
         // 5. Corrector and essential conditions.
         if contact {

@@ -41,4 +41,8 @@ pub struct State {
     /// Time of the first step with a contact force (s), where the watch's start-up begins.
     #[serde(default)]
     pub first_contact_s: Option<Real>,
+    /// Which boundary particles are held on which tool without separation
+    /// (`[boundary index * tools + tool]`; empty when every tool separates).
+    #[serde(default)]
+    pub held: Vec<bool>,
 }
