@@ -10,13 +10,13 @@
 //! the time and the state of a forging are one), and stepping N solver steps while paused.
 //! The `SimulateSteps` action is not served.
 
-use crate::dds::server;
 use crate::msgs::{
     GetSimulationStateRequest, GetSimulationStateResponse, GetSimulatorFeaturesRequest,
     GetSimulatorFeaturesResponse, ResetSimulationRequest, ResetSimulationResponse, ResultMsg,
     SetSimulationStateRequest, SetSimulationStateResponse, SimulationState, SimulatorFeatures,
     StepSimulationRequest, StepSimulationResponse,
 };
+use crate::service::server;
 use ros2_client::dds::{Node, Server};
 use ros2_client::service::RmwRequestId;
 use ros2_client::QosProfile;

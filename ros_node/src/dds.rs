@@ -16,13 +16,9 @@ use crate::params::{Parameters, Settings};
 use crate::Topic;
 use rkforge_core::Scene;
 use ros2_client::dds::rustdds::Topic as DdsTopic;
-use ros2_client::dds::{
-    Context, ContextOptions, Node as RosNode, Publisher, Server, ServiceMapping, Subscription,
-};
+use ros2_client::dds::{Context, ContextOptions, Node as RosNode, Publisher, Subscription};
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
-use ros2_client::{
-    Message, MessageTypeName, Name, NodeName, NodeOptions, QosProfile, ServiceTypeName,
-};
+use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 use serde::ser::SerializeTuple;
 use serde::{Serialize, Serializer};
 
@@ -317,36 +313,6 @@ impl Node {
             .map(|i| (i.topic.clone(), i.rejected))
             .collect()
     }
-}
-
-/// The server of service `base/service` of type `package/srv/ty`, in the request/reply
-/// mapping of `rmw_cyclonedds_cpp` (a header of the client's GUID and a sequence number
-/// before the request or reply).
-///
-/// # Errors
-///
-/// A bad service name, or DDS could not create the server.
-pub(crate) fn server<Req, Resp>(
-    node: &mut RosNode,
-    base: &str,
-    service: &str,
-    package: &str,
-    ty: &str,
-    qos: &QosProfile,
-) -> Result<Server<Req, Resp>, String>
-where
-    Req: Message + Clone + 'static,
-    Resp: Message + 'static,
-{
-    let name = Name::new(base, service).map_err(|e| format!("service {base}/{service}: {e:?}"))?;
-    node.create_server(
-        ServiceMapping::Cyclone,
-        &name,
-        &ServiceTypeName::new(package, ty),
-        qos.clone(),
-        qos.clone(),
-    )
-    .map_err(|e| format!("cannot serve {base}/{service}: {e:?}"))
 }
 
 /// The DDS topic (`rt/...`) of `t` with its standard type name.

@@ -8,7 +8,8 @@
 //! - [`signals`]: SIGINT and SIGTERM as a flag, so that a run stops and finishes its files;
 //! - `dds` (feature `dds`, on by default): the ROS 2 node over DDS (`ros2-client`);
 //! - `params` (feature `dds`): the node's run-time settings as ROS 2 parameters;
-//! - `control` (feature `dds`): the `simulation_interfaces` services (reset, step, pause).
+//! - `control` (feature `dds`): the `simulation_interfaces` services (reset, step, pause);
+//! - `service` (feature `dds`): service servers in the `rmw_cyclonedds_cpp` mapping.
 
 #[cfg(feature = "dds")]
 pub mod control;
@@ -19,6 +20,8 @@ pub mod msgs;
 #[cfg(feature = "dds")]
 pub mod params;
 pub mod record;
+#[cfg(feature = "dds")]
+pub mod service;
 pub mod signals;
 
 use msgs::RosMessage;

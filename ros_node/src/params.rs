@@ -11,7 +11,7 @@
 //!
 //! A refused value is answered with `successful = false` and the reason.
 
-use crate::dds::server;
+use crate::service::server;
 use ros2_client::dds::{Node, Server};
 use ros2_client::parameters::raw::{
     FloatingPointRange, Parameter, ParameterDescriptor, ParameterType, ParameterValue,
