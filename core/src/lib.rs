@@ -23,6 +23,7 @@ pub mod math;
 pub mod rk_shape;
 pub mod sampling;
 pub mod scene;
+pub mod scene_keys;
 pub mod scene_overrides;
 pub mod solver;
 pub mod team;

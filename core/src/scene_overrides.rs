@@ -9,7 +9,8 @@
 //! its dotted key; errors in the file keep the file's key and line.
 
 use crate::error::{Error, Result};
-use crate::scene::{key_line, syntax_message, Scene};
+use crate::scene::Scene;
+use crate::scene_keys::{key_line, syntax_message};
 use toml::{Table, Value};
 
 /// A scene's text with dotted-key overrides on top, and the validated scene they give.
