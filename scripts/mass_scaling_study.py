@@ -44,6 +44,7 @@ def scene_text(name, particles, speed, scaling, samples):
                   f'motion = {{ kind = "constant", velocity_m_per_s = {speed!r} }}', text)
     text = re.sub(r"(?m)^end_s = .*$", f"end_s = {end!r}", text)
     text = re.sub(r"(?m)^dt_s = .*$", "", text)
+    text = re.sub(r"(?m)^dt_safety = .*$", "", text)
     text = re.sub(r"(?m)^history_interval_s = .*$", f"history_interval_s = {end / samples!r}", text)
     text = re.sub(r"(?m)^frames = .*$", "frames = 0", text)
     time = "[time]\ndt_safety = 0.9\n"
