@@ -85,6 +85,32 @@ pub(super) enum Plan {
 }
 
 impl Simulation {
+    /// The quasi-static watch after a step in which `contact` forces acted or not: the
+    /// kinetic-to-internal energy ratio once the start-up is over (`kinetic_to_internal_from`
+    /// of the time from the first contact, or from t = 0 without tools, to the end), its
+    /// largest value kept, and the run stopped past `checks.kinetic_to_internal_max`.
+    pub(super) fn watch_quasi_static(&mut self, contact: bool) -> Result<()> {
+        let st = &mut self.st;
+        if contact && st.first_contact_s.is_none() {
+            st.first_contact_s = Some(st.time);
+        }
+        let start = if self.tools.is_empty() {
+            Some(0.0)
+        } else {
+            st.first_contact_s
+        };
+        let (checks, end) = (&self.scene.checks, self.scene.time.end_s);
+        if start.is_some_and(|t0| st.time >= t0 + checks.kinetic_to_internal_from * (end - t0)) {
+            let ratio = st.energy.kinetic_to_internal();
+            st.kinetic_to_internal_max = st.kinetic_to_internal_max.max(ratio);
+            if let Some(bound) = checks.kinetic_to_internal_max {
+                st.energy
+                    .check_quasi_static(ratio, bound, st.step, st.time)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Applies mass scaling to the unscaled masses (and the critical step measured with
     /// them).
     pub(super) fn scale_masses(&mut self, plan: Plan) -> Result<()> {

@@ -602,25 +602,8 @@ impl Simulation {
             dt,
             self.st.stable_dt,
         )?;
-        // 8. The quasi-static watch: kinetic against internal energy after the start-up.
-        if contact && self.st.first_contact_s.is_none() {
-            self.st.first_contact_s = Some(self.st.time);
-        }
-        let start = match (self.tools.is_empty(), self.st.first_contact_s) {
-            (true, _) => Some(0.0),
-            (false, first) => first,
-        };
-        let end = self.scene.time.end_s;
-        if start.is_some_and(|t0| self.st.time >= t0 + checks.kinetic_to_internal_from * (end - t0))
-        {
-            let ratio = self.st.energy.kinetic_to_internal();
-            self.st.kinetic_to_internal_max = self.st.kinetic_to_internal_max.max(ratio);
-            if let Some(bound) = checks.kinetic_to_internal_max {
-                self.st
-                    .energy
-                    .check_quasi_static(ratio, bound, self.st.step, self.st.time)?;
-            }
-        }
+        // 8. The quasi-static watch.
+        self.watch_quasi_static(contact)?;
         let t5 = Instant::now();
         self.times.contact += t4 - t3;
         self.times.integration += (t2 - t1) + (t5 - t4);
