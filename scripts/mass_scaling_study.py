@@ -68,13 +68,16 @@ def run(binary, text, out, overrides):
     return summary, history
 
 
-def force_at(history, tools, per_travel, stroke):
-    """Tool force (N, along the first tool's axis, resisting the stroke) at the history row
-    nearest the total stroke `stroke` (m)."""
-    def total(row):
-        return sum(abs(float(row[f"{t}.stroke_m"])) for t in tools)
-    row = min(history, key=lambda r: abs(total(r) - stroke))
-    return -float(row[f"{tools[0]}.force_N"]), total(row)
+def stroke_force(row, tools):
+    """Total stroke of the moving tools (m) and the force (N) along the first tool's axis,
+    resisting the stroke, in one history row."""
+    return sum(abs(float(row[f"{t}.stroke_m"])) for t in tools), -float(row[f"{tools[0]}.force_N"])
+
+
+def force_at(history, tools, stroke):
+    """Tool force (N) at the history row nearest the total stroke `stroke` (m)."""
+    row = min(history, key=lambda r: abs(stroke_force(r, tools)[0] - stroke))
+    return stroke_force(row, tools)[1]
 
 
 def main():
@@ -108,11 +111,9 @@ def main():
             "lateral_m": summary["workpiece"].get("width_m", summary["workpiece"].get("radius_m")),
         }
         for s in strokes:
-            row[f"force_at_{s * 1e3:g}mm_N"] = force_at(history, tools, per_travel, s)[0]
+            row[f"force_at_{s * 1e3:g}mm_N"] = force_at(history, tools, s)
         rows.append(row)
-        curves[scaling] = [force_at([h], tools, per_travel, 0.0)[1:] and
-                           (sum(abs(float(h[f"{t}.stroke_m"])) for t in tools), -float(h[f"{tools[0]}.force_N"]))
-                           for h in history]
+        curves[scaling] = [stroke_force(h, tools) for h in history]
         print(json.dumps(row), flush=True)
     ref = rows[0]
     a.out.mkdir(parents=True, exist_ok=True)
