@@ -205,6 +205,8 @@ def test_parameters_out_of_range_and_wrong_state_calls(fmus):
     raises(s, lambda: s.fmu.setInteger([s.vr["resolution.nx"]], [1]), "resolution.nx", "[2, 4000]")
     raises(s, lambda: s.fmu.setString([s.vr["integration"]], ["q3"]), "integration", "q4")
     raises(s, lambda: s.fmu.setReal([s.vr["dt_safety"]], [1.5]), "dt_safety", "out of range")
+    raises(s, lambda: s.fmu.setReal([s.vr["wall.friction"]], [-0.1]), "wall.friction",
+           "zero or positive")
     s.fmu.freeInstance()
 
 

@@ -29,7 +29,7 @@ use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::Kinematics;
 use crate::team::{part, particle_phase, Parts, Team};
-use crate::tools::{penalty_force, Interface, Tool};
+use crate::tools::{penalty_force, Interface, SlaveForce, Tool};
 use std::f64::consts::PI;
 
 /// Boundary particles handled by one task of the contact stage's interpolation.
@@ -77,6 +77,18 @@ impl Body<'_> {
         }
         [x, vj]
     }
+}
+
+/// What the contact stage keeps for each boundary particle `k` on each tool `t` from step to
+/// step, at index `k * tools + t` (part of the saved state).
+pub struct Pairs<'a> {
+    /// Whether the particle is held on the tool (a tool without separation; empty when
+    /// every tool separates): a particle that penetrates such a tool is held from then on.
+    pub held: &'a mut [bool],
+    /// The particle's stick point on the tool in the tool's frame (m: `x_J` less the tool's
+    /// stroke along its axis), kept while the particle stays in contact with a tool that has
+    /// friction ([`crate::tools::penalty_force`]).
+    pub stick: &'a mut [Option<[Real; 2]>],
 }
 
 /// The contact forces of the last step, and what the stage keeps from step to step to skip
@@ -182,9 +194,7 @@ impl Contact {
     /// corrector's step. A boundary particle is interpolated only when it may be in a tool's
     /// search box: its clearance to the boxes, measured when last interpolated, shrinks each
     /// step by `S_J du + box_move` and while it stays positive the particle is skipped.
-    /// `held[k * tools + t]` says whether boundary particle `k` is held on tool `t` (a tool
-    /// without separation; empty when every tool separates); a particle that penetrates such
-    /// a tool is held from then on.
+    /// `pairs` holds what each boundary particle keeps on each tool from step to step.
     /// Fills [`Contact::force`] and each tool's force (N); returns whether any force acts and
     /// the work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
     pub fn stage(
@@ -192,7 +202,7 @@ impl Contact {
         team: &Team,
         tools: &mut [Tool],
         body: &Body<'_>,
-        held: &mut [bool],
+        pairs: Pairs<'_>,
         dt: Real,
         dt_avg: Real,
     ) -> (bool, Real) {
@@ -272,19 +282,23 @@ impl Contact {
         });
         let mut any = false;
         let ntools = tools.len();
+        let Pairs { held, stick } = pairs;
         for (k, ((&j, &[x, vj]), &c)) in boundary
             .iter()
             .zip(&self.motion)
             .zip(&self.clearance)
             .enumerate()
         {
+            let stick = &mut stick[k * ntools..(k + 1) * ntools];
             if self.skip && c > 0.0 {
+                stick.fill(None);
                 continue;
             }
             let j = j as usize;
             for (t, tool) in tools.iter_mut().enumerate() {
                 let b = &bounds[t];
                 if x[0] < b.x[0] || x[0] > b.x[1] || x[1] < b.y[0] || x[1] > b.y[1] {
+                    stick[t] = None;
                     continue;
                 }
                 let hold = (!tool.separation).then(|| &mut held[k * ntools + t]);
@@ -293,6 +307,7 @@ impl Contact {
                     _ => 0.0,
                 };
                 let Some(pen) = tool.gap_above(x, below) else {
+                    stick[t] = None;
                     continue;
                 };
                 if let Some(h) = hold {
@@ -307,15 +322,21 @@ impl Contact {
                 } else {
                     Interface::default()
                 };
-                let f = penalty_force(
-                    mass[j],
-                    pen,
-                    [vj[0] - vt[0], vj[1] - vt[1]],
-                    &tool.friction,
-                    at,
-                    dt,
-                    dt_avg,
-                );
+                // The particle in the tool's frame, and its slip from the stick point (set
+                // one step back along the relative velocity when the contact begins).
+                let s = tool.state.stroke;
+                let p = [x[0] - s * tool.axis[0], x[1] - s * tool.axis[1]];
+                let slip = if tool.friction.is_frictionless() {
+                    [0.0; 2]
+                } else {
+                    let a = stick[t]
+                        .unwrap_or([p[0] - dt * (vj[0] - vt[0]), p[1] - dt * (vj[1] - vt[1])]);
+                    [p[0] - a[0], p[1] - a[1]]
+                };
+                let SlaveForce { force: f, kept } =
+                    penalty_force(mass[j], pen, slip, &tool.friction, at, dt, dt_avg);
+                stick[t] =
+                    (!tool.friction.is_frictionless()).then_some([p[0] - kept[0], p[1] - kept[1]]);
                 tool.state.force[0] -= f[0];
                 tool.state.force[1] -= f[1];
                 tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);

@@ -345,12 +345,17 @@ impl Instance {
             }
             Binding::DtSafety if value > 0.0 && value <= 1.0 => self.params.dt_safety = value,
             Binding::DtFixed if value >= 0.0 => self.params.dt_fixed = value,
-            Binding::Friction(k) if value >= 0.0 => self.params.friction[k] = value,
+            Binding::Friction(k) => {
+                let law = self.scene.tools[k].friction.with_coefficient(value);
+                if let Some((_, why)) = law.validate().into_iter().next() {
+                    return Err(request(format!("`{}` = {value}: {why}", v.name)));
+                }
+                self.params.friction[k] = value
+            }
             Binding::MassScalingFactor if value >= 1.0 => self.params.mass_factor = value,
             Binding::MassScalingTarget if value >= 0.0 => self.params.mass_target_dt = value,
             Binding::DtSafety
             | Binding::DtFixed
-            | Binding::Friction(_)
             | Binding::MassScalingFactor
             | Binding::MassScalingTarget => {
                 return Err(request(format!("`{}` = {value} is out of range", v.name)))

@@ -46,7 +46,7 @@ pub use mass_scaling::MassScalingReport;
 pub use state::State;
 
 use crate::constraints::Constraints;
-use crate::contact::{Body, Contact};
+use crate::contact::{Body, Contact, Pairs};
 use crate::error::{Error, Result};
 use crate::integration::{point_shapes, PointSet};
 use crate::material::{HenckyJ2, PointState};
@@ -260,6 +260,7 @@ impl Simulation {
             true => Vec::new(),
             false => vec![false; boundary.len() * tools.len()],
         };
+        let stick = vec![None; boundary.len() * tools.len()];
         let mut sim = Simulation {
             material,
             nx,
@@ -299,6 +300,7 @@ impl Simulation {
                 kinetic_to_internal_max: 0.0,
                 first_contact_s: None,
                 held,
+                stick,
             },
             tools,
             out: vec![PointOut::initial(&material); npts],
@@ -460,6 +462,7 @@ impl Simulation {
             || st.points.len() != self.st.points.len()
             || st.tools.len() != self.st.tools.len()
             || st.held.len() != self.st.held.len()
+            || st.stick.len() != self.st.stick.len()
         {
             return Err(Error::State(
                 "the saved state belongs to another discretisation".into(),
@@ -522,7 +525,10 @@ impl Simulation {
             &self.team,
             &mut self.tools,
             &body,
-            &mut self.st.held,
+            Pairs {
+                held: &mut self.st.held,
+                stick: &mut self.st.stick,
+            },
             dt_full,
             dt_avg,
         );

@@ -45,4 +45,9 @@ pub struct State {
     /// (`[boundary index * tools + tool]`; empty when every tool separates).
     #[serde(default)]
     pub held: Vec<bool>,
+    /// Stick point of each boundary particle in contact with each tool that has friction,
+    /// in the tool's frame (m; `[boundary index * tools + tool]`, `None` out of contact):
+    /// the friction spring's anchor ([`crate::tools::penalty_force`]).
+    #[serde(default)]
+    pub stick: Vec<Option<[Real; 2]>>,
 }
