@@ -11,6 +11,8 @@ step count of each run. Writes study.csv, study.md and (with matplotlib) force_s
     scripts/mass_scaling_study.py wheel --particles 12x12 --speed 0.02 ...
     scripts/mass_scaling_study.py ring --particles 21x14 --speed 0.01 ...
 
+--reuse redraws the tables and the curves from the runs already in --out.
+
 Uses target/release/rkforge (or $RKFORGE_BIN). Runs go one after the other; the wall
 times are each run's own `wall_s`.
 """
@@ -55,13 +57,15 @@ def scene_text(name, particles, speed, scaling, samples):
     return text.replace("[time]\n", time), tools, per_travel, strokes, end
 
 
-def run(binary, text, out, overrides):
+def run(binary, text, out, overrides, reuse):
     scene = out / "scene.toml"
-    out.mkdir(parents=True, exist_ok=True)
-    scene.write_text(text)
-    sets = [arg for kv in overrides for arg in ("--set", kv)]
-    subprocess.run([binary, "run", str(scene), "--out", str(out), "--no-frames", "--quiet", *sets],
-                   check=False, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    done = reuse and scene.exists() and scene.read_text() == text and (out / "summary.json").exists()
+    if not done:
+        out.mkdir(parents=True, exist_ok=True)
+        scene.write_text(text)
+        sets = [arg for kv in overrides for arg in ("--set", kv)]
+        subprocess.run([binary, "run", str(scene), "--out", str(out), "--no-frames", "--quiet", *sets],
+                       check=False, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     summary = json.loads((out / "summary.json").read_text())
     with open(out / "history.csv") as f:
         history = list(csv.DictReader(f))
@@ -91,6 +95,9 @@ def main():
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="scene override for every run (rkforge run --set), repeatable")
     p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--reuse", action="store_true",
+                   help="read the runs already in --out (same scene text) instead of rerunning them "
+                        "(to redraw the tables and curves; the overrides are not compared)")
     a = p.parse_args()
     binary = os.environ.get("RKFORGE_BIN", str(ROOT / "target/release/rkforge"))
     particles = [int(x) for x in a.particles.split("x")]
@@ -98,7 +105,7 @@ def main():
     curves = {}
     for scaling in a.scaling.split(","):
         text, tools, per_travel, strokes, end = scene_text(a.scene, particles, a.speed, scaling, a.samples)
-        summary, history = run(binary, text, a.out / scaling.replace("=", "_"), a.set)
+        summary, history = run(binary, text, a.out / scaling.replace("=", "_"), a.set, a.reuse)
         ms = summary.get("mass_scaling") or {}
         row = {
             "scaling": scaling,

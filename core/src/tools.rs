@@ -363,8 +363,8 @@ pub fn penalty_force(
     dt_avg: Real,
 ) -> SlaveForce {
     let n = pen.normal;
-    let k = m / (dt_step * dt_avg);
-    let fn_ = k * pen.gap;
+    let dt2 = dt_step * dt_avg;
+    let fn_ = m * pen.gap / dt2;
     let mut force = [fn_ * n[0], fn_ * n[1]];
     let mut kept = [0.0; 2];
     if !friction.is_frictionless() {
@@ -372,7 +372,7 @@ pub fn penalty_force(
         let st = [slip[0] - sn * n[0], slip[1] - sn * n[1]];
         let st_norm = (st[0] * st[0] + st[1] * st[1]).sqrt();
         if st_norm > 0.0 {
-            let stick = k * st_norm;
+            let stick = m * st_norm / dt2;
             let ff = friction.bound(fn_, at.flow_stress, at.area).min(stick);
             force[0] -= ff * st[0] / st_norm;
             force[1] -= ff * st[1] / st_norm;
