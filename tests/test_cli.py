@@ -262,3 +262,48 @@ def test_sweep_varies_scene_keys_over_a_grid(rkforge_bin, tmp_path):
         s = json.loads((case / "q2_9x9_0.5" / "summary.json").read_text())
         top = next(t for t in s["tools"] if t["name"] == "top")
         assert top["velocity_m_per_s"] == float(r["tools.top.motion.velocity_m_per_s"])
+
+
+RING_SHORT = {
+    "particles = [31, 21]": "particles = [11, 7]",
+    "end_s = 1.025e-3                 # 0.125 mm of ramp + 4.875 mm at 5 m/s = 5 mm stroke":
+        "end_s = 0.225e-3",  # 1 mm stroke: 10 % height reduction
+}
+
+
+def test_ring_chart_sets_the_upper_bound_beside_the_runs(rkforge_bin, tmp_path):
+    scene = tmp_path / "ring.toml"
+    scene.write_text(scene_variant("ring_compression.toml", RING_SHORT))
+    out = tmp_path / "chart"
+    proc = subprocess.run([rkforge_bin, "ring-chart", str(scene), "--m", "0,1", "--mu", "0.1",
+                           "--out", str(out)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert "| m | | 10 % | 20 % | 30 % | 40 % | 50 % |" in lines
+    cells = {}
+    for line in lines:
+        if line.startswith("| ") and "%" not in line:
+            row = [c.strip() for c in line.strip("|").split("|")]
+            m = row[0] or m
+            cells[(m, row[1])] = row[2:]
+    # Homogeneous upsetting at m = 0: 1 - 1 / sqrt(0.9) = -5.4 % at 10 %; nothing past the stroke.
+    assert cells[("0", "upper bound")] == ["-5.4", "-11.8", "-19.5", "-29.1", "-41.4"]
+    assert cells[("0", "simulated")][1:] == ["-"] * 4 and cells[("0", "difference")][1:] == ["-"] * 4
+    for m in ("0", "1"):
+        sim, ub, diff = (float(cells[(m, k)][0]) for k in ("simulated", "upper bound", "difference"))
+        assert abs(sim - ub - diff) <= 0.11
+    # Sticking friction closes the hole in both, from the start.
+    assert float(cells[("1", "simulated")][0]) > 0 and float(cells[("1", "upper bound")][0]) > 0
+    with open(out / "ring_chart.csv") as f:
+        rows = list(csv.DictReader(f))
+    runs = {(r["source"], r["law"], r["mu"], r["m"]) for r in rows}
+    assert runs == {("simulation", "shear", "NaN", "0"), ("simulation", "shear", "NaN", "1"),
+                    ("simulation", "coulomb", "0.1", "NaN"),
+                    ("upper_bound", "shear", "NaN", "0"), ("upper_bound", "shear", "NaN", "1")}
+    bound = [r for r in rows if r["source"] == "upper_bound" and r["m"] == "0"]
+    assert float(bound[0]["height_reduction_pct"]) == 0.0 and 9.9 < float(bound[-1]["height_reduction_pct"]) <= 10.0
+    with open(out / "ring_chart_comparison.csv") as f:
+        table = list(csv.DictReader(f))
+    assert [(r["m"], r["height_reduction_pct"]) for r in table][:2] == [("0", "10"), ("0", "20")]
+    assert len(table) == 10 and table[1]["simulated_pct"] == ""
+    assert (out / "ring_chart.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

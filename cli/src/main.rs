@@ -42,7 +42,8 @@ enum Command {
     /// Run a grid of resolutions, rules and time-step safety factors; error against wall time.
     Sweep(SweepArgs),
     /// Friction calibration chart of a ring compression scene: inner diameter decrease
-    /// against height reduction per friction law (ring_chart.csv and ring_chart.png).
+    /// against height reduction per friction law, beside Avitzur's upper bound for each
+    /// shear factor m (ring_chart.csv, ring_chart_comparison.csv and ring_chart.png).
     RingChart(RingChartArgs),
 }
 
@@ -225,9 +226,24 @@ fn ring_chart_command(a: RingChartArgs) -> Result<(), String> {
     let out = a
         .out
         .unwrap_or_else(|| PathBuf::from("out").join("ring_chart"));
-    let curves = ring_chart::chart(&scene, &laws, &out)?;
-    print!("{}", ring_chart::csv(&curves));
-    println!("ring_chart.csv and ring_chart.png in {}", out.display());
+    match ring_chart::chart(&scene, &laws, &out)? {
+        Some(rows) => {
+            println!(
+                "Decrease of the inner diameter (%), simulated against Avitzur's upper bound:"
+            );
+            print!("{}", ring_chart::comparison_table(&rows));
+            println!(
+                "ring_chart.csv, ring_chart_comparison.csv and ring_chart.png in {}",
+                out.display()
+            );
+        }
+        None => {
+            println!(
+                "no upper-bound reference: the scene is not a half ring mirrored at its y_min edge"
+            );
+            println!("ring_chart.csv and ring_chart.png in {}", out.display());
+        }
+    }
     Ok(())
 }
 

@@ -190,7 +190,12 @@ pub fn sweep(
             } else {
                 format!("{} {label}", rule.name())
             };
-            series.push(plots::Series { label: name, x, y });
+            series.push(plots::Series {
+                label: name,
+                x,
+                y,
+                ..plots::Series::default()
+            });
         }
     }
     std::fs::write(out.join("sweep.csv"), &csv)

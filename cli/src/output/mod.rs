@@ -69,6 +69,7 @@ impl HistoryPlots for History {
                     label: format!("rkforge {rule}"),
                     x: t.clone(),
                     y,
+                    ..plots::Series::default()
                 }],
                 &markers,
             )?;
@@ -81,6 +82,7 @@ impl HistoryPlots for History {
                 label: tool.name.clone(),
                 x: t.clone(),
                 y: force(&tool.name),
+                ..plots::Series::default()
             })
             .collect();
         if !over_time.is_empty() {
@@ -106,6 +108,7 @@ impl HistoryPlots for History {
                     .map(|s| s * 1e3)
                     .collect(),
                 y: force(&tool.name).iter().map(|f| -f).collect(),
+                ..plots::Series::default()
             })
             .collect();
         if !strokes.is_empty() {
@@ -130,6 +133,7 @@ impl HistoryPlots for History {
             label: c.trim_end_matches("_J").replace('_', " "),
             x: t.clone(),
             y: self.column(&format!("energy.{c}")).unwrap_or_default(),
+            ..plots::Series::default()
         })
         .collect();
         plots::line_plot(

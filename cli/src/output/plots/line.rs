@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
 use super::{axes_chart, centred_text, draw_err, ensure_font, font, png_canvas, save, titled};
@@ -15,7 +16,7 @@ use super::{TITLE_H, X_AREA};
 ///
 /// `x` and `y` must have the same length. Points with a non-finite coordinate are skipped and
 /// break the line. Series with few points also get a dot at every point.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Series {
     /// Legend text; an empty label keeps the series out of the legend.
     pub label: String,
@@ -23,6 +24,21 @@ pub struct Series {
     pub x: Vec<f64>,
     /// Ordinates.
     pub y: Vec<f64>,
+    /// Line colour.
+    pub colour: Colour,
+    /// Dashed (e.g. a theoretical reference beside a computed curve) instead of solid.
+    pub dashed: bool,
+}
+
+/// The colour of a [`Series`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Colour {
+    /// The palette colour of the series' own position in the plot.
+    #[default]
+    Auto,
+    /// The palette colour of position `k` (e.g. a reference drawn in its computed curve's
+    /// colour).
+    Palette(usize),
 }
 
 /// A labelled marker (e.g. a published value) drawn as a distinct point with its label in the legend.
@@ -57,6 +73,9 @@ const SERIES_COLOURS: [RGBColor; 10] = [
 const MAX_DOTTED_POINTS: usize = 30;
 /// Radius of those dots (pixels).
 const DOT_RADIUS: i32 = 5;
+/// Dash and gap lengths of dashed curves (pixels).
+const DASH_PX: i32 = 12;
+const GAP_PX: i32 = 7;
 /// Pixel offsets of the one-pixel lines that together draw a curve about 3 pixels wide.
 const BRUSH: [(f64, f64); 5] = [(0.0, 0.0), (-1.0, 0.0), (1.0, 0.0), (0.0, -1.0), (0.0, 1.0)];
 /// Shortest line segment drawn for dense curves (pixels).
@@ -211,19 +230,27 @@ impl<'a> LinePlan<'a> {
             self.y.span.width() / f64::from(plot_h.max(1)),
         );
         for (i, (series, runs)) in self.series.iter().zip(&self.runs).enumerate() {
-            let colour = SERIES_COLOURS[i % SERIES_COLOURS.len()];
+            let colour = match series.colour {
+                Colour::Auto => SERIES_COLOURS[i % SERIES_COLOURS.len()],
+                Colour::Palette(k) => SERIES_COLOURS[k % SERIES_COLOURS.len()],
+            };
             let style = colour.stroke_width(3);
             let dotted = runs.iter().map(Vec::len).sum::<usize>() <= MAX_DOTTED_POINTS;
             if !series.label.is_empty() {
                 let dot = if dotted { DOT_RADIUS } else { 0 };
+                let dashed = series.dashed;
                 chart
                     .draw_series(LineSeries::new(std::iter::empty(), style))
                     .map_err(draw_err)?
                     .label(series.label.as_str())
                     .legend(move |at| {
-                        EmptyElement::at(at)
-                            + PathElement::new(vec![(0, 0), (34, 0)], style)
-                            + Circle::new((17, 0), dot, style.filled())
+                        let sample = vec![(0, 0), (34, 0)];
+                        let line = if dashed {
+                            DashedPathElement::new(sample, DASH_PX, GAP_PX, style).into_dyn()
+                        } else {
+                            PathElement::new(sample, style).into_dyn()
+                        };
+                        EmptyElement::at(at) + line + Circle::new((17, 0), dot, style.filled())
                     });
             }
             for run in runs {
@@ -234,9 +261,13 @@ impl<'a> LinePlan<'a> {
                     let shifted = line
                         .iter()
                         .map(|p| (p.0 + bx * pixel.0, p.1 + by * pixel.1));
-                    chart
-                        .draw_series(LineSeries::new(shifted, colour.stroke_width(1)))
-                        .map_err(draw_err)?;
+                    let thin = colour.stroke_width(1);
+                    if series.dashed {
+                        chart.draw_series(DashedLineSeries::new(shifted, DASH_PX, GAP_PX, thin))
+                    } else {
+                        chart.draw_series(LineSeries::new(shifted, thin))
+                    }
+                    .map_err(draw_err)?;
                 }
                 if dotted || run.len() == 1 {
                     let dots = run
@@ -404,6 +435,7 @@ mod tests {
             label: label.into(),
             x,
             y,
+            ..Series::default()
         }
     }
 
@@ -554,6 +586,39 @@ mod tests {
                 });
             }
         }
+    }
+
+    /// Pixels of exactly the colour `c` in an RGB image.
+    fn pixels_of(pixels: &[u8], c: RGBColor) -> usize {
+        pixels.chunks(3).filter(|p| p == &[c.0, c.1, c.2]).count()
+    }
+
+    #[test]
+    fn dashed_series_leave_gaps_and_take_the_colour_asked_for() {
+        let x: Vec<f64> = (0..100).map(f64::from).collect();
+        let line = |dashed: bool, colour: Colour| {
+            let s = [
+                series("first", vec![0.0, 99.0], vec![-1.0, -1.0]),
+                Series {
+                    colour,
+                    dashed,
+                    ..series("", x.clone(), vec![0.5; 100])
+                },
+            ];
+            let plan = LinePlan::new("t", "x", "y", &s, &[]).expect("plan");
+            render(LINE_SIZE, |root| plan.draw(root).expect("draw"))
+        };
+        let (second, first) = (SERIES_COLOURS[1], SERIES_COLOURS[0]);
+        let solid = pixels_of(&line(false, Colour::Auto), second);
+        let dashed = pixels_of(&line(true, Colour::Auto), second);
+        // Dashes of 12 pixels with gaps of 7 cover about 12/19 of the length.
+        let share = dashed as f64 / solid as f64;
+        assert!((0.55..0.75).contains(&share), "{dashed} of {solid}");
+        // In the first series' colour, the second series adds its pixels to the first's.
+        let alone = pixels_of(&line(false, Colour::Auto), first);
+        let shared = pixels_of(&line(false, Colour::Palette(0)), first);
+        assert!(shared > alone + solid / 2, "{shared} {alone}");
+        assert_eq!(pixels_of(&line(false, Colour::Palette(0)), second), 0);
     }
 
     #[test]

@@ -12,7 +12,7 @@ mod colour_bar;
 mod line;
 mod shape;
 
-pub use line::{line_plot, Marker, Series};
+pub use line::{line_plot, Colour, Marker, Series};
 pub use shape::{shape_plot, stages_plot, Stage};
 
 use std::path::Path;
