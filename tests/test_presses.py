@@ -72,17 +72,17 @@ def test_hydraulic_press_presses_at_pump_speed_and_stalls_at_its_tonnage(fmu):
     assert f.max() < 1.01 * press.tonnage
     after = t >= t[stall] + 0.1
     assert np.all(np.abs(f[after] / press.tonnage - 1) < 0.01), (f[after].min(), f[after].max())
-    # The ram stalls: within 0.1 s of the tonnage it is below 12 % of its pressing speed, and
-    # it keeps slowing. It creeps because the billet's force at a given stroke depends on the
-    # ram's speed: after 1 mm more at 1 mm/s instead of 19 mm/s it is 2.1 % lower (2.3 % with
-    # a quarter of the added mass, so not inertia; +0.04 % without friction, so the contact
-    # friction's).
+    # The ram stalls: from 0.1 s after the tonnage on it stands, its mean speed over every
+    # 0.1 s window below 0.1 % of its pressing speed (the ram and oil column still ring step
+    # to step). The billet's force at a given stroke does not depend on how fast it got
+    # there, so nothing lets the ram creep on. (With the paper's one-step stick force it did:
+    # friction then fell with the sliding speed, the force 2.1 % lower after 1 mm at 1 mm/s
+    # than at 19 mm/s, and the ram crept at several per cent of its speed.)
     assert np.all(v[after] < 0.12 * q_over_a), v[after].max() / q_over_a
     windows = [v[after][k:k + 500].mean() for k in range(0, after.sum() - 499, 500)]
-    assert len(windows) >= 2 and np.all(np.diff(windows) < 0), windows
-    assert v[-1] < 0.06 * q_over_a
+    assert len(windows) >= 2 and np.all(np.abs(windows) < 1e-3 * q_over_a), windows
     last = t >= t[-1] - 0.2
-    assert s[-1] - s[last][0] < 0.1 * q_over_a * 0.2, "a tenth of the free stroke"
+    assert abs(s[-1] - s[last][0]) < 1e-3 * q_over_a * 0.2, "the ram stands"
     assert hist["pressure"][-1] == press.relief_pressure
     # The mass scaling keeps the billet quasi-static: its kinetic energy stays below 0.1 % of
     # its internal energy (the FMU's watch, from 0.15 s on).
