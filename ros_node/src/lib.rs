@@ -9,8 +9,11 @@
 //! - `dds` (feature `dds`, on by default): the ROS 2 node over DDS (`ros2-client`);
 //! - `params` (feature `dds`): the node's run-time settings as ROS 2 parameters;
 //! - `control` (feature `dds`): the `simulation_interfaces` services (reset, step, pause);
+//! - `action` (feature `dds`): the `simulation_interfaces` action `SimulateSteps`;
 //! - `service` (feature `dds`): service servers in the `rmw_cyclonedds_cpp` mapping.
 
+#[cfg(feature = "dds")]
+pub mod action;
 #[cfg(feature = "dds")]
 pub mod control;
 #[cfg(feature = "dds")]

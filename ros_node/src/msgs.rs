@@ -1,8 +1,10 @@
 //! The standard ROS 2 messages rkforge publishes and their CDR codec. The types are generated
-//! by the build script from the standard definitions in `ros_node/msg/<package>/msg/*.msg`
-//! (the ROS 2 **Humble** files, byte for byte with their comments; `msg/SOURCES.md` says
-//! where each was taken from): per file a struct with the `.msg` constants and defaults, its
-//! [`CdrMessage`] and [`CdrDecode`] codec and its [`RosMessage`] names and texts.
+//! by the build script from the standard definitions in
+//! `ros_node/msg/<package>/{msg,srv,action}/` (the ROS 2 **Humble** files, byte for byte with
+//! their comments; `msg/SOURCES.md` says where each was taken from): per
+//! message, part of a service (`_Request`, `_Response`) or part of an action (`_Goal`,
+//! `_Result`, `_Feedback`) a struct with the constants and defaults, its [`CdrMessage`] and
+//! [`CdrDecode`] codec and its [`RosMessage`] names and texts.
 //!
 //! # Schema layout
 //!
@@ -745,6 +747,58 @@ mod tests {
         }
         assert_eq!(StepSimulationRequest::default().steps, 1);
         assert_eq!(ResultMsg::RESULT_OK, 1);
+    }
+
+    /// The goal, result and feedback of each action are the parts of its `.action` file, with
+    /// the DDS type names of rosidl (`pkg::action::dds_::Action_Goal_`).
+    #[test]
+    fn actions_are_their_action_files() {
+        let files = msg_files("action");
+        assert_eq!(files.len(), 1);
+        let text = format!(
+            "{}---\n{}---\n{}",
+            SimulateStepsGoal::DEFINITION,
+            SimulateStepsResult::DEFINITION,
+            SimulateStepsFeedback::DEFINITION
+        );
+        assert_eq!(text, files["simulation_interfaces/SimulateSteps"]);
+        for (name, dds) in [
+            (
+                SimulateStepsGoal::TYPE_NAME,
+                SimulateStepsGoal::DDS_TYPE_NAME,
+            ),
+            (
+                SimulateStepsResult::TYPE_NAME,
+                SimulateStepsResult::DDS_TYPE_NAME,
+            ),
+            (
+                SimulateStepsFeedback::TYPE_NAME,
+                SimulateStepsFeedback::DDS_TYPE_NAME,
+            ),
+        ] {
+            let (pkg, ty) = name.split_once("/action/").unwrap();
+            assert_eq!(pkg, "simulation_interfaces");
+            assert_eq!(dds, format!("{pkg}::action::dds_::{ty}_"));
+        }
+        assert_eq!(
+            SimulateStepsGoal::TYPE_NAME,
+            "simulation_interfaces/action/SimulateSteps_Goal"
+        );
+        // The result's one dependency is the standard Result message.
+        let msgs = msg_files("msg");
+        let sections = sections(SimulateStepsResult::SCHEMA);
+        assert_eq!(sections.len(), 2);
+        assert_eq!(sections[1].0, Some("simulation_interfaces/Result"));
+        assert_eq!(sections[1].1, msgs["simulation_interfaces/Result"]);
+        let feedback = SimulateStepsFeedback {
+            completed_steps: 3,
+            remaining_steps: 5,
+        };
+        assert_eq!(
+            SimulateStepsFeedback::from_cdr(&feedback.to_cdr()),
+            Ok(feedback)
+        );
+        assert_eq!(SimulateStepsGoal::default().steps, 0);
     }
 
     /// The dependencies in rosbag2's order: depth first, each level sorted by qualified name.
