@@ -315,6 +315,18 @@ class StepSimulationReply(
     result: SimResult
 
 
+@dataclass
+class Energy(IdlStruct, typename="rkforge_msgs::msg::dds_::Energy_"):
+    header: Header
+    initial: t.float64
+    kinetic: t.float64
+    elastic: t.float64
+    plastic: t.float64
+    internal: t.float64
+    contact_work: t.float64
+    tool_work: t.float64
+
+
 # The SimulateSteps action as rcl_action puts it on DDS: services `<action>/_action/send_goal`,
 # `get_result`, `cancel_goal` (requests and replies with rmw_cyclonedds_cpp's header, as
 # above), topics `<action>/_action/feedback` and `status`.

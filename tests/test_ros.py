@@ -7,7 +7,7 @@ import time
 
 import pytest
 
-from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest,
+from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest, Energy,
                       Float64, GetParametersReply, GetParametersRequest, JointState,
                       ListParametersReply, ListParametersRequest, Parameter, Peer, PointCloud2,
                       ServiceClient, SetParametersReply, SetParametersRequest, SimulateSteps,
@@ -31,6 +31,7 @@ class LockstepController:
         self.wrenches = {n: self.peer.reader(f"{NS}/{n}/wrench", WrenchStamped, latched=True)
                          for n in ["top", "bottom"]}
         self.clock = self.peer.reader("/clock", Clock, latched=True)
+        self.energy = self.peer.reader(f"{NS}/energy", Energy, latched=True)
         self.cloud = self.peer.reader(f"{NS}/workpiece", PointCloud2, reliable=False)
         self.cmd = {n: self.peer.writer(f"{NS}/{n}/velocity_cmd", Float64)
                     for n in ["top", "bottom"]}
@@ -39,12 +40,13 @@ class LockstepController:
         self.wrench = {"top": {}, "bottom": {}}
         self.clouds = {}
         self.clocks = set()
+        self.energies = {}
 
     def serve(self, node, timeout=120):
         t0 = time.monotonic()
         # Before its first answer the controller waits until every reader found the node
         # (the node holds the first sample until then): nothing published is missed.
-        wait_readers_matched([self.tools, self.clock, *self.wrenches.values()])
+        wait_readers_matched([self.tools, self.clock, self.energy, *self.wrenches.values()])
         while node.poll() is None:
             assert time.monotonic() - t0 < timeout, "the lockstep run did not finish"
             for js in take(self.tools, 50):
@@ -62,6 +64,8 @@ class LockstepController:
                 self.clouds[stamp_ns(c.header)] = c
             for c in take(self.clock, 50):
                 self.clocks.add(c.clock.sec * 10**9 + c.clock.nanosec)
+            for e in take(self.energy, 50):
+                self.energies[stamp_ns(e.header)] = e
             time.sleep(0.001)
         return node.communicate(timeout=10)
 
@@ -91,6 +95,13 @@ def test_a_cyclone_dds_peer_reads_the_topics_with_history_values(rkforge_bin, rk
             assert got[s].wrench.force.x == row[f"{tool}.force_x_N"]
             assert got[s].wrench.force.y == row[f"{tool}.force_y_N"]
     assert ctl.clocks == set(stamps)
+    assert set(ctl.energies) == set(stamps), "reliable energy accounts are all delivered"
+    for s, row in zip(stamps, rows):
+        e = ctl.energies[s]
+        assert e.header.frame_id == "rkforge"
+        assert (e.kinetic, e.elastic, e.plastic, e.internal, e.contact_work, e.tool_work) == (
+            row["energy.kinetic_J"], row["energy.elastic_J"], row["energy.plastic_J"],
+            row["energy.internal_J"], row["energy.contact_J"], row["energy.tool_work_J"])
     assert ctl.clouds, "no point cloud arrived"
     by_stamp = dict(zip(stamps, rows))
     for s, c in ctl.clouds.items():

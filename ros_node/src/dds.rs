@@ -3,7 +3,7 @@
 //! (`geometry_msgs::msg::dds_::WrenchStamped_`, ...) and QoS, a `std_msgs/msg/Float64`
 //! subscription per movable tool for velocity commands, the parameter and
 //! `simulation_interfaces` services and the `SimulateSteps` action. The state topics a
-//! controller needs from the start (wrenches, joint states, markers, `/clock`) are
+//! controller needs from the start (wrenches, joint states, markers, energy, `/clock`) are
 //! transient local: a reader that matches after a sample was published still receives it.
 //!
 //! The messages are those of a [`Sample`], already CDR-encoded by [`msgs`](crate::msgs); they
@@ -341,7 +341,9 @@ fn create_topic(node: &RosNode, t: &Topic) -> Result<DdsTopic, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::msgs::{Clock, JointState, MarkerArray, PointCloud2, RosMessage, WrenchStamped};
+    use crate::msgs::{
+        Clock, Energy, JointState, MarkerArray, PointCloud2, RosMessage, WrenchStamped,
+    };
 
     #[test]
     fn domain_ids_follow_ros2() {
@@ -367,6 +369,7 @@ mod tests {
             (MarkerArray::TYPE_NAME, MarkerArray::DDS_TYPE_NAME),
             (Clock::TYPE_NAME, Clock::DDS_TYPE_NAME),
             (Float64::TYPE_NAME, Float64::DDS_TYPE_NAME),
+            (Energy::TYPE_NAME, Energy::DDS_TYPE_NAME),
         ] {
             assert_eq!(type_name(name).unwrap().dds_msg_type(), dds);
         }
