@@ -1,9 +1,11 @@
-//! Derives the message and service types from the standard definitions in
-//! `msg/<package>/msg/<Type>.msg` and `msg/<package>/srv/<Service>.srv`
-//! (the one source of every message): for each file a Rust struct with its constants and
-//! defaults, its CDR codec (`CdrMessage`, `CdrDecode`) and its `RosMessage` constants (type
-//! name, DDS type name, the `.msg` text and the full `ros2msg` schema as rosbag2 writes it).
-//! The generated code is included by `src/msgs.rs`.
+//! Derives the message, service and action types from the definitions in
+//! `msg/<package>/msg/<Type>.msg`, `msg/<package>/srv/<Service>.srv` and
+//! `msg/<package>/action/<Action>.action` (the one source of every message): for each
+//! message, part of a service (request, response) or part of an action (goal, result,
+//! feedback) a Rust struct with its constants and defaults, its CDR codec (`CdrMessage`,
+//! `CdrDecode`) and its `RosMessage` constants (type name, DDS type name, the text and the
+//! full `ros2msg` schema as rosbag2 writes it). The generated code is included by
+//! `src/msgs.rs`.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
@@ -52,15 +54,17 @@ struct Field {
     default: Option<String>,
 }
 
-/// One `.msg` file, or the request or response part of a `.srv` file.
+/// One `.msg` file, the request or response part of a `.srv` file, or the goal, result or
+/// feedback part of an `.action` file.
 struct Message {
     /// `pkg/Type`, as rosbag2 names it after `MSG:` (`pkg/Service_Request` for a part of a
-    /// service).
+    /// service, `pkg/Action_Goal` for a part of an action).
     name: String,
     path: PathBuf,
-    /// `msg`, or `srv` for a part of a service.
+    /// `msg`, `srv` for a part of a service, `action` for a part of an action.
     kind: &'static str,
-    /// The text: all of a `.msg`, the lines before or after the `---` of a `.srv`.
+    /// The text: all of a `.msg`, the lines before or after the `---` of a `.srv`, the lines
+    /// before, between or after the two `---` of an `.action`.
     text: String,
     fields: Vec<Field>,
     /// (ROS type, name, value).
@@ -77,7 +81,8 @@ impl Message {
         self.name.rsplit('/').next().unwrap_or_default()
     }
 
-    /// The Rust name: the type's, `Service_Request` written `ServiceRequest`, and names of
+    /// The Rust name: the type's, `Service_Request` written `ServiceRequest` (and
+    /// `Action_Goal` `ActionGoal`), and names of
     /// Rust's prelude (`simulation_interfaces/msg/Result`) with the suffix `Msg`.
     fn ident(&self) -> String {
         let ident = self.type_name().replace('_', "");
@@ -361,6 +366,36 @@ fn generate(m: &Message, all: &BTreeMap<String, Message>) -> String {
     s
 }
 
+/// The types of a definition file `ty.kind` with text `text`: (type name, text) of the
+/// `.msg`; of the `_Request` and `_Response` parts of a `.srv` (split at its `---` line);
+/// of the `_Goal`, `_Result` and `_Feedback` parts of an `.action` (split at its two `---`
+/// lines). Every part but the last keeps the newline before its `---`.
+fn split(path: &Path, ty: &str, kind: &str, text: &str) -> Vec<(String, String)> {
+    let suffixes: &[&str] = match kind {
+        "msg" => return vec![(ty.to_owned(), text.to_owned())],
+        "srv" => &["_Request", "_Response"],
+        _ => &["_Goal", "_Result", "_Feedback"],
+    };
+    let parts: Vec<&str> = text.split("\n---\n").collect();
+    assert_eq!(
+        parts.len(),
+        suffixes.len(),
+        "{}: expected {} `---` line(s)",
+        path.display(),
+        suffixes.len() - 1
+    );
+    let last = parts.len() - 1;
+    suffixes
+        .iter()
+        .zip(parts)
+        .enumerate()
+        .map(|(k, (suffix, part))| {
+            let newline = if k < last { "\n" } else { "" };
+            (format!("{ty}{suffix}"), format!("{part}{newline}"))
+        })
+        .collect()
+}
+
 fn main() {
     let root =
         PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it")).join("msg");
@@ -378,7 +413,7 @@ fn main() {
             .and_then(|n| n.to_str())
             .unwrap_or_default()
             .to_owned();
-        for kind in ["msg", "srv"] {
+        for kind in ["msg", "srv", "action"] {
             let Ok(entries) = std::fs::read_dir(dir.join(kind)) else {
                 continue;
             };
@@ -395,17 +430,7 @@ fn main() {
                     .unwrap_or_default();
                 let text = std::fs::read_to_string(&path)
                     .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-                let parts = if kind == "msg" {
-                    vec![(ty.to_owned(), text)]
-                } else {
-                    let (request, response) = text
-                        .split_once("\n---\n")
-                        .unwrap_or_else(|| panic!("{}: no `---` line", path.display()));
-                    vec![
-                        (format!("{ty}_Request"), format!("{request}\n")),
-                        (format!("{ty}_Response"), response.to_owned()),
-                    ]
-                };
+                let parts = split(&path, ty, kind, &text);
                 for (ty, text) in parts {
                     let (fields, constants) = parse(&path, &package, &text);
                     let name = format!("{package}/{ty}");

@@ -43,11 +43,12 @@ DOMAIN = "199"
 PEER = r"""
 import sys, time
 sys.path.insert(0, sys.argv[1])
-from ros_peer import (Clock, JointState, Peer, PointCloud2, WrenchStamped, take)
+from ros_peer import (Clock, Energy, JointState, Peer, PointCloud2, WrenchStamped, take)
 p = Peer(int(sys.argv[2]))
 tools = sys.argv[3].split(",")
 readers = [p.reader("/rkforge/tools", JointState), p.reader("/clock", Clock),
-           p.reader("/rkforge/workpiece", PointCloud2, reliable=False)]
+           p.reader("/rkforge/workpiece", PointCloud2, reliable=False),
+           p.reader("/rkforge/energy", Energy)]
 readers += [p.reader(f"/rkforge/{t}/wrench", WrenchStamped) for t in tools]
 print("ready", flush=True)
 n = 0

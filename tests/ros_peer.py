@@ -315,6 +315,118 @@ class StepSimulationReply(
     result: SimResult
 
 
+@dataclass
+class Energy(IdlStruct, typename="rkforge_msgs::msg::dds_::Energy_"):
+    header: Header
+    initial: t.float64
+    kinetic: t.float64
+    elastic: t.float64
+    plastic: t.float64
+    internal: t.float64
+    contact_work: t.float64
+    tool_work: t.float64
+
+
+# The SimulateSteps action as rcl_action puts it on DDS: services `<action>/_action/send_goal`,
+# `get_result`, `cancel_goal` (requests and replies with rmw_cyclonedds_cpp's header, as
+# above), topics `<action>/_action/feedback` and `status`.
+@dataclass
+class UUID(IdlStruct, typename="unique_identifier_msgs::msg::dds_::UUID_"):
+    uuid: t.array[t.uint8, 16]
+
+
+@dataclass
+class GoalInfo(IdlStruct, typename="action_msgs::msg::dds_::GoalInfo_"):
+    goal_id: UUID
+    stamp: Time
+
+
+@dataclass
+class GoalStatus(IdlStruct, typename="action_msgs::msg::dds_::GoalStatus_"):
+    goal_info: GoalInfo
+    status: t.int8
+
+
+@dataclass
+class GoalStatusArray(IdlStruct, typename="action_msgs::msg::dds_::GoalStatusArray_"):
+    status_list: t.sequence[GoalStatus]
+
+
+@dataclass
+class SimulateStepsGoal(IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_Goal_"):
+    steps: t.uint64
+
+
+@dataclass
+class SimulateStepsResult(IdlStruct,
+                          typename="simulation_interfaces::action::dds_::SimulateSteps_Result_"):
+    result: SimResult
+
+
+@dataclass
+class SimulateStepsFeedback(
+        IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_Feedback_"):
+    completed_steps: t.uint64
+    remaining_steps: t.uint64
+
+
+@dataclass
+class SimulateStepsFeedbackMessage(
+        IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_FeedbackMessage_"):
+    goal_id: UUID
+    feedback: SimulateStepsFeedback
+
+
+@dataclass
+class SendGoalRequest(
+        IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_SendGoal_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    goal_id: UUID
+    goal: SimulateStepsGoal
+
+
+@dataclass
+class SendGoalReply(
+        IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_SendGoal_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    accepted: bool
+    stamp: Time
+
+
+@dataclass
+class GetResultRequest(
+        IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_GetResult_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    goal_id: UUID
+
+
+@dataclass
+class GetResultReply(
+        IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_GetResult_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    status: t.int8
+    result: SimulateStepsResult
+
+
+@dataclass
+class CancelGoalRequest(IdlStruct, typename="action_msgs::srv::dds_::CancelGoal_Request_"):
+    guid: t.uint64
+    seq: t.int64
+    goal_info: GoalInfo
+
+
+@dataclass
+class CancelGoalReply(IdlStruct, typename="action_msgs::srv::dds_::CancelGoal_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    return_code: t.int8
+    goals_canceling: t.sequence[GoalInfo]
+
+
 def qos(reliable=True, latched=False):
     """rclcpp's default (reliable, keep last 10, volatile) or best effort; transient local
     when `latched` (a reader that matches late still gets the samples the writer holds); plain
@@ -399,6 +511,56 @@ class Simulator:
     def step(self, steps):
         r = self.step_.call(steps).result
         return r.result, r.error_message
+
+
+class SimulateSteps:
+    """A client of the node's SimulateSteps action under namespace `ns`, as rclcpp's action
+    client talks to it: goals with a random id, the result by id, cancel by id; the feedback
+    and status topics are read with rcl_action's QoS (status: transient local)."""
+
+    # action_msgs/msg/GoalStatus
+    UNKNOWN, ACCEPTED, EXECUTING, CANCELING, SUCCEEDED, CANCELED, ABORTED = range(7)
+
+    def __init__(self, peer, ns="/rkforge"):
+        base = f"{ns}/simulate_steps/_action"
+        self.send_goal = ServiceClient(peer, f"{base}/send_goal", SendGoalRequest, SendGoalReply)
+        self.get_result = ServiceClient(peer, f"{base}/get_result", GetResultRequest,
+                                        GetResultReply)
+        self.cancel_goal = ServiceClient(peer, f"{base}/cancel_goal", CancelGoalRequest,
+                                         CancelGoalReply)
+        self.feedback = DataReader(
+            peer.dp, Topic(peer.dp, f"rt{base}/feedback", SimulateStepsFeedbackMessage),
+            qos=qos(True))
+        self.status = DataReader(
+            peer.dp, Topic(peer.dp, f"rt{base}/status", GoalStatusArray),
+            qos=Qos(Policy.Reliability.Reliable(max_blocking_time=1_000_000_000),
+                    Policy.History.KeepLast(1), Policy.Durability.TransientLocal,
+                    Policy.DataRepresentation(use_cdrv0_representation=True)))
+
+    def wait_ready(self, timeout=60):
+        """Wait until the three services and the feedback topic have found the node's
+        endpoints (feedback is volatile: what is published before that is lost)."""
+        for client in [self.send_goal, self.get_result, self.cancel_goal]:
+            wait_matched(client.writer, timeout)
+            wait_readers_matched([client.reader], timeout)
+        wait_readers_matched([self.feedback], timeout)
+
+    def send(self, steps):
+        """Send a goal of `steps` steps: (goal id as bytes, accepted)."""
+        goal_id = os.urandom(16)
+        reply = self.send_goal.call(UUID(list(goal_id)), SimulateStepsGoal(steps))
+        return goal_id, reply.accepted
+
+    def result(self, goal_id, timeout=120):
+        """The goal's status and result: (status, result code, error message); waits until
+        the goal has ended."""
+        r = self.get_result.call(UUID(list(goal_id)), timeout=timeout)
+        return r.status, r.result.result.result, r.result.result.error_message
+
+    def cancel(self, goal_id):
+        """Cancel a goal by id: (return code, ids of the goals canceling)."""
+        r = self.cancel_goal.call(GoalInfo(UUID(list(goal_id)), Time(0, 0)))
+        return r.return_code, [bytes(g.goal_id.uuid) for g in r.goals_canceling]
 
 
 def take(reader, n=50):

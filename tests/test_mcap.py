@@ -26,8 +26,13 @@ TOPICS = {
     "/rkforge/tools": "sensor_msgs/msg/JointState",
     "/rkforge/workpiece": "sensor_msgs/msg/PointCloud2",
     "/rkforge/tool_markers": "visualization_msgs/msg/MarkerArray",
+    "/rkforge/energy": "rkforge_msgs/msg/Energy",
     "/clock": "rosgraph_msgs/msg/Clock",
 }
+
+# The fields of rkforge_msgs/msg/Energy and the history.csv columns with the same figures.
+ENERGY = {"kinetic": "kinetic_J", "elastic": "elastic_J", "plastic": "plastic_J",
+          "internal": "internal_J", "contact_work": "contact_J", "tool_work": "tool_work_J"}
 
 
 @pytest.fixture(scope="module", params=["zstd", "none"])
@@ -133,6 +138,10 @@ def check_against_history(msgs, rows, particles=64):
         top = m.markers[0]
         # The top tool starts at y = 0.25 and moves down by its stroke.
         assert top.points[0].y == pytest.approx(0.25 - row["top.stroke_m"], abs=1e-12)
+    for (_, e), row in zip(by_topic["/rkforge/energy"], rows):
+        for field, column in ENERGY.items():
+            assert getattr(e, field) == row[f"energy.{column}"], field
+        assert e.initial == 0.0, "the block starts at rest"
     for (_, c), row in zip(by_topic["/clock"], rows):
         assert c.clock.sec * 10**9 + c.clock.nanosec == ns(row["time_s"])
 
@@ -308,6 +317,43 @@ def test_a_killed_process_leaves_a_file_readable_to_its_last_chunk(rkforge_bin, 
     assert times == sorted(times)
 
 
+def test_the_energy_topic_closes_the_account_of_an_impact(rkforge_bin, tmp_path):
+    """The energy account of a coarse Taylor bar (a copper bar at 227 m/s on a rigid wall),
+    read from its recording: it starts with the bar's kinetic energy (240 J), which the
+    impact turns into plastic work (96 % of it); kinetic + internal - contact work stays at
+    the initial energy (measured within 0.01 %); the fixed wall delivers no work and its
+    penalty contact only takes energy (4 %); the last figures are the run's summary."""
+    scene = tmp_path / "taylor_coarse.toml"
+    scene.write_text((ROOT / "scenes" / "taylor_bar.toml").read_text())
+    out, path = tmp_path / "out", tmp_path / "taylor.mcap"
+    rows = run_history(rkforge_bin, scene, out, "--mcap", str(path),
+                       "--set", "workpiece.particles=[6,17]")
+    summary = json.loads((out / "summary.json").read_text())["energy"]
+    energy = [(t, m) for topic, t, m in decoded(path) if topic == "/rkforge/energy"]
+    assert [t for t, _ in energy] == [ns(r["time_s"]) for r in rows]
+    initial = summary["initial_J"]
+    assert initial > 0
+    first, last = energy[0][1], energy[-1][1]
+    assert first.kinetic == first.initial == initial
+    assert (first.internal, first.contact_work, first.tool_work) == (0.0, 0.0, 0.0)
+    for _, e in energy:
+        assert e.initial == initial
+        assert e.internal == e.elastic + e.plastic
+        assert e.kinetic + e.internal - e.contact_work == pytest.approx(initial, rel=1e-3)
+        assert e.tool_work == 0.0, "the wall is fixed: it delivers no work"
+        # The contact interface only takes energy (here: the penalty's losses).
+        assert e.contact_work <= 1e-9 * initial
+    plastic = [e.plastic for _, e in energy]
+    assert plastic == sorted(plastic), "plastic work is dissipated, never returned"
+    assert last.plastic > 0.9 * initial, "the impact turns the kinetic energy into plastic work"
+    assert last.kinetic < 0.01 * initial
+    # The last sample is the end of the run: the summary's figures, bit for bit.
+    assert (last.initial, last.kinetic, last.elastic, last.plastic, last.internal,
+            last.contact_work, last.tool_work) == (
+        summary["initial_J"], summary["kinetic_J"], summary["elastic_J"], summary["plastic_J"],
+        summary["internal_J"], summary["contact_J"], summary["tool_work_J"])
+
+
 def test_the_foxglove_layout_shows_recorded_topics_and_fields(recorded):
     """The shipped layout's panels read topics and fields that a recording has."""
     _, path, _, _, _ = recorded
@@ -328,7 +374,12 @@ def test_the_foxglove_layout_shows_recorded_topics_and_fields(recorded):
     paths = [p["value"] for plot in plots for p in plot["paths"]]
     paths += [plot["xAxisPath"]["value"] for plot in plots if plot["xAxisVal"] == "custom"]
     assert "/rkforge/tools.position[0]" in paths
+    assert "/rkforge/energy.internal" in paths
     for p in paths:
         topic, field = p.split(".", 1)
-        name, index = field.rstrip("]").split("[")
-        assert isinstance(getattr(last[topic], name)[int(index)], float), p
+        if "[" in field:
+            name, index = field.rstrip("]").split("[")
+            value = getattr(last[topic], name)[int(index)]
+        else:
+            value = getattr(last[topic], field)
+        assert isinstance(value, float), p

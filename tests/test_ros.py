@@ -7,11 +7,11 @@ import time
 
 import pytest
 
-from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest, Float64,
-                      GetParametersReply, GetParametersRequest, JointState,
+from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest, Energy,
+                      Float64, GetParametersReply, GetParametersRequest, JointState,
                       ListParametersReply, ListParametersRequest, Parameter, Peer, PointCloud2,
-                      ServiceClient, SetParametersReply, SetParametersRequest, Simulator,
-                      WrenchStamped,
+                      ServiceClient, SetParametersReply, SetParametersRequest, SimulateSteps,
+                      Simulator, WrenchStamped,
                       parameter_value, quit_node, run_history, running_node, small_block,
                       stamp_ns, start_node, take, wait_matched, wait_readers_matched,
                       wait_until)
@@ -31,6 +31,7 @@ class LockstepController:
         self.wrenches = {n: self.peer.reader(f"{NS}/{n}/wrench", WrenchStamped, latched=True)
                          for n in ["top", "bottom"]}
         self.clock = self.peer.reader("/clock", Clock, latched=True)
+        self.energy = self.peer.reader(f"{NS}/energy", Energy, latched=True)
         self.cloud = self.peer.reader(f"{NS}/workpiece", PointCloud2, reliable=False)
         self.cmd = {n: self.peer.writer(f"{NS}/{n}/velocity_cmd", Float64)
                     for n in ["top", "bottom"]}
@@ -39,12 +40,13 @@ class LockstepController:
         self.wrench = {"top": {}, "bottom": {}}
         self.clouds = {}
         self.clocks = set()
+        self.energies = {}
 
     def serve(self, node, timeout=120):
         t0 = time.monotonic()
         # Before its first answer the controller waits until every reader found the node
         # (the node holds the first sample until then): nothing published is missed.
-        wait_readers_matched([self.tools, self.clock, *self.wrenches.values()])
+        wait_readers_matched([self.tools, self.clock, self.energy, *self.wrenches.values()])
         while node.poll() is None:
             assert time.monotonic() - t0 < timeout, "the lockstep run did not finish"
             for js in take(self.tools, 50):
@@ -62,6 +64,8 @@ class LockstepController:
                 self.clouds[stamp_ns(c.header)] = c
             for c in take(self.clock, 50):
                 self.clocks.add(c.clock.sec * 10**9 + c.clock.nanosec)
+            for e in take(self.energy, 50):
+                self.energies[stamp_ns(e.header)] = e
             time.sleep(0.001)
         return node.communicate(timeout=10)
 
@@ -91,6 +95,13 @@ def test_a_cyclone_dds_peer_reads_the_topics_with_history_values(rkforge_bin, rk
             assert got[s].wrench.force.x == row[f"{tool}.force_x_N"]
             assert got[s].wrench.force.y == row[f"{tool}.force_y_N"]
     assert ctl.clocks == set(stamps)
+    assert set(ctl.energies) == set(stamps), "reliable energy accounts are all delivered"
+    for s, row in zip(stamps, rows):
+        e = ctl.energies[s]
+        assert e.header.frame_id == "rkforge"
+        assert (e.kinetic, e.elastic, e.plastic, e.internal, e.contact_work, e.tool_work) == (
+            row["energy.kinetic_J"], row["energy.elastic_J"], row["energy.plastic_J"],
+            row["energy.internal_J"], row["energy.contact_J"], row["energy.tool_work_J"])
     assert ctl.clouds, "no point cloud arrived"
     by_stamp = dict(zip(stamps, rows))
     for s, c in ctl.clouds.items():
@@ -200,8 +211,9 @@ def test_simulation_interfaces_pause_step_and_refuse_with_standard_codes(rkforge
         peer = Peer(171)
         sim = Simulator(peer)
         features = sim.features.call(0).features
-        # Reset, state getting, setting and pausing, single and multiple steps.
-        assert sorted(features.features) == [20, 24, 25, 26, 31, 32]
+        # Reset, state getting, setting and pausing, single and multiple steps, the
+        # SimulateSteps action.
+        assert sorted(features.features) == [20, 24, 25, 26, 31, 32, 33]
         assert sim.state() == sim.PLAYING
         assert sim.set(sim.PAUSED) == (1, "")
         assert sim.state() == sim.PAUSED
@@ -239,6 +251,136 @@ def test_simulation_interfaces_pause_step_and_refuse_with_standard_codes(rkforge
         assert sim.state() == sim.STOPPED
         stamp_seen(0)
         assert stamps[-1] == 0
+        quit_node(sim, node)
+
+
+class StampWatch:
+    """The joint-state stamps a latched reader has seen, to wait for one."""
+
+    def __init__(self, peer):
+        self.reader = peer.reader(f"{NS}/tools", JointState, latched=True)
+        self.stamps = []
+
+    def wait_for(self, ns):
+        wait_until(lambda: self.stamps.extend(stamp_ns(js.header) for js in take(self.reader))
+                   or ns in self.stamps, 60, f"a joint state at {ns} ns")
+        return self.stamps[-1]
+
+
+def feedback_of(action, goal, seen, steps):
+    """Wait for the feedback of `goal` that reports `steps` steps completed (kept in `seen`,
+    with the feedback of other goals); the feedback of `goal` so far."""
+    def mine():
+        return [f.feedback for f in seen if bytes(f.goal_id.uuid) == goal]
+
+    wait_until(lambda: seen.extend(take(action.feedback)) or
+               any(f.completed_steps == steps for f in mine()), 60,
+               f"feedback of {steps} steps")
+    return mine()
+
+
+def test_simulate_steps_takes_exactly_n_steps_with_feedback(rkforge_ros_bin, tmp_path):
+    """The SimulateSteps action, called as rclcpp's action client calls it over
+    rmw_cyclonedds_cpp. The block forging has a fixed step of 1 us: a goal of N steps while
+    paused ends SUCCEEDED with the time N us later, its feedback counting the steps. Goals it
+    cannot carry out are accepted, then aborted with RESULT_OPERATION_FAILED and the reason,
+    as StepSimulation refuses them; the node goes on."""
+    scene = small_block(tmp_path)
+    with running_node(rkforge_ros_bin, scene, 173, "--lockstep", "--hold-at-end") as node:
+        peer = Peer(173)
+        sim = Simulator(peer)
+        action = SimulateSteps(peer)
+        watch = StampWatch(peer)
+        action.wait_ready()
+        wait_readers_matched([watch.reader, action.status])
+        assert 33 in sim.features.call(0).features.features  # STEP_SIMULATION_ACTION
+        # Playing (lockstep holds the first sample: nobody commands).
+        goal, accepted = action.send(10)
+        assert accepted
+        assert action.result(goal) == (action.ABORTED, 4,
+                                       "SimulateSteps needs the simulation paused")
+        assert sim.set(sim.PAUSED) == (1, "")
+        goal, accepted = action.send(0)
+        assert accepted
+        assert action.result(goal) == (action.ABORTED, 4, "SimulateSteps needs at least one step")
+        assert watch.wait_for(0) == 0
+        seen = []
+        # Across the sample time 150 us: 155 steps end at 155 us.
+        goal, accepted = action.send(155)
+        assert accepted
+        assert action.result(goal) == (action.SUCCEEDED, 1, "")
+        assert watch.wait_for(155_000) == 155_000
+        fb = feedback_of(action, goal, seen, 155)
+        assert fb[-1].remaining_steps == 0
+        assert all(f.completed_steps + f.remaining_steps == 155 for f in fb)
+        assert [f.completed_steps for f in fb] == sorted(f.completed_steps for f in fb)
+        # The latched status topic has the goal's end.
+        statuses = {}
+
+        def status_seen():
+            for array in take(action.status):
+                statuses.update((bytes(s.goal_info.goal_id.uuid), s.status)
+                                for s in array.status_list)
+            return statuses.get(goal) == action.SUCCEEDED
+
+        wait_until(status_seen, 60, "the goal's status SUCCEEDED")
+        # A goal beyond the end time stops there: 2845 steps from 155 us to 3 ms.
+        goal, _ = action.send(10**6)
+        assert action.result(goal) == (
+            action.ABORTED, 4, "stopped at the end time after 2845 of 1000000 steps")
+        assert watch.wait_for(3_000_000) == 3_000_000
+        assert feedback_of(action, goal, seen, 2845)[-1].remaining_steps == 10**6 - 2845
+        goal, _ = action.send(1)
+        assert action.result(goal) == (action.ABORTED, 4,
+                                       "the run is at its end time: reset it before stepping")
+        # A result request for a goal the node never had: STATUS_UNKNOWN.
+        assert action.result(bytes(16))[0] == action.UNKNOWN
+        assert sim.state() == sim.PAUSED and node.poll() is None
+        quit_node(sim, node)
+
+
+def test_a_simulate_steps_goal_is_canceled_after_the_step_under_way(rkforge_ros_bin, tmp_path):
+    """A goal of a million steps is canceled once its feedback shows it under way: it ends
+    CANCELED after k steps, the time k us later (fixed step of 1 us) and the last feedback
+    at k; canceling it again answers ERROR_GOAL_TERMINATED, an unknown goal
+    ERROR_UNKNOWN_GOAL_ID, and a further goal steps on from there."""
+    # 2 s of press time at 10 mm/s per tool: a million steps deform the block little.
+    scene = small_block(tmp_path, end="2.0")
+    slow = ["--set", "tools.top.motion.velocity_m_per_s=0.01",
+            "--set", "tools.bottom.motion.velocity_m_per_s=0.01"]
+    with running_node(rkforge_ros_bin, scene, 174, "--lockstep", "--hold-at-end",
+                      *slow) as node:
+        peer = Peer(174)
+        sim = Simulator(peer)
+        action = SimulateSteps(peer)
+        watch = StampWatch(peer)
+        action.wait_ready()
+        wait_readers_matched([watch.reader])
+        assert sim.set(sim.PAUSED) == (1, "")
+        assert watch.wait_for(0) == 0
+        steps = 10**6
+        goal, accepted = action.send(steps)
+        assert accepted
+        seen = []
+        wait_until(lambda: seen.extend(take(action.feedback)) or seen, 60,
+                   "feedback of the goal under way")
+        assert bytes(seen[0].goal_id.uuid) == goal
+        assert 0 < seen[0].feedback.completed_steps < steps
+        assert action.cancel(goal) == (0, [goal])  # ERROR_NONE: the goal is canceling
+        status, code, message = action.result(goal)
+        assert (status, code) == (action.CANCELED, 4)
+        assert message.startswith("canceled after ") and message.endswith(f" of {steps} steps")
+        k = int(message.split()[2])
+        assert seen[0].feedback.completed_steps <= k < steps
+        fb = feedback_of(action, goal, seen, k)
+        assert fb[-1].remaining_steps == steps - k
+        assert watch.wait_for(k * 1000) == k * 1000
+        assert action.cancel(goal) == (3, [])  # ERROR_GOAL_TERMINATED
+        assert action.cancel(bytes(range(16))) == (2, [])  # ERROR_UNKNOWN_GOAL_ID
+        goal, _ = action.send(10)
+        assert action.result(goal) == (action.SUCCEEDED, 1, "")
+        assert watch.wait_for((k + 10) * 1000) == (k + 10) * 1000
+        assert node.poll() is None
         quit_node(sim, node)
 
 

@@ -7,8 +7,8 @@
 //!
 //! Supported: the state (playing, paused, stopped = reset and paused, quitting), a reset of
 //! the whole scene (scopes `SCOPE_DEFAULT`, `SCOPE_ALL`, or time and state together, since
-//! the time and the state of a forging are one), and stepping N solver steps while paused.
-//! The `SimulateSteps` action is not served.
+//! the time and the state of a forging are one), and stepping N solver steps while paused,
+//! with this service or the `SimulateSteps` action ([`crate::action`]).
 
 use crate::msgs::{
     GetSimulationStateRequest, GetSimulationStateResponse, GetSimulatorFeaturesRequest,
@@ -22,13 +22,14 @@ use ros2_client::service::RmwRequestId;
 use ros2_client::QosProfile;
 
 /// The features the node supports, as `GetSimulatorFeatures` lists them.
-pub const FEATURES: [u16; 6] = [
+pub const FEATURES: [u16; 7] = [
     SimulatorFeatures::SIMULATION_RESET as u16,
     SimulatorFeatures::SIMULATION_STATE_GETTING as u16,
     SimulatorFeatures::SIMULATION_STATE_SETTING as u16,
     SimulatorFeatures::SIMULATION_STATE_PAUSE as u16,
     SimulatorFeatures::STEP_SIMULATION_SINGLE as u16,
     SimulatorFeatures::STEP_SIMULATION_MULTIPLE as u16,
+    SimulatorFeatures::STEP_SIMULATION_ACTION as u16,
 ];
 
 /// A request that the main loop carries out, then answers with [`Services::answer`].
@@ -124,7 +125,7 @@ impl Services {
                 features: FEATURES.to_vec(),
                 spawn_formats: Vec::new(),
                 custom_info: format!(
-                    "rkforge {}: reset restores the scene's initial state bit for bit; a step is one explicit solver step (the last step before a sample time is shortened to land on it)",
+                    "rkforge {}: reset restores the scene's initial state bit for bit; a step is one explicit solver step (the last step before a sample time is shortened to land on it); SimulateSteps runs one goal at a time and can be canceled",
                     env!("CARGO_PKG_VERSION")
                 ),
             };
@@ -223,19 +224,19 @@ pub fn check_reset(scope: u8) -> Result<(), ResultMsg> {
     }
 }
 
-/// Whether `StepSimulation` of `steps` steps can run in `state` (`at_end`: the run has
-/// reached its end time).
+/// Whether `interface` (`StepSimulation` or `SimulateSteps`) can take `steps` steps in
+/// `state` (`at_end`: the run has reached its end time).
 ///
 /// # Errors
 ///
 /// `RESULT_OPERATION_FAILED`: not paused, no steps, or at the end time.
-pub fn check_step(state: u8, steps: u64, at_end: bool) -> Result<(), ResultMsg> {
+pub fn check_step(interface: &str, state: u8, steps: u64, at_end: bool) -> Result<(), ResultMsg> {
     let fail = |m: &str| Err(result(ResultMsg::RESULT_OPERATION_FAILED, m));
     if state != SimulationState::STATE_PAUSED {
-        return fail("StepSimulation needs the simulation paused");
+        return fail(&format!("{interface} needs the simulation paused"));
     }
     if steps == 0 {
-        return fail("StepSimulation needs at least one step");
+        return fail(&format!("{interface} needs at least one step"));
     }
     if at_end {
         return fail("the run is at its end time: reset it before stepping");
@@ -273,9 +274,15 @@ mod tests {
         for scope in [1, 2, 4] {
             assert_eq!(check_reset(scope).unwrap_err().result, 0, "{scope}");
         }
-        assert_eq!(check_step(PAUSED, 5, false), Ok(()));
+        assert_eq!(check_step("StepSimulation", PAUSED, 5, false), Ok(()));
         for (state, steps, at_end) in [(PLAYING, 5, false), (PAUSED, 0, false), (PAUSED, 1, true)] {
-            assert_eq!(check_step(state, steps, at_end).unwrap_err().result, 4);
+            let refused = check_step("SimulateSteps", state, steps, at_end).unwrap_err();
+            assert_eq!(refused.result, 4);
         }
+        let refused = check_step("SimulateSteps", PLAYING, 5, false).unwrap_err();
+        assert_eq!(
+            refused.error_message,
+            "SimulateSteps needs the simulation paused"
+        );
     }
 }

@@ -1,13 +1,15 @@
 //! The ROS 2 node over DDS (`ros2-client`, RustDDS): publishers for the topics of
 //! [`topics`](crate::topics) with their standard DDS type names
-//! (`geometry_msgs::msg::dds_::WrenchStamped_`, ...) and QoS, and a `std_msgs/msg/Float64`
-//! subscription per movable tool for velocity commands. The state topics a controller needs
-//! from the start (wrenches, joint states, markers, `/clock`) are transient local: a reader
-//! that matches after a sample was published still receives it.
+//! (`geometry_msgs::msg::dds_::WrenchStamped_`, ...) and QoS, a `std_msgs/msg/Float64`
+//! subscription per movable tool for velocity commands, the parameter and
+//! `simulation_interfaces` services and the `SimulateSteps` action. The state topics a
+//! controller needs from the start (wrenches, joint states, markers, energy, `/clock`) are
+//! transient local: a reader that matches after a sample was published still receives it.
 //!
 //! The messages are those of a [`Sample`], already CDR-encoded by [`msgs`](crate::msgs); they
 //! are handed to DDS as they are (see [`Payload`]), so the wire bytes equal the MCAP bytes.
 
+use crate::action::StepsAction;
 use crate::control::{Request, Services};
 use crate::frame::Sample;
 use crate::msgs::Float64;
@@ -103,6 +105,7 @@ pub struct Node {
     publishers: Vec<(String, Publisher<Payload>)>,
     parameters: Parameters,
     services: Services,
+    action: StepsAction,
     inputs: Vec<CommandInput>,
     dropped: u64,
     // Declared last: dropped after the publishers and subscriptions that belong to it.
@@ -200,10 +203,18 @@ impl Node {
         // Services: reliable and volatile, as rmw's default for services.
         let parameters = Parameters::new(&mut node, ns, "rkforge", &qos_of(true, false))?;
         let services = Services::new(&mut node, ns, &qos_of(true, false))?;
+        // The action's status: reliable, transient local, keep last 1 (rcl_action's default).
+        let status = QosProfile {
+            history: History::KeepLast { depth: 1 },
+            ..qos_of(true, true)
+        };
+        let reliable = qos_of(true, false);
+        let action = StepsAction::new(&mut node, ns, &reliable, &reliable, &status)?;
         Ok(Node {
             publishers,
             parameters,
             services,
+            action,
             inputs,
             dropped: 0,
             _node: node,
@@ -249,6 +260,11 @@ impl Node {
     /// Answer a request returned by [`Node::poll_services`].
     pub fn answer(&self, request: Request, result: ResultMsg) {
         self.services.answer(request, result);
+    }
+
+    /// The `SimulateSteps` action server (see [`action`](crate::action)).
+    pub fn steps_action(&mut self) -> &mut StepsAction {
+        &mut self.action
     }
 
     /// Messages not published because DDS could not take them.
@@ -325,7 +341,9 @@ fn create_topic(node: &RosNode, t: &Topic) -> Result<DdsTopic, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::msgs::{Clock, JointState, MarkerArray, PointCloud2, RosMessage, WrenchStamped};
+    use crate::msgs::{
+        Clock, Energy, JointState, MarkerArray, PointCloud2, RosMessage, WrenchStamped,
+    };
 
     #[test]
     fn domain_ids_follow_ros2() {
@@ -351,6 +369,7 @@ mod tests {
             (MarkerArray::TYPE_NAME, MarkerArray::DDS_TYPE_NAME),
             (Clock::TYPE_NAME, Clock::DDS_TYPE_NAME),
             (Float64::TYPE_NAME, Float64::DDS_TYPE_NAME),
+            (Energy::TYPE_NAME, Energy::DDS_TYPE_NAME),
         ] {
             assert_eq!(type_name(name).unwrap().dds_msg_type(), dds);
         }

@@ -12,6 +12,7 @@
 //!   z = 0, axisymmetric scenes put r on x and z on y), `plastic_strain` and `von_mises` (Pa),
 //!   all `float32`, from [`Simulation::fields`];
 //! - `visualization_msgs/msg/MarkerArray`: one line strip per tool through its current vertices;
+//! - `rkforge_msgs/msg/Energy`: the energy account (J), history.csv's energy columns;
 //! - `rosgraph_msgs/msg/Clock`: the simulation time.
 //!
 //! Every header stamp is the simulation time rounded to the nearest nanosecond, in frame
@@ -19,8 +20,8 @@
 //! axisymmetry, as in history.csv.
 
 use crate::msgs::{
-    point_cloud_xyz_fields, CdrMessage, Clock, ColorRGBA, Header, JointState, Marker, MarkerArray,
-    Point, StrainPoint, Time, Vector3, Wrench, WrenchStamped,
+    point_cloud_xyz_fields, CdrMessage, Clock, ColorRGBA, Energy, Header, JointState, Marker,
+    MarkerArray, Point, StrainPoint, Time, Vector3, Wrench, WrenchStamped,
 };
 use rkforge_core::Simulation;
 
@@ -81,7 +82,7 @@ pub fn sample(sim: &Simulation) -> Sample {
         frame_id: FRAME_ID.to_owned(),
     };
     let tools = sim.tools();
-    let mut messages = Vec::with_capacity(tools.len() + 4);
+    let mut messages = Vec::with_capacity(tools.len() + 5);
     for t in tools {
         let f = t.state.force;
         messages.push(
@@ -125,6 +126,20 @@ pub fn sample(sim: &Simulation) -> Sample {
         .collect();
     messages.push(point_cloud_xyz_fields(header.clone(), &points).to_cdr());
     messages.push(tool_markers(sim, &header).to_cdr());
+    let e = sim.energy();
+    messages.push(
+        Energy {
+            header: header.clone(),
+            initial: e.initial,
+            kinetic: e.kinetic,
+            elastic: e.elastic,
+            plastic: e.plastic,
+            internal: e.internal(),
+            contact_work: e.contact_work,
+            tool_work: e.tool_work,
+        }
+        .to_cdr(),
+    );
     messages.push(
         Clock {
             clock: header.stamp,
@@ -185,7 +200,7 @@ fn tool_markers(sim: &Simulation, header: &Header) -> MarkerArray {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::msgs::{CdrDecode, Clock, JointState, WrenchStamped};
+    use crate::msgs::{CdrDecode, Clock, Energy, JointState, WrenchStamped};
     use rkforge_core::Scene;
 
     fn block() -> Simulation {
@@ -223,6 +238,16 @@ mod tests {
         assert_eq!(j.position[1], sim.tools()[1].state.stroke);
         assert_eq!(j.velocity[0], 10.0);
         assert_eq!(j.effort[0], sim.tools()[0].axial_force());
+        let e = Energy::from_cdr(&s.messages[published - 2]).unwrap();
+        assert_eq!(e.header, w.header);
+        let account = sim.energy();
+        assert_eq!((e.kinetic, e.plastic), (account.kinetic, account.plastic));
+        assert_eq!(e.internal, account.elastic + account.plastic);
+        assert_eq!(e.tool_work, account.tool_work);
+        assert!(
+            e.tool_work > 0.0 && e.internal > 0.0,
+            "the tools are forging"
+        );
         let c = Clock::from_cdr(s.messages.last().unwrap()).unwrap();
         assert_eq!(c.clock, w.header.stamp);
         // 36 particles of 20 bytes at the end of the cloud, before is_dense.

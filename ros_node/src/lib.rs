@@ -9,8 +9,11 @@
 //! - `dds` (feature `dds`, on by default): the ROS 2 node over DDS (`ros2-client`);
 //! - `params` (feature `dds`): the node's run-time settings as ROS 2 parameters;
 //! - `control` (feature `dds`): the `simulation_interfaces` services (reset, step, pause);
+//! - `action` (feature `dds`): the `simulation_interfaces` action `SimulateSteps`;
 //! - `service` (feature `dds`): service servers in the `rmw_cyclonedds_cpp` mapping.
 
+#[cfg(feature = "dds")]
+pub mod action;
 #[cfg(feature = "dds")]
 pub mod control;
 #[cfg(feature = "dds")]
@@ -74,7 +77,7 @@ pub fn validate_namespace(ns: &str) -> Result<(), String> {
 
 /// The topics of a scene under namespace `ns`: first the published ones in the order of the
 /// messages of a [`frame::Sample`] (one wrench per tool in scene order, `tools`, `workpiece`,
-/// `tool_markers`, `/clock`), then one `velocity_cmd` subscription per movable tool.
+/// `tool_markers`, `energy`, `/clock`), then one `velocity_cmd` subscription per movable tool.
 ///
 /// # Errors
 ///
@@ -117,6 +120,14 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
         name: format!("{base}/tool_markers"),
         message: msgs::MarkerArray::TYPE_NAME,
         schema: msgs::MarkerArray::SCHEMA,
+        publish: true,
+        reliable: true,
+        latched: true,
+    });
+    t.push(Topic {
+        name: format!("{base}/energy"),
+        message: msgs::Energy::TYPE_NAME,
+        schema: msgs::Energy::SCHEMA,
         publish: true,
         reliable: true,
         latched: true,

@@ -1,11 +1,13 @@
 //! `rkforge-ros`: run a scene as a ROS 2 node. See the README's ROS 2 section.
 //!
 //! Two threads: the simulation steps on a rayon worker and hands a [`Sample`] over at every
-//! publish instant; the main thread publishes it over DDS, records it to MCAP, paces the run
-//! and forwards velocity commands, which the simulation applies before its next step.
+//! publish instant; the main thread publishes it over DDS, records it to MCAP, paces the run,
+//! forwards velocity commands, which the simulation applies before its next step, and serves
+//! the parameters, the `simulation_interfaces` services and the `SimulateSteps` action.
 
 use clap::Parser;
 use rkforge_core::{Scene, SceneSource, Simulation, MAX_SAMPLES};
+use rkforge_ros::action::{GoalId, GoalStatusEnum};
 use rkforge_ros::control::{self, check_reset, check_step, transition, Request, Transition};
 use rkforge_ros::dds::{domain_id_from_env, Command, Node};
 use rkforge_ros::frame::{sample, Sample};
@@ -15,7 +17,7 @@ use rkforge_ros::record::{Compression, Provenance, Recorder};
 use serde_json::json;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::time::{Duration, Instant};
 
@@ -30,6 +32,10 @@ const LINGER: Duration = Duration::from_millis(300);
 /// commands (a controller that joined late then still sees it; controllers answer each
 /// stamp once).
 const REPUBLISH: Duration = Duration::from_millis(250);
+
+/// The feedback of a `SimulateSteps` goal is published at most this often while it executes,
+/// and once after its last step.
+const FEEDBACK: Duration = Duration::from_millis(10);
 
 #[derive(Parser)]
 #[command(
@@ -81,6 +87,8 @@ enum ToSim {
     Continue,
     /// Take this many solver steps (fewer if the end time comes first), then a sample.
     Step(u64),
+    /// Stop the steps of [`ToSim::Step`] after the one under way (ignored if they are done).
+    Cancel,
     /// Back to the scene's initial state, then a sample.
     Reset,
     /// Stop now (a signal arrived).
@@ -165,12 +173,14 @@ fn run(a: &Args) -> Result<(), String> {
     );
     let (to_sim, sim_rx) = mpsc::channel();
     let (sim_tx, from_sim) = mpsc::channel();
+    let progress = AtomicU64::new(0);
     let outcome = std::thread::scope(|s| {
         let sim = &mut sim;
         let schedule = &schedule;
         let scene = &scene;
+        let progress = &progress;
         s.spawn(move || {
-            rayon::scope(move |_| simulate(sim, scene, schedule, &sim_rx, &sim_tx));
+            rayon::scope(move |_| simulate(sim, scene, schedule, &sim_rx, &sim_tx, progress));
         });
         let mut main = MainLoop {
             node: &mut node,
@@ -187,6 +197,8 @@ fn run(a: &Args) -> Result<(), String> {
             state: SimulationState::STATE_PLAYING,
             hold_at_end: a.hold_at_end,
             current: None,
+            progress,
+            executing: None,
         };
         let r = main.serve(&from_sim);
         // Unblock the simulation whatever happened (it may be gone already).
@@ -269,14 +281,16 @@ fn schedule(end: f64, interval: f64) -> Result<Vec<f64>, String> {
 /// The simulation thread: a sample at t = 0, then one after each order of the main thread:
 /// [`ToSim::Continue`] steps to the next time of `schedule` as `Simulation::run_to` does
 /// (the last step of each interval shortened to land on it), [`ToSim::Step`] takes N of
-/// those steps, [`ToSim::Reset`] rebuilds the simulation from `scene` (the same bits as at
-/// start). Commands apply between steps as they come.
+/// those steps (or fewer, on [`ToSim::Cancel`]), [`ToSim::Reset`] rebuilds the simulation
+/// from `scene` (the same bits as at start). Commands apply between steps as they come.
+/// `progress` counts the steps of the order under way.
 fn simulate(
     sim: &mut Simulation,
     scene: &Scene,
     schedule: &[f64],
     rx: &Receiver<ToSim>,
     tx: &Sender<FromSim>,
+    progress: &AtomicU64,
 ) {
     // Index of the next sample time.
     let mut next = 0;
@@ -292,6 +306,8 @@ fn simulate(
         let order = loop {
             match rx.recv() {
                 Ok(ToSim::Command(c)) => command(sim, c),
+                // A cancel that came after the steps it was meant to stop.
+                Ok(ToSim::Cancel) => {}
                 Ok(order) => break order,
                 Err(_) => return,
             }
@@ -311,13 +327,14 @@ fn simulate(
                 steps = 0;
                 continue;
             }
-            ToSim::Command(_) | ToSim::Stop => return,
+            ToSim::Command(_) | ToSim::Cancel | ToSim::Stop => return,
         };
         steps = 0;
-        while steps < limit && next < schedule.len() {
+        'steps: while steps < limit && next < schedule.len() {
             while let Ok(msg) = rx.try_recv() {
                 match msg {
                     ToSim::Command(c) => command(sim, c),
+                    ToSim::Cancel => break 'steps,
                     _ => return,
                 }
             }
@@ -327,6 +344,7 @@ fn simulate(
                 return;
             }
             steps += 1;
+            progress.store(steps, Ordering::Relaxed);
             if sim.time() >= t - 1e-12 * t.abs() {
                 next += 1;
                 if limit == u64::MAX {
@@ -364,6 +382,21 @@ struct MainLoop<'a> {
     hold_at_end: bool,
     /// The last sample published.
     current: Option<Sample>,
+    /// Steps of the simulation's order under way (for the feedback of `SimulateSteps`).
+    progress: &'a AtomicU64,
+    /// The `SimulateSteps` goal executing.
+    executing: Option<Executing>,
+}
+
+/// A `SimulateSteps` goal while its steps run.
+struct Executing {
+    id: GoalId,
+    /// Steps the goal asks for.
+    steps: u64,
+    /// Steps completed in the last feedback, and when it was published.
+    reported: (u64, Instant),
+    /// Whether the simulation was told to stop early.
+    cancel_sent: bool,
 }
 
 /// How a wait for the go-ahead ended.
@@ -434,6 +467,7 @@ impl MainLoop<'_> {
                     if !self.settings.lockstep {
                         self.forward_commands()?;
                     }
+                    self.tend_goal()?;
                 }
                 Err(RecvTimeoutError::Disconnected) => {
                     return Err("the simulation thread ended unexpectedly".into())
@@ -487,6 +521,9 @@ impl MainLoop<'_> {
             }
             self.poll_parameters();
             if let Some(go) = self.requests(from_sim, published, at_end)? {
+                return Ok(go);
+            }
+            if let Some(go) = self.goals(from_sim, published, at_end)? {
                 return Ok(go);
             }
             if self.state != SimulationState::STATE_PLAYING {
@@ -565,7 +602,9 @@ impl MainLoop<'_> {
                     })
                 }
                 Request::Reset(_, scope) => check_reset(scope).map(|()| Go::Again),
-                Request::Step(_, n) => check_step(self.state, n, *at_end).map(|()| Go::Again),
+                Request::Step(_, n) => {
+                    check_step("StepSimulation", self.state, n, *at_end).map(|()| Go::Again)
+                }
             };
             let result = match outcome {
                 Err(refused) => refused,
@@ -605,6 +644,121 @@ impl MainLoop<'_> {
             self.node.answer(r, result);
         }
         Ok(next)
+    }
+
+    /// Carry out the `SimulateSteps` goals received, one after the other; what the caller
+    /// does next if one of them stepped.
+    fn goals(
+        &mut self,
+        from_sim: &Receiver<FromSim>,
+        published: &mut u64,
+        at_end: &mut bool,
+    ) -> Result<Option<Go>, String> {
+        let mut next = None;
+        for (id, steps) in self.node.steps_action().poll() {
+            match self.simulate_steps(id, steps, from_sim, published, at_end)? {
+                Some(Go::Quit) => return Ok(Some(Go::Quit)),
+                Some(go) => next = Some(go),
+                None => {}
+            }
+        }
+        Ok(next)
+    }
+
+    /// Carry out goal `id` of `steps` steps and end it: succeeded after all of them; aborted
+    /// with `RESULT_OPERATION_FAILED` if refused as `StepSimulation` would refuse it, stopped
+    /// at the end time, or stopped by a signal or a failure; canceled if asked to stop before
+    /// its last step. What the caller does next if it stepped (`None` if refused).
+    fn simulate_steps(
+        &mut self,
+        id: GoalId,
+        steps: u64,
+        from_sim: &Receiver<FromSim>,
+        published: &mut u64,
+        at_end: &mut bool,
+    ) -> Result<Option<Go>, String> {
+        let failed = |m: &str| control::result(ResultMsg::RESULT_OPERATION_FAILED, m);
+        if let Err(refused) = check_step("SimulateSteps", self.state, steps, *at_end) {
+            let action = self.node.steps_action();
+            action.finish(id, GoalStatusEnum::Aborted, refused);
+            return Ok(None);
+        }
+        if self.node.steps_action().canceling(id) {
+            let result = failed(&format!("canceled before it started: 0 of {steps} steps"));
+            let action = self.node.steps_action();
+            action.finish(id, GoalStatusEnum::Canceled, result);
+            return Ok(None);
+        }
+        self.node.steps_action().execute(id);
+        self.progress.store(0, Ordering::Relaxed);
+        self.executing = Some(Executing {
+            id,
+            steps,
+            reported: (0, Instant::now()),
+            cancel_sent: false,
+        });
+        self.send(ToSim::Step(steps))?;
+        let received = self.receive(from_sim, published);
+        let cancel_sent = self.executing.take().is_some_and(|g| g.cancel_sent);
+        let (status, result, go) = match &received {
+            Err(e) => (GoalStatusEnum::Aborted, failed(e), None),
+            Ok(None) => {
+                let done = self.progress.load(Ordering::Relaxed);
+                let message =
+                    format!("the node is stopping (a signal) after {done} of {steps} steps");
+                (GoalStatusEnum::Aborted, failed(&message), Some(Go::Quit))
+            }
+            Ok(Some((end, done))) => {
+                let done = *done;
+                *at_end = *end;
+                self.pace = (Instant::now(), self.time);
+                self.node.steps_action().feedback(id, done, steps - done);
+                let (status, result) = if done == steps {
+                    (
+                        GoalStatusEnum::Succeeded,
+                        control::result(ResultMsg::RESULT_OK, ""),
+                    )
+                } else if cancel_sent {
+                    let message = format!("canceled after {done} of {steps} steps");
+                    (GoalStatusEnum::Canceled, failed(&message))
+                } else {
+                    let message = format!("stopped at the end time after {done} of {steps} steps");
+                    (GoalStatusEnum::Aborted, failed(&message))
+                };
+                (status, result, Some(Go::Again))
+            }
+        };
+        self.node.steps_action().finish(id, status, result);
+        received.map(|_| go)
+    }
+
+    /// While a `SimulateSteps` goal executes: answer the action's requests (a goal that
+    /// arrives now is aborted: one goal at a time), stop the steps when the goal is canceled
+    /// and publish its feedback at most every [`FEEDBACK`].
+    fn tend_goal(&mut self) -> Result<(), String> {
+        let Some(goal) = self.executing.as_mut() else {
+            return Ok(());
+        };
+        let action = self.node.steps_action();
+        for (other, _) in action.poll() {
+            let result = control::result(
+                ResultMsg::RESULT_OPERATION_FAILED,
+                "another SimulateSteps goal is executing (one at a time)",
+            );
+            action.finish(other, GoalStatusEnum::Aborted, result);
+        }
+        if !goal.cancel_sent && action.canceling(goal.id) {
+            self.to_sim
+                .send(ToSim::Cancel)
+                .map_err(|_| "the simulation thread ended unexpectedly".to_string())?;
+            goal.cancel_sent = true;
+        }
+        let done = self.progress.load(Ordering::Relaxed);
+        if done > goal.reported.0 && goal.reported.1.elapsed() >= FEEDBACK {
+            action.feedback(goal.id, done, goal.steps.saturating_sub(done));
+            goal.reported = (done, Instant::now());
+        }
+        Ok(())
     }
 }
 
