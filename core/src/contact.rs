@@ -29,7 +29,8 @@ use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::Kinematics;
 use crate::team::{part, particle_phase, Parts, Team};
-use crate::tools::{penalty_force, Interface, SlaveForce, Tool};
+use crate::tools::{penalty_force, Interface, Slave, SlaveForce, Tool};
+use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// Boundary particles handled by one task of the contact stage's interpolation.
@@ -85,10 +86,29 @@ pub struct Pairs<'a> {
     /// Whether the particle is held on the tool (a tool without separation; empty when
     /// every tool separates): a particle that penetrates such a tool is held from then on.
     pub held: &'a mut [bool],
-    /// The particle's stick point on the tool in the tool's frame (m: `x_J` less the tool's
-    /// stroke along its axis), kept while the particle stays in contact with a tool that has
-    /// friction ([`crate::tools::penalty_force`]).
-    pub stick: &'a mut [Option<[Real; 2]>],
+    /// The particle's friction state while it stays in contact with a tool that has
+    /// friction.
+    pub stick: &'a mut [Option<Stick>],
+}
+
+/// A boundary particle's friction on a tool, kept from one step to the next.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Stick {
+    /// The part of the last step's friction force that the corrector did not realise on
+    /// the particle (N; [`Contact::carry`]), added to this step's stick force
+    /// ([`crate::tools::penalty_force`]).
+    pub carried: [Real; 2],
+}
+
+/// A particle-tool pair with friction that was in contact in the last contact stage.
+#[derive(Debug, Clone, Copy)]
+struct Touched {
+    /// Index `k * tools + t` of boundary particle `k` on tool `t`.
+    pair: u32,
+    /// Contact normal (-).
+    normal: [Real; 2],
+    /// Friction force on the particle (N).
+    friction: [Real; 2],
 }
 
 /// The contact forces of the last step, and what the stage keeps from step to step to skip
@@ -123,6 +143,8 @@ pub struct Contact {
     /// The integration point nearest to each boundary particle's reference position (only
     /// when a tool's friction law needs the flow stress).
     nearest_point: Vec<u32>,
+    /// The pairs with friction in contact at this step, for [`Contact::carry`].
+    touched: Vec<Touched>,
 }
 
 impl Contact {
@@ -188,9 +210,10 @@ impl Contact {
     }
 
     /// Contact of the predicted boundary positions with `tools` at `t_{n+1}` (paper eqs.
-    /// 4-7). The penalty stiffness `m_s / dt^2` uses the solver's natural step `dt` (s; equal
-    /// to the actual step except when a step is shortened to land on a requested time), so a
-    /// short step never turns a residual penetration into a huge impulse; `dt_avg` (s) is the
+    /// 4-7). The positions are predicted over the solver's natural step `dt` (s; equal to
+    /// the actual step except when a step is shortened to land on a requested time), where
+    /// the tools must be too, and the penalty stiffness `m_s / dt^2` uses it, so a short step
+    /// never turns a residual penetration into a huge impulse; `dt_avg` (s) is the
     /// corrector's step. A boundary particle is interpolated only when it may be in a tool's
     /// search box: its clearance to the boxes, measured when last interpolated, shrinks each
     /// step by `S_J du + box_move` and while it stays positive the particle is skipped.
@@ -283,6 +306,7 @@ impl Contact {
         let mut any = false;
         let ntools = tools.len();
         let Pairs { held, stick } = pairs;
+        self.touched.clear();
         for (k, ((&j, &[x, vj]), &c)) in boundary
             .iter()
             .zip(&self.motion)
@@ -322,21 +346,26 @@ impl Contact {
                 } else {
                     Interface::default()
                 };
-                // The particle in the tool's frame, and its slip from the stick point (set
-                // one step back along the relative velocity when the contact begins).
-                let s = tool.state.stroke;
-                let p = [x[0] - s * tool.axis[0], x[1] - s * tool.axis[1]];
-                let slip = if tool.friction.is_frictionless() {
-                    [0.0; 2]
-                } else {
-                    let a = stick[t]
-                        .unwrap_or([p[0] - dt * (vj[0] - vt[0]), p[1] - dt * (vj[1] - vt[1])]);
-                    [p[0] - a[0], p[1] - a[1]]
+                let carried = match stick[t] {
+                    Some(Stick { carried }) => carried,
+                    None => [0.0; 2],
                 };
-                let SlaveForce { force: f, kept } =
-                    penalty_force(mass[j], pen, slip, &tool.friction, at, dt, dt_avg);
-                stick[t] =
-                    (!tool.friction.is_frictionless()).then_some([p[0] - kept[0], p[1] - kept[1]]);
+                let slave = Slave {
+                    m: mass[j],
+                    v_rel: [vj[0] - vt[0], vj[1] - vt[1]],
+                    carried,
+                };
+                let SlaveForce { force: f, friction } =
+                    penalty_force(slave, pen, &tool.friction, at, dt, dt_avg);
+                if tool.friction.is_frictionless() {
+                    stick[t] = None;
+                } else {
+                    self.touched.push(Touched {
+                        pair: (k * ntools + t) as u32,
+                        normal: pen.normal,
+                        friction,
+                    });
+                }
                 tool.state.force[0] -= f[0];
                 tool.state.force[1] -= f[1];
                 tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
@@ -355,6 +384,50 @@ impl Contact {
         }
         self.boxes = bounds;
         (any, tool_work)
+    }
+
+    /// After the corrector: what the friction force `f_T` of each pair in contact did not
+    /// realise on its particle, carried to the next step's stick force
+    /// ([`crate::tools::penalty_force`]) as `c = f_T + m_J P_T (v*_J - v_J) / dt_avg` (N),
+    /// with `v*_J` the particle's predicted velocity the force was computed from,
+    /// `v_J = sum_I N_I(X_J) v_I` its velocity after the corrector and the essential
+    /// conditions (m/s; `v` the coefficient velocities), `P_T` the projection on the tool's
+    /// tangent and `dt_avg` the corrector's step (s). With interpolating shape functions the
+    /// corrector changes `v_J` by `f dt_avg / m_J` and nothing is carried; eq. 7 spreads
+    /// `f` over coefficients that other particles share, which realises less on `J`.
+    /// `stick` is indexed as [`Pairs::stick`].
+    pub fn carry(
+        &self,
+        boundary: &[u32],
+        nodal: &ShapeTable,
+        mass: &[Real],
+        v: &[[Real; 2]],
+        stick: &mut [Option<Stick>],
+        dt_avg: Real,
+    ) {
+        let tools = stick.len() / boundary.len().max(1);
+        for touched in &self.touched {
+            let k = touched.pair as usize / tools;
+            let j = boundary[k] as usize;
+            let mut vj = [0.0; 2];
+            for e in nodal.row(j) {
+                let i = nodal.index[e] as usize;
+                vj[0] += nodal.n[e] * v[i][0];
+                vj[1] += nodal.n[e] * v[i][1];
+            }
+            let predicted = self.motion[k][1];
+            let dv = [predicted[0] - vj[0], predicted[1] - vj[1]];
+            let n = touched.normal;
+            let dn = dv[0] * n[0] + dv[1] * n[1];
+            let c = mass[j] / dt_avg;
+            let f = touched.friction;
+            stick[touched.pair as usize] = Some(Stick {
+                carried: [
+                    f[0] + c * (dv[0] - dn * n[0]),
+                    f[1] + c * (dv[1] - dn * n[1]),
+                ],
+            });
+        }
     }
 
     /// Flow stress and contact area of boundary particle `k` at its predicted position `x`

@@ -4,10 +4,9 @@
 //! Slaves are the workpiece boundary particles, masters the tool segments. For a slave `J`
 //! whose predicted physical position lies behind a segment by the gap `g_J > 0`:
 //! - normal force (eq. 4): `f_n = m_s g / dt^2` along the segment normal `n` (N);
-//! - stick force (eq. 6): `f_st = -m_s s_T / dt^2`, `s_T` the tangential slip since the
-//!   particle last stuck (the paper's `v_TR dt` on a contact's first step; see
-//!   [`penalty_force`]);
-//! - friction (eq. 5): `f_f = -min(b, |f_st|) s_T / |s_T|` with the bound `b` of the
+//! - stick force (eq. 6): `f_st = -m_s v_TR / dt`, `v_TR` the tangential relative velocity,
+//!   plus what the last step's friction left unrealised (see [`penalty_force`]);
+//! - friction (eq. 5): `f_f = min(b, |f_st|) f_st / |f_st|` with the bound `b` of the
 //!   tool's law ([`Friction`]): `mu f_n` (Coulomb, the paper's), `m k A` (shear friction
 //!   factor) or `min(mu f_n, m k A)`;
 //! - the particle force is spread to the RK coefficients (eq. 7): `f_I += f_J N_I(X_J)`.
@@ -324,63 +323,75 @@ pub struct Interface {
     pub area: Real,
 }
 
-/// The force on one slave particle and what it leaves of its tangential slip.
+/// The force on one slave particle, with its friction part.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlaveForce {
     /// Contact force on the slave (N): normal penalty plus friction.
     pub force: [Real; 2],
-    /// Tangential slip kept in the friction spring (m): `s_T` while sticking, shortened to
-    /// `b / k` along `s_T` while sliding; the stick point moves to `x - kept`.
-    pub kept: [Real; 2],
+    /// Its tangential part, the friction force (N): the stick force while sticking, the
+    /// law's bound while sliding.
+    pub friction: [Real; 2],
 }
 
-/// Paper eqs. 4-6: contact force on a slave of mass `m` (kg) with gap `g` (m) along the
-/// normal `n`, tangential slip `slip` (m) from its stick point on the tool, the tool's
-/// `friction` law with the particle's flow stress and area `at`, the natural step `dt_step`
-/// and the corrector's step `dt_avg` (s). Both directions use the penalty stiffness
-/// `k = m / (dt_step dt_avg)` (N/m; `m / dt^2` at constant step):
-/// - normal (eq. 4): `f_n = k g`;
-/// - stick (eq. 6): `f_st = -k s_T`, `s_T` the tangential part of the slip. The paper takes
-///   `s_T = v_TR dt`, the slip of one step; here `s_T` is the slip since the particle last
-///   stuck, which is the same on the first step of a contact (the stick point is then set
-///   one step back along the relative velocity) and for interpolating shape functions on
-///   every step, but keeps the force of a sticking particle when eq. 7 spreads it over
-///   coefficients that move other particles too: the stick force then builds up until the
-///   slip stops, instead of leaving a slip velocity `f dt / m` that makes the friction
-///   depend on the step, the mass and the tool speed;
-/// - friction (eq. 5): `f_f = -min(b, k |s_T|) s_T / |s_T|` with the law's bound `b`; when
-///   the bound governs the particle slides and the stick point follows it (the return
-///   mapping of elasto-plastic friction, Wriggers 2006, *Computational Contact Mechanics*,
-///   section 5.2), so the tangential force never exceeds `b` and the slip it acts against
-///   only dissipates.
+/// A slave particle as the contact force sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Slave {
+    /// Mass `m` (kg).
+    pub m: Real,
+    /// Velocity relative to the tool (m/s).
+    pub v_rel: [Real; 2],
+    /// The friction force the last step left unrealised (N; zero on a new contact).
+    pub carried: [Real; 2],
+}
+
+/// Paper eqs. 4-6: contact force on a `slave` of mass `m` (kg) with gap `g` (m) along the
+/// normal `n`, velocity relative to the tool `v_rel` (m/s), the friction force `carried`
+/// (N) that the last step's friction left unrealised, the tool's `law` with the
+/// particle's flow stress and area `at`, the natural step `dt_step` and the corrector's
+/// step `dt_avg` (s):
+/// - normal (eq. 4): `f_n = m g / (dt_step dt_avg)` (`m g / dt^2` at constant step);
+/// - stick (eq. 6): `f_st = c_T - m v_TR / dt_avg`, the paper's force that stops the
+///   tangential relative velocity `v_TR` in one step plus the tangential part `c_T` of the
+///   carried force. For interpolating shape functions `c` is zero and this is the paper's
+///   law. RK shape functions do not interpolate: eq. 7 spreads the force over coefficients
+///   that move other particles too, so it changes the particle's velocity by less than
+///   `f dt_avg / m`, and what it did not realise is carried to the next step
+///   ([`crate::contact::Contact::carry`]). A sticking particle's force thus builds up until
+///   its slip stops, instead of leaving it slipping at a speed set by the step and the mass
+///   (which made the friction depend on the step, the mass scaling and the tool speed);
+/// - friction (eq. 5): `f_f = min(b, |f_st|) f_st / |f_st|` with the law's bound `b`: the
+///   particle sticks below the bound and slides at it (the return mapping of elasto-plastic
+///   friction, Wriggers 2006, *Computational Contact Mechanics*, section 5.2), so the
+///   tangential force never exceeds `b`.
 pub fn penalty_force(
-    m: Real,
+    slave: Slave,
     pen: Penetration,
-    slip: [Real; 2],
-    friction: &Friction,
+    law: &Friction,
     at: Interface,
     dt_step: Real,
     dt_avg: Real,
 ) -> SlaveForce {
+    let Slave { m, v_rel, carried } = slave;
     let n = pen.normal;
-    let dt2 = dt_step * dt_avg;
-    let fn_ = m * pen.gap / dt2;
+    let fn_ = m * pen.gap / (dt_step * dt_avg);
     let mut force = [fn_ * n[0], fn_ * n[1]];
-    let mut kept = [0.0; 2];
-    if !friction.is_frictionless() {
-        let sn = slip[0] * n[0] + slip[1] * n[1];
-        let st = [slip[0] - sn * n[0], slip[1] - sn * n[1]];
-        let st_norm = (st[0] * st[0] + st[1] * st[1]).sqrt();
-        if st_norm > 0.0 {
-            let stick = m * st_norm / dt2;
-            let ff = friction.bound(fn_, at.flow_stress, at.area).min(stick);
-            force[0] -= ff * st[0] / st_norm;
-            force[1] -= ff * st[1] / st_norm;
-            let keep = ff / stick;
-            kept = [keep * st[0], keep * st[1]];
+    let mut friction = [0.0; 2];
+    if !law.is_frictionless() {
+        let tangential = |a: [Real; 2]| {
+            let an = a[0] * n[0] + a[1] * n[1];
+            [a[0] - an * n[0], a[1] - an * n[1]]
+        };
+        let (vt, ct) = (tangential(v_rel), tangential(carried));
+        let st = [ct[0] - m * vt[0] / dt_avg, ct[1] - m * vt[1] / dt_avg];
+        let stick = (st[0] * st[0] + st[1] * st[1]).sqrt();
+        if stick > 0.0 {
+            let ff = law.bound(fn_, at.flow_stress, at.area).min(stick);
+            friction = [ff * st[0] / stick, ff * st[1] / stick];
+            force[0] += friction[0];
+            force[1] += friction[1];
         }
     }
-    SlaveForce { force, kept }
+    SlaveForce { force, friction }
 }
 
 #[cfg(test)]
@@ -499,6 +510,15 @@ mod tests {
         }
     }
 
+    /// A slave of mass `m` moving at `v` relative to the tool with `carried` force.
+    fn slave(m: Real, v: [Real; 2], carried: [Real; 2]) -> Slave {
+        Slave {
+            m,
+            v_rel: v,
+            carried,
+        }
+    }
+
     #[test]
     fn friction_is_bounded_by_coulomb_and_by_the_stick_force() {
         let pen = Penetration {
@@ -510,24 +530,30 @@ mod tests {
         // Fast sliding: Coulomb bound.
         let c = Friction::Coulomb { mu: 0.3 };
         let at = Interface::default();
-        // Slip of one step at 5 m/s.
-        let f = penalty_force(m, pen, [5.0 * dt, 0.0], &c, at, dt, dt).force;
+        let f = penalty_force(slave(m, [5.0, 0.0], [0.0; 2]), pen, &c, at, dt, dt).force;
         assert!(
             (f[1] - fn_).abs() < 1e-9 && (f[0] + 0.3 * fn_).abs() < 1e-9,
             "{f:?}"
         );
-        // Slow sliding: the stick force m v / dt is smaller and wins, and the particle keeps
-        // its whole slip in the spring.
-        let slow = penalty_force(m, pen, [1e-4 * dt, 0.0], &c, at, dt, dt);
+        // Slow sliding: the stick force m v / dt is smaller and wins.
+        let slow = penalty_force(slave(m, [1e-4, 0.0], [0.0; 2]), pen, &c, at, dt, dt);
         assert!((slow.force[0] + m * 1e-4 / dt).abs() < 1e-12, "{slow:?}");
-        assert_eq!(slow.kept, [1e-4 * dt, 0.0]);
-        // Sliding: the kept slip is the bound over the stiffness, along the slip.
-        let fast = penalty_force(m, pen, [5.0 * dt, 1e-3], &c, at, dt, dt);
-        assert!((fast.kept[0] - 0.3 * fn_ * dt * dt / m).abs() < 1e-15 && fast.kept[1] == 0.0);
-        // Frictionless: no tangential force.
+        assert_eq!(slow.friction, [slow.force[0], 0.0]);
+        // A carried force adds to the stick force (its normal part is dropped); the sum is
+        // still capped at the bound.
+        let carried = [-50.0, 1e9];
+        let held = penalty_force(slave(m, [1e-4, 0.0], carried), pen, &c, at, dt, dt);
+        assert!(
+            (held.friction[0] + 50.0 + m * 1e-4 / dt).abs() < 1e-9,
+            "{held:?}"
+        );
+        assert_eq!(held.friction[1], 0.0);
+        let capped = penalty_force(slave(m, [1e-4, 0.0], [-1e9, 0.0]), pen, &c, at, dt, dt);
+        assert!((capped.friction[0] + 0.3 * fn_).abs() < 1e-9, "{capped:?}");
+        // Frictionless: no tangential force, whatever is carried.
         let none = Friction::Coulomb { mu: 0.0 };
-        let free = penalty_force(m, pen, [5.0 * dt, 0.0], &none, at, dt, dt);
-        assert_eq!((free.force[0], free.kept), (0.0, [0.0; 2]));
+        let free = penalty_force(slave(m, [5.0, 0.0], carried), pen, &none, at, dt, dt);
+        assert_eq!((free.force[0], free.friction), (0.0, [0.0; 2]));
     }
 
     #[test]
@@ -563,8 +589,9 @@ mod tests {
                 [1e-6, 0.0],
                 [-2e-7, 7.0],
             ] {
-                let slip = [v[0] * dt, v[1] * dt];
-                let SlaveForce { force: f, kept } = penalty_force(m, pen, slip, &law, at, dt, dt);
+                let SlaveForce { force: f, friction } =
+                    penalty_force(slave(m, v, [0.0; 2]), pen, &law, at, dt, dt);
+                assert_eq!(friction, [f[0], 0.0], "{law:?}: the tangential part");
                 let vt = v[0];
                 // Never above the bound nor the stick force; never along the sliding (no
                 // energy created: f_t v_t <= 0).
@@ -575,16 +602,13 @@ mod tests {
                 );
                 assert!(f[0] * vt <= 0.0, "{law:?} {v:?} {f:?}");
                 // The normal force is untouched by friction.
-                assert!((f[1] - fn_).abs() <= 1e-15 * fn_, "{f:?}");
+                assert_eq!(f[1], fn_);
                 if stick > bound {
                     assert!(
                         (f[0].abs() - bound).abs() <= 1e-12 * bound,
                         "{law:?} slides at its bound"
                     );
-                    // The stick point follows: what is kept holds exactly the bound.
-                    assert!((kept[0].abs() * m / (dt * dt) - bound).abs() <= 1e-9 * bound);
                 } else {
-                    assert_eq!(kept[0], slip[0], "{law:?} keeps its slip while sticking");
                     // Sticking: the force stops the sliding in this step, m v + f dt = 0.
                     assert!(
                         (m * vt + f[0] * dt).abs() <= 1e-15 * m * vt.abs().max(1.0),
@@ -594,16 +618,16 @@ mod tests {
             }
         }
         // m = 0 and a bonded particle under tension (negative gap) carry no Coulomb friction.
-        let slip = [5.0 * dt, 0.0];
-        let none = penalty_force(m, pen, slip, &Friction::Shear { m: 0.0 }, at, dt, dt);
+        let fast = slave(m, [5.0, 0.0], [0.0; 2]);
+        let none = penalty_force(fast, pen, &Friction::Shear { m: 0.0 }, at, dt, dt);
         assert_eq!(none.force[0], 0.0);
         let pull = Penetration {
             gap: -1e-7,
             normal: [0.0, 1.0],
         };
-        let f = penalty_force(m, pull, slip, &Friction::Coulomb { mu: 0.3 }, at, dt, dt).force;
+        let f = penalty_force(fast, pull, &Friction::Coulomb { mu: 0.3 }, at, dt, dt).force;
         assert!(f[1] < 0.0 && f[0] == 0.0, "{f:?}");
-        let f = penalty_force(m, pull, slip, &Friction::Shear { m: 0.3 }, at, dt, dt).force;
+        let f = penalty_force(fast, pull, &Friction::Shear { m: 0.3 }, at, dt, dt).force;
         assert!(
             (f[0] + 0.3 * ka).abs() < 1e-12 * ka,
             "shear friction needs no pressure: {f:?}"

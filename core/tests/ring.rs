@@ -60,8 +60,9 @@ fn frictionless_ring_upsets_homogeneously() {
 /// speed without a ramp. With the stick force taken from the one-step slip, many particles
 /// reached the stick cap together at first contact, and their corrections, spread through
 /// shared coefficients, overshot: the interface gave the ring 5 % more work than the platen
-/// delivered and the energy check stopped the run at 73 us. With the stick force on the
-/// slip from a stick point the interface gives back at most what its penalty springs store:
+/// delivered and the energy check stopped the run at 73 us. With the unrealised part of the
+/// stick force carried to the next step instead, the force builds up over several steps and
+/// the interface gives back at most what its penalty stores:
 /// over the elastic start (200 us at 10 mm/s, every contact sticking) the work it created is
 /// below 0.5 % of the platen's at every step for m = 0.2 and m = 1 (0.14 % measured), and
 /// below 0.1 % for the frictionless platen (0.03 %): the penalty's discrete error in the

@@ -502,11 +502,20 @@ impl Simulation {
         // 3. Force gather and predictor.
         self.force_stage(Some((dt_avg, dt_full)));
         let t3 = Instant::now();
-        // 4. Contact: the tools advance over the step at their mid-step velocity.
+        // 4. Contact: the tools advance over the step at their mid-step velocity. The
+        // predicted positions are a natural step ahead; on a step shortened to land on a
+        // requested time the tools meet them there too, a further `dt_full - dt` ahead, and
+        // go back to the end of the step after the stage.
         let t_mid = self.st.time + 0.5 * dt;
         for t in self.tools.iter_mut() {
             t.state.velocity = t.velocity_at(t_mid);
             t.state.stroke += dt * t.state.velocity;
+        }
+        let strokes: Vec<Real> = self.tools.iter().map(|t| t.state.stroke).collect();
+        if dt < dt_full {
+            for t in self.tools.iter_mut() {
+                t.state.stroke += (dt_full - dt) * t.state.velocity;
+            }
         }
         let body = Body {
             boundary: &self.boundary,
@@ -532,6 +541,9 @@ impl Simulation {
             dt_full,
             dt_avg,
         );
+        for (t, stroke) in self.tools.iter_mut().zip(strokes) {
+            t.state.stroke = stroke;
+        }
         let t4 = Instant::now();
         // 5. Corrector and essential conditions.
         if contact {
@@ -539,6 +551,16 @@ impl Simulation {
         }
         if let Some(c) = &self.constraints {
             c.project(&mut self.st.v, &self.mass);
+        }
+        if contact {
+            self.contact.carry(
+                &self.boundary,
+                &self.nodal,
+                &self.mass,
+                &self.st.v,
+                &mut self.st.stick,
+                dt_avg,
+            );
         }
         // 6. Update, with the energy sums.
         let motion = Motion {

@@ -1,6 +1,7 @@
 //! The whole changing state of a simulation, saved and restored as one value.
 
 use super::energy::Energy;
+use crate::contact::Stick;
 use crate::material::PointState;
 use crate::math::Real;
 use crate::tools::ToolState;
@@ -45,9 +46,8 @@ pub struct State {
     /// (`[boundary index * tools + tool]`; empty when every tool separates).
     #[serde(default)]
     pub held: Vec<bool>,
-    /// Stick point of each boundary particle in contact with each tool that has friction,
-    /// in the tool's frame (m; `[boundary index * tools + tool]`, `None` out of contact):
-    /// the friction spring's anchor ([`crate::tools::penalty_force`]).
+    /// The friction state of each boundary particle in contact with each tool that has
+    /// friction (`[boundary index * tools + tool]`, `None` out of contact).
     #[serde(default)]
-    pub stick: Vec<Option<[Real; 2]>>,
+    pub stick: Vec<Option<Stick>>,
 }
