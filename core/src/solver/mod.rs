@@ -19,9 +19,11 @@
 //! 3. force gather and predictor (`update.rs`): `f_I` summed in a fixed order,
 //!    `v* = v_{n-1/2} - dt_avg f_int / m`;
 //! 4. contact ([`crate::contact`]): the tools advance; penetration of the predicted boundary
-//!    particles at `t_{n+1}`, paper eqs. 4-7;
+//!    particles at `t_{n+1}`, paper eqs. 4-7 (on a step shortened to land on a requested
+//!    time, positions and tools a natural step ahead);
 //! 5. corrector (`update.rs`): `v_{n+1/2} = v* + dt_avg f_c / m`, then the projection onto the
-//!    essential conditions;
+//!    essential conditions, and the friction the corrector did not realise carried to the
+//!    next step ([`crate::contact::Contact::carry`]);
 //! 6. update (`update.rs`): `d_{n+1} = d_n + dt v_{n+1/2}` with the step's energy sums;
 //! 7. energy account and its checks (`energy.rs`).
 //!
