@@ -252,11 +252,17 @@ def test_read_mcap_gives_the_history_columns_and_the_point_clouds(rkforge_bin, t
     rec = rkforge.read_mcap(mcap)
     tools = [f"{t}.{c}" for t in ("top", "bottom")
              for c in ("stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N")]
-    assert list(rec.history.columns) == ["time_s", *tools]
+    energy = [f"energy.{c}" for c in ("kinetic_J", "elastic_J", "plastic_J", "internal_J", "contact_J",
+                                      "tool_work_J")]
+    assert list(rec.history.columns) == ["time_s", *tools, *energy, "energy.initial_J"]
     assert len(rec.history) == len(history)
     # Log times are the sample times rounded to the nanosecond.
     assert np.abs(rec.history["time_s"].to_numpy() - history["time_s"].to_numpy()).max() < 1e-9
-    assert_same_history(rec.history[tools], history[tools])
+    assert_same_history(rec.history[tools + energy], history[tools + energy])
+    # The block starts at rest; the account closes: the tools' work went into the block.
+    assert (rec.history["energy.initial_J"] == 0.0).all()
+    end = rec.history.iloc[-1]
+    assert end["energy.internal_J"] == pytest.approx(end["energy.contact_J"] - end["energy.kinetic_J"], rel=1e-3)
     assert len(rec.clouds) == len(history) and np.array_equal(rec.cloud_times_s, rec.history["time_s"])
     for cloud, (_, row) in zip(rec.clouds, history.iterrows()):
         assert set(cloud) == {"x", "y", "z", "plastic_strain", "von_mises"}

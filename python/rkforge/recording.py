@@ -7,6 +7,11 @@ from typing import Dict, List
 import numpy as np
 import pandas as pd
 
+#: history.csv's energy columns by the fields of rkforge_msgs/msg/Energy.
+_ENERGY = {"kinetic": "kinetic_J", "elastic": "elastic_J", "plastic": "plastic_J",
+           "internal": "internal_J", "contact_work": "contact_J", "tool_work": "tool_work_J",
+           "initial": "initial_J"}
+
 #: numpy types of the PointCloud2 field datatypes (sensor_msgs/PointField).
 _POINT_TYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
 
@@ -17,7 +22,10 @@ class Recording:
 
     ``history``: one row per sample, ``time_s`` and per tool the history's columns
     ``<tool>.stroke_m``, ``<tool>.velocity_m_per_s``, ``<tool>.force_N`` (along its axis),
-    ``<tool>.force_x_N``, ``<tool>.force_y_N``. ``clouds``: per sample, the particles as a
+    ``<tool>.force_x_N``, ``<tool>.force_y_N``, then the energy account as history.csv names it
+    (``energy.kinetic_J``, ``energy.elastic_J``, ``energy.plastic_J``, ``energy.internal_J``,
+    ``energy.contact_J``, ``energy.tool_work_J``; J) where the recording has the energy
+    topic, and ``energy.initial_J``. ``clouds``: per sample, the particles as a
     dict of numpy arrays (``x``, ``y``, ``z``, ``plastic_strain``, ``von_mises``; float32 as
     recorded), at the times ``cloud_times_s``.
     """
@@ -40,7 +48,8 @@ def _cloud(msg) -> Dict[str, np.ndarray]:
 
 def read_mcap(path, namespace: str = "/rkforge") -> Recording:
     """Read a recording of the rkforge topics under ``namespace``: the tools' joint states
-    and wrenches as history columns, the workpiece point clouds as numpy arrays.
+    and wrenches and the energy account as history columns, the workpiece point clouds as
+    numpy arrays.
 
     Compressed chunks (lz4, zstd) are read by the ``mcap`` reader; times are the messages'
     log times (simulation time, ns) in seconds.
@@ -66,6 +75,10 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
                 row = rows.setdefault(message.log_time, {})
                 row[f"{name}.force_x_N"] = msg.wrench.force.x
                 row[f"{name}.force_y_N"] = msg.wrench.force.y
+            elif topic == f"{ns}/energy":
+                row = rows.setdefault(message.log_time, {})
+                for name, column in _ENERGY.items():
+                    row[f"energy.{column}"] = getattr(msg, name)
             elif topic == f"{ns}/workpiece":
                 clouds.append(_cloud(msg))
                 cloud_times.append(message.log_time * 1e-9)
@@ -75,9 +88,10 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
         tools = []
         for c in history.columns[1:]:
             name = c.rsplit(".", 1)[0]
-            if name not in tools:
+            if name not in tools and name != "energy":
                 tools.append(name)
         suffixes = ["stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N"]
         order = ["time_s"] + [f"{t}.{s}" for t in tools for s in suffixes if f"{t}.{s}" in history.columns]
+        order += [f"energy.{c}" for c in _ENERGY.values() if f"energy.{c}" in history.columns]
         history = history[order]
     return Recording(history=history, clouds=clouds, cloud_times_s=np.array(cloud_times))
