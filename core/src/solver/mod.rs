@@ -513,12 +513,13 @@ impl Simulation {
             t.state.velocity = t.velocity_at(t_mid);
             t.state.stroke += dt * t.state.velocity;
         }
-        let strokes: Vec<Real> = self.tools.iter().map(|t| t.state.stroke).collect();
-        if dt < dt_full {
+        let strokes = (dt < dt_full).then(|| {
+            let at_end: Vec<Real> = self.tools.iter().map(|t| t.state.stroke).collect();
             for t in self.tools.iter_mut() {
                 t.state.stroke += (dt_full - dt) * t.state.velocity;
             }
-        }
+            at_end
+        });
         let body = Body {
             boundary: &self.boundary,
             nodal: &self.nodal,
@@ -543,8 +544,10 @@ impl Simulation {
             dt_full,
             dt_avg,
         );
-        for (t, stroke) in self.tools.iter_mut().zip(strokes) {
-            t.state.stroke = stroke;
+        if let Some(strokes) = strokes {
+            for (t, stroke) in self.tools.iter_mut().zip(strokes) {
+                t.state.stroke = stroke;
+            }
         }
         let t4 = Instant::now();
         // 5. Corrector and essential conditions.
