@@ -7,12 +7,19 @@ import time
 
 import pytest
 
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+from cyclonedds.util import duration
+
 from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest, Energy,
-                      Float64, GetParametersReply, GetParametersRequest, JointState,
+                      Float64, GetParametersReply, GetParametersRequest,
+                      GetSimulationStateReply, GetSimulationStateRequest, JointState,
+                      SetSimulationStateReply, SetSimulationStateRequest, SimulationState,
                       ListParametersReply, ListParametersRequest, Parameter, Peer, PointCloud2,
                       ServiceClient, SetParametersReply, SetParametersRequest, SimulateSteps,
                       Simulator, WrenchStamped,
-                      parameter_value, quit_node, run_history, running_node, small_block,
+                      parameter_value, qos, quit_node, run_history, running_node, small_block,
                       stamp_ns, start_node, take, wait_matched, wait_readers_matched,
                       wait_until)
 
@@ -199,6 +206,44 @@ def test_parameters_are_listed_read_set_and_refused_with_a_reason(rkforge_ros_bi
         _, err = node.communicate(timeout=120)
         assert node.returncode == 0, err
         assert "published 21 samples" in err
+
+
+def call_with_a_late_reply_reader(peer, service, request, reply, *fields):
+    """Call `service` as a client whose reply reader matches only after the node has taken
+    the request and had a second to answer; the reply."""
+    writer = DataWriter(peer.dp, Topic(peer.dp, f"rq{service}Request", request), qos=qos(True))
+    wait_matched(writer)
+    writer.write(request(ServiceClient.GUID, 1, *fields))
+    assert writer.wait_for_acks(duration(seconds=60)), "the node never took the request"
+    time.sleep(1.0)
+    reader = DataReader(peer.dp, Topic(peer.dp, f"rr{service}Reply", reply), qos=qos(True))
+    got = []
+    wait_until(lambda: got.extend(r for r in take(reader) if r.seq == 1) or got, 60,
+               f"the reply of {service} to a client whose reply reader matched late")
+    return got[0]
+
+
+def test_a_reply_reaches_a_client_whose_reply_reader_matches_after_its_request(
+        rkforge_ros_bin, tmp_path):
+    """A client knows the service is there when its own endpoints have matched the node's
+    (rclcpp's wait_for_service); on a loaded machine the node's reply writer can match the
+    client's reply reader only later, and a volatile writer never delivers what it wrote
+    before. The node holds the reply until the reader matches, also the last one (quitting)
+    before it ends."""
+    scene = small_block(tmp_path)
+    with running_node(rkforge_ros_bin, scene, 175, "--lockstep") as node:
+        peer = Peer(175)
+        r = call_with_a_late_reply_reader(peer, f"{NS}/get_simulation_state",
+                                          GetSimulationStateRequest, GetSimulationStateReply, 0)
+        assert (r.state.state, r.result.result) == (Simulator.PLAYING, 1)
+        assert node.poll() is None
+        r = call_with_a_late_reply_reader(peer, f"{NS}/set_simulation_state",
+                                          SetSimulationStateRequest, SetSimulationStateReply,
+                                          SimulationState(Simulator.QUITTING))
+        assert (r.result.result, r.result.error_message) == (1, "")
+        _, err = node.communicate(timeout=60)
+        assert node.returncode == 0, err
+        assert "has not matched" not in err
 
 
 def test_simulation_interfaces_pause_step_and_refuse_with_standard_codes(rkforge_ros_bin,

@@ -14,6 +14,7 @@
 //! aborted. A canceled goal stops after the step under way.
 
 use crate::msgs::{ResultMsg, SimulateStepsFeedback, SimulateStepsGoal, SimulateStepsResult};
+use crate::service::{Outbox, ReplyReaders};
 use ros2_client::action::{ActionServerQosPolicies, GetResultResponse, SendGoalResponse};
 use ros2_client::action_msgs::{
     CancelGoalRequest, CancelGoalResponse, CancelGoalResponseEnum, GoalInfo, GoalStatus,
@@ -23,8 +24,10 @@ pub use ros2_client::action_msgs::{GoalId, GoalStatusEnum};
 use ros2_client::builtin_interfaces::Time;
 use ros2_client::dds::{ActionServer, Node, ServiceMapping};
 use ros2_client::service::RmwRequestId;
-use ros2_client::{ActionTypeName, Name, QosProfile};
+use ros2_client::{ActionTypeName, Name, NodeName, QosProfile};
 use serde::Deserialize;
+use std::sync::Arc;
+use std::time::Instant;
 
 /// Finished goals kept for result and cancel requests that come later (the oldest are
 /// forgotten first; a result request for a forgotten goal is answered `STATUS_UNKNOWN`).
@@ -46,17 +49,24 @@ pub struct StepsAction {
     goals: Vec<Goal>,
     /// Result requests waiting for their goal to end.
     waiting: Vec<(RmwRequestId, GoalId)>,
+    /// Replies waiting for their client's reply reader (see [`crate::service`]).
+    goal_replies: Outbox<SendGoalResponse>,
+    result_replies: Outbox<GetResultResponse<SimulateStepsResult>>,
+    cancel_replies: Outbox<CancelGoalResponse>,
+    readers: Arc<ReplyReaders>,
 }
 
 impl StepsAction {
     /// Serve the action `ns/simulate_steps` with QoS `services` for its three services,
-    /// `feedback` for the feedback topic and `status` for the status topic.
+    /// `feedback` for the feedback topic and `status` for the status topic; replies wait for
+    /// the clients' reply readers in `readers`.
     ///
     /// # Errors
     ///
     /// A bad namespace, or DDS could not create the services or topics.
     pub fn new(
         node: &mut Node,
+        readers: &Arc<ReplyReaders>,
         ns: &str,
         services: &QosProfile,
         feedback: &QosProfile,
@@ -79,10 +89,18 @@ impl StepsAction {
                 qos,
             )
             .map_err(|e| format!("cannot serve the action {ns}/simulate_steps: {e:?}"))?;
+        let node_name = NodeName::new(node.namespace(), "rkforge")
+            .map_err(|e| format!("namespace {}: {e:?}", node.namespace()))?;
+        let reply_topic =
+            |service: &str| name.to_dds_name("rr", &node_name, &format!("/_action/{service}Reply"));
         Ok(StepsAction {
             server,
             goals: Vec::new(),
             waiting: Vec::new(),
+            goal_replies: Outbox::new(&reply_topic("send_goal")),
+            result_replies: Outbox::new(&reply_topic("get_result")),
+            cancel_replies: Outbox::new(&reply_topic("cancel_goal")),
+            readers: Arc::clone(readers),
         })
     }
 
@@ -90,8 +108,9 @@ impl StepsAction {
     /// last call, oldest first, with the steps each asks for. A goal id already known is
     /// refused (`accepted: false`).
     pub fn poll(&mut self) -> Vec<(GoalId, u64)> {
+        self.flush();
         let mut accepted = Vec::new();
-        while let Ok(Some((request, r))) = self.server.receive_goal() {
+        while let Some((request, r)) = received(self.server.receive_goal(), &self.goal_replies) {
             let stamp = Time::now();
             let new = self.find(r.goal_id).is_none();
             if new {
@@ -105,41 +124,72 @@ impl StepsAction {
                 });
                 accepted.push((r.goal_id, r.goal.steps));
             }
-            let _ = self.server.send_goal_response(
+            self.goal_replies.push(
                 request,
                 SendGoalResponse {
                     accepted: new,
                     stamp,
                 },
+                Instant::now(),
             );
         }
         if !accepted.is_empty() {
             self.publish_status();
         }
-        while let Ok(Some((request, r))) = self.server.receive_result_request() {
+        while let Some((request, r)) =
+            received(self.server.receive_result_request(), &self.result_replies)
+        {
             match self.find(r.goal_id).map(|g| (g.status, g.result.clone())) {
-                Some((status, Some(result))) => {
-                    let _ = self
-                        .server
-                        .send_result(request, GetResultResponse { status, result });
-                }
+                Some((status, Some(result))) => self.result_replies.push(
+                    request,
+                    GetResultResponse { status, result },
+                    Instant::now(),
+                ),
                 Some((_, None)) => self.waiting.push((request, r.goal_id)),
-                None => {
-                    let _ = self.server.send_result(
-                        request,
-                        GetResultResponse {
-                            status: GoalStatusEnum::Unknown,
-                            result: SimulateStepsResult::default(),
-                        },
-                    );
-                }
+                None => self.result_replies.push(
+                    request,
+                    GetResultResponse {
+                        status: GoalStatusEnum::Unknown,
+                        result: SimulateStepsResult::default(),
+                    },
+                    Instant::now(),
+                ),
             }
         }
-        while let Ok(Some((request, r))) = self.server.receive_cancel_request() {
+        while let Some((request, r)) =
+            received(self.server.receive_cancel_request(), &self.cancel_replies)
+        {
             let response = self.cancel(&r);
-            let _ = self.server.send_cancel_response(request, response);
+            self.cancel_replies.push(request, response, Instant::now());
         }
+        self.flush();
         accepted
+    }
+
+    /// Write the replies held whose clients can now receive them (see
+    /// [`crate::service`]); true if replies still wait.
+    pub fn flush(&mut self) -> bool {
+        let warn = |outbox: &str, e: &dyn std::fmt::Debug| {
+            eprintln!("warning: reply on {outbox} not written: {e:?}");
+        };
+        for (id, r) in self.goal_replies.ready(&self.readers) {
+            if let Err(e) = self.server.send_goal_response(id, r) {
+                warn(self.goal_replies.service(), &e);
+            }
+        }
+        for (id, r) in self.result_replies.ready(&self.readers) {
+            if let Err(e) = self.server.send_result(id, r) {
+                warn(self.result_replies.service(), &e);
+            }
+        }
+        for (id, r) in self.cancel_replies.ready(&self.readers) {
+            if let Err(e) = self.server.send_cancel_response(id, r) {
+                warn(self.cancel_replies.service(), &e);
+            }
+        }
+        !(self.goal_replies.is_empty()
+            && self.result_replies.is_empty()
+            && self.cancel_replies.is_empty())
     }
 
     /// Mark the goals that `request` names as canceling, with rcl_action's policy: a zero
@@ -220,14 +270,16 @@ impl StepsAction {
             .partition(|(_, goal)| *goal == id);
         self.waiting = wait;
         for (request, _) in answer {
-            let _ = self.server.send_result(
+            self.result_replies.push(
                 request,
                 GetResultResponse {
                     status,
                     result: result.clone(),
                 },
+                Instant::now(),
             );
         }
+        self.flush();
         while self.goals.iter().filter(|g| g.result.is_some()).count() > FINISHED_KEPT {
             if let Some(k) = self.goals.iter().position(|g| g.result.is_some()) {
                 self.goals.remove(k);
@@ -267,6 +319,18 @@ fn cancel_target(request: &CancelGoalRequest) -> Option<GoalInfo> {
         .and_then(serde_json::from_value::<Request>)
         .ok()
         .map(|r| r.goal_info)
+}
+
+/// The request `r` received on the service of `outbox`, if any; a request that cannot be
+/// read is reported on stderr and skipped.
+fn received<T, E: std::fmt::Debug, O>(r: Result<Option<T>, E>, outbox: &Outbox<O>) -> Option<T> {
+    match r {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("warning: unreadable request on {}: {e:?}", outbox.service());
+            None
+        }
+    }
 }
 
 #[cfg(test)]

@@ -16,10 +16,11 @@ use crate::msgs::{
     SetSimulationStateRequest, SetSimulationStateResponse, SimulationState, SimulatorFeatures,
     StepSimulationRequest, StepSimulationResponse,
 };
-use crate::service::server;
-use ros2_client::dds::{Node, Server};
+use crate::service::{server, ReplyReaders, Service};
+use ros2_client::dds::Node;
 use ros2_client::service::RmwRequestId;
 use ros2_client::QosProfile;
+use std::sync::Arc;
 
 /// The features the node supports, as `GetSimulatorFeatures` lists them.
 pub const FEATURES: [u16; 7] = [
@@ -58,11 +59,11 @@ pub enum Transition {
 
 /// The five servers.
 pub struct Services {
-    features: Server<GetSimulatorFeaturesRequest, GetSimulatorFeaturesResponse>,
-    get_state: Server<GetSimulationStateRequest, GetSimulationStateResponse>,
-    set_state: Server<SetSimulationStateRequest, SetSimulationStateResponse>,
-    reset: Server<ResetSimulationRequest, ResetSimulationResponse>,
-    step: Server<StepSimulationRequest, StepSimulationResponse>,
+    features: Service<GetSimulatorFeaturesRequest, GetSimulatorFeaturesResponse>,
+    get_state: Service<GetSimulationStateRequest, GetSimulationStateResponse>,
+    set_state: Service<SetSimulationStateRequest, SetSimulationStateResponse>,
+    reset: Service<ResetSimulationRequest, ResetSimulationResponse>,
+    step: Service<StepSimulationRequest, StepSimulationResponse>,
 }
 
 /// A `simulation_interfaces/msg/Result`.
@@ -80,16 +81,23 @@ fn ok() -> ResultMsg {
 }
 
 impl Services {
-    /// Serve the five services under namespace `ns` with QoS `qos` for requests and replies.
+    /// Serve the five services under namespace `ns` with QoS `qos` for requests and replies;
+    /// replies wait for the clients' reply readers in `readers`.
     ///
     /// # Errors
     ///
     /// DDS could not create a service.
-    pub fn new(node: &mut Node, ns: &str, qos: &QosProfile) -> Result<Services, String> {
+    pub fn new(
+        node: &mut Node,
+        readers: &Arc<ReplyReaders>,
+        ns: &str,
+        qos: &QosProfile,
+    ) -> Result<Services, String> {
         let p = "simulation_interfaces";
         Ok(Services {
             features: server(
                 node,
+                readers,
                 ns,
                 "get_simulator_features",
                 p,
@@ -98,6 +106,7 @@ impl Services {
             )?,
             get_state: server(
                 node,
+                readers,
                 ns,
                 "get_simulation_state",
                 p,
@@ -106,21 +115,39 @@ impl Services {
             )?,
             set_state: server(
                 node,
+                readers,
                 ns,
                 "set_simulation_state",
                 p,
                 "SetSimulationState",
                 qos,
             )?,
-            reset: server(node, ns, "reset_simulation", p, "ResetSimulation", qos)?,
-            step: server(node, ns, "step_simulation", p, "StepSimulation", qos)?,
+            reset: server(
+                node,
+                readers,
+                ns,
+                "reset_simulation",
+                p,
+                "ResetSimulation",
+                qos,
+            )?,
+            step: server(
+                node,
+                readers,
+                ns,
+                "step_simulation",
+                p,
+                "StepSimulation",
+                qos,
+            )?,
         })
     }
 
     /// Answer the feature and state queries (the simulation is in `state`) and return the
     /// other requests received, for the main loop.
-    pub fn poll(&self, state: u8) -> Vec<Request> {
-        while let Ok(Some((id, _))) = self.features.receive_request() {
+    pub fn poll(&mut self, state: u8) -> Vec<Request> {
+        self.flush();
+        while let Some((id, _)) = self.features.take() {
             let features = SimulatorFeatures {
                 features: FEATURES.to_vec(),
                 spawn_formats: Vec::new(),
@@ -129,43 +156,51 @@ impl Services {
                     env!("CARGO_PKG_VERSION")
                 ),
             };
-            let _ = self
-                .features
-                .send_response(id, GetSimulatorFeaturesResponse { features });
+            self.features
+                .reply(id, GetSimulatorFeaturesResponse { features });
         }
-        while let Ok(Some((id, _))) = self.get_state.receive_request() {
+        while let Some((id, _)) = self.get_state.take() {
             let response = GetSimulationStateResponse {
                 state: SimulationState { state },
                 result: ok(),
             };
-            let _ = self.get_state.send_response(id, response);
+            self.get_state.reply(id, response);
         }
         let mut out = Vec::new();
-        while let Ok(Some((id, r))) = self.set_state.receive_request() {
+        while let Some((id, r)) = self.set_state.take() {
             out.push(Request::SetState(id, r.state.state));
         }
-        while let Ok(Some((id, r))) = self.reset.receive_request() {
+        while let Some((id, r)) = self.reset.take() {
             out.push(Request::Reset(id, r.scope));
         }
-        while let Ok(Some((id, r))) = self.step.receive_request() {
+        while let Some((id, r)) = self.step.take() {
             out.push(Request::Step(id, r.steps));
         }
         out
     }
 
+    /// Write the replies held whose clients can now receive them (see
+    /// [`crate::service`]); true if replies still wait.
+    pub fn flush(&mut self) -> bool {
+        let waiting = [
+            self.features.flush(),
+            self.get_state.flush(),
+            self.set_state.flush(),
+            self.reset.flush(),
+            self.step.flush(),
+        ];
+        waiting.contains(&true)
+    }
+
     /// Answer `request` with `result`.
-    pub fn answer(&self, request: Request, result: ResultMsg) {
-        let _ = match request {
+    pub fn answer(&mut self, request: Request, result: ResultMsg) {
+        match request {
             Request::SetState(id, _) => self
                 .set_state
-                .send_response(id, SetSimulationStateResponse { result }),
-            Request::Reset(id, _) => self
-                .reset
-                .send_response(id, ResetSimulationResponse { result }),
-            Request::Step(id, _) => self
-                .step
-                .send_response(id, StepSimulationResponse { result }),
-        };
+                .reply(id, SetSimulationStateResponse { result }),
+            Request::Reset(id, _) => self.reset.reply(id, ResetSimulationResponse { result }),
+            Request::Step(id, _) => self.step.reply(id, StepSimulationResponse { result }),
+        }
     }
 }
 

@@ -15,6 +15,7 @@ use crate::frame::Sample;
 use crate::msgs::Float64;
 use crate::msgs::ResultMsg;
 use crate::params::{Parameters, Settings};
+use crate::service::ReplyReaders;
 use crate::Topic;
 use rkforge_core::Scene;
 use ros2_client::dds::rustdds::Topic as DdsTopic;
@@ -23,6 +24,7 @@ use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 use serde::ser::SerializeTuple;
 use serde::{Serialize, Serializer};
+use std::sync::Arc;
 
 /// Largest `ROS_DOMAIN_ID` (the ROS 2 documentation's limit for the default port mapping).
 pub const MAX_DOMAIN_ID: u16 = 232;
@@ -201,15 +203,16 @@ impl Node {
             }
         }
         // Services: reliable and volatile, as rmw's default for services.
-        let parameters = Parameters::new(&mut node, ns, "rkforge", &qos_of(true, false))?;
-        let services = Services::new(&mut node, ns, &qos_of(true, false))?;
+        let readers = Arc::new(ReplyReaders::watch(context.domain_participant())?);
+        let parameters = Parameters::new(&mut node, &readers, ns, "rkforge", &qos_of(true, false))?;
+        let services = Services::new(&mut node, &readers, ns, &qos_of(true, false))?;
         // The action's status: reliable, transient local, keep last 1 (rcl_action's default).
         let status = QosProfile {
             history: History::KeepLast { depth: 1 },
             ..qos_of(true, true)
         };
         let reliable = qos_of(true, false);
-        let action = StepsAction::new(&mut node, ns, &reliable, &reliable, &status)?;
+        let action = StepsAction::new(&mut node, &readers, ns, &reliable, &reliable, &status)?;
         Ok(Node {
             publishers,
             parameters,
@@ -246,20 +249,32 @@ impl Node {
 
     /// Answer the parameter requests received since the last call (see
     /// [`params`](crate::params)); true if a setting changed.
-    pub fn serve_parameters(&self, settings: &mut Settings) -> bool {
+    pub fn serve_parameters(&mut self, settings: &mut Settings) -> bool {
         self.parameters.serve(settings)
     }
 
     /// Answer the simulator feature and state queries (the simulation is in `state`, a
     /// `SimulationState` value) and return the other `simulation_interfaces` requests
     /// received since the last call (see [`control`](crate::control)).
-    pub fn poll_services(&self, state: u8) -> Vec<Request> {
+    pub fn poll_services(&mut self, state: u8) -> Vec<Request> {
         self.services.poll(state)
     }
 
     /// Answer a request returned by [`Node::poll_services`].
-    pub fn answer(&self, request: Request, result: ResultMsg) {
+    pub fn answer(&mut self, request: Request, result: ResultMsg) {
         self.services.answer(request, result);
+    }
+
+    /// Write the replies held for clients whose reply readers have now matched (see
+    /// [`service`](crate::service)); true if replies still wait (for at most
+    /// [`HOLD`](crate::service::HOLD)).
+    pub fn flush_replies(&mut self) -> bool {
+        let waiting = [
+            self.parameters.flush(),
+            self.services.flush(),
+            self.action.flush(),
+        ];
+        waiting.contains(&true)
     }
 
     /// The `SimulateSteps` action server (see [`action`](crate::action)).

@@ -206,6 +206,10 @@ fn run(a: &Args) -> Result<(), String> {
         r
     });
     let loop_wall = wall.elapsed().as_secs_f64();
+    // The last replies (e.g. to STATE_QUITTING) reach their clients before the node ends.
+    while node.flush_replies() {
+        std::thread::sleep(POLL);
+    }
     std::thread::sleep(LINGER);
     let stopped = stop.load(Ordering::SeqCst);
     let figures = summary(&sim, &outcome, stopped, node.dropped(), loop_wall);

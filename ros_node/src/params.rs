@@ -11,8 +11,8 @@
 //!
 //! A refused value is answered with `successful = false` and the reason.
 
-use crate::service::server;
-use ros2_client::dds::{Node, Server};
+use crate::service::{server, ReplyReaders, Service};
+use ros2_client::dds::Node;
 use ros2_client::parameters::raw::{
     FloatingPointRange, Parameter, ParameterDescriptor, ParameterType, ParameterValue,
     SetParametersResult,
@@ -23,6 +23,7 @@ use ros2_client::rcl_interfaces::{
     SetParametersRequest, SetParametersResponse,
 };
 use ros2_client::QosProfile;
+use std::sync::Arc;
 
 /// The settings that parameters change while the node runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,22 +41,23 @@ const NAMES: [&str; 3] = ["lockstep", "publish_rate", "real_time_factor"];
 
 /// The four parameter services of the node.
 pub struct Parameters {
-    list: Server<ListParametersRequest, ListParametersResponse>,
-    get: Server<GetParametersRequest, GetParametersResponse>,
-    set: Server<SetParametersRequest, SetParametersResponse>,
-    describe: Server<DescribeParametersRequest, DescribeParametersResponse>,
+    list: Service<ListParametersRequest, ListParametersResponse>,
+    get: Service<GetParametersRequest, GetParametersResponse>,
+    set: Service<SetParametersRequest, SetParametersResponse>,
+    describe: Service<DescribeParametersRequest, DescribeParametersResponse>,
 }
 
 impl Parameters {
     /// Serve the parameter services of node `node_name` in namespace `ns` (topics
     /// `rq/<ns>/<node_name>/<service>Request` and `rr/...Reply`) with QoS `qos` for requests
-    /// and replies.
+    /// and replies; replies wait for the clients' reply readers in `readers`.
     ///
     /// # Errors
     ///
     /// DDS could not create a service.
     pub fn new(
         node: &mut Node,
+        readers: &Arc<ReplyReaders>,
         ns: &str,
         node_name: &str,
         qos: &QosProfile,
@@ -64,6 +66,7 @@ impl Parameters {
         Ok(Parameters {
             list: server(
                 node,
+                readers,
                 &base,
                 "list_parameters",
                 "rcl_interfaces",
@@ -72,6 +75,7 @@ impl Parameters {
             )?,
             get: server(
                 node,
+                readers,
                 &base,
                 "get_parameters",
                 "rcl_interfaces",
@@ -80,6 +84,7 @@ impl Parameters {
             )?,
             set: server(
                 node,
+                readers,
                 &base,
                 "set_parameters",
                 "rcl_interfaces",
@@ -88,6 +93,7 @@ impl Parameters {
             )?,
             describe: server(
                 node,
+                readers,
                 &base,
                 "describe_parameters",
                 "rcl_interfaces",
@@ -97,30 +103,40 @@ impl Parameters {
         })
     }
 
+    /// Write the replies held whose clients can now receive them (see
+    /// [`crate::service`]); true if replies still wait.
+    pub fn flush(&mut self) -> bool {
+        let waiting = [
+            self.list.flush(),
+            self.get.flush(),
+            self.describe.flush(),
+            self.set.flush(),
+        ];
+        waiting.contains(&true)
+    }
+
     /// Answer every pending request; set requests change `settings`. True if a setting
     /// changed.
-    pub fn serve(&self, settings: &mut Settings) -> bool {
+    pub fn serve(&mut self, settings: &mut Settings) -> bool {
+        self.flush();
         let mut changed = false;
-        while let Ok(Some((id, _))) = self.list.receive_request() {
+        while let Some((id, _)) = self.list.take() {
             let result = ListParametersResult {
                 names: NAMES.iter().map(|n| (*n).to_owned()).collect(),
                 prefixes: Vec::new(),
             };
-            let _ = self
-                .list
-                .send_response(id, ListParametersResponse { result });
+            self.list.reply(id, ListParametersResponse { result });
         }
-        while let Ok(Some((id, req))) = self.get.receive_request() {
+        while let Some((id, req)) = self.get.take() {
             let values = req.names.iter().map(|n| value(settings, n)).collect();
-            let _ = self.get.send_response(id, GetParametersResponse { values });
+            self.get.reply(id, GetParametersResponse { values });
         }
-        while let Ok(Some((id, req))) = self.describe.receive_request() {
+        while let Some((id, req)) = self.describe.take() {
             let values = req.names.iter().map(|n| describe(n)).collect();
-            let _ = self
-                .describe
-                .send_response(id, DescribeParametersResponse { values });
+            self.describe
+                .reply(id, DescribeParametersResponse { values });
         }
-        while let Ok(Some((id, req))) = self.set.receive_request() {
+        while let Some((id, req)) = self.set.take() {
             let results = req
                 .parameter
                 .iter()
@@ -133,9 +149,7 @@ impl Parameters {
                     }
                 })
                 .collect();
-            let _ = self
-                .set
-                .send_response(id, SetParametersResponse { results });
+            self.set.reply(id, SetParametersResponse { results });
         }
         changed
     }
