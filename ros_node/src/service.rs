@@ -8,8 +8,10 @@
 //! client's reply reader. A volatile writer never delivers a sample written before a reader
 //! matched, so a reply written then is lost and the client waits forever. The node therefore
 //! holds each reply in an [`Outbox`] until its writer has matched the client's reply reader,
-//! reported by [`ReplyReaders`]. `rmw_cyclonedds_cpp`'s `rmw_send_response` waits for the
-//! same match (blocking, for at most 100 ms); the node's loop goes on while a reply waits.
+//! reported by [`ReplyReaders`], and the first reply to a reader [`FIRST_REPLY_DELAY`] more,
+//! for the reader's first heartbeat. `rmw_cyclonedds_cpp`'s `rmw_send_response` waits for
+//! the same match (blocking, for at most 100 ms); the node's loop goes on while a reply
+//! waits.
 
 use ros2_client::dds::rustdds::{
     DomainParticipant, DomainParticipantStatusEvent, StatusEvented, GUID,
@@ -17,7 +19,7 @@ use ros2_client::dds::rustdds::{
 use ros2_client::dds::{Node as RosNode, Server, ServiceMapping};
 use ros2_client::service::RmwRequestId;
 use ros2_client::{Message, Name, NodeName, QosProfile, ServiceTypeName};
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
@@ -26,6 +28,22 @@ use std::time::{Duration, Instant};
 /// How long a reply waits for its client's reply reader to match before it is written
 /// anyway (with a warning): discovery can take seconds on a loaded machine.
 pub const HOLD: Duration = Duration::from_secs(10);
+
+/// How long the first reply to a client's reply reader waits after both its request arrived
+/// and the node's writer matched the reader.
+///
+/// A Cyclone DDS volatile reader (rclcpp's default through `rmw_cyclonedds_cpp`) accepts no
+/// data from another vendor's writer before it has processed a heartbeat from it, and takes
+/// that first heartbeat's last sequence number as the start of the session: what the writer
+/// had written by then is never delivered ("the first samples written after matching the
+/// reader may be lost", in Cyclone's source). The reader asks for that heartbeat once it has
+/// matched the writer (a pre-emptive ACKNACK, 10 ms later in the traces), and the client
+/// sends its request only after that match. A reply written at once can be data that the
+/// first heartbeat already counts: rustdds sends the data by multicast and its answer to the
+/// ACKNACK by unicast, and a loaded receiver can take them in either order (measured: 1 run
+/// in 10 of the ROS tests with both cores busy lost a reply so). Waiting this long lets the
+/// reader process a heartbeat first; later replies to the same reader go out at once.
+pub const FIRST_REPLY_DELAY: Duration = Duration::from_millis(200);
 
 /// How often the watcher thread drains the participant's status events.
 const WATCH_PERIOD: Duration = Duration::from_millis(1);
@@ -128,10 +146,11 @@ struct Held<T> {
 }
 
 /// The replies of one service's reply topic (`rr/NS/SERVICEReply`) that wait for their
-/// client's reply reader to match, in the order received.
+/// client's reply reader to match, in the order received, and the readers answered so far.
 pub(crate) struct Outbox<T> {
     topic: String,
     held: Vec<Held<T>>,
+    answered: HashSet<GUID>,
 }
 
 impl<T> Outbox<T> {
@@ -140,6 +159,7 @@ impl<T> Outbox<T> {
         Outbox {
             topic: topic.to_owned(),
             held: Vec::new(),
+            answered: HashSet::new(),
         }
     }
 
@@ -172,30 +192,43 @@ impl<T> Outbox<T> {
     }
 
     /// Take out the replies to write at `now`, in the order received: those whose client's
-    /// reply reader has matched (`matched(reply topic, request)`), and those held longer
-    /// than [`HOLD`] (with a warning: the client may never see them).
+    /// reply reader has matched (`matched(reply topic, request)` gives the reader and the
+    /// time of the match) and has been answered before, or [`FIRST_REPLY_DELAY`] has passed
+    /// since both the request and the match; and those held longer than [`HOLD`] (with a
+    /// warning: the client may never see them).
     fn ready_at(
         &mut self,
         now: Instant,
-        matched: impl Fn(&str, RmwRequestId) -> bool,
+        matched: impl Fn(&str, RmwRequestId) -> Option<(GUID, Instant)>,
     ) -> Vec<(RmwRequestId, T)> {
-        let (ready, wait): (Vec<_>, Vec<_>) = std::mem::take(&mut self.held)
-            .into_iter()
-            .partition(|h| {
-                matched(&self.topic, h.id) || {
-                    let late = now.duration_since(h.since) >= HOLD;
-                    if late {
-                        eprintln!(
-                            "warning: the reply reader of the client of {} has not matched after {} s; the reply is written anyway",
-                            self.service(),
-                            HOLD.as_secs()
-                        );
-                    }
-                    late
+        let mut ready = Vec::new();
+        for h in std::mem::take(&mut self.held) {
+            let waited = now.duration_since(h.since);
+            let go = match matched(&self.topic, h.id) {
+                Some((reader, at))
+                    if self.answered.contains(&reader)
+                        || now.duration_since(at.max(h.since)) >= FIRST_REPLY_DELAY =>
+                {
+                    self.answered.insert(reader);
+                    true
                 }
-            });
-        self.held = wait;
-        ready.into_iter().map(|h| (h.id, h.reply)).collect()
+                _ if waited >= HOLD => {
+                    eprintln!(
+                        "warning: the reply reader of the client of {} has not matched after {} s; the reply is written anyway",
+                        self.service(),
+                        HOLD.as_secs()
+                    );
+                    true
+                }
+                _ => false,
+            };
+            if go {
+                ready.push((h.id, h.reply));
+            } else {
+                self.held.push(h);
+            }
+        }
+        ready
     }
 }
 
@@ -203,7 +236,8 @@ impl<T> Outbox<T> {
 /// `RemoteReaderMatched` events, which a thread collects as they come.
 pub struct ReplyReaders {
     participant: DomainParticipant,
-    matched: Arc<Mutex<HashSet<GUID>>>,
+    /// Each reader matched and when the watcher saw it.
+    matched: Arc<Mutex<HashMap<GUID, Instant>>>,
     stop: Arc<AtomicBool>,
     watcher: Option<JoinHandle<()>>,
 }
@@ -215,7 +249,7 @@ impl ReplyReaders {
     ///
     /// The thread could not be started.
     pub fn watch(participant: DomainParticipant) -> Result<ReplyReaders, String> {
-        let matched = Arc::new(Mutex::new(HashSet::new()));
+        let matched = Arc::new(Mutex::new(HashMap::new()));
         let stop = Arc::new(AtomicBool::new(false));
         let listener = participant.status_listener();
         let (m, s) = (Arc::clone(&matched), Arc::clone(&stop));
@@ -231,7 +265,8 @@ impl ReplyReaders {
                         {
                             m.lock()
                                 .unwrap_or_else(PoisonError::into_inner)
-                                .insert(remote_reader);
+                                .entry(remote_reader)
+                                .or_insert_with(Instant::now);
                         }
                     }
                     std::thread::sleep(WATCH_PERIOD);
@@ -246,19 +281,21 @@ impl ReplyReaders {
         })
     }
 
-    /// True if a reader on DDS topic `topic` in the participant of the client of request
-    /// `id` has been matched. The Cyclone request header carries the first 8 bytes of the
-    /// client's GUID prefix (the participant's), so clients in two participants of one
-    /// process whose prefixes share those bytes are not told apart.
-    pub fn matched(&self, topic: &str, id: RmwRequestId) -> bool {
+    /// The reader on DDS topic `topic` in the participant of the client of request `id` and
+    /// when the node's writer matched it, if it has. The Cyclone request header carries the
+    /// first 8 bytes of the client's GUID prefix (the participant's), so clients in two
+    /// participants of one process whose prefixes share those bytes are not told apart.
+    pub fn matched(&self, topic: &str, id: RmwRequestId) -> Option<(GUID, Instant)> {
         let client = id.writer_gid.to_bytes16();
         let matched = self.matched.lock().unwrap_or_else(PoisonError::into_inner);
-        self.participant.discovered_readers().iter().any(|r| {
-            let guid = r.reader_proxy.remote_reader_guid;
-            r.subscription_topic_data.topic_name == topic
-                && guid.to_bytes()[..8] == client[..8]
-                && matched.contains(&guid)
-        })
+        self.participant
+            .discovered_readers()
+            .iter()
+            .map(|r| (r, r.reader_proxy.remote_reader_guid))
+            .filter(|(r, guid)| {
+                r.subscription_topic_data.topic_name == topic && guid.to_bytes()[..8] == client[..8]
+            })
+            .find_map(|(_, guid)| matched.get(&guid).map(|at| (guid, *at)))
     }
 }
 
@@ -288,29 +325,68 @@ mod tests {
         }
     }
 
+    /// The reply reader of client `client` (see [`request`]).
+    fn reader(client: u8) -> GUID {
+        let mut guid = [0; 16];
+        guid[0] = client;
+        guid[15] = 4;
+        GUID::from_bytes(guid)
+    }
+
+    /// When the readers of [`all_matched`] matched.
+    fn long_ago() -> Instant {
+        static T: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+        *T.get_or_init(Instant::now)
+    }
+
+    /// Every client's reply reader has matched, at [`long_ago`].
+    fn all_matched(topic: &str, id: RmwRequestId) -> Option<(GUID, Instant)> {
+        (topic == TOPIC).then(|| (reader(id.writer_gid.to_bytes16()[0]), long_ago()))
+    }
+
     #[test]
-    fn a_reply_to_a_matched_client_goes_out_at_once() {
-        let t0 = Instant::now();
+    fn the_first_reply_to_a_reader_waits_the_delay_and_later_ones_go_at_once() {
+        let t0 = long_ago() + Duration::from_secs(1);
         let mut outbox = Outbox::new(TOPIC);
-        outbox.push(request(1, 1), "a", t0);
-        let ready = outbox.ready_at(t0, |topic, _| topic == TOPIC);
-        assert_eq!(ready, vec![(request(1, 1), "a")]);
-        assert!(outbox.held.is_empty());
+        outbox.push(request(1, 1), "first", t0);
+        assert!(outbox.ready_at(t0, all_matched).is_empty());
+        let early = t0 + FIRST_REPLY_DELAY - Duration::from_millis(1);
+        assert!(outbox.ready_at(early, all_matched).is_empty());
+        let ready = outbox.ready_at(t0 + FIRST_REPLY_DELAY, all_matched);
+        assert_eq!(ready, vec![(request(1, 1), "first")]);
+        let t1 = t0 + Duration::from_secs(1);
+        outbox.push(request(1, 2), "second", t1);
+        let second = outbox.ready_at(t1, all_matched);
+        assert_eq!(second, vec![(request(1, 2), "second")]);
+        assert!(outbox.is_empty());
         assert_eq!(outbox.service(), "/rkforge/get_simulation_state");
     }
 
     #[test]
-    fn a_reply_waits_for_its_clients_reader_and_others_pass_it() {
+    fn a_reader_that_matches_after_the_request_gets_the_delay_from_its_match() {
         let t0 = Instant::now();
+        let mut outbox = Outbox::new(TOPIC);
+        outbox.push(request(1, 1), "a", t0);
+        let match_at = t0 + Duration::from_secs(2);
+        let matched = |_: &str, _| Some((reader(1), match_at));
+        assert!(outbox.ready_at(match_at, matched).is_empty());
+        let ready = outbox.ready_at(match_at + FIRST_REPLY_DELAY, matched);
+        assert_eq!(ready, vec![(request(1, 1), "a")]);
+    }
+
+    #[test]
+    fn a_reply_waits_for_its_clients_reader_and_others_pass_it() {
+        let t0 = long_ago() + Duration::from_secs(1);
         let mut outbox = Outbox::new(TOPIC);
         outbox.push(request(1, 1), "late client", t0);
         outbox.push(request(2, 1), "matched client", t0);
         outbox.push(request(1, 2), "late client again", t0);
-        let client_2 = |_: &str, id: RmwRequestId| id.writer_gid.to_bytes16()[0] == 2;
+        let client_2 =
+            |topic: &str, id: RmwRequestId| all_matched(topic, id).filter(|r| r.0 == reader(2));
         let first = outbox.ready_at(t0 + Duration::from_secs(1), client_2);
         assert_eq!(first, vec![(request(2, 1), "matched client")]);
         // Client 1's reader matches: its replies go out in the order of the requests.
-        let later = outbox.ready_at(t0 + Duration::from_secs(2), |_, _| true);
+        let later = outbox.ready_at(t0 + Duration::from_secs(2), all_matched);
         assert_eq!(
             later,
             vec![
@@ -318,7 +394,7 @@ mod tests {
                 (request(1, 2), "late client again")
             ]
         );
-        assert!(outbox.ready_at(t0 + HOLD * 2, |_, _| true).is_empty());
+        assert!(outbox.ready_at(t0 + HOLD * 2, all_matched).is_empty());
     }
 
     #[test]
@@ -326,7 +402,7 @@ mod tests {
         let t0 = Instant::now();
         let mut outbox = Outbox::new(TOPIC);
         outbox.push(request(1, 1), "a", t0);
-        let never = |_: &str, _| false;
+        let never = |_: &str, _| None;
         assert!(outbox
             .ready_at(t0 + HOLD - Duration::from_millis(1), never)
             .is_empty());
