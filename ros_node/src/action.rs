@@ -14,7 +14,7 @@
 //! aborted. A canceled goal stops after the step under way.
 
 use crate::msgs::{ResultMsg, SimulateStepsFeedback, SimulateStepsGoal, SimulateStepsResult};
-use crate::service::{Outbox, ReplyReaders};
+use crate::service::{reply_topic, Outbox, ReplyReaders};
 use ros2_client::action::{ActionServerQosPolicies, GetResultResponse, SendGoalResponse};
 use ros2_client::action_msgs::{
     CancelGoalRequest, CancelGoalResponse, CancelGoalResponseEnum, GoalInfo, GoalStatus,
@@ -24,7 +24,7 @@ pub use ros2_client::action_msgs::{GoalId, GoalStatusEnum};
 use ros2_client::builtin_interfaces::Time;
 use ros2_client::dds::{ActionServer, Node, ServiceMapping};
 use ros2_client::service::RmwRequestId;
-use ros2_client::{ActionTypeName, Name, NodeName, QosProfile};
+use ros2_client::{ActionTypeName, Name, QosProfile};
 use serde::Deserialize;
 use std::sync::Arc;
 use std::time::Instant;
@@ -89,17 +89,14 @@ impl StepsAction {
                 qos,
             )
             .map_err(|e| format!("cannot serve the action {ns}/simulate_steps: {e:?}"))?;
-        let node_name = NodeName::new(node.namespace(), "rkforge")
-            .map_err(|e| format!("namespace {}: {e:?}", node.namespace()))?;
-        let reply_topic =
-            |service: &str| name.to_dds_name("rr", &node_name, &format!("/_action/{service}Reply"));
+        let topic = |service: &str| reply_topic(node, &name, &format!("/_action/{service}"));
         Ok(StepsAction {
+            goal_replies: Outbox::new(&topic("send_goal")?),
+            result_replies: Outbox::new(&topic("get_result")?),
+            cancel_replies: Outbox::new(&topic("cancel_goal")?),
             server,
             goals: Vec::new(),
             waiting: Vec::new(),
-            goal_replies: Outbox::new(&reply_topic("send_goal")),
-            result_replies: Outbox::new(&reply_topic("get_result")),
-            cancel_replies: Outbox::new(&reply_topic("cancel_goal")),
             readers: Arc::clone(readers),
         })
     }
@@ -110,7 +107,7 @@ impl StepsAction {
     pub fn poll(&mut self) -> Vec<(GoalId, u64)> {
         self.flush();
         let mut accepted = Vec::new();
-        while let Some((request, r)) = received(self.server.receive_goal(), &self.goal_replies) {
+        while let Some((request, r)) = self.goal_replies.received(self.server.receive_goal()) {
             let stamp = Time::now();
             let new = self.find(r.goal_id).is_none();
             if new {
@@ -136,8 +133,9 @@ impl StepsAction {
         if !accepted.is_empty() {
             self.publish_status();
         }
-        while let Some((request, r)) =
-            received(self.server.receive_result_request(), &self.result_replies)
+        while let Some((request, r)) = self
+            .result_replies
+            .received(self.server.receive_result_request())
         {
             match self.find(r.goal_id).map(|g| (g.status, g.result.clone())) {
                 Some((status, Some(result))) => self.result_replies.push(
@@ -156,8 +154,9 @@ impl StepsAction {
                 ),
             }
         }
-        while let Some((request, r)) =
-            received(self.server.receive_cancel_request(), &self.cancel_replies)
+        while let Some((request, r)) = self
+            .cancel_replies
+            .received(self.server.receive_cancel_request())
         {
             let response = self.cancel(&r);
             self.cancel_replies.push(request, response, Instant::now());
@@ -169,23 +168,16 @@ impl StepsAction {
     /// Write the replies held whose clients can now receive them (see
     /// [`crate::service`]); true if replies still wait.
     pub fn flush(&mut self) -> bool {
-        let warn = |outbox: &str, e: &dyn std::fmt::Debug| {
-            eprintln!("warning: reply on {outbox} not written: {e:?}");
-        };
         for (id, r) in self.goal_replies.ready(&self.readers) {
-            if let Err(e) = self.server.send_goal_response(id, r) {
-                warn(self.goal_replies.service(), &e);
-            }
+            self.goal_replies
+                .written(self.server.send_goal_response(id, r));
         }
         for (id, r) in self.result_replies.ready(&self.readers) {
-            if let Err(e) = self.server.send_result(id, r) {
-                warn(self.result_replies.service(), &e);
-            }
+            self.result_replies.written(self.server.send_result(id, r));
         }
         for (id, r) in self.cancel_replies.ready(&self.readers) {
-            if let Err(e) = self.server.send_cancel_response(id, r) {
-                warn(self.cancel_replies.service(), &e);
-            }
+            self.cancel_replies
+                .written(self.server.send_cancel_response(id, r));
         }
         !(self.goal_replies.is_empty()
             && self.result_replies.is_empty()
@@ -319,18 +311,6 @@ fn cancel_target(request: &CancelGoalRequest) -> Option<GoalInfo> {
         .and_then(serde_json::from_value::<Request>)
         .ok()
         .map(|r| r.goal_info)
-}
-
-/// The request `r` received on the service of `outbox`, if any; a request that cannot be
-/// read is reported on stderr and skipped.
-fn received<T, E: std::fmt::Debug, O>(r: Result<Option<T>, E>, outbox: &Outbox<O>) -> Option<T> {
-    match r {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("warning: unreadable request on {}: {e:?}", outbox.service());
-            None
-        }
-    }
 }
 
 #[cfg(test)]

@@ -20,6 +20,7 @@ use ros2_client::dds::{Node as RosNode, Server, ServiceMapping};
 use ros2_client::service::RmwRequestId;
 use ros2_client::{Message, Name, NodeName, QosProfile, ServiceTypeName};
 use std::collections::{HashMap, HashSet};
+use std::fmt::Debug;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::thread::JoinHandle;
@@ -79,14 +80,24 @@ where
             qos.clone(),
         )
         .map_err(|e| format!("cannot serve {base}/{service}: {e:?}"))?;
+    Ok(Service {
+        server,
+        outbox: Outbox::new(&reply_topic(node, &name, "")?),
+        readers: Arc::clone(readers),
+    })
+}
+
+/// The DDS topic of the replies of service `name` + `suffix` of `node` (`rr<name><suffix>Reply`,
+/// the namespace added to a relative name), e.g. `rr/rkforge/get_parametersReply`.
+///
+/// # Errors
+///
+/// The node's namespace is not a valid ROS 2 namespace.
+pub(crate) fn reply_topic(node: &RosNode, name: &Name, suffix: &str) -> Result<String, String> {
     // Only the node's namespace enters the DDS name of a relative service name.
     let node_name = NodeName::new(node.namespace(), "rkforge")
         .map_err(|e| format!("namespace {}: {e:?}", node.namespace()))?;
-    Ok(Service {
-        server,
-        outbox: Outbox::new(&name.to_dds_name("rr", &node_name, "Reply")),
-        readers: Arc::clone(readers),
-    })
+    Ok(name.to_dds_name("rr", &node_name, &format!("{suffix}Reply")))
 }
 
 /// A service server and the replies it holds for clients not yet matched.
@@ -105,16 +116,7 @@ where
     /// stderr and ends this round of taking (the client gets no reply, as from any ROS 2
     /// server).
     pub(crate) fn take(&self) -> Option<(RmwRequestId, Req)> {
-        match self.server.receive_request() {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln!(
-                    "warning: unreadable request on {}: {e:?}",
-                    self.outbox.service()
-                );
-                None
-            }
-        }
+        self.outbox.received(self.server.receive_request())
     }
 
     /// Reply `response` to request `id`: now if the client's reply reader has matched (and,
@@ -128,12 +130,7 @@ where
     /// wait.
     pub(crate) fn flush(&mut self) -> bool {
         for (id, response) in self.outbox.ready(&self.readers) {
-            if let Err(e) = self.server.send_response(id, response) {
-                eprintln!(
-                    "warning: reply on {} not written: {e:?}",
-                    self.outbox.service()
-                );
-            }
+            self.outbox.written(self.server.send_response(id, response));
         }
         !self.outbox.is_empty()
     }
@@ -168,6 +165,22 @@ impl<T> Outbox<T> {
     pub(crate) fn service(&self) -> &str {
         let t = self.topic.strip_prefix("rr").unwrap_or(&self.topic);
         t.strip_suffix("Reply").unwrap_or(t)
+    }
+
+    /// The request that `r` (a server's take) gives, if any; an error is reported on stderr
+    /// and ends this round of taking (the client gets no reply, as from any ROS 2 server).
+    pub(crate) fn received<R, E: Debug>(&self, r: Result<Option<R>, E>) -> Option<R> {
+        r.unwrap_or_else(|e| {
+            eprintln!("warning: unreadable request on {}: {e:?}", self.service());
+            None
+        })
+    }
+
+    /// Report on stderr a reply that DDS did not take (`r`, a server's write).
+    pub(crate) fn written<E: Debug>(&self, r: Result<(), E>) {
+        if let Err(e) = r {
+            eprintln!("warning: reply on {} not written: {e:?}", self.service());
+        }
     }
 
     /// True if no reply waits.
