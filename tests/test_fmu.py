@@ -243,3 +243,11 @@ def test_two_instances_on_two_threads_match_sequential_runs(fmus):
     for t in threads:
         t.join()
     assert par["a"] == par["b"] == seq["a"] == seq["b"]
+
+
+def test_a_velocity_that_would_pass_particles_in_one_step_is_refused_naming_the_tool(fmus):
+    # 1e300 m/s used to take the top tool through the block with a force of 0.
+    s = Slave(fmus["block_forging"], params=COARSE)
+    s.set("top.velocity", 1e300)
+    raises(s, lambda: s.step(20e-6), "tool `top`", "1.0000e300 m/s", "commanded")
+    s.close()

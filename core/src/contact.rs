@@ -1,13 +1,21 @@
 //! The contact stage of a step: the paper's penalty contact (Sidibe et al. 2009, section
-//! II-3, eqs. 4-7; the force laws are in [`crate::tools`]) applied to the predicted
-//! boundary particles of the workpiece.
+//! II-3, eqs. 4-7; the force laws are in [`crate::tools`]) applied to every particle of the
+//! workpiece that can reach a tool, then the tools' convex corners against the workpiece's
+//! surface ([`crate::corners`], the second pass of a two-pass node-to-segment method).
 //!
-//! For each boundary particle `J` the predicted physical position and velocity are
-//! interpolated from the RK coefficients, `x_J = X_J + sum_I N_I(X_J) (d_I + dt v*_I)` (m)
-//! and `v_J = sum_I N_I(X_J) v*_I` (m/s); a particle behind a tool segment gets the penalty
+//! Every particle is a contact candidate, not only those that started on the boundary:
+//! material that flows around a die corner brings particles from the inside to the surface
+//! (and a Lagrangian kernel stretches the boundary ring open there). Candidates are ordered
+//! boundary ring first (counter-clockwise), then the inside particles by index.
+//!
+//! For each candidate `J` the predicted physical position and velocity are interpolated
+//! from the RK coefficients, `x_J = X_J + sum_I N_I(X_J) (d_I + dt v*_I)` (m) and
+//! `v_J = sum_I N_I(X_J) v*_I` (m/s); a particle behind a tool segment gets the penalty
 //! force of eqs. 4-6 (N), spread to the coefficients with eq. 7, `f_I += N_I(X_J) f_J`, and
-//! the tool takes the reaction. Particles that cannot have reached a tool's search box are
-//! skipped ([`Contact`]), with the bits of evaluating every one.
+//! the tool takes the reaction. The boundary ring is interpolated at every step (the
+//! corner pass needs the whole surface); an inside particle only while it may be within
+//! the search depth of a tool: its clearance ([`Contact`]) bounds its distance to every
+//! tool's polyline, so skipping it gives the bits of evaluating it.
 //!
 //! A tool without separation holds every particle that has penetrated it: from then on the
 //! particle's signed gap is taken on either side of the surface, so the normal force pulls a
@@ -18,11 +26,14 @@
 //!
 //! The shear friction factor needs each slave's flow stress and contact area
 //! ([`Interface`]): the flow stress of the integration point nearest to the particle's
-//! reference position, and the area of its tributary boundary, half of each boundary
-//! segment to its ring neighbours at their predicted positions, projected on the tool's
-//! tangent (times the depth in plane strain, times `2 pi r` at each half segment's middle in
-//! axisymmetry, so a particle on the axis has the disc `pi (l / 2)^2`).
+//! reference position, and the area of its tributary boundary: for a boundary ring particle
+//! half of each boundary segment to its ring neighbours at their predicted positions,
+//! projected on the tool's tangent; for an inside particle that reached a tool, one
+//! reference spacing `sqrt(h_x h_y)`; times the depth in plane strain, times `2 pi r` in
+//! axisymmetry (at each half segment's middle for a ring particle, so a particle on the
+//! axis has the disc `pi (l / 2)^2`).
 
+use crate::corners;
 use crate::geometry::{bounds_of, Extents};
 use crate::material::{Hardening, PointState};
 use crate::math::Real;
@@ -33,8 +44,8 @@ use crate::tools::{penalty_force, Interface, Slave, SlaveForce, Tool};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
-/// Boundary particles handled by one task of the contact stage's interpolation.
-const BOUNDARY_BLOCK: usize = 32;
+/// Candidates handled by one task of the contact stage's interpolation.
+const CANDIDATE_BLOCK: usize = 32;
 
 /// The workpiece as the contact stage reads it.
 pub struct Body<'a> {
@@ -80,8 +91,9 @@ impl Body<'_> {
     }
 }
 
-/// What the contact stage keeps for each boundary particle `k` on each tool `t` from step to
-/// step, at index `k * tools + t` (part of the saved state).
+/// What the contact stage keeps for each candidate `k` (boundary ring first, then the
+/// inside particles; [`Contact::candidates`]) on each tool `t` from step to step, at index
+/// `k * tools + t` (part of the saved state).
 pub struct Pairs<'a> {
     /// Whether the particle is held on the tool (a tool without separation; empty when
     /// every tool separates): a particle that penetrates such a tool is held from then on.
@@ -91,7 +103,7 @@ pub struct Pairs<'a> {
     pub stick: &'a mut [Option<Stick>],
 }
 
-/// A boundary particle's friction on a tool, kept from one step to the next.
+/// A particle's friction on a tool, kept from one step to the next.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Stick {
     /// The part of the last step's friction force that the corrector did not realise on
@@ -103,7 +115,7 @@ pub struct Stick {
 /// A particle-tool pair with friction that was in contact in the last contact stage.
 #[derive(Debug, Clone, Copy)]
 struct Touched {
-    /// Index `k * tools + t` of boundary particle `k` on tool `t`.
+    /// Index `k * tools + t` of candidate `k` on tool `t`.
     pair: u32,
     /// Contact normal (-).
     normal: [Real; 2],
@@ -112,46 +124,55 @@ struct Touched {
 }
 
 /// The contact forces of the last step, and what the stage keeps from step to step to skip
-/// boundary particles that cannot reach a tool. None of the latter is state: dropping it
+/// inside particles that cannot reach a tool. None of the latter is state: dropping it
 /// ([`Contact::forget`], as a restore does) only makes the next step evaluate every
-/// boundary particle.
+/// particle.
 #[derive(Debug, Clone, Default)]
 pub struct Contact {
     /// Contact force on each RK coefficient (N), eq. 7; zero where no particle touches.
     pub force: Vec<[Real; 2]>,
+    /// The contact candidates: the boundary ring (counter-clockwise), then every other
+    /// particle by index.
+    candidates: Vec<u32>,
+    /// Length of the boundary ring, the first candidates.
+    ring: usize,
     /// `dt V*` of the last two predictors (m), `V*` the largest velocity component of a
     /// particle after the predictor and `dt` the step the contact stage interpolates with.
     predicted_moves: [Real; 2],
     /// `dt V` of the last update (m), `V` the largest velocity component at the half step.
     update_move: Real,
-    /// `S_J = sum_I |N_I(X_J)|` of each boundary particle. Between two contact stages
+    /// `S_J = sum_I |N_I(X_J)|` of each candidate. Between two contact stages
     /// `u_I = d_I + dt v*_I` changes by `dt_n v_{n+1/2} + dt_{n+1} v*_{n+1} - dt_n v*_n`,
     /// at most `du = update_move + predicted_moves[0] + predicted_moves[1]` per component,
-    /// so `x_J = X_J + sum_I N_I(X_J) u_I` moves at most `S_J du` per component.
+    /// so `x_J = X_J + sum_I N_I(X_J) u_I` moves at most `S_J du` per component (and
+    /// `sqrt 2 S_J du` in distance).
     sum_abs: Vec<Real>,
-    /// Lower bound on the distance (largest component) from each boundary particle to
-    /// every tool's search box (m); positive means the particle cannot be in one.
+    /// Lower bound on how far each inside candidate must move before a tool's contact
+    /// search can find it ([`Tool::clearance`], m): positive means no contact force can act
+    /// on it (unused for the ring, which is evaluated at every step).
     pub(crate) clearance: Vec<Real>,
-    /// Predicted position (m) and velocity (m/s) of each boundary particle evaluated this
-    /// step.
+    /// Predicted position (m) and velocity (m/s) of each candidate evaluated this step.
     motion: Vec<[[Real; 2]; 2]>,
-    /// The tools' search boxes at the last step.
-    boxes: Vec<Extents>,
-    /// Skip the particles with a positive clearance (false only in the test that compares
-    /// against evaluating all of them).
+    /// The tools' strokes at the last step (m).
+    strokes: Vec<Real>,
+    /// Skip the inside particles with a positive clearance (false only in the test that
+    /// compares against evaluating all of them).
     pub(crate) skip: bool,
-    /// The integration point nearest to each boundary particle's reference position (only
-    /// when a tool's friction law needs the flow stress).
+    /// The integration point nearest to each candidate's reference position (only when a
+    /// tool's friction law needs the flow stress).
     nearest_point: Vec<u32>,
     /// The pairs with friction in contact at this step, for [`Contact::carry`].
     touched: Vec<Touched>,
+    /// The candidates that took a contact force this step: the particles whose penetration
+    /// the step checks ([`Contact::near`]).
+    near: Vec<u32>,
 }
 
 impl Contact {
-    /// The stage for a workpiece whose `boundary` particles have the rows of `nodal`, with
-    /// reference particle positions `reference` (m) and integration points at `points` (m);
-    /// `flow_stress` when a tool's friction law needs it. Every particle is evaluated at the
-    /// first step.
+    /// The stage for a workpiece whose particles have the rows of `nodal`, with the
+    /// counter-clockwise `boundary` ring, reference particle positions `reference` (m) and
+    /// integration points at `points` (m); `flow_stress` when a tool's friction law needs it.
+    /// Every particle is evaluated at the first step.
     pub fn new(
         boundary: &[u32],
         nodal: &ShapeTable,
@@ -159,41 +180,56 @@ impl Contact {
         points: &[[Real; 2]],
         flow_stress: bool,
     ) -> Contact {
+        let particles = reference.len();
+        let mut on_ring = vec![false; particles];
+        for &j in boundary {
+            on_ring[j as usize] = true;
+        }
+        let candidates: Vec<u32> = boundary
+            .iter()
+            .copied()
+            .chain((0..particles as u32).filter(|&j| !on_ring[j as usize]))
+            .collect();
         let nearest_point = if flow_stress {
-            boundary
-                .iter()
-                .map(|&j| {
-                    let x = reference[j as usize];
-                    let d2 = |p: &[Real; 2]| (p[0] - x[0]).powi(2) + (p[1] - x[1]).powi(2);
-                    (0..points.len())
-                        .min_by(|&a, &b| d2(&points[a]).total_cmp(&d2(&points[b])))
-                        .unwrap_or(0) as u32
-                })
-                .collect()
+            nearest_points(&candidates, reference, points)
         } else {
             Vec::new()
         };
-        let particles = reference.len();
         Contact {
             nearest_point,
             force: vec![[0.0; 2]; particles],
-            sum_abs: boundary
+            sum_abs: candidates
                 .iter()
                 .map(|&j| nodal.row(j as usize).map(|e| nodal.n[e].abs()).sum())
                 .collect(),
-            clearance: vec![0.0; boundary.len()],
-            motion: vec![[[0.0; 2]; 2]; boundary.len()],
+            clearance: vec![0.0; candidates.len()],
+            motion: vec![[[0.0; 2]; 2]; candidates.len()],
+            ring: boundary.len(),
+            candidates,
             skip: true,
             ..Default::default()
         }
     }
 
-    /// Forgets the clearances and the last step's search boxes, so that the next contact
-    /// stage evaluates every boundary particle (after the displacements were set from
-    /// outside).
+    /// Number of contact candidates (every particle): the pairs of [`Pairs`] are
+    /// `candidates * tools`.
+    pub fn candidate_count(&self) -> usize {
+        self.candidates.len()
+    }
+
+    /// The particles that took a contact force in the last stage: every particle that the
+    /// stage found inside a tool, at its predicted position.
+    pub fn near(&self) -> impl Iterator<Item = usize> + '_ {
+        self.near
+            .iter()
+            .map(|&k| self.candidates[k as usize] as usize)
+    }
+
+    /// Forgets the clearances and the last step's strokes, so that the next contact stage
+    /// evaluates every particle (after the displacements were set from outside).
     pub fn forget(&mut self) {
         self.clearance.fill(0.0);
-        self.boxes.clear();
+        self.strokes.clear();
         self.update_move = Real::INFINITY;
     }
 
@@ -209,17 +245,19 @@ impl Contact {
         self.update_move = bound;
     }
 
-    /// Contact of the predicted boundary positions with `tools` at `t_{n+1}` (paper eqs.
-    /// 4-7). The positions are predicted over the solver's natural step `dt` (s; equal to
-    /// the actual step except when a step is shortened to land on a requested time), where
-    /// the tools must be too, and the penalty stiffness `m_s / dt^2` uses it, so a short step
-    /// never turns a residual penetration into a huge impulse; `dt_avg` (s) is the
-    /// corrector's step. A boundary particle is interpolated only when it may be in a tool's
-    /// search box: its clearance to the boxes, measured when last interpolated, shrinks each
-    /// step by `S_J du + box_move` and while it stays positive the particle is skipped.
-    /// `pairs` holds what each boundary particle keeps on each tool from step to step.
-    /// Fills [`Contact::force`] and each tool's force (N); returns whether any force acts and
-    /// the work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
+    /// Contact of the predicted particle positions with `tools` at `t_{n+1}` (paper eqs.
+    /// 4-7), then of the tools' convex corners with the predicted surface
+    /// ([`crate::corners`]). The positions are predicted over the solver's natural step
+    /// `dt` (s; equal to the actual step except when a step is shortened to land on a
+    /// requested time), where the tools must be too, and the penalty stiffness `m_s / dt^2`
+    /// uses it, so a short step never turns a residual penetration into a huge impulse;
+    /// `dt_avg` (s) is the corrector's step. The boundary ring is interpolated at every step;
+    /// an inside particle only when it may be within the search depth of a tool: its
+    /// clearance, measured when last interpolated, shrinks each step by
+    /// `sqrt 2 S_J du + tool_move` and while it stays positive the particle is skipped.
+    /// `pairs` holds what each candidate keeps on each tool from step to step. Fills
+    /// [`Contact::force`] and each tool's force (N); returns whether any force acts and the
+    /// work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
     pub fn stage(
         &mut self,
         team: &Team,
@@ -232,6 +270,7 @@ impl Contact {
         for t in tools.iter_mut() {
             t.state.force = [0.0; 2];
         }
+        self.near.clear();
         if tools.is_empty() {
             return (false, 0.0);
         }
@@ -241,47 +280,43 @@ impl Contact {
             .iter()
             .map(|t| bounds_of(&t.vertices(), t.depth))
             .collect();
-        // How far any search box moved since the last step (a first step: unbounded).
-        let box_move = if self.boxes.len() == bounds.len() {
-            bounds
+        // How far any tool moved since the last step (a first step: unbounded).
+        let tool_move = if self.strokes.len() == tools.len() {
+            tools
                 .iter()
-                .zip(&self.boxes)
-                .flat_map(|(a, b)| {
-                    [
-                        a.x[0] - b.x[0],
-                        a.x[1] - b.x[1],
-                        a.y[0] - b.y[0],
-                        a.y[1] - b.y[1],
-                    ]
-                })
-                .fold(0.0, |m: Real, e| m.max(e.abs()))
+                .zip(&self.strokes)
+                .fold(0.0, |m: Real, (t, s)| m.max((t.state.stroke - s).abs()))
         } else {
             Real::INFINITY
         };
         // Predicted positions x_J = X_J + sum_I N_I(X_J) u_I, u_I = d_I + dt v*_I, and
-        // velocities v_J = sum_I N_I(X_J) v*_I of the boundary particles that may be in a
-        // search box: a particle's clearance to the boxes shrinks each step by at most
-        // S_J du + box_move, and while it stays positive the particle is skipped (it could
-        // not have touched a tool: the bits are those of evaluating every particle).
+        // velocities v_J = sum_I N_I(X_J) v*_I of the ring and of the inside particles that
+        // may be within the search depth of a tool: a particle's clearance shrinks each
+        // step by at most sqrt 2 S_J du + tool_move, and while it stays positive the
+        // particle is skipped (it could not have touched a tool: the bits are those of
+        // evaluating every particle).
         let Body {
-            boundary,
             nodal,
             reference,
             mass,
             spacing,
             ..
         } = *body;
-        let (np, nb) = (reference.len(), boundary.len());
-        let du = self.update_move + self.predicted_moves[0] + self.predicted_moves[1];
-        let (skip, sum_abs) = (self.skip, &self.sum_abs);
+        let (np, nc, ring) = (reference.len(), self.candidates.len(), self.ring);
+        let du = std::f64::consts::SQRT_2
+            * (self.update_move + self.predicted_moves[0] + self.predicted_moves[1]);
+        let (skip, sum_abs, candidates) = (self.skip, &self.sum_abs, &self.candidates);
         let margin = 1e-9 * spacing[0].min(spacing[1]);
+        let tools_now: &[Tool] = tools;
+        let ntools = tools.len();
+        let held_now: &[bool] = pairs.held;
         let (motion_parts, clearance_parts) = (
             Parts::new(&mut self.motion),
             Parts::new(&mut self.clearance),
         );
-        particle_phase(team, np, nb.div_ceil(BOUNDARY_BLOCK), &|b| {
-            let range = part(b, BOUNDARY_BLOCK, nb);
-            // SAFETY: block `b` alone takes these boundary particles.
+        particle_phase(team, np, nc.div_ceil(CANDIDATE_BLOCK), &|b| {
+            let range = part(b, CANDIDATE_BLOCK, nc);
+            // SAFETY: block `b` alone takes these candidates.
             let (out, clear) = unsafe {
                 (
                     motion_parts.get(range.clone()),
@@ -289,36 +324,44 @@ impl Contact {
                 )
             };
             for (k, (m, c)) in range.zip(out.iter_mut().zip(clear.iter_mut())) {
-                *c -= sum_abs[k] * du + box_move;
-                if skip && *c > 0.0 {
-                    continue;
+                if k >= ring {
+                    *c -= sum_abs[k] * du + tool_move;
+                    if skip && *c > 0.0 {
+                        continue;
+                    }
                 }
-                *m = body.predicted(boundary[k] as usize, dt);
-                let x = m[0];
-                let gap = bounds.iter().fold(Real::INFINITY, |g, b| {
-                    let dx = (b.x[0] - x[0]).max(x[0] - b.x[1]);
-                    let dy = (b.y[0] - x[1]).max(x[1] - b.y[1]);
-                    g.min(dx.max(dy))
-                });
-                *c = gap - margin;
+                *m = body.predicted(candidates[k] as usize, dt);
+                if k >= ring {
+                    let x = m[0];
+                    *c = tools_now
+                        .iter()
+                        .enumerate()
+                        .map(|(t, tool)| {
+                            let held = held_now.get(k * ntools + t).copied().unwrap_or(false);
+                            tool.clearance(x, held)
+                        })
+                        .fold(Real::INFINITY, Real::min)
+                        - margin;
+                }
             }
         });
         let mut any = false;
-        let ntools = tools.len();
         let Pairs { held, stick } = pairs;
         self.touched.clear();
-        for (k, ((&j, &[x, vj]), &c)) in boundary
+        for (k, ((&j, &[x, vj]), &c)) in self
+            .candidates
             .iter()
             .zip(&self.motion)
             .zip(&self.clearance)
             .enumerate()
         {
             let stick = &mut stick[k * ntools..(k + 1) * ntools];
-            if self.skip && c > 0.0 {
+            if k >= ring && self.skip && c > 0.0 {
                 stick.fill(None);
                 continue;
             }
             let j = j as usize;
+            let mut touches = false;
             for (t, tool) in tools.iter_mut().enumerate() {
                 let b = &bounds[t];
                 if x[0] < b.x[0] || x[0] > b.x[1] || x[1] < b.y[0] || x[1] > b.y[1] {
@@ -369,12 +412,36 @@ impl Contact {
                 tool.state.force[0] -= f[0];
                 tool.state.force[1] -= f[1];
                 tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
-                for e in nodal.row(j) {
-                    let i = nodal.index[e] as usize;
-                    let n = nodal.n[e];
-                    self.force[i][0] += n * f[0];
-                    self.force[i][1] += n * f[1];
+                spread(&mut self.force, nodal, j, f);
+                touches = true;
+            }
+            if touches {
+                self.near.push(k as u32);
+                any = true;
+            }
+        }
+        let surface = corners::Surface {
+            ring: &self.candidates[..ring],
+            motion: &self.motion[..ring],
+            mass,
+        };
+        for tool in tools.iter_mut() {
+            for corner in corners::inside(tool, &surface) {
+                let f = corners::penalty(&corner, &surface, dt, dt_avg);
+                let vt = [
+                    tool.axis[0] * tool.state.velocity,
+                    tool.axis[1] * tool.state.velocity,
+                ];
+                for (k, w) in [
+                    (corner.segment, 1.0 - corner.along),
+                    ((corner.segment + 1) % ring, corner.along),
+                ] {
+                    let fk = [w * f[0], w * f[1]];
+                    spread(&mut self.force, nodal, self.candidates[k] as usize, fk);
+                    tool_work += dt_avg * (fk[0] * vt[0] + fk[1] * vt[1]);
                 }
+                tool.state.force[0] -= f[0];
+                tool.state.force[1] -= f[1];
                 any = true;
             }
         }
@@ -382,7 +449,8 @@ impl Contact {
             let f = t.state.force;
             t.state.peak_force = t.state.peak_force.max((f[0] * f[0] + f[1] * f[1]).sqrt());
         }
-        self.boxes = bounds;
+        self.strokes.clear();
+        self.strokes.extend(tools.iter().map(|t| t.state.stroke));
         (any, tool_work)
     }
 
@@ -398,17 +466,16 @@ impl Contact {
     /// `stick` is indexed as [`Pairs::stick`].
     pub fn carry(
         &self,
-        boundary: &[u32],
         nodal: &ShapeTable,
         mass: &[Real],
         v: &[[Real; 2]],
         stick: &mut [Option<Stick>],
         dt_avg: Real,
     ) {
-        let tools = stick.len() / boundary.len().max(1);
+        let tools = stick.len() / self.candidates.len().max(1);
         for touched in &self.touched {
             let k = touched.pair as usize / tools;
-            let j = boundary[k] as usize;
+            let j = self.candidates[k] as usize;
             let mut vj = [0.0; 2];
             for e in nodal.row(j) {
                 let i = nodal.index[e] as usize;
@@ -430,8 +497,8 @@ impl Contact {
         }
     }
 
-    /// Flow stress and contact area of boundary particle `k` at its predicted position `x`
-    /// (m) on a tool surface with normal `normal` ([`Interface`]; see the module doc).
+    /// Flow stress and contact area of candidate `k` at its predicted position `x` (m) on a
+    /// tool surface with normal `normal` ([`Interface`]; see the module doc).
     fn interface(
         &self,
         body: &Body<'_>,
@@ -440,16 +507,24 @@ impl Contact {
         normal: [Real; 2],
         dt: Real,
     ) -> Interface {
-        let nb = body.boundary.len();
+        let nb = self.ring;
         let tangent = [-normal[1], normal[0]];
         let mut area = 0.0;
-        for other in [(k + nb - 1) % nb, (k + 1) % nb] {
-            let y = body.predicted(body.boundary[other] as usize, dt)[0];
-            let mid = [0.5 * (x[0] + y[0]), 0.5 * (x[1] + y[1])];
-            let length = ((mid[0] - x[0]) * tangent[0] + (mid[1] - x[1]) * tangent[1]).abs();
-            area += match body.kinematics {
+        if k < nb {
+            for other in [(k + nb - 1) % nb, (k + 1) % nb] {
+                let y = body.predicted(self.candidates[other] as usize, dt)[0];
+                let mid = [0.5 * (x[0] + y[0]), 0.5 * (x[1] + y[1])];
+                let length = ((mid[0] - x[0]) * tangent[0] + (mid[1] - x[1]) * tangent[1]).abs();
+                area += match body.kinematics {
+                    Kinematics::PlaneStrain => length * body.depth_m,
+                    Kinematics::Axisymmetric => PI * length * (x[0] + mid[0]).max(0.0),
+                };
+            }
+        } else {
+            let length = (body.spacing[0] * body.spacing[1]).sqrt();
+            area = match body.kinematics {
                 Kinematics::PlaneStrain => length * body.depth_m,
-                Kinematics::Axisymmetric => PI * length * (x[0] + mid[0]).max(0.0),
+                Kinematics::Axisymmetric => 2.0 * PI * length * x[0].max(0.0),
             };
         }
         let eps_p = body.points[self.nearest_point[k] as usize].eps_p;
@@ -458,4 +533,76 @@ impl Contact {
             area,
         }
     }
+}
+
+/// Eq. 7: the force `f` (N) on particle `j` spread to the coefficients,
+/// `f_I += N_I(X_j) f`.
+fn spread(force: &mut [[Real; 2]], nodal: &ShapeTable, j: usize, f: [Real; 2]) {
+    for e in nodal.row(j) {
+        let i = nodal.index[e] as usize;
+        let n = nodal.n[e];
+        force[i][0] += n * f[0];
+        force[i][1] += n * f[1];
+    }
+}
+
+/// The integration point nearest to each particle of `particles` (reference positions
+/// `reference`, m) among the points at `points` (m), the first of equals by index; points
+/// are binned at the largest spacing of their cloud, so each particle looks at a few bins.
+fn nearest_points(particles: &[u32], reference: &[[Real; 2]], points: &[[Real; 2]]) -> Vec<u32> {
+    let b = bounds_of(points, 0.0);
+    let span = [b.x[1] - b.x[0], b.y[1] - b.y[0]];
+    let size =
+        (span[0].max(span[1]) / (points.len() as Real).sqrt().max(1.0)).max(Real::MIN_POSITIVE);
+    let dims = [0, 1].map(|c| (span[c] / size).floor() as usize + 1);
+    let cell = |x: [Real; 2]| {
+        [
+            ((x[0] - b.x[0]) / size)
+                .floor()
+                .clamp(0.0, (dims[0] - 1) as Real) as usize,
+            ((x[1] - b.y[0]) / size)
+                .floor()
+                .clamp(0.0, (dims[1] - 1) as Real) as usize,
+        ]
+    };
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1]];
+    for (p, x) in points.iter().enumerate() {
+        let [i, j] = cell(*x);
+        bins[j * dims[0] + i].push(p as u32);
+    }
+    particles
+        .iter()
+        .map(|&j| {
+            let x = reference[j as usize];
+            let d2 = |p: u32| {
+                let q = points[p as usize];
+                (q[0] - x[0]).powi(2) + (q[1] - x[1]).powi(2)
+            };
+            let [ci, cj] = cell(x);
+            // Widen the ring of bins until it holds a point and every bin that could hold
+            // a nearer one has been seen.
+            let mut best: Option<(Real, u32)> = None;
+            for r in 0..dims[0].max(dims[1]) {
+                for bj in cj.saturating_sub(r)..=(cj + r).min(dims[1] - 1) {
+                    for bi in ci.saturating_sub(r)..=(ci + r).min(dims[0] - 1) {
+                        if bi.abs_diff(ci).max(bj.abs_diff(cj)) != r {
+                            continue;
+                        }
+                        for &p in &bins[bj * dims[0] + bi] {
+                            let d = d2(p);
+                            if best.is_none_or(|(bd, bp)| d < bd || (d == bd && p < bp)) {
+                                best = Some((d, p));
+                            }
+                        }
+                    }
+                }
+                if let Some((d, _)) = best {
+                    if d.sqrt() <= r as Real * size {
+                        break;
+                    }
+                }
+            }
+            best.map_or(0, |(_, p)| p)
+        })
+        .collect()
 }

@@ -44,6 +44,19 @@ pub enum Error {
         bound: f64,
         detail: String,
     },
+    /// A particle went deeper into a tool than the scene's bound: the contact lets material
+    /// through.
+    #[error("step {step} (t = {time:.6e} s): particle {particle} (reference position {reference:?} m) lies {depth:.3e} m ({depth_rel:.3} spacings) inside tool `{tool}`, deeper than checks.max_penetration_rel = {bound}")]
+    Penetration {
+        step: u64,
+        time: f64,
+        particle: usize,
+        reference: [f64; 2],
+        tool: String,
+        depth: f64,
+        depth_rel: f64,
+        bound: f64,
+    },
     /// The time step is above the stable step.
     #[error("step {step} (t = {time:.6e} s): time step {dt:.3e} s exceeds the stable step {dt_crit:.3e} s ({detail})")]
     Unstable {

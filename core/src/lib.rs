@@ -12,6 +12,7 @@
 
 pub mod constraints;
 pub mod contact;
+pub mod corners;
 pub mod error;
 pub mod friction;
 pub mod geometry;

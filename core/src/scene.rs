@@ -364,6 +364,17 @@ pub struct Checks {
     /// 0.02 from 10 % on).
     #[serde(default = "default_watch_from")]
     pub kinetic_to_internal_from: Real,
+    /// Deepest a particle may lie inside a tool, in smallest particle spacings (-), before
+    /// the run stops with the step, time, particle, tool and depth named. The penalty's own
+    /// penetration under forging pressures is a few thousandths of a spacing
+    /// (`g = p h dt^2 / (m_J / h)`, about `0.8 h p / (K + 4G/3)`), so 0.1 only trips when
+    /// the contact lets material through.
+    #[serde(default = "default_max_penetration")]
+    pub max_penetration_rel: Real,
+}
+
+fn default_max_penetration() -> Real {
+    0.1
 }
 
 fn default_watch_from() -> Real {
@@ -380,6 +391,7 @@ impl Default for Checks {
             energy_balance_tol: default_energy_tol(),
             kinetic_to_internal_max: None,
             kinetic_to_internal_from: default_watch_from(),
+            max_penetration_rel: default_max_penetration(),
         }
     }
 }
@@ -686,6 +698,12 @@ impl Scene {
                 format!("must be positive, got {r}"),
             );
         }
+        let pen = self.checks.max_penetration_rel;
+        check(
+            pos(pen),
+            "checks.max_penetration_rel",
+            format!("must be positive, got {pen}"),
+        );
         let from = self.checks.kinetic_to_internal_from;
         check(
             (0.0..1.0).contains(&from),

@@ -39,6 +39,10 @@ pub struct Tool {
     pub bins: SegmentBins,
     /// Largest penetration treated as contact (m).
     pub depth: Real,
+    /// Indices of the vertices where the tool is convex towards the workpiece (the
+    /// polyline turns right, the workpiece lying on its left): the corners that can cut
+    /// between two surface particles ([`crate::corners`]).
+    pub convex: Vec<u32>,
 }
 
 /// What changes while a tool moves.
@@ -83,7 +87,52 @@ impl Tool {
             },
             bins: SegmentBins::new(&spec.points_m, depth),
             depth,
+            convex: convex_vertices(&spec.points_m),
         }
+    }
+
+    /// A lower bound on how far the point `x` (m) must move before the contact search
+    /// ([`Tool::gap_above`]) can find it within the search depth (m): its distance to the
+    /// polyline prolonged by rays along its end segments (the side the search gives a point
+    /// beyond an end is the side of that ray, so a point changes side only by crossing the
+    /// prolonged polyline), less the search depth when the point is already inside (or
+    /// `held` on a tool without separation, where a gap down to minus the depth counts).
+    pub fn clearance(&self, x: [Real; 2], held: bool) -> Real {
+        let s = self.state.stroke;
+        let local = [x[0] - s * self.axis[0], x[1] - s * self.axis[1]];
+        let p = &self.points0;
+        let n = p.len();
+        let to_segment = |a: [Real; 2], t: [Real; 2], hi: Real| {
+            let u = [local[0] - a[0], local[1] - a[1]];
+            let s = ((u[0] * t[0] + u[1] * t[1]) / (t[0] * t[0] + t[1] * t[1])).clamp(0.0, hi);
+            (u[0] - s * t[0]).hypot(u[1] - s * t[1])
+        };
+        let mut d = p
+            .windows(2)
+            .map(|ab| to_segment(ab[0], [ab[1][0] - ab[0][0], ab[1][1] - ab[0][1]], 1.0))
+            .fold(Real::INFINITY, Real::min);
+        if n >= 2 {
+            let first = [p[0][0] - p[1][0], p[0][1] - p[1][1]];
+            let last = [p[n - 1][0] - p[n - 2][0], p[n - 1][1] - p[n - 2][1]];
+            d = d
+                .min(to_segment(p[0], first, Real::INFINITY))
+                .min(to_segment(p[n - 1], last, Real::INFINITY));
+        }
+        if held || self.depth_inside(x).is_some() {
+            d - self.depth
+        } else {
+            d
+        }
+    }
+
+    /// How deep the point `x` (m) lies inside the tool in its current position (m), over
+    /// every segment and at any depth: the measure of penetration, where
+    /// [`Tool::penetration`] is the contact's search within the search depth.
+    pub fn depth_inside(&self, x: [Real; 2]) -> Option<Real> {
+        let s = self.state.stroke;
+        let local = [x[0] - s * self.axis[0], x[1] - s * self.axis[1]];
+        let segments = 0..self.points0.len().saturating_sub(1);
+        gap_within(&self.points0, segments, local, 0.0, Real::INFINITY).map(|p| p.gap)
     }
 
     /// The penetration of the point `x` (m) into the tool in its current position.
@@ -98,7 +147,7 @@ impl Tool {
         let local = [x[0] - s * self.axis[0], x[1] - s * self.axis[1]];
         gap_within(
             &self.points0,
-            self.bins.candidates(local),
+            self.bins.candidates(local).iter().map(|&k| k as usize),
             local,
             below,
             self.depth,
@@ -149,6 +198,18 @@ impl Tool {
     pub fn axial_force(&self) -> Real {
         self.state.force[0] * self.axis[0] + self.state.force[1] * self.axis[1]
     }
+}
+
+/// The interior vertices of the polyline `verts` at which it turns right (clockwise): with
+/// the workpiece on the left of travel, the tool's convex corners.
+fn convex_vertices(verts: &[[Real; 2]]) -> Vec<u32> {
+    (1..verts.len().saturating_sub(1))
+        .filter(|&k| {
+            let (a, b, c) = (verts[k - 1], verts[k], verts[k + 1]);
+            (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0]) < 0.0
+        })
+        .map(|k| k as u32)
+        .collect()
 }
 
 /// A slave point's penetration of a tool: gap (m, > 0 inside) and push direction.
@@ -244,7 +305,7 @@ pub fn penetration(
     x: [Real; 2],
     depth: Real,
 ) -> Option<Penetration> {
-    gap_within(verts, candidates, x, 0.0, depth)
+    gap_within(verts, candidates.iter().map(|&k| k as usize), x, 0.0, depth)
 }
 
 /// As [`penetration`], for a gap in `(below, depth]` other than zero (`below` < 0 reaches
@@ -252,7 +313,7 @@ pub fn penetration(
 /// into the workpiece (the segment normal on a face).
 pub fn gap_within(
     verts: &[[Real; 2]],
-    candidates: &[u32],
+    candidates: impl IntoIterator<Item = usize>,
     x: [Real; 2],
     below: Real,
     depth: Real,
@@ -264,8 +325,7 @@ pub fn gap_within(
     };
     // (signed distance, negative inside; closest point; side normal; on a face interior)
     let mut best: Option<(Real, [Real; 2], [Real; 2], bool)> = None;
-    for &k in candidates {
-        let k = k as usize;
+    for k in candidates {
         let (a, b) = (verts[k], verts[k + 1]);
         let t = [b[0] - a[0], b[1] - a[1]];
         let s = ((x[0] - a[0]) * t[0] + (x[1] - a[1]) * t[1]) / (t[0] * t[0] + t[1] * t[1]);
@@ -637,14 +697,13 @@ mod tests {
     #[test]
     fn a_held_particle_in_front_of_the_wall_is_pulled_back() {
         let wall = [[0.0, 0.0], [1.0, 0.0]];
-        let all = [0u32];
-        let p = gap_within(&wall, &all, [0.5, 0.01], -0.1, 0.1).unwrap();
+        let p = gap_within(&wall, [0], [0.5, 0.01], -0.1, 0.1).unwrap();
         assert!(
             (p.gap + 0.01).abs() < 1e-15 && close(p.normal, [0.0, 1.0]),
             "{p:?}"
         );
-        assert!(gap_within(&wall, &all, [0.5, 0.2], -0.1, 0.1).is_none());
-        assert!(gap_within(&wall, &all, [0.5, 0.0], -0.1, 0.1).is_none());
+        assert!(gap_within(&wall, [0], [0.5, 0.2], -0.1, 0.1).is_none());
+        assert!(gap_within(&wall, [0], [0.5, 0.0], -0.1, 0.1).is_none());
     }
 
     #[test]

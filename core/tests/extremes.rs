@@ -121,7 +121,7 @@ fn block_forging_friction_0_05_and_1() {
         let mut sim = run(&s);
         sane(&sim, 0.01, 0.01);
         let h = sim.spacing()[0];
-        assert!(sim.measure_penetration() < 0.1 * h);
+        assert!(sim.measure_penetration().unwrap().depth < 0.1 * h);
         peaks.push(sim.tools()[0].axial_force().abs());
     }
     println!("final forces at mu 0, 0.5, 1: {peaks:?}");
@@ -196,4 +196,41 @@ fn tool_velocity_jump_and_reversal() {
         "the top tool has left"
     );
     assert!(sim.max_plastic_strain() > 0.05, "it did forge");
+}
+
+/// A tool commanded so fast that it would pass particles in one step: a velocity of 1e300
+/// m/s used to take the top tool through the block with a force of 0. Now the step
+/// shortens so that no tool moves more than half a spacing, and a speed that would shorten
+/// it below a hundredth stops the run with the tool and its velocity named.
+#[test]
+fn a_tool_too_fast_for_the_step_shortens_it_or_is_named() {
+    let mut s = common::block_at_press_speed(9, 10.0);
+    s.tools[0].motion = Motion::External {
+        initial_velocity_m_per_s: 10.0,
+    };
+    let mut sim = Simulation::new(&s).unwrap();
+    let top = sim.tool_index("top").unwrap();
+    let h = sim.spacing()[0].min(sim.spacing()[1]);
+    for _ in 0..10 {
+        sim.step(None).unwrap();
+    }
+    // Fast, but within a hundredth of the step: each step moves the tool half a spacing.
+    let fast = 0.5 * h / (0.2 * sim.next_dt());
+    sim.set_tool_velocity(top, fast).unwrap();
+    let (t0, s0) = (sim.time(), sim.tools()[top].state.stroke);
+    sim.step(None).unwrap();
+    let moved = sim.tools()[top].state.stroke - s0;
+    assert!(
+        (moved - 0.5 * h).abs() < 1e-9 * h,
+        "moved {moved} m in {} s",
+        sim.time() - t0
+    );
+    sim.set_tool_velocity(top, 1e300).unwrap();
+    match sim.step(None) {
+        Err(Error::Request(m)) => assert!(
+            m.contains("tool `top`") && m.contains("1.0000e300 m/s") && m.contains("commanded"),
+            "{m}"
+        ),
+        other => panic!("expected an error naming the tool, got {other:?}"),
+    }
 }

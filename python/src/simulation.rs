@@ -213,11 +213,12 @@ impl Simulation {
     }
 
     /// Record a history row now, as `rkforge run` does at its samples (this also updates
-    /// the run's largest penetration): a dict of history.csv's columns.
+    /// the run's largest penetration): a dict of history.csv's columns. SimulationError
+    /// when a particle lies deeper inside a tool than `checks.max_penetration_rel`.
     fn sample<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let (columns, row) = self.with(py, |s| {
             let mut history = rkforge_runner::History::new(&s.sim);
-            history.record(&mut s.sim);
+            history.record(&mut s.sim).map_err(crate::to_py)?;
             Ok((history.columns().to_vec(), history.rows()[0].clone()))
         })?;
         let d = PyDict::new(py);

@@ -82,9 +82,15 @@ impl History {
         }
     }
 
-    /// Record the current state (also updates the run's largest penetration).
-    pub fn record(&mut self, sim: &mut Simulation) {
-        let pen = sim.measure_penetration();
+    /// Record the current state. The penetration is measured over every particle against
+    /// every tool (and kept as the run's largest); a particle deeper than the scene's bound
+    /// is returned as an error, after the row is recorded.
+    pub fn record(&mut self, sim: &mut Simulation) -> Result<(), rkforge_core::Error> {
+        let measured = sim.measure_penetration();
+        let pen = match &measured {
+            Ok(p) => p.depth,
+            Err(_) => sim.max_penetration(),
+        };
         let m = measures(sim);
         let e = sim.energy();
         let h = min_spacing(sim);
@@ -124,6 +130,7 @@ impl History {
             e.kinetic_to_internal(),
         ]);
         self.rows.push(row);
+        measured.map(|_| ())
     }
 
     /// The column names: `time_s`, `dt_s`, per tool `<tool>.stroke_m` ..., `workpiece.*`,

@@ -112,14 +112,17 @@ pub fn drive(
     let mut history = History::new(sim);
     let mut output_time = Duration::ZERO;
     let clock = Instant::now();
-    history.record(sim);
+    let mut failure = history.record(sim).err().map(|e| e.to_string());
     observer.sample(sim)?;
     if frames > 0 {
         observer.frame(sim)?;
     }
     output_time += clock.elapsed();
-    let mut failure = None;
+    let mut recorded = true;
     for mark in marks {
+        if failure.is_some() {
+            break;
+        }
         if let Some(e) = observer.stop(sim) {
             failure = Some(e);
             break;
@@ -127,12 +130,13 @@ pub fn drive(
         if mark.time > sim.time() + 1e-12 * end {
             if let Err(e) = sim.run_to(mark.time, |_| {}) {
                 failure = Some(e.to_string());
+                recorded = false;
                 break;
             }
         }
         let clock = Instant::now();
         if mark.sample {
-            history.record(sim);
+            failure = history.record(sim).err().map(|e| e.to_string());
             observer.sample(sim)?;
         }
         if mark.frame {
@@ -141,9 +145,10 @@ pub fn drive(
         output_time += clock.elapsed();
         observer.progress(sim);
     }
-    if failure.is_some() {
+    if failure.is_some() && !recorded {
         let clock = Instant::now();
-        history.record(sim);
+        // The run already failed: the row is what matters here, not the bound again.
+        let _ = history.record(sim);
         observer.sample(sim)?;
         output_time += clock.elapsed();
     }

@@ -66,22 +66,6 @@ impl Simulation {
         enclosed_volume(&ring, model.kinematics, model.depth_m)
     }
 
-    /// Largest penetration of a boundary particle into a tool now (m); also kept as the
-    /// run's maximum.
-    pub fn measure_penetration(&mut self) -> Real {
-        let x = self.positions();
-        let mut worst: Real = 0.0;
-        for t in &self.tools {
-            for &j in &self.boundary {
-                if let Some(p) = t.penetration(x[j as usize]) {
-                    worst = worst.max(p.gap);
-                }
-            }
-        }
-        self.st.max_penetration = self.st.max_penetration.max(worst);
-        worst
-    }
-
     /// Bounds of the physical positions of the particles that started on `edge` (m): for
     /// the Taylor bar, `YMin`'s largest x is the impact-face radius and `YMax`'s largest y
     /// the free-face length.

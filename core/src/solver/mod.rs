@@ -35,6 +35,7 @@ mod energy;
 mod fields;
 mod layout;
 mod mass_scaling;
+mod penetration;
 mod stable_step;
 mod state;
 mod stress;
@@ -45,6 +46,7 @@ mod update;
 pub use energy::Energy;
 pub use fields::Fields;
 pub use mass_scaling::MassScalingReport;
+pub use penetration::Penetrated;
 pub use state::State;
 
 use crate::constraints::Constraints;
@@ -60,7 +62,7 @@ use crate::tools::{Tool, SEARCH_DEPTH_SPACINGS};
 use energy::StepEnergy;
 use layout::{Scatter, MAX_GROUP};
 use mass_scaling::{stiffness_bounds, Plan};
-use stable_step::landing_step;
+use stable_step::{landing_step, tool_step_limit};
 use std::f64::consts::PI;
 use std::time::{Duration, Instant};
 use stress::{has_avx2, PointOut};
@@ -258,11 +260,19 @@ impl Simulation {
         let (v, initial) = initial_motion(w.initial_velocity_m_per_s, constraints.as_ref(), &mass);
         let npts = points.positions.len();
         let stable_dt = h[0].min(h[1]) / wave_speed;
+        let contact = Contact::new(
+            &boundary,
+            &nodal,
+            &ref_pos,
+            &points.positions,
+            tools.iter().any(|t| t.friction.needs_flow_stress()),
+        );
+        let pairs = contact.candidate_count() * tools.len();
         let held = match tools.iter().all(|t| t.separation) {
             true => Vec::new(),
-            false => vec![false; boundary.len() * tools.len()],
+            false => vec![false; pairs],
         };
-        let stick = vec![None; boundary.len() * tools.len()];
+        let stick = vec![None; pairs];
         let mut sim = Simulation {
             material,
             nx,
@@ -273,13 +283,7 @@ impl Simulation {
             weights,
             inv_radius,
             scatter,
-            contact: Contact::new(
-                &boundary,
-                &nodal,
-                &ref_pos,
-                &points.positions,
-                tools.iter().any(|t| t.friction.needs_flow_stress()),
-            ),
+            contact,
             boundary,
             constraints,
             st: State {
@@ -488,11 +492,20 @@ impl Simulation {
     /// One central-difference step, at most `max_dt` long (s): the stages of the module
     /// doc, in order.
     pub fn step(&mut self, max_dt: Option<Real>) -> Result<()> {
+        // 0. A tool too fast for the step stops the run before anything changes.
+        let h_min = self.spacing[0].min(self.spacing[1]);
+        let tool_dt =
+            tool_step_limit(&self.tools, self.st.time, self.next_dt(), h_min).map_err(|what| {
+                Error::Request(format!(
+                    "step {} (t = {:.6e} s): {what}",
+                    self.st.step, self.st.time
+                ))
+            })?;
         // 1. Stress, fused with the scatter of the internal force.
         let (elastic, plastic) = self.stress_stage()?;
         // 2. Time step.
         let t1 = Instant::now();
-        let dt_full = self.next_dt();
+        let dt_full = self.next_dt().min(tool_dt);
         let dt = landing_step(dt_full, max_dt);
         if dt.is_nan() || dt <= 0.0 {
             return Err(Error::Request(format!(
@@ -559,7 +572,6 @@ impl Simulation {
         }
         if contact {
             self.contact.carry(
-                &self.boundary,
                 &self.nodal,
                 &self.mass,
                 &self.st.v,
@@ -626,6 +638,9 @@ impl Simulation {
         self.st.dt_prev = dt;
         for (t, s) in self.tools.iter().zip(self.st.tools.iter_mut()) {
             *s = t.state;
+        }
+        if contact {
+            self.check_penetration()?;
         }
         let checks = &self.scene.checks;
         self.st.energy.check(

@@ -3,6 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::math::Real;
+use crate::tools::Tool;
 
 /// Most Lanczos products for the critical step.
 const LANCZOS_MAX: usize = 300;
@@ -153,6 +154,54 @@ pub(super) fn landing_step(dt_full: Real, max_dt: Option<Real>) -> Real {
     } else {
         left / n
     }
+}
+
+/// Farthest a tool may move in one step, in smallest particle spacings: the penalty contact
+/// sees a particle only once it is behind a segment, so a tool that moved past a spacing in
+/// one step could pass particles it never saw (a velocity input of 1e300 m/s took a tool
+/// through the block with no force).
+pub const TOOL_TRAVEL_SPACINGS: Real = 0.5;
+
+/// Shortest a tool's speed may make a step, as a fraction of the natural step: below it the
+/// run stops and names the tool, instead of crawling.
+pub const TOOL_STEP_FRACTION: Real = 0.01;
+
+/// The longest step (s) in which no tool moves more than [`TOOL_TRAVEL_SPACINGS`] smallest
+/// spacings `h` (m), `0.5 h / |v|` with `|v|` the larger of each tool's speeds at `t` and
+/// `t + dt` (m/s), `dt` the natural step (infinite when no tool is that fast). A tool that
+/// would shorten the step below [`TOOL_STEP_FRACTION`] of `dt` is an error naming it and its
+/// speed.
+pub(super) fn tool_step_limit(
+    tools: &[Tool],
+    t: Real,
+    dt: Real,
+    h: Real,
+) -> std::result::Result<Real, String> {
+    let travel = TOOL_TRAVEL_SPACINGS * h;
+    let mut limited = Real::INFINITY;
+    for tool in tools.iter().filter(|t| t.is_movable()) {
+        let speed = tool
+            .velocity_at(t)
+            .abs()
+            .max(tool.velocity_at(t + dt).abs());
+        if speed * dt <= travel {
+            continue;
+        }
+        let short = travel / speed;
+        if short < TOOL_STEP_FRACTION * dt {
+            let source = match tool.state.command {
+                Some(_) => "commanded",
+                None => "in the scene",
+            };
+            return Err(format!(
+                "tool `{}`: velocity {speed:.4e} m/s ({source}) would move it {:.4e} m in one step of {dt:.4e} s, more than {TOOL_TRAVEL_SPACINGS} particle spacing ({travel:.4e} m), and the step would have to shorten below {TOOL_STEP_FRACTION} of its length; lower the tool's velocity",
+                tool.name,
+                speed * dt,
+            ));
+        }
+        limited = limited.min(short);
+    }
+    Ok(limited)
 }
 
 #[cfg(test)]

@@ -1,0 +1,237 @@
+//! The second pass of the contact stage: a tool's convex corners against the workpiece's
+//! surface, so that a die corner cannot cut between two surface particles.
+//!
+//! The particle pass ([`crate::contact`]) finds particles behind a tool segment. Where the
+//! material flows around a convex die corner, the surface particles on either side of the
+//! corner can both stay outside the tool while the corner lies inside the material between
+//! them (RK particles are points; the surface between them is the polygon through the
+//! boundary ring). A two-pass node-to-segment method (Hallquist, Goudreau and Benson 1985;
+//! Wriggers 2006, *Computational Contact Mechanics*, section 9.1) also checks the master's
+//! nodes against the slave surface: here each convex tool vertex `v` against the polygon of
+//! the predicted boundary ring positions `x_a` (counter-clockwise; in a Lagrangian
+//! description the material's surface is the image of its reference boundary).
+//!
+//! A corner inside the polygon, at the distance `g` (m) from its nearest ring segment
+//! `(a, b)` at the point `c = (1 - s) x_a + s x_b`, gets the paper's normal penalty (eq. 4)
+//! with the segment's interpolated mass `m_s = (1 - s) m_a + s m_b` (kg):
+//! `f = m_s g / (dt dt_avg) (v - c) / g` (N) on the surface, pushing the material past
+//! the corner; it is shared `(1 - s) f` and `s f` by the two ring particles, each spread to
+//! the coefficients with eq. 7, and the tool takes the reaction `-f`. The pass is
+//! frictionless: a corner touches the material over a point, where the particle pass
+//! carries the friction of the faces on either side.
+
+use crate::math::Real;
+use crate::tools::Tool;
+
+/// The workpiece's surface as the corner pass reads it.
+pub struct Surface<'a> {
+    /// The boundary ring's particles, counter-clockwise.
+    pub ring: &'a [u32],
+    /// Predicted position (m) and velocity (m/s) of each ring particle.
+    pub motion: &'a [[[Real; 2]; 2]],
+    /// Lumped masses of all particles (kg).
+    pub mass: &'a [Real],
+}
+
+/// A tool corner inside the workpiece.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Corner {
+    /// The corner's position (m).
+    pub at: [Real; 2],
+    /// Index `k` in the ring of the nearest segment `(k, k + 1)`.
+    pub segment: usize,
+    /// Where on it the nearest point lies, `s` in [0, 1] from particle `k`.
+    pub along: Real,
+    /// The nearest point `c` on the segment (m).
+    pub nearest: [Real; 2],
+    /// Distance `g` from the corner to the surface (m), at most the tool's search depth.
+    pub gap: Real,
+}
+
+/// The convex corners of `tool` (in its current position) that lie inside the polygon of
+/// the surface, within the tool's search depth of it (deeper ones would belong to material
+/// the particle pass holds).
+pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
+    let x: Vec<[Real; 2]> = surface.motion.iter().map(|m| m[0]).collect();
+    if tool.convex.is_empty() || x.len() < 3 {
+        return Vec::new();
+    }
+    let (lo, hi) = x.iter().fold(
+        ([Real::INFINITY; 2], [Real::NEG_INFINITY; 2]),
+        |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1])],
+                [hi[0].max(p[0]), hi[1].max(p[1])],
+            )
+        },
+    );
+    let s = tool.state.stroke;
+    tool.convex
+        .iter()
+        .filter_map(|&k| {
+            let p = tool.points0[k as usize];
+            let v = [p[0] + s * tool.axis[0], p[1] + s * tool.axis[1]];
+            if v[0] <= lo[0] || v[0] >= hi[0] || v[1] <= lo[1] || v[1] >= hi[1] {
+                return None;
+            }
+            if !in_polygon(&x, v) {
+                return None;
+            }
+            let corner = nearest_segment(&x, v);
+            (corner.gap > 0.0 && corner.gap <= tool.depth).then_some(corner)
+        })
+        .collect()
+}
+
+/// The surface force of a corner (N; module doc): `m_s g / (dt dt_avg)` along `v - c`,
+/// with the natural step `dt` and the corrector's step `dt_avg` (s) as the particle pass.
+pub fn penalty(corner: &Corner, surface: &Surface<'_>, dt: Real, dt_avg: Real) -> [Real; 2] {
+    let n = surface.ring.len();
+    let (a, b) = (corner.segment, (corner.segment + 1) % n);
+    let s = corner.along;
+    let m = (1.0 - s) * surface.mass[surface.ring[a] as usize]
+        + s * surface.mass[surface.ring[b] as usize];
+    let f = m / (dt * dt_avg);
+    [
+        f * (corner.at[0] - corner.nearest[0]),
+        f * (corner.at[1] - corner.nearest[1]),
+    ]
+}
+
+/// Whether `v` lies inside the closed polygon `x` (even-odd rule: a ray towards +x crosses
+/// the edges an odd number of times).
+fn in_polygon(x: &[[Real; 2]], v: [Real; 2]) -> bool {
+    let n = x.len();
+    let mut inside = false;
+    for k in 0..n {
+        let (a, b) = (x[k], x[(k + 1) % n]);
+        if (a[1] > v[1]) != (b[1] > v[1]) {
+            let cross = a[0] + (v[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if v[0] < cross {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+/// The segment of the closed polygon `x` nearest to `v`, the first of equals.
+fn nearest_segment(x: &[[Real; 2]], v: [Real; 2]) -> Corner {
+    let n = x.len();
+    let mut best = Corner {
+        at: v,
+        segment: 0,
+        along: 0.0,
+        nearest: x[0],
+        gap: Real::INFINITY,
+    };
+    for k in 0..n {
+        let (a, b) = (x[k], x[(k + 1) % n]);
+        let t = [b[0] - a[0], b[1] - a[1]];
+        let len2 = t[0] * t[0] + t[1] * t[1];
+        let s = if len2 > 0.0 {
+            (((v[0] - a[0]) * t[0] + (v[1] - a[1]) * t[1]) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let c = [a[0] + s * t[0], a[1] + s * t[1]];
+        let gap = (v[0] - c[0]).hypot(v[1] - c[1]);
+        if gap < best.gap {
+            best = Corner {
+                at: v,
+                segment: k,
+                along: s,
+                nearest: c,
+                gap,
+            };
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::friction::Friction;
+    use crate::scene::{Motion, ToolSpec};
+
+    fn tool(points: Vec<[Real; 2]>) -> Tool {
+        Tool::new(
+            &ToolSpec {
+                name: "punch".into(),
+                points_m: points,
+                axis: [0.0, -1.0],
+                motion: Motion::Fixed,
+                friction: Friction::Coulomb { mu: 0.0 },
+                separation: true,
+            },
+            0.3,
+        )
+    }
+
+    /// A unit square of material (counter-clockwise ring of 8 particles) and a punch whose
+    /// corner at (0.5, 0.9) dips 0.1 below its top face between two surface particles.
+    fn square() -> (Vec<[[Real; 2]; 2]>, Vec<u32>, Vec<Real>) {
+        let pts = [
+            [0.0, 0.0],
+            [0.5, 0.0],
+            [1.0, 0.0],
+            [1.0, 0.5],
+            [1.0, 1.0],
+            [0.5, 1.0],
+            [0.0, 1.0],
+            [0.0, 0.5],
+        ];
+        let motion = pts.iter().map(|&p| [p, [0.0; 2]]).collect();
+        ((motion), (0..8).collect(), vec![2.0; 8])
+    }
+
+    #[test]
+    fn a_corner_between_two_surface_particles_is_found_and_pushed_out() {
+        let (motion, ring, mass) = square();
+        let surface = Surface {
+            ring: &ring,
+            motion: &motion,
+            mass: &mass,
+        };
+        // The punch's face from the right at y = 1.2, down to a corner at (0.75, 0.9),
+        // then up and left: traversed with the material on its left (below).
+        let punch = tool(vec![
+            [2.0, 1.2],
+            [0.9, 1.2],
+            [0.75, 0.9],
+            [0.6, 1.2],
+            [-1.0, 1.2],
+        ]);
+        assert_eq!(punch.convex, vec![2]);
+        let found = inside(&punch, &surface);
+        assert_eq!(found.len(), 1);
+        let c = found[0];
+        assert_eq!(c.segment, 4, "between (1, 1) and (0.5, 1)");
+        assert!((c.gap - 0.1).abs() < 1e-12 && (c.along - 0.5).abs() < 1e-12);
+        let f = penalty(&c, &surface, 0.1, 0.1);
+        // m_s g / dt^2 = 2 * 0.1 / 0.01 = 20 N, down: the material is pushed past the corner.
+        assert!(f[0].abs() < 1e-12 && (f[1] + 20.0).abs() < 1e-9, "{f:?}");
+    }
+
+    #[test]
+    fn corners_outside_the_material_or_concave_ones_give_nothing() {
+        let (motion, ring, mass) = square();
+        let surface = Surface {
+            ring: &ring,
+            motion: &motion,
+            mass: &mass,
+        };
+        let above = tool(vec![
+            [2.0, 1.2],
+            [0.9, 1.2],
+            [0.75, 1.05],
+            [0.6, 1.2],
+            [-1.0, 1.2],
+        ]);
+        assert!(inside(&above, &surface).is_empty());
+        // A concave corner (the polyline turns left) is never checked.
+        let concave = tool(vec![[2.0, 0.8], [0.75, 0.9], [-1.0, 0.8]]);
+        assert!(concave.convex.is_empty());
+    }
+}
