@@ -12,7 +12,15 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// A frame kept for the stage plot: time (s), particle positions (m), plastic strain, tool outlines.
-type Shape = (f64, Vec<[f64; 2]>, Vec<f64>, Vec<Vec<[f64; 2]>>);
+/// A frame's shape for the plots: time (s), particle positions (m), plastic strain, tool
+/// polylines (m), and the tools' fill points (m) with whether each is filled.
+type Shape = (
+    f64,
+    Vec<[f64; 2]>,
+    Vec<f64>,
+    Vec<Vec<[f64; 2]>>,
+    Vec<([f64; 2], bool)>,
+);
 
 /// How to run.
 pub struct Options {
@@ -269,7 +277,12 @@ fn write_frame(
     .map_err(|e| format!("cannot write {name}: {e}"))?;
     list.push((sim.time(), format!("frames/{name}")));
     let tools = sim.tools().iter().map(|t| t.vertices()).collect();
-    shapes.push((sim.time(), f.positions, f.plastic_strain, tools));
+    let marks = sim
+        .fill_points()
+        .iter()
+        .map(|p| (p.at_m, p.filled.is_some()))
+        .collect();
+    shapes.push((sim.time(), f.positions, f.plastic_strain, tools, marks));
     Ok(())
 }
 
@@ -288,6 +301,7 @@ fn write_stages(sim: &Simulation, opts: &Options, shapes: &[Shape]) -> Result<()
         &last.2,
         "equivalent plastic strain",
         &last.3,
+        &last.4,
         axis_labels(sim),
         1e3,
     )?;
@@ -298,6 +312,7 @@ fn write_stages(sim: &Simulation, opts: &Options, shapes: &[Shape]) -> Result<()
             positions: &s.1,
             values: &s.2,
             tools: s.3.clone(),
+            marks: s.4.clone(),
         })
         .collect();
     plots::stages_plot(

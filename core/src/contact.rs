@@ -163,9 +163,9 @@ pub struct Contact {
     nearest_point: Vec<u32>,
     /// The pairs with friction in contact at this step, for [`Contact::carry`].
     touched: Vec<Touched>,
-    /// The candidates that took a contact force this step: the particles whose penetration
-    /// the step checks ([`Contact::near`]).
-    near: Vec<u32>,
+    /// The pairs `[candidate, tool]` with a contact force this step: the particles whose
+    /// penetration the step checks ([`Contact::near`]).
+    near: Vec<[u32; 2]>,
 }
 
 impl Contact {
@@ -217,12 +217,24 @@ impl Contact {
         self.candidates.len()
     }
 
-    /// The particles that took a contact force in the last stage: every particle that the
-    /// stage found inside a tool, at its predicted position.
-    pub fn near(&self) -> impl Iterator<Item = usize> + '_ {
+    /// The pairs `(particle, tool)` with a contact force in the last stage: every particle
+    /// that the stage found inside a tool, at its predicted position.
+    pub fn near(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
         self.near
             .iter()
-            .map(|&k| self.candidates[k as usize] as usize)
+            .map(|&[k, t]| (self.candidates[k as usize] as usize, t as usize))
+    }
+
+    /// Whether each particle of the boundary ring (counter-clockwise) touched `tool` in the
+    /// last stage.
+    pub fn ring_touching(&self, tool: usize) -> Vec<bool> {
+        let mut touching = vec![false; self.ring];
+        for &[k, t] in &self.near {
+            if t as usize == tool && (k as usize) < self.ring {
+                touching[k as usize] = true;
+            }
+        }
+        touching
     }
 
     /// Forgets the clearances and the last step's strokes, so that the next contact stage
@@ -361,7 +373,6 @@ impl Contact {
                 continue;
             }
             let j = j as usize;
-            let mut touches = false;
             for (t, tool) in tools.iter_mut().enumerate() {
                 let b = &bounds[t];
                 if x[0] < b.x[0] || x[0] > b.x[1] || x[1] < b.y[0] || x[1] > b.y[1] {
@@ -413,10 +424,7 @@ impl Contact {
                 tool.state.force[1] -= f[1];
                 tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
                 spread(&mut self.force, nodal, j, f);
-                touches = true;
-            }
-            if touches {
-                self.near.push(k as u32);
+                self.near.push([k as u32, t as u32]);
                 any = true;
             }
         }

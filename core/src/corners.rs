@@ -164,6 +164,7 @@ mod tests {
                 motion: Motion::Fixed,
                 friction: Friction::Coulomb { mu: 0.0 },
                 separation: true,
+                fill_points: Vec::new(),
             },
             0.3,
         )

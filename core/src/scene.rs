@@ -307,10 +307,30 @@ pub struct ToolSpec {
     /// friction law.
     #[serde(default = "default_separation")]
     pub separation: bool,
+    /// Named points of the tool's surface (cavity corners) whose filling is reported: when
+    /// the material first reached each, and which stay empty (underfill).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fill_points: Vec<FillPoint>,
+}
+
+/// A name usable in outputs and interfaces: non-empty, letters, digits and `_`.
+fn is_name(name: &str) -> bool {
+    !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 fn default_separation() -> bool {
     true
+}
+
+/// A named point of a tool's surface: the material has reached it once a particle in
+/// contact with the tool lies within `output.fill_distance_rel` smallest spacings of it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FillPoint {
+    /// Name, used in outputs (`<tool>.<name>.filled`).
+    pub name: String,
+    /// Position with the tool at its start (m); it moves with the tool.
+    pub at_m: [Real; 2],
 }
 
 /// What is recorded.
@@ -328,10 +348,18 @@ pub struct OutputSpec {
     /// Taylor bar's impact-face radius and free-face length).
     #[serde(default)]
     pub faces: Vec<Edge>,
+    /// How close (in smallest particle spacings) a particle in contact with a tool must
+    /// come to one of the tool's `fill_points` to have filled it.
+    #[serde(default = "default_fill_distance")]
+    pub fill_distance_rel: Real,
 }
 
 fn default_frames() -> usize {
     5
+}
+
+fn default_fill_distance() -> Real {
+    0.5
 }
 
 impl Default for OutputSpec {
@@ -340,6 +368,7 @@ impl Default for OutputSpec {
             history_interval_s: None,
             frames: default_frames(),
             faces: Vec::new(),
+            fill_distance_rel: default_fill_distance(),
         }
     }
 }
@@ -596,11 +625,7 @@ impl Scene {
         for (i, tool) in self.tools.iter().enumerate() {
             let key = |k: &str| format!("tools[{i}].{k}");
             check(
-                !tool.name.is_empty()
-                    && tool
-                        .name
-                        .chars()
-                        .all(|c| c.is_ascii_alphanumeric() || c == '_'),
+                is_name(&tool.name),
                 &key("name"),
                 format!(
                     "`{}` must be non-empty and use only letters, digits and `_`",
@@ -640,6 +665,19 @@ impl Scene {
             );
             for (suffix, message) in tool.friction.validate() {
                 check(false, &key(&format!("friction{suffix}")), message);
+            }
+            let mut points = std::collections::BTreeSet::new();
+            for (k, f) in tool.fill_points.iter().enumerate() {
+                check(
+                    is_name(&f.name) && points.insert(f.name.clone()),
+                    &key(&format!("fill_points[{k}].name")),
+                    format!("`{}` must be a new name of letters, digits and `_`", f.name),
+                );
+                check(
+                    f.at_m.iter().all(|c| c.is_finite()),
+                    &key(&format!("fill_points[{k}].at_m")),
+                    "must be finite".into(),
+                );
             }
             match &tool.motion {
                 Motion::Fixed => {}
@@ -698,6 +736,12 @@ impl Scene {
                 format!("must be positive, got {r}"),
             );
         }
+        let fill = self.output.fill_distance_rel;
+        check(
+            pos(fill),
+            "output.fill_distance_rel",
+            format!("must be positive, got {fill}"),
+        );
         let pen = self.checks.max_penetration_rel;
         check(
             pos(pen),

@@ -717,6 +717,7 @@ mod tests {
             },
             friction: Friction::default(),
             separation: true,
+            fill_points: Vec::new(),
         };
         let mut t = Tool::new(&spec, 0.1);
         assert_eq!(t.velocity_at(-1.0), 0.0);

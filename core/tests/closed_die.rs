@@ -44,6 +44,28 @@ fn deepest(scene: &Scene) -> (f64, f64) {
     (worst, volume)
 }
 
+/// The shipped wheel's cavity corners (its `fill_points`): the hub recesses' outer corners
+/// fill near the end of the stroke, the rim's outer corners stay empty (the scene's
+/// underfill: no flash land); the workpiece touches a part of each tool. (On the 15 x 15
+/// grid no particle comes within half a spacing of the hub corners.)
+#[test]
+fn the_wheel_fills_its_hub_corners_and_not_its_rim_corners() {
+    let scene = wheel(IntegrationRule::Q2, [30, 30]);
+    let mut sim = Simulation::new(&scene).unwrap();
+    sim.run_to(0.5 * scene.time.end_s, |_| {}).unwrap();
+    assert!(sim.fill_points().iter().all(|p| p.filled.is_none()));
+    sim.run_to(scene.time.end_s, |_| {}).unwrap();
+    for p in sim.fill_points() {
+        let tool = &sim.tools()[p.tool].name;
+        let expected = p.name == "hub_corner";
+        assert_eq!(p.filled.is_some(), expected, "{tool}.{}: {:?}", p.name, p.filled);
+    }
+    for t in 0..sim.tools().len() {
+        let f = sim.contact_fraction(t);
+        assert!(f > 0.2 && f < 1.0, "tool {t}: contact fraction {f}");
+    }
+}
+
 #[test]
 fn no_particle_enters_the_wheel_dies_with_any_rule() {
     for rule in [

@@ -29,6 +29,7 @@ fn friction_scene(mu: f64, plate: Motion, hold_x: bool) -> Scene {
             },
             friction: Friction::Coulomb { mu: 0.0 },
             separation: true,
+            fill_points: Vec::new(),
         },
         ToolSpec {
             name: "plate".into(),
@@ -37,6 +38,7 @@ fn friction_scene(mu: f64, plate: Motion, hold_x: bool) -> Scene {
             motion: plate,
             friction: Friction::Coulomb { mu },
             separation: true,
+            fill_points: Vec::new(),
         },
     ];
     if hold_x {

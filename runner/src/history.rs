@@ -41,9 +41,13 @@ impl History {
                 "force_N",
                 "force_x_N",
                 "force_y_N",
+                "contact_fraction",
             ] {
                 columns.push(format!("{}.{c}", t.name));
             }
+        }
+        for p in sim.fill_points() {
+            columns.push(format!("{}.{}.filled", sim.tools()[p.tool].name, p.name));
         }
         let lat = lateral(sim, &sim.extents()).0;
         for c in [
@@ -95,15 +99,21 @@ impl History {
         let e = sim.energy();
         let h = min_spacing(sim);
         let mut row = vec![sim.time(), sim.state().dt_prev];
-        for t in sim.tools() {
+        for (k, t) in sim.tools().iter().enumerate() {
             row.extend([
                 t.state.stroke,
                 t.state.velocity,
                 t.axial_force(),
                 t.state.force[0],
                 t.state.force[1],
+                sim.contact_fraction(k),
             ]);
         }
+        row.extend(
+            sim.fill_points()
+                .iter()
+                .map(|p| if p.filled.is_some() { 1.0 } else { 0.0 }),
+        );
         let x = m.extents;
         row.extend([
             x.x[0],

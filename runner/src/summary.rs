@@ -173,6 +173,20 @@ pub fn reference_table(scene: &Scene, summary: &Value) -> String {
 /// The JSON object of one tool in the summary.
 pub fn tool_json(sim: &Simulation, k: usize) -> Value {
     let t = &sim.tools()[k];
+    let fill: Vec<Value> = sim
+        .fill_points()
+        .into_iter()
+        .filter(|p| p.tool == k)
+        .map(|p| {
+            json!({
+                "name": p.name,
+                "at_m": p.at_m,
+                "filled": p.filled.is_some(),
+                "filled_s": p.filled.map(|f| f.time_s),
+                "filled_stroke_m": p.filled.map(|f| f.stroke_m),
+            })
+        })
+        .collect();
     json!({
         "name": t.name,
         "stroke_m": t.state.stroke,
@@ -180,5 +194,8 @@ pub fn tool_json(sim: &Simulation, k: usize) -> Value {
         "force_N": t.state.force,
         "axial_force_N": t.axial_force(),
         "peak_force_N": t.state.peak_force,
+        "contact_length_m": sim.contact_length(k),
+        "contact_fraction": sim.contact_fraction(k),
+        "fill_points": fill,
     })
 }

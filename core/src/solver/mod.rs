@@ -33,6 +33,7 @@
 
 mod energy;
 mod fields;
+mod fill;
 mod layout;
 mod mass_scaling;
 mod penetration;
@@ -45,9 +46,10 @@ mod update;
 
 pub use energy::Energy;
 pub use fields::Fields;
+pub use fill::FillPoint;
 pub use mass_scaling::MassScalingReport;
 pub use penetration::Penetrated;
-pub use state::State;
+pub use state::{Filled, State};
 
 use crate::constraints::Constraints;
 use crate::contact::{Body, Contact, Pairs};
@@ -307,6 +309,7 @@ impl Simulation {
                 first_contact_s: None,
                 held,
                 stick,
+                fill: vec![None; scene.tools.iter().map(|t| t.fill_points.len()).sum()],
             },
             tools,
             out: vec![PointOut::initial(&material); npts],
@@ -469,6 +472,7 @@ impl Simulation {
             || st.tools.len() != self.st.tools.len()
             || st.held.len() != self.st.held.len()
             || st.stick.len() != self.st.stick.len()
+            || st.fill.len() != self.st.fill.len()
         {
             return Err(Error::State(
                 "the saved state belongs to another discretisation".into(),
@@ -641,6 +645,7 @@ impl Simulation {
         }
         if contact {
             self.check_penetration()?;
+            self.check_fill();
         }
         let checks = &self.scene.checks;
         self.st.energy.check(

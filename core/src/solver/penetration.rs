@@ -3,10 +3,10 @@
 //! same time, and the scene's bound on it (`checks.max_penetration_rel`).
 //!
 //! Two measures, neither limited to the particles the contact stage treats as slaves:
-//! - at every step with a contact force, the particles the contact stage found in a tool's
-//!   search box ([`crate::contact::Contact::near`]; every particle within the search depth
-//!   of a tool is among them), against each tool within its search depth; past the bound the
-//!   run stops with the step, time, particle, tool and depth;
+//! - at every step with a contact force, the particles that took one
+//!   ([`crate::contact::Contact::near`]: every particle the stage found inside a tool at its
+//!   predicted position), against that tool within its search depth; past the bound the run
+//!   stops with the step, time, particle, tool and depth;
 //! - at each output sample ([`Simulation::measure_penetration`]), every particle against
 //!   every segment of every tool at any depth.
 
@@ -27,7 +27,7 @@ pub struct Penetrated {
 
 impl Simulation {
     /// The physical position `X_j + sum_I N_I(X_j) d_I` of particle `j` now (m).
-    fn position(&self, j: usize) -> [Real; 2] {
+    pub(super) fn position(&self, j: usize) -> [Real; 2] {
         let u = self.nodal.interpolate(j, &self.st.d);
         [self.ref_pos[j][0] + u[0], self.ref_pos[j][1] + u[1]]
     }
@@ -36,17 +36,14 @@ impl Simulation {
     /// (m); kept as the run's largest and stopped at the scene's bound.
     pub(super) fn check_penetration(&mut self) -> Result<()> {
         let mut worst = Penetrated::default();
-        for j in self.contact.near() {
-            let x = self.position(j);
-            for (t, tool) in self.tools.iter().enumerate() {
-                if let Some(p) = tool.penetration(x) {
-                    if p.gap > worst.depth {
-                        worst = Penetrated {
-                            depth: p.gap,
-                            particle: j,
-                            tool: t,
-                        };
-                    }
+        for (j, t) in self.contact.near() {
+            if let Some(p) = self.tools[t].penetration(self.position(j)) {
+                if p.gap > worst.depth {
+                    worst = Penetrated {
+                        depth: p.gap,
+                        particle: j,
+                        tool: t,
+                    };
                 }
             }
         }

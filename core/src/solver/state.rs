@@ -50,4 +50,17 @@ pub struct State {
     /// friction (`[boundary index * tools + tool]`, `None` out of contact).
     #[serde(default)]
     pub stick: Vec<Option<Stick>>,
+    /// When the material first reached each tool's fill points, in scene order (tool by
+    /// tool); `None` while a point is empty.
+    #[serde(default)]
+    pub fill: Vec<Option<Filled>>,
+}
+
+/// The moment the material first reached a tool's fill point.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Filled {
+    /// Time (s).
+    pub time_s: Real,
+    /// The tool's stroke then (m).
+    pub stroke_m: Real,
 }

@@ -23,6 +23,9 @@ pub struct Stage<'a> {
     pub values: &'a [f64],
     /// Tool polylines (m), drawn as thick dark lines.
     pub tools: Vec<Vec<[f64; 2]>>,
+    /// Marked points of the tools (m) and whether each is filled: the tools' fill points,
+    /// drawn as a filled green dot when the material reached them, a hollow red ring when not.
+    pub marks: Vec<([f64; 2], bool)>,
 }
 
 /// Height of the strip holding a panel title in [`stages_plot`].
@@ -50,6 +53,10 @@ const NODE_DOT_RADIUS: i32 = 3;
 const MIN_MESH_EDGE: f64 = 14.0;
 /// Colour of the tools.
 const TOOL: RGBColor = RGBColor(25, 25, 25);
+/// Colours and radius (pixels) of the fill points, filled and empty.
+const FILLED: RGBColor = RGBColor(0, 150, 60);
+const EMPTY: RGBColor = RGBColor(210, 30, 30);
+const MARK_RADIUS: i32 = 6;
 
 /// Deformed shape: quads filled with a colour map of the mean of their corner values, a colour
 /// bar labelled `value_label`, equal aspect ratio (1 m in x = 1 m in y on screen), tool polylines
@@ -73,6 +80,7 @@ pub fn shape_plot(
     values: &[f64],
     value_label: &str,
     tools: &[Vec<[f64; 2]>],
+    marks: &[([f64; 2], bool)],
     axis_labels: (&str, &str),
     scale: f64,
 ) -> Result<(), String> {
@@ -81,6 +89,7 @@ pub fn shape_plot(
         positions,
         values,
         tools: tools.to_vec(),
+        marks: marks.to_vec(),
     };
     stages_plot(
         path,
@@ -162,6 +171,8 @@ struct PanelGeometry {
     nodes: Vec<((f64, f64), f64)>,
     /// Tool polylines, split where a point is not finite.
     tools: Vec<Vec<(f64, f64)>>,
+    /// Fill points and whether each is filled.
+    marks: Vec<((f64, f64), bool)>,
 }
 
 impl PanelGeometry {
@@ -206,10 +217,16 @@ impl PanelGeometry {
             })
             .filter(|run| !run.is_empty())
             .collect();
+        let marks = stage
+            .marks
+            .iter()
+            .filter_map(|(p, filled)| point(p).map(|q| (q, *filled)))
+            .collect();
         PanelGeometry {
             quads,
             nodes,
             tools,
+            marks,
         }
     }
 }
@@ -500,6 +517,21 @@ impl<'a> ShapePlan<'a> {
             .flat_map(|polyline| clip_polyline(polyline, x.span, y.span))
             .map(|polyline| PathElement::new(polyline, TOOL.stroke_width(4)));
         chart.draw_series(tools).map_err(draw_err)?;
+        let inside = |p: &(f64, f64)| {
+            (x.span.lo..=x.span.hi).contains(&p.0) && (y.span.lo..=y.span.hi).contains(&p.1)
+        };
+        let marks = geometry
+            .marks
+            .iter()
+            .filter(|(p, _)| inside(p))
+            .map(|&(p, filled)| {
+                let style = match filled {
+                    true => FILLED.filled(),
+                    false => EMPTY.stroke_width(3),
+                };
+                Circle::new(p, MARK_RADIUS, style)
+            });
+        chart.draw_series(marks).map_err(draw_err)?;
         Ok(chart.plotting_area().dim_in_pixel())
     }
 }
@@ -597,6 +629,7 @@ mod tests {
             positions,
             values,
             tools: tools.to_vec(),
+            marks: vec![([0.01, 0.01], true), ([0.02, 0.0], false)],
         }
     }
 
@@ -619,6 +652,7 @@ mod tests {
             &values,
             "Effective plastic strain [-]",
             &dies(),
+            &[([0.01, 0.0], true), ([0.03, 0.0], false)],
             ("r [mm]", "z [mm]"),
             1e3,
         )
@@ -695,7 +729,16 @@ mod tests {
             let path = dir.join(format!("case_{k}.png"));
             let labels = ("x", "y");
             match shape_plot(
-                &path, case, positions, quads, values, "v", tools, labels, 1e3,
+                &path,
+                case,
+                positions,
+                quads,
+                values,
+                "v",
+                tools,
+                &[],
+                labels,
+                1e3,
             ) {
                 Ok(()) => assert_eq!(png_size(&path).0, SHAPE_WIDTH, "{case}"),
                 Err(e) => assert!(!e.is_empty(), "{case}"),
@@ -705,7 +748,16 @@ mod tests {
         let plot = |positions: &[[f64; 2]], quads: &[[u32; 4]], values: &[f64], scale: f64| {
             let labels = ("x", "y");
             shape_plot(
-                &path, "t", positions, quads, values, "v", &tools, labels, scale,
+                &path,
+                "t",
+                positions,
+                quads,
+                values,
+                "v",
+                &tools,
+                &[],
+                labels,
+                scale,
             )
         };
         assert!(plot(&[], &[], &[], 1e3).is_ok(), "tools alone can be drawn");
@@ -724,7 +776,7 @@ mod tests {
             "zero scale"
         );
         assert!(plot(&positions, &quads, &values, nan).is_err(), "nan scale");
-        let nothing = shape_plot(&path, "t", &[], &[], &[], "v", &[], ("x", "y"), 1.0);
+        let nothing = shape_plot(&path, "t", &[], &[], &[], "v", &[], &[], ("x", "y"), 1.0);
         assert!(nothing.is_err(), "nothing to draw");
     }
 

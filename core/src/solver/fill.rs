@@ -1,0 +1,122 @@
+//! What closed-die users read of the die: which named points of each tool (cavity corners,
+//! `[[tools]] fill_points`) the material has reached and when, and how much of each tool's
+//! length the workpiece touches.
+//!
+//! A fill point is reached at the first step after which a particle in contact with its
+//! tool lies, at its physical position `x_J = X_J + sum_I N_I(X_J) d_I`, within
+//! `output.fill_distance_rel` smallest spacings of the point (which moves with the tool).
+//! A point still empty at the end of the stroke is underfill.
+//!
+//! The contact length of a tool is the length of the workpiece's surface polygon (the
+//! boundary ring's physical positions) over the segments whose two particles both touched
+//! the tool in the last step; its fraction is that over the length of the tool's polyline.
+
+use super::Simulation;
+use crate::math::Real;
+
+/// A tool's fill point with its state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FillPoint {
+    /// The tool's index.
+    pub tool: usize,
+    /// The point's name.
+    pub name: String,
+    /// Its position now (m).
+    pub at_m: [Real; 2],
+    /// When the material first reached it, if it has.
+    pub filled: Option<super::Filled>,
+}
+
+impl Simulation {
+    /// After a step with contact: records the fill points that a particle in contact with
+    /// their tool now reaches.
+    pub(super) fn check_fill(&mut self) {
+        if self.st.fill.iter().all(Option::is_some) {
+            return;
+        }
+        let reach = self.scene.output.fill_distance_rel * self.spacing[0].min(self.spacing[1]);
+        let firsts = self.fill_offsets();
+        let pairs: Vec<(usize, usize)> = self.contact.near().collect();
+        for (j, t) in pairs {
+            let spec = &self.scene.tools[t];
+            if spec.fill_points.is_empty() {
+                continue;
+            }
+            let x = self.position(j);
+            let tool = &self.tools[t];
+            let s = tool.state.stroke;
+            for (k, p) in spec.fill_points.iter().enumerate() {
+                let slot = &mut self.st.fill[firsts[t] + k];
+                if slot.is_some() {
+                    continue;
+                }
+                let at = [p.at_m[0] + s * tool.axis[0], p.at_m[1] + s * tool.axis[1]];
+                if (x[0] - at[0]).hypot(x[1] - at[1]) <= reach {
+                    *slot = Some(super::Filled {
+                        time_s: self.st.time,
+                        stroke_m: s,
+                    });
+                }
+            }
+        }
+    }
+
+    /// Index of each tool's first fill point in [`super::State::fill`].
+    fn fill_offsets(&self) -> Vec<usize> {
+        let mut first = 0;
+        self.scene
+            .tools
+            .iter()
+            .map(|t| {
+                let k = first;
+                first += t.fill_points.len();
+                k
+            })
+            .collect()
+    }
+
+    /// Every tool's fill points, tool by tool, with where they are now and when they filled.
+    pub fn fill_points(&self) -> Vec<FillPoint> {
+        let firsts = self.fill_offsets();
+        let mut out = Vec::new();
+        for (t, spec) in self.scene.tools.iter().enumerate() {
+            let tool = &self.tools[t];
+            let s = tool.state.stroke;
+            for (k, p) in spec.fill_points.iter().enumerate() {
+                out.push(FillPoint {
+                    tool: t,
+                    name: p.name.clone(),
+                    at_m: [p.at_m[0] + s * tool.axis[0], p.at_m[1] + s * tool.axis[1]],
+                    filled: self.st.fill[firsts[t] + k],
+                });
+            }
+        }
+        out
+    }
+
+    /// Length of the workpiece's surface in contact with tool `t` in the last step (m): the
+    /// boundary ring's segments whose two particles both touched it, at their physical
+    /// positions.
+    pub fn contact_length(&self, t: usize) -> Real {
+        let touching = self.contact.ring_touching(t);
+        let n = self.boundary.len();
+        (0..n)
+            .filter(|&k| touching[k] && touching[(k + 1) % n])
+            .map(|k| {
+                let a = self.position(self.boundary[k] as usize);
+                let b = self.position(self.boundary[(k + 1) % n] as usize);
+                (b[0] - a[0]).hypot(b[1] - a[1])
+            })
+            .sum()
+    }
+
+    /// [`Simulation::contact_length`] over the length of the tool's polyline (-).
+    pub fn contact_fraction(&self, t: usize) -> Real {
+        let length: Real = self.tools[t]
+            .points0
+            .windows(2)
+            .map(|s| (s[1][0] - s[0][0]).hypot(s[1][1] - s[0][1]))
+            .sum();
+        self.contact_length(t) / length
+    }
+}
