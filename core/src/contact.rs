@@ -225,6 +225,15 @@ impl Contact {
             .map(|&[k, t]| (self.candidates[k as usize] as usize, t as usize))
     }
 
+    /// The boundary ring's particles with their positions as the last stage predicted them
+    /// (m; a natural step ahead of the step's start).
+    pub fn ring_predicted(&self) -> impl Iterator<Item = (usize, [Real; 2])> + '_ {
+        self.candidates[..self.ring]
+            .iter()
+            .zip(&self.motion)
+            .map(|(&j, m)| (j as usize, m[0]))
+    }
+
     /// Whether each particle of the boundary ring (counter-clockwise) touched `tool` in the
     /// last stage.
     pub fn ring_touching(&self, tool: usize) -> Vec<bool> {

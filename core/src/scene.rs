@@ -349,7 +349,10 @@ pub struct OutputSpec {
     #[serde(default)]
     pub faces: Vec<Edge>,
     /// How close (in smallest particle spacings) a particle in contact with a tool must
-    /// come to one of the tool's `fill_points` to have filled it.
+    /// come to one of the tool's `fill_points` to have filled it: by default one spacing,
+    /// the resolution of the particle grid (a particle stands for the material within half
+    /// a spacing around it, and penalty contact on both faces of a concave corner keeps it
+    /// a fraction of a spacing off the corner).
     #[serde(default = "default_fill_distance")]
     pub fill_distance_rel: Real,
 }
@@ -359,7 +362,7 @@ fn default_frames() -> usize {
 }
 
 fn default_fill_distance() -> Real {
-    0.5
+    1.0
 }
 
 impl Default for OutputSpec {

@@ -2,10 +2,11 @@
 //! `[[tools]] fill_points`) the material has reached and when, and how much of each tool's
 //! length the workpiece touches.
 //!
-//! A fill point is reached at the first step after which a particle in contact with its
-//! tool lies, at its physical position `x_J = X_J + sum_I N_I(X_J) d_I`, within
-//! `output.fill_distance_rel` smallest spacings of the point (which moves with the tool).
-//! A point still empty at the end of the stroke is underfill.
+//! A fill point is reached at the first step after which a surface particle (of the
+//! boundary ring, or any particle in contact with a tool) lies, at its physical position
+//! `x_J = X_J + sum_I N_I(X_J) d_I`, within `output.fill_distance_rel` smallest spacings of
+//! the point (which moves with the tool). A point still empty at the end of the stroke is
+//! underfill.
 //!
 //! The contact length of a tool is the length of the workpiece's surface polygon (the
 //! boundary ring's physical positions) over the segments whose two particles both touched
@@ -28,33 +29,37 @@ pub struct FillPoint {
 }
 
 impl Simulation {
-    /// After a step with contact: records the fill points that a particle in contact with
-    /// their tool now reaches.
+    /// After a step with contact: records the fill points that a surface particle now
+    /// reaches. The ring's predicted positions (a step ahead, from the contact stage) pick
+    /// the particles within a spacing more than the reach; their physical positions decide.
     pub(super) fn check_fill(&mut self) {
         if self.st.fill.iter().all(Option::is_some) {
             return;
         }
-        let reach = self.scene.output.fill_distance_rel * self.spacing[0].min(self.spacing[1]);
-        let firsts = self.fill_offsets();
-        let pairs: Vec<(usize, usize)> = self.contact.near().collect();
-        for (j, t) in pairs {
-            let spec = &self.scene.tools[t];
-            if spec.fill_points.is_empty() {
-                continue;
-            }
+        let h = self.spacing[0].min(self.spacing[1]);
+        let reach = self.scene.output.fill_distance_rel * h;
+        let open: Vec<(usize, [Real; 2], usize)> = self
+            .fill_points()
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.filled.is_none())
+            .map(|(k, p)| (k, p.at_m, p.tool))
+            .collect();
+        let near = |x: [Real; 2], at: [Real; 2], r: Real| (x[0] - at[0]).hypot(x[1] - at[1]) <= r;
+        let mut particles: Vec<usize> = self
+            .contact
+            .ring_predicted()
+            .filter(|&(_, x)| open.iter().any(|&(_, at, _)| near(x, at, reach + h)))
+            .map(|(j, _)| j)
+            .collect();
+        particles.extend(self.contact.near().map(|(j, _)| j));
+        for j in particles {
             let x = self.position(j);
-            let tool = &self.tools[t];
-            let s = tool.state.stroke;
-            for (k, p) in spec.fill_points.iter().enumerate() {
-                let slot = &mut self.st.fill[firsts[t] + k];
-                if slot.is_some() {
-                    continue;
-                }
-                let at = [p.at_m[0] + s * tool.axis[0], p.at_m[1] + s * tool.axis[1]];
-                if (x[0] - at[0]).hypot(x[1] - at[1]) <= reach {
-                    *slot = Some(super::Filled {
+            for &(k, at, t) in &open {
+                if self.st.fill[k].is_none() && near(x, at, reach) {
+                    self.st.fill[k] = Some(super::Filled {
                         time_s: self.st.time,
-                        stroke_m: s,
+                        stroke_m: self.tools[t].state.stroke,
                     });
                 }
             }
