@@ -15,7 +15,7 @@ from fmpy.validation import validate_fmu
 from conftest import ROOT
 from driver import Slave
 
-SCENES = ["taylor_bar", "block_forging", "wheel_forging"]
+SCENES = ["taylor_bar", "block_forging", "wheel_forging", "closed_die_hub"]
 
 
 @pytest.fixture(scope="module")
@@ -38,9 +38,12 @@ def test_every_shipped_scene_validates(fmus):
         assert validate_fmu(p) == [], s
         md = read_model_description(p)
         names = {v.name for v in md.modelVariables}
-        tools = {"taylor_bar": ["wall"], "block_forging": ["top", "bottom"], "wheel_forging": ["die", "punch"]}[s]
+        tools = {"taylor_bar": ["wall"], "block_forging": ["top", "bottom"], "wheel_forging": ["die", "punch"],
+                 "closed_die_hub": ["die", "punch"]}[s]
         for t in tools:
-            assert f"{t}.force" in names and f"{t}.stroke" in names
+            assert f"{t}.force" in names and f"{t}.stroke" in names and f"{t}.contact_fraction" in names
+        if s == "closed_die_hub":
+            assert {"die.flange_corner.filled", "punch.hub_top_corner.filled", "punch.land_end.filled"} <= names
         assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
         assert md.coSimulation.canHandleVariableCommunicationStepSize
 
@@ -250,4 +253,25 @@ def test_a_velocity_that_would_pass_particles_in_one_step_is_refused_naming_the_
     s = Slave(fmus["block_forging"], params=COARSE)
     s.set("top.velocity", 1e300)
     raises(s, lambda: s.step(20e-6), "tool `top`", "1.0000e300 m/s", "commanded")
+    s.close()
+
+
+def test_die_fill_and_contact_outputs_match_rkforge_run(fmus, rkforge_bin, tmp_path):
+    """The wheel's fill points and contact fractions as FMU outputs: the same bits as the
+    history of `rkforge run` at the same grid and times, first 0 (nothing touches, nothing
+    filled), then a growing contact."""
+    grid = ["--set", "workpiece.particles=[11,11]", "--set", "time.end_s=1.0e-3"]
+    subprocess.run([rkforge_bin, "run", str(ROOT / "scenes/wheel_forging.toml"), "--out", str(tmp_path),
+                    "--quiet", "--no-frames", *grid], check=True)
+    with open(tmp_path / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    names = ["die.contact_fraction", "punch.contact_fraction", "die.hub_corner.filled",
+             "die.rim_corner.filled", "punch.hub_corner.filled", "punch.rim_corner.filled"]
+    s = Slave(fmus["wheel_forging"], params={"resolution.nx": 11, "resolution.ny": 11})
+    assert s.get(*names) == [0.0] * len(names)
+    h = float(rows[1]["time_s"])
+    for row in rows[1:]:
+        s.step(h)
+        assert s.get(*names) == [float(row[n]) for n in names], row["time_s"]
+    assert 0.0 < s.get("punch.contact_fraction")[0] < 1.0
     s.close()

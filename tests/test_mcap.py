@@ -26,6 +26,7 @@ TOPICS = {
     "/rkforge/tools": "sensor_msgs/msg/JointState",
     "/rkforge/workpiece": "sensor_msgs/msg/PointCloud2",
     "/rkforge/tool_markers": "visualization_msgs/msg/MarkerArray",
+    "/rkforge/die_fill": "rkforge_msgs/msg/DieFill",
     "/rkforge/energy": "rkforge_msgs/msg/Energy",
     "/clock": "rosgraph_msgs/msg/Clock",
 }
@@ -315,6 +316,33 @@ def test_a_killed_process_leaves_a_file_readable_to_its_last_chunk(rkforge_bin, 
     assert len(messages) == clocks * len(TOPICS)
     times = [m.log_time for m in messages]
     assert times == sorted(times)
+
+
+def test_the_die_fill_topic_follows_the_wheels_cavity_corners(rkforge_bin, tmp_path):
+    """The wheel forging's die fill read from its recording (both readers' decoder:
+    mcap-ros2-support): per tool the contact fraction of history.csv; per fill point the
+    filling time, NaN until the sample at which history.csv's `filled` column turns 1, then
+    the summary's `filled_s` and `filled_stroke_m`."""
+    scene = tmp_path / "wheel.toml"
+    scene.write_text((ROOT / "scenes" / "wheel_forging.toml").read_text())
+    out, path = tmp_path / "out", tmp_path / "wheel.mcap"
+    rows = run_history(rkforge_bin, scene, out, "--mcap", str(path), "--set", "workpiece.particles=[11,11]")
+    tools = json.loads((out / "summary.json").read_text())["tools"]
+    fill = [(t, m) for topic, t, m in decoded(path) if topic == "/rkforge/die_fill"]
+    assert [t for t, _ in fill] == [ns(r["time_s"]) for r in rows]
+    points = [f"{t['name']}.{p['name']}" for t in tools for p in t["fill_points"]]
+    final = {f"{t['name']}.{p['name']}": p for t in tools for p in t["fill_points"]}
+    assert len(points) == 4
+    for (_, m), row in zip(fill, rows):
+        assert list(m.tools) == ["die", "punch"] and list(m.points) == points
+        assert list(m.contact_fraction) == [row["die.contact_fraction"], row["punch.contact_fraction"]]
+        for k, name in enumerate(points):
+            filled = row[f"{name}.filled"] == 1.0
+            assert filled != math.isnan(m.filled_time[k]), (name, row["time_s"])
+            if filled:
+                assert m.filled_time[k] == final[name]["filled_s"]
+                assert m.filled_stroke[k] == final[name]["filled_stroke_m"]
+    assert max(r["punch.contact_fraction"] for r in rows) > 0.2
 
 
 def test_the_energy_topic_closes_the_account_of_an_impact(rkforge_bin, tmp_path):

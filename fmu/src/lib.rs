@@ -260,6 +260,11 @@ impl Instance {
             }
             Binding::ToolForce(k) => tools[k].axial_force(),
             Binding::ToolStroke(k) => tools[k].state.stroke,
+            Binding::ToolContactFraction(k) => sim.contact_fraction(k),
+            Binding::FillPoint(k) => match sim.fill_points()[k].filled {
+                Some(_) => 1.0,
+                None => 0.0,
+            },
             Binding::WorkpieceLateral => lateral(sim.extents()),
             Binding::WorkpieceHeight => {
                 let e = sim.extents();

@@ -51,6 +51,11 @@ pub enum Binding {
     ToolForce(usize),
     /// Displacement of tool `k` along its axis (m).
     ToolStroke(usize),
+    /// Share of tool `k`'s polyline length that the workpiece touches (-).
+    ToolContactFraction(usize),
+    /// Whether the material has reached fill point `k` (the scene's fill points, tool by
+    /// tool): 0 or 1.
+    FillPoint(usize),
     /// Lateral size: largest r (axisymmetric) or x extent (plane strain) (m).
     WorkpieceLateral,
     /// Axial extent (m).
@@ -175,6 +180,36 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
             Some("m"),
             format!("displacement of tool {} along its axis", tool.name),
             Binding::ToolStroke(k),
+        );
+        push(
+            format!("{}.contact_fraction", tool.name),
+            Output,
+            Continuous,
+            Kind::Real(None),
+            None,
+            format!(
+                "share of tool {}'s length that the workpiece touches",
+                tool.name
+            ),
+            Binding::ToolContactFraction(k),
+        );
+    }
+    let fill_points = scene.tools.iter().flat_map(|t| {
+        t.fill_points
+            .iter()
+            .map(move |p| (t.name.clone(), p.name.clone()))
+    });
+    for (k, (tool, point)) in fill_points.enumerate() {
+        push(
+            format!("{tool}.{point}.filled"),
+            Output,
+            Continuous,
+            Kind::Real(None),
+            None,
+            format!(
+                "1 once the material has reached point {point} of tool {tool} (die fill), else 0"
+            ),
+            Binding::FillPoint(k),
         );
     }
     let lateral = match scene.model.kinematics {

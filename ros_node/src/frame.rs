@@ -12,6 +12,8 @@
 //!   z = 0, axisymmetric scenes put r on x and z on y), `plastic_strain` and `von_mises` (Pa),
 //!   all `float32`, from [`Simulation::fields`];
 //! - `visualization_msgs/msg/MarkerArray`: one line strip per tool through its current vertices;
+//! - `rkforge_msgs/msg/DieFill`: each tool's contact fraction and each fill point's filling
+//!   time and stroke (NaN while empty), history.csv's `contact_fraction` and `filled` columns;
 //! - `rkforge_msgs/msg/Energy`: the energy account (J), history.csv's energy columns;
 //! - `rosgraph_msgs/msg/Clock`: the simulation time.
 //!
@@ -20,8 +22,8 @@
 //! axisymmetry, as in history.csv.
 
 use crate::msgs::{
-    point_cloud_xyz_fields, CdrMessage, Clock, ColorRGBA, Energy, Header, JointState, Marker,
-    MarkerArray, Point, StrainPoint, Time, Vector3, Wrench, WrenchStamped,
+    point_cloud_xyz_fields, CdrMessage, Clock, ColorRGBA, DieFill, Energy, Header, JointState,
+    Marker, MarkerArray, Point, StrainPoint, Time, Vector3, Wrench, WrenchStamped,
 };
 use rkforge_core::Simulation;
 
@@ -126,6 +128,27 @@ pub fn sample(sim: &Simulation) -> Sample {
         .collect();
     messages.push(point_cloud_xyz_fields(header.clone(), &points).to_cdr());
     messages.push(tool_markers(sim, &header).to_cdr());
+    let fill = sim.fill_points();
+    messages.push(
+        DieFill {
+            header: header.clone(),
+            tools: tools.iter().map(|t| t.name.clone()).collect(),
+            contact_fraction: (0..tools.len()).map(|k| sim.contact_fraction(k)).collect(),
+            points: fill
+                .iter()
+                .map(|p| format!("{}.{}", tools[p.tool].name, p.name))
+                .collect(),
+            filled_time: fill
+                .iter()
+                .map(|p| p.filled.map_or(f64::NAN, |f| f.time_s))
+                .collect(),
+            filled_stroke: fill
+                .iter()
+                .map(|p| p.filled.map_or(f64::NAN, |f| f.stroke_m))
+                .collect(),
+        }
+        .to_cdr(),
+    );
     let e = sim.energy();
     messages.push(
         Energy {

@@ -662,7 +662,7 @@ mod tests {
     }
 
     /// The types of the topics.
-    fn topic_types() -> [(&'static str, &'static str, &'static str, &'static str); 7] {
+    fn topic_types() -> [(&'static str, &'static str, &'static str, &'static str); 8] {
         [
             names::<WrenchStamped>(),
             names::<JointState>(),
@@ -671,6 +671,7 @@ mod tests {
             names::<Float64>(),
             names::<MarkerArray>(),
             names::<Energy>(),
+            names::<DieFill>(),
         ]
     }
 
@@ -680,7 +681,7 @@ mod tests {
     #[test]
     fn schemas_are_the_msg_files_of_the_type_and_its_dependencies() {
         let files = msg_files("msg");
-        assert_eq!(files.len(), 24);
+        assert_eq!(files.len(), 25);
         for (type_name, dds, definition, schema) in topic_types() {
             let (pkg, ty) = type_name.split_once("/msg/").unwrap();
             let short = format!("{pkg}/{ty}");
@@ -835,6 +836,10 @@ mod tests {
         assert_eq!(deps(Clock::SCHEMA), ["builtin_interfaces/Time"]);
         assert_eq!(
             deps(Energy::SCHEMA),
+            ["std_msgs/Header", "builtin_interfaces/Time"]
+        );
+        assert_eq!(
+            deps(DieFill::SCHEMA),
             ["std_msgs/Header", "builtin_interfaces/Time"]
         );
         assert!(deps(Float64::SCHEMA).is_empty());
