@@ -217,6 +217,12 @@ def test_bad_input_raises_and_the_interpreter_lives_on(tmp_path):
         sim.restore_state(rkforge.Simulation(taylor).save_state())
     with pytest.raises(rkforge.StateError, match="not a saved rkforge state"):
         sim.restore_state(b"\x00garbage")
+    # A velocity that would take the tool past particles in one step (1e300 m/s once took it
+    # through the block with a force of 0) stops the step before anything changes.
+    sim.set_tool_velocity("top", 1e300)
+    with pytest.raises(ValueError, match="tool `top`: velocity 1.0000e300 m/s \\(commanded\\)"):
+        sim.step()
+    sim.set_tool_velocity("top", 10.0)
     # Still usable after every refusal.
     sim.run_to(2e-4)
     assert sim.time == pytest.approx(2e-4, rel=1e-12)
