@@ -39,11 +39,8 @@ impl Simulation {
         let h = self.spacing[0].min(self.spacing[1]);
         let reach = self.scene.output.fill_distance_rel * h;
         let open: Vec<(usize, [Real; 2], usize)> = self
-            .fill_points()
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| p.filled.is_none())
-            .map(|(k, p)| (k, p.at_m, p.tool))
+            .points_now()
+            .filter(|&(k, _, _)| self.st.fill[k].is_none())
             .collect();
         let near = |x: [Real; 2], at: [Real; 2], r: Real| (x[0] - at[0]).hypot(x[1] - at[1]) <= r;
         let mut particles: Vec<usize> = self
@@ -66,37 +63,37 @@ impl Simulation {
         }
     }
 
-    /// Index of each tool's first fill point in [`super::State::fill`].
-    fn fill_offsets(&self) -> Vec<usize> {
-        let mut first = 0;
+    /// Every fill point as (index in [`super::State::fill`], position now (m), tool), tool
+    /// by tool in scene order.
+    fn points_now(&self) -> impl Iterator<Item = (usize, [Real; 2], usize)> + '_ {
         self.scene
             .tools
             .iter()
-            .map(|t| {
-                let k = first;
-                first += t.fill_points.len();
-                k
+            .enumerate()
+            .flat_map(move |(t, spec)| {
+                let tool = &self.tools[t];
+                let s = tool.state.stroke;
+                spec.fill_points.iter().map(move |p| {
+                    let at = [p.at_m[0] + s * tool.axis[0], p.at_m[1] + s * tool.axis[1]];
+                    (at, t)
+                })
             })
-            .collect()
+            .enumerate()
+            .map(|(k, (at, t))| (k, at, t))
     }
 
     /// Every tool's fill points, tool by tool, with where they are now and when they filled.
     pub fn fill_points(&self) -> Vec<FillPoint> {
-        let firsts = self.fill_offsets();
-        let mut out = Vec::new();
-        for (t, spec) in self.scene.tools.iter().enumerate() {
-            let tool = &self.tools[t];
-            let s = tool.state.stroke;
-            for (k, p) in spec.fill_points.iter().enumerate() {
-                out.push(FillPoint {
-                    tool: t,
-                    name: p.name.clone(),
-                    at_m: [p.at_m[0] + s * tool.axis[0], p.at_m[1] + s * tool.axis[1]],
-                    filled: self.st.fill[firsts[t] + k],
-                });
-            }
-        }
-        out
+        let names = self.scene.tools.iter().flat_map(|t| &t.fill_points);
+        self.points_now()
+            .zip(names)
+            .map(|((k, at_m, tool), p)| FillPoint {
+                tool,
+                name: p.name.clone(),
+                at_m,
+                filled: self.st.fill[k],
+            })
+            .collect()
     }
 
     /// Length of the workpiece's surface in contact with tool `t` in the last step (m): the
