@@ -170,8 +170,7 @@ mod tests {
         )
     }
 
-    /// A unit square of material (counter-clockwise ring of 8 particles) and a punch whose
-    /// corner at (0.5, 0.9) dips 0.1 below its top face between two surface particles.
+    /// A unit square of material: a counter-clockwise ring of 8 particles of 2 kg at rest.
     fn square() -> (Vec<[[Real; 2]; 2]>, Vec<u32>, Vec<Real>) {
         let pts = [
             [0.0, 0.0],
@@ -184,7 +183,19 @@ mod tests {
             [0.0, 0.5],
         ];
         let motion = pts.iter().map(|&p| [p, [0.0; 2]]).collect();
-        ((motion), (0..8).collect(), vec![2.0; 8])
+        (motion, (0..8).collect(), vec![2.0; 8])
+    }
+
+    /// A punch whose face runs at y = 1.2 from the right, with a notch down to a corner at
+    /// (0.75, `tip`), traversed with the material on its left (below).
+    fn notched(tip: Real) -> Tool {
+        tool(vec![
+            [2.0, 1.2],
+            [0.9, 1.2],
+            [0.75, tip],
+            [0.6, 1.2],
+            [-1.0, 1.2],
+        ])
     }
 
     #[test]
@@ -195,15 +206,8 @@ mod tests {
             motion: &motion,
             mass: &mass,
         };
-        // The punch's face from the right at y = 1.2, down to a corner at (0.75, 0.9),
-        // then up and left: traversed with the material on its left (below).
-        let punch = tool(vec![
-            [2.0, 1.2],
-            [0.9, 1.2],
-            [0.75, 0.9],
-            [0.6, 1.2],
-            [-1.0, 1.2],
-        ]);
+        // The corner dips 0.1 below the top face, between the particles at (1, 1), (0.5, 1).
+        let punch = notched(0.9);
         assert_eq!(punch.convex, vec![2]);
         let found = inside(&punch, &surface);
         assert_eq!(found.len(), 1);
@@ -213,25 +217,13 @@ mod tests {
         let f = penalty(&c, &surface, 0.1, 0.1);
         // m_s g / dt^2 = 2 * 0.1 / 0.01 = 20 N, down: the material is pushed past the corner.
         assert!(f[0].abs() < 1e-12 && (f[1] + 20.0).abs() < 1e-9, "{f:?}");
+        // The same corner above the surface is outside the material.
+        assert!(inside(&notched(1.05), &surface).is_empty());
     }
 
     #[test]
-    fn corners_outside_the_material_or_concave_ones_give_nothing() {
-        let (motion, ring, mass) = square();
-        let surface = Surface {
-            ring: &ring,
-            motion: &motion,
-            mass: &mass,
-        };
-        let above = tool(vec![
-            [2.0, 1.2],
-            [0.9, 1.2],
-            [0.75, 1.05],
-            [0.6, 1.2],
-            [-1.0, 1.2],
-        ]);
-        assert!(inside(&above, &surface).is_empty());
-        // A concave corner (the polyline turns left) is never checked.
+    fn concave_corners_are_never_checked() {
+        // The polyline turns left at (0.75, 0.9): the tool is concave there.
         let concave = tool(vec![[2.0, 0.8], [0.75, 0.9], [-1.0, 0.8]]);
         assert!(concave.convex.is_empty());
     }
