@@ -437,9 +437,10 @@ impl Contact {
                 any = true;
             }
         }
+        let positions: Vec<[Real; 2]> = self.motion[..ring].iter().map(|m| m[0]).collect();
         let surface = corners::Surface {
             ring: &self.candidates[..ring],
-            motion: &self.motion[..ring],
+            positions: &positions,
             mass,
         };
         for tool in tools.iter_mut() {

@@ -27,8 +27,8 @@ use crate::tools::Tool;
 pub struct Surface<'a> {
     /// The boundary ring's particles, counter-clockwise.
     pub ring: &'a [u32],
-    /// Predicted position (m) and velocity (m/s) of each ring particle.
-    pub motion: &'a [[[Real; 2]; 2]],
+    /// Predicted position of each ring particle (m).
+    pub positions: &'a [[Real; 2]],
     /// Lumped masses of all particles (kg).
     pub mass: &'a [Real],
 }
@@ -52,7 +52,7 @@ pub struct Corner {
 /// the surface, within the tool's search depth of it (deeper ones would belong to material
 /// the particle pass holds).
 pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
-    let x: Vec<[Real; 2]> = surface.motion.iter().map(|m| m[0]).collect();
+    let x = surface.positions;
     if tool.convex.is_empty() || x.len() < 3 {
         return Vec::new();
     }
@@ -74,10 +74,10 @@ pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
             if v[0] <= lo[0] || v[0] >= hi[0] || v[1] <= lo[1] || v[1] >= hi[1] {
                 return None;
             }
-            if !in_polygon(&x, v) {
+            if !in_polygon(x, v) {
                 return None;
             }
-            let corner = nearest_segment(&x, v);
+            let corner = nearest_segment(x, v);
             (corner.gap > 0.0 && corner.gap <= tool.depth).then_some(corner)
         })
         .collect()
@@ -170,8 +170,8 @@ mod tests {
         )
     }
 
-    /// A unit square of material: a counter-clockwise ring of 8 particles of 2 kg at rest.
-    fn square() -> (Vec<[[Real; 2]; 2]>, Vec<u32>, Vec<Real>) {
+    /// A unit square of material: a counter-clockwise ring of 8 particles of 2 kg.
+    fn square() -> (Vec<[Real; 2]>, Vec<u32>, Vec<Real>) {
         let pts = [
             [0.0, 0.0],
             [0.5, 0.0],
@@ -182,8 +182,7 @@ mod tests {
             [0.0, 1.0],
             [0.0, 0.5],
         ];
-        let motion = pts.iter().map(|&p| [p, [0.0; 2]]).collect();
-        (motion, (0..8).collect(), vec![2.0; 8])
+        (pts.to_vec(), (0..8).collect(), vec![2.0; 8])
     }
 
     /// A punch whose face runs at y = 1.2 from the right, with a notch down to a corner at
@@ -200,10 +199,10 @@ mod tests {
 
     #[test]
     fn a_corner_between_two_surface_particles_is_found_and_pushed_out() {
-        let (motion, ring, mass) = square();
+        let (positions, ring, mass) = square();
         let surface = Surface {
             ring: &ring,
-            motion: &motion,
+            positions: &positions,
             mass: &mass,
         };
         // The corner dips 0.1 below the top face, between the particles at (1, 1), (0.5, 1).
