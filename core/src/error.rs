@@ -46,7 +46,7 @@ pub enum Error {
     },
     /// A particle went deeper into a tool than the scene's bound: the contact lets material
     /// through.
-    #[error("step {step} (t = {time:.6e} s): particle {particle} (reference position {reference:?} m) lies {depth:.3e} m ({depth_rel:.3} spacings) inside tool `{tool}`, deeper than checks.max_penetration_rel = {bound}")]
+    #[error("step {step} (t = {time:.6e} s): particle {particle} (reference position {reference:?} m) lies {depth:.3e} m ({depth_rel:.3e} spacings) inside tool `{tool}`, deeper than checks.max_penetration_rel = {bound}")]
     Penetration {
         step: u64,
         time: f64,
