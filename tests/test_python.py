@@ -257,7 +257,7 @@ def test_read_mcap_gives_the_history_columns_and_the_point_clouds(rkforge_bin, t
     history = read_history(out / "history.csv")
     rec = rkforge.read_mcap(mcap)
     tools = [f"{t}.{c}" for t in ("top", "bottom")
-             for c in ("stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N")]
+             for c in ("stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N", "contact_fraction")]
     energy = [f"energy.{c}" for c in ("kinetic_J", "elastic_J", "plastic_J", "internal_J", "contact_J",
                                       "tool_work_J")]
     assert list(rec.history.columns) == ["time_s", *tools, *energy, "energy.initial_J"]

@@ -1,6 +1,7 @@
 """Offline analysis of MCAP recordings (``rkforge run --mcap``, ``rkforge-ros --record``)."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Dict, List
 
@@ -22,7 +23,9 @@ class Recording:
 
     ``history``: one row per sample, ``time_s`` and per tool the history's columns
     ``<tool>.stroke_m``, ``<tool>.velocity_m_per_s``, ``<tool>.force_N`` (along its axis),
-    ``<tool>.force_x_N``, ``<tool>.force_y_N``, then the energy account as history.csv names it
+    ``<tool>.force_x_N``, ``<tool>.force_y_N``, ``<tool>.contact_fraction``, then per fill point
+    ``<tool>.<point>.filled`` (0 or 1) where the recording has the die-fill topic, then the energy
+    account as history.csv names it
     (``energy.kinetic_J``, ``energy.elastic_J``, ``energy.plastic_J``, ``energy.internal_J``,
     ``energy.contact_J``, ``energy.tool_work_J``; J) where the recording has the energy
     topic, and ``energy.initial_J``. ``clouds``: per sample, the particles as a
@@ -75,6 +78,12 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
                 row = rows.setdefault(message.log_time, {})
                 row[f"{name}.force_x_N"] = msg.wrench.force.x
                 row[f"{name}.force_y_N"] = msg.wrench.force.y
+            elif topic == f"{ns}/die_fill":
+                row = rows.setdefault(message.log_time, {})
+                for name, fraction in zip(msg.tools, msg.contact_fraction):
+                    row[f"{name}.contact_fraction"] = fraction
+                for name, filled in zip(msg.points, msg.filled_time):
+                    row[f"{name}.filled"] = 0.0 if math.isnan(filled) else 1.0
             elif topic == f"{ns}/energy":
                 row = rows.setdefault(message.log_time, {})
                 for name, column in _ENERGY.items():
@@ -86,12 +95,14 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
     history = pd.DataFrame([{"time_s": t * 1e-9, **rows[t]} for t in times])
     if len(history.columns) > 1:
         tools = []
+        filled = [c for c in history.columns if c.endswith(".filled")]
         for c in history.columns[1:]:
             name = c.rsplit(".", 1)[0]
-            if name not in tools and name != "energy":
+            if name not in tools and name != "energy" and c not in filled:
                 tools.append(name)
-        suffixes = ["stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N"]
+        suffixes = ["stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N", "contact_fraction"]
         order = ["time_s"] + [f"{t}.{s}" for t in tools for s in suffixes if f"{t}.{s}" in history.columns]
+        order += filled
         order += [f"energy.{c}" for c in _ENERGY.values() if f"energy.{c}" in history.columns]
         history = history[order]
     return Recording(history=history, clouds=clouds, cloud_times_s=np.array(cloud_times))
