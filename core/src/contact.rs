@@ -234,18 +234,6 @@ impl Contact {
             .map(|(&j, m)| (j as usize, m[0]))
     }
 
-    /// Whether each particle of the boundary ring (counter-clockwise) touched `tool` in the
-    /// last stage.
-    pub fn ring_touching(&self, tool: usize) -> Vec<bool> {
-        let mut touching = vec![false; self.ring];
-        for &[k, t] in &self.near {
-            if t as usize == tool && (k as usize) < self.ring {
-                touching[k as usize] = true;
-            }
-        }
-        touching
-    }
-
     /// Forgets the clearances and the last step's strokes, so that the next contact stage
     /// evaluates every particle (after the displacements were set from outside).
     pub fn forget(&mut self) {

@@ -9,11 +9,18 @@
 //! underfill.
 //!
 //! The contact length of a tool is the length of the workpiece's surface polygon (the
-//! boundary ring's physical positions) over the segments whose two particles both touched
-//! the tool in the last step; its fraction is that over the length of the tool's polyline.
+//! boundary ring's physical positions) over the segments whose two particles both lie on
+//! the tool: inside it, or outside by at most [`ON_TOOL_SPACINGS`] smallest spacings (the
+//! corrector leaves a particle in contact at about zero gap, on either side); its fraction
+//! is that over the length of the tool's polyline. Both are read from the state alone, so a
+//! restored state reports them as first computed.
 
 use super::Simulation;
 use crate::math::Real;
+
+/// Farthest outside a tool a surface particle counts as on it, in smallest spacings: the
+/// acceptance bound on penetration, taken on the other side.
+pub const ON_TOOL_SPACINGS: Real = 0.05;
 
 /// A tool's fill point with its state.
 #[derive(Debug, Clone, PartialEq)]
@@ -96,17 +103,24 @@ impl Simulation {
             .collect()
     }
 
-    /// Length of the workpiece's surface in contact with tool `t` in the last step (m): the
-    /// boundary ring's segments whose two particles both touched it, at their physical
-    /// positions.
+    /// Length of the workpiece's surface in contact with tool `t` now (m): the boundary
+    /// ring's segments whose two particles both lie on it, at their physical positions.
     pub fn contact_length(&self, t: usize) -> Real {
-        let touching = self.contact.ring_touching(t);
-        let n = self.boundary.len();
+        let below = -ON_TOOL_SPACINGS * self.spacing[0].min(self.spacing[1]);
+        let x: Vec<[Real; 2]> = self
+            .boundary
+            .iter()
+            .map(|&j| self.position(j as usize))
+            .collect();
+        let inside: Vec<bool> = x
+            .iter()
+            .map(|&p| self.tools[t].gap_above(p, below).is_some())
+            .collect();
+        let n = x.len();
         (0..n)
-            .filter(|&k| touching[k] && touching[(k + 1) % n])
+            .filter(|&k| inside[k] && inside[(k + 1) % n])
             .map(|k| {
-                let a = self.position(self.boundary[k] as usize);
-                let b = self.position(self.boundary[(k + 1) % n] as usize);
+                let (a, b) = (x[k], x[(k + 1) % n]);
                 (b[0] - a[0]).hypot(b[1] - a[1])
             })
             .sum()
