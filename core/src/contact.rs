@@ -163,9 +163,19 @@ pub struct Contact {
     nearest_point: Vec<u32>,
     /// The pairs with friction in contact at this step, for [`Contact::carry`].
     touched: Vec<Touched>,
-    /// The pairs `[candidate, tool]` with a contact force this step: the particles whose
-    /// penetration the step checks ([`Contact::near`]).
-    near: Vec<[u32; 2]>,
+    /// The pairs with a contact force this step ([`Contact::near`]).
+    near: Vec<Near>,
+}
+
+/// A candidate that took a contact force from a tool in the last stage.
+#[derive(Debug, Clone, Copy)]
+struct Near {
+    /// The candidate.
+    k: u32,
+    /// The tool.
+    tool: u32,
+    /// Its predicted gap (m).
+    gap: Real,
 }
 
 impl Contact {
@@ -217,16 +227,19 @@ impl Contact {
         self.candidates.len()
     }
 
-    /// The pairs `(particle, tool)` with a contact force in the last stage: every particle
-    /// that the stage found inside a tool, at its predicted position.
-    pub fn near(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
-        self.near
-            .iter()
-            .map(|&[k, t]| (self.candidates[k as usize] as usize, t as usize))
+    /// Every particle that took a contact force in the last stage, with the tool, its
+    /// predicted position (m) and its predicted gap in the tool (m).
+    pub fn near(&self) -> impl Iterator<Item = (usize, usize, [Real; 2], Real)> + '_ {
+        self.near.iter().map(|n| {
+            let k = n.k as usize;
+            let x = self.motion[k][0];
+            (self.candidates[k] as usize, n.tool as usize, x, n.gap)
+        })
     }
 
     /// The boundary ring's particles with their positions as the last stage predicted them
-    /// (m; a natural step ahead of the step's start).
+    /// (m; a natural step ahead of the step's start): all fresh when a tool has fill points
+    /// or convex corners, which is when the stage interpolates the whole ring.
     pub fn ring_predicted(&self) -> impl Iterator<Item = (usize, [Real; 2])> + '_ {
         self.candidates[..self.ring]
             .iter()
@@ -312,6 +325,13 @@ impl Contact {
             ..
         } = *body;
         let (np, nc, ring) = (reference.len(), self.candidates.len(), self.ring);
+        // The whole ring is needed at every step when a tool has convex corners (the corner
+        // pass) or fill points ([`Contact::ring_predicted`]); otherwise it is skipped like
+        // the inside particles.
+        let whole_ring = tools
+            .iter()
+            .any(|t| !t.convex.is_empty() || t.fill_points > 0);
+        let always = if whole_ring { ring } else { 0 };
         let du = std::f64::consts::SQRT_2
             * (self.update_move + self.predicted_moves[0] + self.predicted_moves[1]);
         let (skip, sum_abs, candidates) = (self.skip, &self.sum_abs, &self.candidates);
@@ -333,14 +353,14 @@ impl Contact {
                 )
             };
             for (k, (m, c)) in range.zip(out.iter_mut().zip(clear.iter_mut())) {
-                if k >= ring {
+                if k >= always {
                     *c -= sum_abs[k] * du + tool_move;
                     if skip && *c > 0.0 {
                         continue;
                     }
                 }
                 *m = body.predicted(candidates[k] as usize, dt);
-                if k >= ring {
+                if k >= always {
                     let x = m[0];
                     *c = tools_now
                         .iter()
@@ -365,8 +385,12 @@ impl Contact {
             .enumerate()
         {
             let stick = &mut stick[k * ntools..(k + 1) * ntools];
-            if k >= ring && self.skip && c > 0.0 {
-                stick.fill(None);
+            if k >= always && self.skip && c > 0.0 {
+                // Out of reach of every tool: no friction state (written only when there is
+                // one to drop, as most skipped particles never had any).
+                if stick.iter().any(Option::is_some) {
+                    stick.fill(None);
+                }
                 continue;
             }
             let j = j as usize;
@@ -421,17 +445,25 @@ impl Contact {
                 tool.state.force[1] -= f[1];
                 tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
                 spread(&mut self.force, nodal, j, f);
-                self.near.push([k as u32, t as u32]);
+                self.near.push(Near {
+                    k: k as u32,
+                    tool: t as u32,
+                    gap: pen.gap,
+                });
                 any = true;
             }
         }
-        let positions: Vec<[Real; 2]> = self.motion[..ring].iter().map(|m| m[0]).collect();
+        let corners = tools.iter().any(|t| !t.convex.is_empty());
+        let positions: Vec<[Real; 2]> = match corners {
+            true => self.motion[..ring].iter().map(|m| m[0]).collect(),
+            false => Vec::new(),
+        };
         let surface = corners::Surface {
             ring: &self.candidates[..ring],
             positions: &positions,
             mass,
         };
-        for tool in tools.iter_mut() {
+        for tool in tools.iter_mut().filter(|_| corners) {
             for corner in corners::inside(tool, &surface) {
                 let f = corners::penalty(&corner, &surface, dt, dt_avg);
                 let vt = [

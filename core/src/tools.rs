@@ -43,6 +43,8 @@ pub struct Tool {
     /// polyline turns right, the workpiece lying on its left): the corners that can cut
     /// between two surface particles ([`crate::corners`]).
     pub convex: Vec<u32>,
+    /// Number of the tool's named fill points (the die fill needs the whole surface).
+    pub fill_points: usize,
 }
 
 /// What changes while a tool moves.
@@ -88,6 +90,7 @@ impl Tool {
             bins: SegmentBins::new(&spec.points_m, depth),
             depth,
             convex: convex_vertices(&spec.points_m),
+            fill_points: spec.fill_points.len(),
         }
     }
 

@@ -37,8 +37,9 @@ pub struct FillPoint {
 
 impl Simulation {
     /// After a step with contact: records the fill points that a surface particle now
-    /// reaches. The ring's predicted positions (a step ahead, from the contact stage) pick
-    /// the particles within a spacing more than the reach; their physical positions decide.
+    /// reaches. The predicted positions of the ring and of the particles in contact (a step
+    /// ahead, from the contact stage) pick those within a spacing more than the reach; their
+    /// physical positions decide.
     pub(super) fn check_fill(&mut self) {
         if self.st.fill.iter().all(Option::is_some) {
             return;
@@ -50,13 +51,14 @@ impl Simulation {
             .filter(|&(k, _, _)| self.st.fill[k].is_none())
             .collect();
         let near = |x: [Real; 2], at: [Real; 2], r: Real| (x[0] - at[0]).hypot(x[1] - at[1]) <= r;
-        let mut particles: Vec<usize> = self
+        let touching = self.contact.near().map(|n| (n.0, n.2));
+        let particles: Vec<usize> = self
             .contact
             .ring_predicted()
+            .chain(touching)
             .filter(|&(_, x)| open.iter().any(|&(_, at, _)| near(x, at, reach + h)))
             .map(|(j, _)| j)
             .collect();
-        particles.extend(self.contact.near().map(|(j, _)| j));
         for j in particles {
             let x = self.position(j);
             for &(k, at, t) in &open {

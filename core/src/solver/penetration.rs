@@ -5,8 +5,9 @@
 //! Two measures, neither limited to the particles the contact stage treats as slaves:
 //! - at every step with a contact force, the particles that took one
 //!   ([`crate::contact::Contact::near`]: every particle the stage found inside a tool at its
-//!   predicted position), against that tool within its search depth; past the bound the run
-//!   stops with the step, time, particle, tool and depth;
+//!   predicted position) and whose predicted gap reached half the bound (the corrector only
+//!   pushes a particle in contact out of its tool), against that tool within its search
+//!   depth; past the bound the run stops with the step, time, particle, tool and depth;
 //! - at each output sample ([`Simulation::measure_penetration`]), every particle against
 //!   every segment of every tool at any depth.
 
@@ -32,11 +33,20 @@ impl Simulation {
         [self.ref_pos[j][0] + u[0], self.ref_pos[j][1] + u[1]]
     }
 
-    /// The step's check: the deepest of the particles near a tool, within the search depth
-    /// (m); kept as the run's largest and stopped at the scene's bound.
+    /// The step's check: the deepest of the particles in contact whose predicted gap reached
+    /// half the bound, within the search depth (m); kept as the run's largest and stopped at
+    /// the scene's bound.
     pub(super) fn check_penetration(&mut self) -> Result<()> {
         let mut worst = Penetrated::default();
-        for (j, t) in self.contact.near() {
+        let h = self.spacing[0].min(self.spacing[1]);
+        let watch = 0.5 * self.scene.checks.max_penetration_rel * h;
+        let deep: Vec<(usize, usize)> = self
+            .contact
+            .near()
+            .filter(|n| n.3 >= watch)
+            .map(|n| (n.0, n.1))
+            .collect();
+        for (j, t) in deep {
             if let Some(p) = self.tools[t].penetration(self.position(j)) {
                 if p.gap > worst.depth {
                     worst = Penetrated {
