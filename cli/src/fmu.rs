@@ -94,10 +94,7 @@ pub fn pack(scene_path: &Path, out: &Path) -> Result<String, String> {
         guid: xml::guid(&text),
         description: scene.description.clone(),
         stop_time: scene.time.end_s,
-        step_size: scene
-            .output
-            .history_interval_s
-            .unwrap_or(scene.time.end_s / 200.0),
+        step_size: scene.history_interval(),
     };
     let md = xml::write(&header, &vars)?;
     let lib =

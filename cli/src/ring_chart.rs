@@ -128,7 +128,7 @@ pub fn curves(scene: &Scene, laws: &[Friction]) -> Result<Vec<Curve>, String> {
         return Err(format!("scene `{}` has no moving tool", scene.name));
     }
     let end = scene.time.end_s;
-    let interval = scene.output.history_interval_s.unwrap_or(end / 200.0);
+    let interval = scene.history_interval();
     let times = sample_times(end, interval)
         .ok_or_else(|| format!("output.history_interval_s {interval} gives too many samples"))?;
     let (d0, h0) = (2.0 * w.origin_m[0], w.size_m[1]);

@@ -337,7 +337,8 @@ pub struct FillPoint {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
-    /// Interval between rows of the time history (s); default: end time / 200.
+    /// Interval between rows of the time history (s); default: end time / 200
+    /// ([`Scene::history_interval`]).
     #[serde(default)]
     pub history_interval_s: Option<Real>,
     /// Number of VTK frames and shape plots over the run (0 for none).
@@ -356,6 +357,9 @@ pub struct OutputSpec {
     #[serde(default = "default_fill_distance")]
     pub fill_distance_rel: Real,
 }
+
+/// History rows over a run whose scene sets no `output.history_interval_s`.
+pub const DEFAULT_HISTORY_ROWS: Real = 200.0;
 
 fn default_frames() -> usize {
     5
@@ -783,6 +787,14 @@ impl Scene {
     /// message.
     pub(crate) fn deserialize_table(doc: toml::Table) -> std::result::Result<Scene, String> {
         Scene::deserialize(toml::Value::Table(doc)).map_err(|e| e.message().trim().to_string())
+    }
+
+    /// The interval between history rows (s): `output.history_interval_s`, or the end time
+    /// over [`DEFAULT_HISTORY_ROWS`]. Every front end samples at it.
+    pub fn history_interval(&self) -> Real {
+        self.output
+            .history_interval_s
+            .unwrap_or(self.time.end_s / DEFAULT_HISTORY_ROWS)
     }
 
     /// The integration rule, overridable from outside (CLI, FMU parameter).

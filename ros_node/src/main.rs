@@ -139,7 +139,7 @@ fn run(a: &Args) -> Result<(), String> {
     let end = scene.time.end_s;
     let interval = match a.publish_rate {
         Some(r) => 1.0 / r,
-        None => scene.output.history_interval_s.unwrap_or(end / 200.0),
+        None => scene.history_interval(),
     };
     let schedule = schedule(end, interval)?;
     let samples = schedule.len();

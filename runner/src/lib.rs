@@ -34,7 +34,7 @@ pub struct Mark {
 /// The scene's history interval gives more than [`rkforge_core::MAX_SAMPLES`] samples.
 pub fn schedule(scene: &Scene, frames: usize) -> Result<Vec<Mark>, String> {
     let end = scene.time.end_s;
-    let interval = scene.output.history_interval_s.unwrap_or(end / 200.0);
+    let interval = scene.history_interval();
     let mut marks: Vec<Mark> = rkforge_core::sample_times(end, interval)
         .ok_or_else(|| format!("output.history_interval_s {interval:e} s: too many samples"))?
         .into_iter()
