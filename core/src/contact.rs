@@ -12,10 +12,11 @@
 //! from the RK coefficients, `x_J = X_J + sum_I N_I(X_J) (d_I + dt v*_I)` (m) and
 //! `v_J = sum_I N_I(X_J) v*_I` (m/s); a particle behind a tool segment gets the penalty
 //! force of eqs. 4-6 (N), spread to the coefficients with eq. 7, `f_I += N_I(X_J) f_J`, and
-//! the tool takes the reaction. The boundary ring is interpolated at every step (the
-//! corner pass needs the whole surface); an inside particle only while it may be within
-//! the search depth of a tool: its clearance ([`Contact`]) bounds its distance to every
-//! tool's polyline, so skipping it gives the bits of evaluating it.
+//! the tool takes the reaction. The boundary ring is interpolated at every step when a tool
+//! has convex corners or fill points (the corner pass and the die fill need the whole
+//! surface); any other particle only while it may reach a tool: its clearance ([`Contact`])
+//! bounds its distance to every tool's polyline, so skipping it gives the bits of evaluating
+//! it.
 //!
 //! A tool without separation holds every particle that has penetrated it: from then on the
 //! particle's signed gap is taken on either side of the surface, so the normal force pulls a
@@ -273,9 +274,9 @@ impl Contact {
     /// `dt` (s; equal to the actual step except when a step is shortened to land on a
     /// requested time), where the tools must be too, and the penalty stiffness `m_s / dt^2`
     /// uses it, so a short step never turns a residual penetration into a huge impulse;
-    /// `dt_avg` (s) is the corrector's step. The boundary ring is interpolated at every step;
-    /// an inside particle only when it may be within the search depth of a tool: its
-    /// clearance, measured when last interpolated, shrinks each step by
+    /// `dt_avg` (s) is the corrector's step. The boundary ring is interpolated at every step
+    /// when a tool has convex corners or fill points; any other particle only when it may
+    /// reach a tool: its clearance, measured when last interpolated, shrinks each step by
     /// `sqrt 2 S_J du + tool_move` and while it stays positive the particle is skipped.
     /// `pairs` holds what each candidate keeps on each tool from step to step. Fills
     /// [`Contact::force`] and each tool's force (N); returns whether any force acts and the
