@@ -15,6 +15,17 @@ pub struct Extents {
     pub y: [Real; 2],
 }
 
+impl Extents {
+    /// The workpiece's lateral size (m) with its summary key: the largest r in axisymmetry
+    /// (`radius_m`), the x extent in plane strain (`width_m`).
+    pub fn lateral(&self, kinematics: Kinematics) -> (&'static str, Real) {
+        match kinematics {
+            Kinematics::Axisymmetric => ("radius_m", self.x[1]),
+            Kinematics::PlaneStrain => ("width_m", self.x[1] - self.x[0]),
+        }
+    }
+}
+
 /// Bounds of a point set (m).
 pub fn bounds(p: &[[Real; 2]]) -> Extents {
     bounds_of(p, 0.0)

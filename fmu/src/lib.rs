@@ -8,7 +8,7 @@
 pub mod ffi;
 
 use rkforge_core::scene::MassScaling;
-use rkforge_core::{Error, IntegrationRule, Kinematics, Result, Scene, Simulation, State};
+use rkforge_core::{Error, IntegrationRule, Result, Scene, Simulation, State};
 use rkforge_model_description::{variable_table, xml, Binding, Causality, Variable};
 use serde::{Deserialize, Serialize};
 
@@ -250,10 +250,6 @@ impl Instance {
         let (params, commands) = (self.params.clone(), self.commands.clone());
         let sim = self.readable_sim()?;
         let tools = sim.tools();
-        let lateral = |e: rkforge_core::Extents| match sim.scene().model.kinematics {
-            Kinematics::Axisymmetric => e.x[1],
-            Kinematics::PlaneStrain => e.x[1] - e.x[0],
-        };
         Ok(match binding {
             Binding::ToolVelocity(k) => {
                 commands[k].unwrap_or_else(|| tools[k].velocity_at(sim.time()))
@@ -265,7 +261,7 @@ impl Instance {
                 Some(_) => 1.0,
                 None => 0.0,
             },
-            Binding::WorkpieceLateral => lateral(sim.extents()),
+            Binding::WorkpieceLateral => sim.extents().lateral(sim.scene().model.kinematics).1,
             Binding::WorkpieceHeight => {
                 let e = sim.extents();
                 e.y[1] - e.y[0]

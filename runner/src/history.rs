@@ -1,6 +1,6 @@
 //! The time history of a run: one row per sample, written as history.csv.
 
-use rkforge_core::{Extents, Kinematics, Simulation};
+use rkforge_core::{Extents, Simulation};
 use std::path::Path;
 
 /// Time history: one row per sample.
@@ -19,14 +19,6 @@ pub(crate) fn measures(sim: &Simulation) -> Measures {
     Measures {
         extents: sim.extents(),
         volume_change_rel: sim.volume() / sim.reference_volume() - 1.0,
-    }
-}
-
-/// `radius_m` (axisymmetric: largest r) or `width_m` (plane strain: x extent).
-pub fn lateral(sim: &Simulation, e: &Extents) -> (&'static str, f64) {
-    match sim.scene().model.kinematics {
-        Kinematics::Axisymmetric => ("radius_m", e.x[1]),
-        Kinematics::PlaneStrain => ("width_m", e.x[1] - e.x[0]),
     }
 }
 
@@ -49,7 +41,7 @@ impl History {
         for p in sim.fill_points() {
             columns.push(format!("{}.{}.filled", sim.tools()[p.tool].name, p.name));
         }
-        let lat = lateral(sim, &sim.extents()).0;
+        let lat = sim.extents().lateral(sim.scene().model.kinematics).0;
         for c in [
             "x_min_m",
             "x_max_m",
@@ -120,7 +112,7 @@ impl History {
             x.x[1],
             x.y[0],
             x.y[1],
-            lateral(sim, &x).1,
+            x.lateral(sim.scene().model.kinematics).1,
             x.y[1] - x.y[0],
             m.volume_change_rel,
             sim.max_plastic_strain(),

@@ -9,7 +9,7 @@
 pub mod history;
 pub mod summary;
 
-pub use history::{lateral, History};
+pub use history::History;
 pub use summary::{reference_table, summary, tool_json};
 
 use rkforge_core::{Scene, Simulation};

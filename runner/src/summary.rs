@@ -1,7 +1,7 @@
 //! The summary of a run (summary.json) and the table of our figures beside the scene's
 //! references.
 
-use crate::history::{face_values, lateral, measures, min_spacing, FACE_KEYS};
+use crate::history::{face_values, measures, min_spacing, FACE_KEYS};
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -13,7 +13,7 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>
     let m = measures(sim);
     let e = sim.energy();
     let x = m.extents;
-    let (lat, lat_v) = lateral(sim, &x);
+    let (lat, lat_v) = x.lateral(sim.scene().model.kinematics);
     let mut workpiece = json!({
         "height_m": x.y[1] - x.y[0],
         "x_range_m": x.x,

@@ -5,7 +5,7 @@ pub mod plots;
 pub mod vtu;
 
 use rkforge_core::Simulation;
-use rkforge_runner::{lateral, History};
+use rkforge_runner::History;
 use std::path::Path;
 
 /// The plots drawn from a run's history.
@@ -37,7 +37,7 @@ impl HistoryPlots for History {
             .iter()
             .map(|v| v * tscale)
             .collect();
-        let (lat, _) = lateral(sim, &sim.extents());
+        let (lat, _) = sim.extents().lateral(sim.scene().model.kinematics);
         let lat_label = lat.trim_end_matches("_m");
         for (key, label) in [(lat, lat_label), ("height_m", "height")] {
             let y: Vec<f64> = self
