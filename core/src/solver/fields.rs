@@ -25,12 +25,7 @@ pub struct Fields {
 impl Simulation {
     /// Physical positions `X_J + sum_I N_I(X_J) d_I` of all particles (m).
     pub fn positions(&self) -> Vec<[Real; 2]> {
-        (0..self.ref_pos.len())
-            .map(|j| {
-                let u = self.nodal.interpolate(j, &self.st.d);
-                [self.ref_pos[j][0] + u[0], self.ref_pos[j][1] + u[1]]
-            })
-            .collect()
+        (0..self.ref_pos.len()).map(|j| self.position(j)).collect()
     }
 
     /// Bounds of the deformed workpiece over all particles (m).
@@ -73,11 +68,7 @@ impl Simulation {
         let x: Vec<[Real; 2]> = edge
             .particles(self.nx, self.ny)
             .into_iter()
-            .map(|j| {
-                let j = j as usize;
-                let u = self.nodal.interpolate(j, &self.st.d);
-                [self.ref_pos[j][0] + u[0], self.ref_pos[j][1] + u[1]]
-            })
+            .map(|j| self.position(j as usize))
             .collect();
         bounds(&x)
     }
