@@ -148,6 +148,12 @@ pub struct Discretization {
     /// Kernel support radius per direction, in particle spacings (-).
     #[serde(default = "default_support")]
     pub support: [Real; 2],
+    /// Re-reference the kernel when an integration point's largest principal in-plane
+    /// stretch since the last reference reaches this value (-): the shape functions are
+    /// rebuilt on the current configuration and the state carried over
+    /// ([`crate::solver`]'s `rereference.rs`). Absent: the Lagrangian kernel throughout.
+    #[serde(default)]
+    pub rereference_stretch: Option<Real>,
 }
 
 fn default_support() -> [Real; 2] {
@@ -159,6 +165,7 @@ impl Default for Discretization {
         Discretization {
             integration: IntegrationRule::default(),
             support: default_support(),
+            rereference_stretch: None,
         }
     }
 }
@@ -600,6 +607,18 @@ impl Scene {
                 s.is_finite() && (1.05..=4.0).contains(&s),
                 "discretization.support",
                 format!("support radii must lie in [1.05, 4] particle spacings (a linear basis needs more than 1), got {:?}", self.discretization.support),
+            );
+        }
+        if let Some(s) = self.discretization.rereference_stretch {
+            check(
+                s.is_finite() && (1.1..=10.0).contains(&s),
+                "discretization.rereference_stretch",
+                format!("must lie in [1.1, 10] (a principal stretch), got {s}"),
+            );
+            check(
+                self.discretization.integration != IntegrationRule::Scni,
+                "discretization.rereference_stretch",
+                "re-referencing works with the cell rules q2 and q4; scni's nodal domains are not rebuilt on the deformed particles".into(),
             );
         }
         let t = &self.time;

@@ -30,7 +30,7 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>
     }
     let times = sim.times;
     let scene = sim.scene();
-    json!({
+    let mut summary = json!({
         "status": if error.is_some() { "error" } else { "ok" },
         "error": error,
         "scene": scene.name,
@@ -81,7 +81,18 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>
             "integration": times.integration.as_secs_f64(),
             "output": output_s,
         },
-    })
+    });
+    // Only a scene that re-references the kernel has the entry.
+    if let Some(stretch) = scene.discretization.rereference_stretch {
+        summary["rereference"] = json!({
+            "stretch": stretch,
+            "count": sim.reference().map_or(0, |r| r.count),
+            "last_s": sim.reference().map(|r| r.time_s),
+            "remap_J": e.remap,
+            "velocity_fit_residual": sim.reference().map(|r| r.fit_residual),
+        });
+    }
+    summary
 }
 
 /// Look up a dotted key such as `workpiece.radius_m` in the summary.

@@ -29,6 +29,10 @@ pub struct Energy {
     /// Internal work over the half step from `d_n` to `d_{n+1/2}`, `dt f_int . v_{n+1/2} / 2`,
     /// which puts the internal energy at the time of the kinetic energy.
     pub internal_half_step: Real,
+    /// Kinetic energy changed by the velocity transfers of kernel re-referencing
+    /// (`rereference.rs`; J), 0 without re-referencing.
+    #[serde(default)]
+    pub remap: Real,
 }
 
 impl Energy {
@@ -42,7 +46,10 @@ impl Energy {
     /// `d_n` plus the half-step work, which equals the internal force work exactly for a
     /// linear elastic body, so what remains measures the time discretisation of plasticity.
     pub fn balance_error(&self) -> Real {
-        self.kinetic + self.internal() + self.internal_half_step - self.contact_work - self.initial
+        self.kinetic + self.internal() + self.internal_half_step
+            - self.contact_work
+            - self.initial
+            - self.remap
     }
     /// The energy against which the balance error is measured: the larger of the initial
     /// energy and the total contact work exchanged.

@@ -12,7 +12,7 @@ use crate::scene::Edge;
 pub struct Fields {
     /// Physical positions `X_J + u(X_J)` (m).
     pub positions: Vec<[Real; 2]>,
-    /// Physical displacements `u(X_J)` (m).
+    /// Physical displacements `x_J - X_J` from the undeformed workpiece (m).
     pub displacement: Vec<[Real; 2]>,
     /// Physical velocities (m/s).
     pub velocity: Vec<[Real; 2]>,
@@ -50,7 +50,7 @@ impl Simulation {
 
     /// Volume of the undeformed workpiece (m^3).
     pub fn reference_volume(&self) -> Real {
-        self.volume_of(&self.ref_pos)
+        self.volume_of(&self.original)
     }
 
     /// Volume enclosed by the boundary particles of the particle positions `x` (m^3):
@@ -92,7 +92,13 @@ impl Simulation {
             }
         }
         for j in 0..np {
-            f.displacement.push(self.nodal.interpolate(j, &self.st.d));
+            f.displacement.push(match self.st.reference {
+                None => self.nodal.interpolate(j, &self.st.d),
+                Some(_) => {
+                    let (x, x0) = (f.positions[j], self.original[j]);
+                    [x[0] - x0[0], x[1] - x0[1]]
+                }
+            });
             f.velocity.push(self.nodal.interpolate(j, &self.st.v));
             let w = if wsum[j] > 0.0 { 1.0 / wsum[j] } else { 0.0 };
             f.plastic_strain.push(ep[j] * w);
@@ -114,6 +120,11 @@ impl Simulation {
     /// Reference positions of the integration points (m).
     pub fn point_positions(&self) -> &[[Real; 2]] {
         &self.points.positions
+    }
+    /// Mises equivalent of the Cauchy stress at each integration point (Pa), at the last
+    /// stress stage.
+    pub fn point_von_mises(&self) -> Vec<Real> {
+        self.out.iter().map(|o| o.von_mises).collect()
     }
     /// Equivalent plastic strain at each integration point.
     pub fn point_plastic_strain(&self) -> Vec<Real> {

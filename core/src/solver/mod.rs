@@ -37,6 +37,7 @@ mod fill;
 mod layout;
 mod mass_scaling;
 mod penetration;
+mod rereference;
 mod stable_step;
 mod state;
 mod stress;
@@ -49,6 +50,7 @@ pub use fields::Fields;
 pub use fill::FillPoint;
 pub use mass_scaling::MassScalingReport;
 pub use penetration::Penetrated;
+pub use rereference::Reference;
 pub use state::{Filled, State};
 
 use crate::constraints::Constraints;
@@ -100,8 +102,16 @@ pub struct Simulation {
     ny: usize,
     /// Particle spacings (m).
     spacing: [Real; 2],
-    /// Reference particle positions `X_I` (m), row by row.
+    /// Reference particle positions `X_I` (m), row by row: the lattice's, or the positions
+    /// at the last kernel re-reference (`rereference.rs`).
     ref_pos: Vec<[Real; 2]>,
+    /// The lattice's particle positions (m), the undeformed workpiece.
+    original: Vec<[Real; 2]>,
+    /// The lattice's planar kernel volumes (m^2), for the first re-reference.
+    lattice_volumes: Vec<Real>,
+    /// `J = det F` of each point at the last re-reference (-), 1 before one.
+    reference_jacobian: Vec<Real>,
+
     /// Row-sum lumped masses `m_I` (kg; whole ring in axisymmetry, per depth in plane
     /// strain).
     mass: Vec<Real>,
@@ -310,6 +320,8 @@ impl Simulation {
                 held,
                 stick,
                 fill: vec![None; scene.tools.iter().map(|t| t.fill_points.len()).sum()],
+                reference: None,
+                max_stretch: 0.0,
             },
             tools,
             out: vec![PointOut::initial(&material); npts],
@@ -320,6 +332,9 @@ impl Simulation {
             simd: true,
             team: Team::default(),
             ref_pos,
+            original: lattice.cloud().positions.clone(),
+            lattice_volumes: lattice.cloud().volumes.clone(),
+            reference_jacobian: vec![1.0; npts],
             points,
             nodal,
             scene: scene.clone(),
@@ -376,9 +391,14 @@ impl Simulation {
     pub fn spacing(&self) -> [Real; 2] {
         self.spacing
     }
-    /// Reference particle positions (m).
+    /// Particle positions of the undeformed workpiece (m).
     pub fn reference_positions(&self) -> &[[Real; 2]] {
-        &self.ref_pos
+        &self.original
+    }
+    /// The configuration the kernel was last re-referenced on, if it was
+    /// (`discretization.rereference_stretch`).
+    pub fn reference(&self) -> Option<&Reference> {
+        self.st.reference.as_ref()
     }
     /// Lumped masses (kg).
     pub fn masses(&self) -> &[Real] {
@@ -478,6 +498,12 @@ impl Simulation {
                 "the saved state belongs to another discretisation".into(),
             ));
         }
+        if st.reference != self.st.reference {
+            match &st.reference {
+                Some(r) => self.install(r)?,
+                None => self.take_discretization(Simulation::new(&self.scene)?),
+            }
+        }
         for (t, s) in self.tools.iter_mut().zip(&st.tools) {
             t.state = *s;
         }
@@ -496,6 +522,9 @@ impl Simulation {
     /// One central-difference step, at most `max_dt` long (s): the stages of the module
     /// doc, in order.
     pub fn step(&mut self, max_dt: Option<Real>) -> Result<()> {
+        // 0. Kernel re-reference, when the scene asks for it and the deformation reached it.
+        self.rereference_if_due()
+            .map_err(|e| rereference::failed(self.st.step, self.st.time, e))?;
         // 0. A tool too fast for the step stops the run before anything changes.
         let h_min = self.spacing[0].min(self.spacing[1]);
         let tool_dt =
@@ -614,7 +643,7 @@ impl Simulation {
                 time: self.st.time,
                 what: format!(
                     "velocity of particle {i} at {:?} m is not finite",
-                    self.ref_pos[i]
+                    self.original[i]
                 ),
             });
         }
@@ -695,6 +724,8 @@ impl Simulation {
             material: &self.material,
             weights: &self.weights,
             inv_radius: &self.inv_radius,
+            reference_jacobian: &self.reference_jacobian,
+            track_stretch: self.scene.discretization.rereference_stretch.is_some(),
             axi: self.scene.model.kinematics == Kinematics::Axisymmetric,
             spacing: self.spacing,
             avx2: self.simd && has_avx2(),
@@ -716,6 +747,9 @@ impl Simulation {
         })?;
         self.st.stable_dt =
             self.critical_dt0 * sums.min_altitude / self.spacing[0].min(self.spacing[1]);
+        if self.scene.discretization.rereference_stretch.is_some() {
+            self.st.max_stretch = sums.max_stretch;
+        }
         self.times.stress += t0.elapsed();
         Ok((sums.elastic, sums.plastic))
     }

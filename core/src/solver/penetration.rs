@@ -95,7 +95,7 @@ impl Simulation {
                 step: self.st.step,
                 time: self.st.time,
                 particle: worst.particle,
-                reference: self.ref_pos[worst.particle],
+                reference: self.original[worst.particle],
                 tool: self.tools[worst.tool].name.clone(),
                 depth: worst.depth,
                 depth_rel: worst.depth / h,

@@ -1,6 +1,7 @@
 //! The whole changing state of a simulation, saved and restored as one value.
 
 use super::energy::Energy;
+use super::rereference::Reference;
 use crate::contact::Stick;
 use crate::material::PointState;
 use crate::math::Real;
@@ -54,6 +55,13 @@ pub struct State {
     /// tool); `None` while a point is empty.
     #[serde(default)]
     pub fill: Vec<Option<Filled>>,
+    /// The configuration the kernel was last re-referenced on (`None`: the lattice).
+    #[serde(default)]
+    pub reference: Option<Reference>,
+    /// Largest principal in-plane stretch of `F` at the last stress stage (-), measured
+    /// when the scene re-references the kernel (0 otherwise).
+    #[serde(default)]
+    pub max_stretch: Real,
 }
 
 /// The moment the material first reached a tool's fill point.

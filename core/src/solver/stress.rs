@@ -61,6 +61,8 @@ struct ChunkSums {
     plastic: Real,
     /// Smallest squared altitude of a deformed cell (m^2).
     min_altitude2: Real,
+    /// Largest squared principal in-plane stretch of `F` (-), when tracked.
+    max_stretch2: Real,
     failure: Option<(usize, String)>,
 }
 
@@ -88,6 +90,8 @@ struct StressContext<'a> {
     material: &'a HenckyJ2,
     weights: &'a [Real],
     inv_radius: &'a [Real],
+    reference_jacobian: &'a [Real],
+    track_stretch: bool,
     axi: bool,
     spacing: [Real; 2],
     /// `sigma_y(0)` (Pa), for the plastic work.
@@ -238,6 +242,7 @@ impl StressContext<'_> {
             elastic: 0.0,
             plastic: 0.0,
             min_altitude2: Real::INFINITY,
+            max_stretch2: 0.0,
             failure: None,
         };
         let [hx, hy] = self.spacing;
@@ -305,6 +310,17 @@ impl StressContext<'_> {
                 let area = (f11 * f22 - f12 * f21) * hx * hy;
                 *a2 = area * area.abs() / ex2.max(ey2);
             }
+            // Largest principal stretch squared, the larger eigenvalue of F^T F:
+            // (|F|^2 + sqrt(|F|^4 - 4 det^2)) / 2.
+            if self.track_stretch {
+                for l in 0..used {
+                    let f = [batch.f[0][l], batch.f[1][l], batch.f[2][l], batch.f[3][l]];
+                    let norm2 = f[0] * f[0] + f[1] * f[1] + f[2] * f[2] + f[3] * f[3];
+                    let det = f[0] * f[3] - f[1] * f[2];
+                    let root = (norm2 * norm2 - 4.0 * det * det).max(0.0).sqrt();
+                    s.max_stretch2 = s.max_stretch2.max(0.5 * (norm2 + root));
+                }
+            }
             // Scatter weights w_p (P grad N_I + e_r P_33 N_I / R_p), all lanes at once.
             for l in 0..LANES {
                 let w = weight[l];
@@ -325,8 +341,11 @@ impl StressContext<'_> {
                     let flow = batch.flow_stress[l];
                     out.set_plastic_strain(self.material, state.eps_p, flow, self.initial_yield);
                 }
-                out.von_mises = u.von_mises[l];
-                out.jacobian = u.jacobian[l];
+                // F is measured from the last reference: J and the Cauchy stress q / J
+                // take the Jacobian J_ref of that reference (1 without re-referencing).
+                let j_ref = self.reference_jacobian[p0 + l];
+                out.von_mises = u.von_mises[l] / j_ref;
+                out.jacobian = u.jacobian[l] * j_ref;
                 s.elastic += u.elastic_energy[l] * weight[l];
                 s.plastic += out.plastic_work * weight[l];
                 s.min_altitude2 = s.min_altitude2.min(altitude2[l]);
@@ -381,6 +400,11 @@ pub(super) struct Inputs<'a> {
     pub weights: &'a [Real],
     /// `1 / R_p` of each point (1/m) in axisymmetry.
     pub inv_radius: &'a [Real],
+    /// `J_ref = det F` of each point at the last re-reference (-), 1 without one: the
+    /// Jacobian and the Cauchy stress are measured from the original configuration.
+    pub reference_jacobian: &'a [Real],
+    /// Measure the largest principal stretch (for the re-reference trigger).
+    pub track_stretch: bool,
     /// Axisymmetric (hoop stretch and stress) or plane strain.
     pub axi: bool,
     /// Particle spacings (m), for the deformed cells' altitudes.
@@ -397,6 +421,8 @@ pub(super) struct Sums {
     pub plastic: Real,
     /// Smallest altitude of a deformed cell `det F hx hy / max(|F hx e_x|, |F hy e_y|)` (m).
     pub min_altitude: Real,
+    /// Largest principal in-plane stretch of `F` over the points (-), 0 when not tracked.
+    pub max_stretch: Real,
 }
 
 /// Runs the stress stage over all points on `team`: updates each point's history in
@@ -433,6 +459,8 @@ pub(super) fn stage(
         material: input.material,
         weights: input.weights,
         inv_radius: input.inv_radius,
+        reference_jacobian: input.reference_jacobian,
+        track_stretch: input.track_stretch,
         axi: input.axi,
         spacing: input.spacing,
         initial_yield: input.material.hardening.initial_yield(),
@@ -475,6 +503,7 @@ pub(super) fn stage(
         };
     });
     let (mut elastic, mut plastic, mut min_altitude2) = (0.0, 0.0, Real::INFINITY);
+    let mut max_stretch2: Real = 0.0;
     for s in sums {
         if let Some(failure) = s.failure {
             return Err(failure);
@@ -482,10 +511,12 @@ pub(super) fn stage(
         elastic += s.elastic;
         plastic += s.plastic;
         min_altitude2 = min_altitude2.min(s.min_altitude2);
+        max_stretch2 = max_stretch2.max(s.max_stretch2);
     }
     Ok(Sums {
         elastic,
         plastic,
         min_altitude: min_altitude2.max(0.0).sqrt(),
+        max_stretch: max_stretch2.sqrt(),
     })
 }

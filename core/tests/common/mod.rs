@@ -38,6 +38,7 @@ pub fn patch(kin: Kinematics, n: usize, rule: IntegrationRule, support: f64) -> 
         discretization: Discretization {
             integration: rule,
             support: [support, support],
+            rereference_stretch: None,
         },
         time: TimeSpec {
             end_s: 1e-6,

@@ -1,0 +1,392 @@
+//! Kernel re-referencing (`discretization.rereference_stretch`): when an integration point's
+//! largest principal in-plane stretch since the last reference reaches the scene's value,
+//! the discretisation is rebuilt on the current configuration and the state carried over,
+//! as updated-Lagrangian RKPM does at intervals (Chen, Pan, Wu, Liu 1996, sec. 4; Chen, Wu,
+//! Yoon, You 2001 for the same transfer in forming). With a Lagrangian kernel the supports
+//! stretch with the material; in a forging flash, strains of 5-10 draw them out until a
+//! point's neighbours lie nearly on a line and the approximation degrades.
+//!
+//! At a re-reference (all at the positions `x = X + sum_I N_I(X) d_I` of the end of the
+//! last step):
+//! - particles: `X' = x_J`; each particle's cell `G' = F_J G` (m; `G = diag(h_x, h_y)` on
+//!   the lattice) and kernel volume `V' = det F_J V` (m^2), with `F_J` and `det F_J`
+//!   averaged over the points that see the particle with weights `|N_J(x_p)| w_p`; its
+//!   support radii `a'_k = s_k (|G'_k1| + |G'_k2|)` (m, `s` = `discretization.support`),
+//!   the axis-aligned extent of its deformed cell, so that a stretched region keeps about
+//!   `s` neighbours per direction ([`KernelCloud::with_supports`]);
+//! - integration points: `x_p` becomes the point's position with its weight `w_p` kept (the
+//!   material's energy and stress are per original volume, so `f_I = sum_p w_p tau grad_x
+//!   N_I` is the same sum in the new reference), `1 / R_p = 1 / r_p`, and the history pushed
+//!   forward, `C_p'^{-1} = F C_p^{-1} F^T` (the elastic left Cauchy-Green tensor `b_e`, and
+//!   `F'_33^2 C_p^{-1}_33` out of plane), so that the trial state of the next step is the
+//!   one the old reference would give; `J_ref = J` keeps the Jacobian and Cauchy stress
+//!   measured from the original configuration;
+//! - displacements `d' = 0`; velocities: the coefficients whose interpolation at the new
+//!   reference reproduces the physical particle velocities, `sum_I N'_I(X'_J) v'_I = v_J`
+//!   (least squares by conjugate gradients on the nodal matrix), projected onto the essential conditions;
+//!   the kinetic energy this changes is booked as `Energy::remap` (J);
+//! - masses, the boundary ring, the tools' state, the contact pairs' held and stick state
+//!   are the particles' own and stay; the contact stage, the essential conditions and the
+//!   critical step are rebuilt (the step is measured again on the new shape functions with
+//!   unstressed points, as at the start).
+//!
+//! Without re-referencing (the default) nothing here runs and the bits are those of the
+//! Lagrangian kernel. SCNI is refused by the scene: its nodal domains are not rebuilt.
+
+use super::Simulation;
+use crate::constraints::Constraints;
+use crate::contact::Contact;
+use crate::error::{Error, Result};
+use crate::material::PointState;
+use crate::math::Real;
+use crate::rk_shape::{KernelCloud, ShapeTable};
+use crate::scene::Kinematics;
+use serde::{Deserialize, Serialize};
+
+/// Conjugate-gradient iterations allowed for the velocity transfer.
+const FIT_ITERATIONS: usize = 500;
+/// Relative residual at which the velocity transfer stops (-).
+const FIT_TOLERANCE: Real = 1e-12;
+
+/// The configuration the kernel was last rebuilt on, saved with the state.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Reference {
+    /// Re-references so far.
+    pub count: u32,
+    /// Time of the last one (s).
+    pub time_s: Real,
+    /// Particle positions `X'` (m).
+    pub particles: Vec<[Real; 2]>,
+    /// Planar kernel volumes `V'` (m^2).
+    pub volumes: Vec<Real>,
+    /// Each particle's deformed cell `G = [G_11, G_12, G_21, G_22]` (m).
+    pub cells: Vec<[Real; 4]>,
+    /// Integration point positions (m).
+    pub points: Vec<[Real; 2]>,
+    /// `J = det F` of each point from the original configuration (-).
+    pub point_jacobian: Vec<Real>,
+    /// Relative residual of the velocity transfer (-).
+    pub fit_residual: Real,
+}
+
+/// The deformation at one integration point: `F = I + sum_I d_I (x) grad N_I`
+/// (`[F_xX, F_xY, F_yX, F_yY]`), the out-of-plane stretch and the displacement (m).
+struct PointMotion {
+    f: [Real; 4],
+    f33: Real,
+    u: [Real; 2],
+}
+
+impl Simulation {
+    /// Re-references the kernel when the last stress stage's largest stretch reached the
+    /// scene's `discretization.rereference_stretch`.
+    pub(super) fn rereference_if_due(&mut self) -> Result<()> {
+        match self.scene.discretization.rereference_stretch {
+            Some(limit) if self.st.max_stretch >= limit => self.rereference(),
+            _ => Ok(()),
+        }
+    }
+
+    /// Re-references the kernel now, on the positions of the current displacement (see
+    /// the module doc); a run does it itself when `discretization.rereference_stretch` is
+    /// reached.
+    pub fn rereference(&mut self) -> Result<()> {
+        let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
+        let np = self.ref_pos.len();
+        let npts = self.weights.len();
+        let positions = self.positions();
+        let motions: Vec<PointMotion> = (0..npts).map(|p| self.point_motion(p, axi)).collect();
+        // Particle averages of F and det F over the points that see them.
+        let mut sum = vec![[0.0; 6]; np];
+        for (p, m) in motions.iter().enumerate() {
+            let det = m.f[0] * m.f[3] - m.f[1] * m.f[2];
+            for (i, [n, _, _]) in self.scatter.point_row(p) {
+                let w = (n * self.weights[p]).abs();
+                let s = &mut sum[i];
+                for (sk, fk) in s.iter_mut().zip(m.f) {
+                    *sk += w * fk;
+                }
+                s[4] += w * det;
+                s[5] += w;
+            }
+        }
+        let (old_cells, old_volumes, old_jacobian) = self.current_reference();
+        let mut cells = Vec::with_capacity(np);
+        let mut volumes = Vec::with_capacity(np);
+        for (i, s) in sum.iter().enumerate() {
+            let (f, det) = match s[5] > 0.0 {
+                true => ([s[0], s[1], s[2], s[3]].map(|x| x / s[5]), s[4] / s[5]),
+                false => ([1.0, 0.0, 0.0, 1.0], 1.0),
+            };
+            let g = old_cells[i];
+            cells.push([
+                f[0] * g[0] + f[1] * g[2],
+                f[0] * g[1] + f[1] * g[3],
+                f[2] * g[0] + f[3] * g[2],
+                f[2] * g[1] + f[3] * g[3],
+            ]);
+            volumes.push(old_volumes[i] * det);
+        }
+        let points: Vec<[Real; 2]> = motions
+            .iter()
+            .enumerate()
+            .map(|(p, m)| {
+                let x = self.points.positions[p];
+                [x[0] + m.u[0], x[1] + m.u[1]]
+            })
+            .collect();
+        let point_jacobian: Vec<Real> = motions
+            .iter()
+            .zip(&old_jacobian)
+            .map(|(m, j)| j * (m.f[0] * m.f[3] - m.f[1] * m.f[2]) * m.f33)
+            .collect();
+        for (state, m) in self.st.points.iter_mut().zip(&motions) {
+            push_forward(state, m);
+        }
+        // Physical velocities before the new shape functions replace the old.
+        let v_now: Vec<[Real; 2]> = (0..np)
+            .map(|j| self.nodal.interpolate(j, &self.st.v))
+            .collect();
+        let v_before: Vec<[Real; 2]> = (0..np)
+            .map(|j| self.nodal.interpolate(j, &self.v_prev))
+            .collect();
+        let kinetic_before = kinetic(&self.mass, &self.st.v);
+        let previous = self.st.reference.as_ref();
+        let mut reference = Reference {
+            count: previous.map_or(0, |r| r.count) + 1,
+            time_s: self.st.time,
+            particles: positions,
+            volumes,
+            cells,
+            points,
+            point_jacobian,
+            fit_residual: 0.0,
+        };
+        self.install(&reference)?;
+        let (v, r1) = fit(&self.nodal, &v_now);
+        let (v_prev, r2) = fit(&self.nodal, &v_before);
+        reference.fit_residual = r1.max(r2);
+        self.st.v = v;
+        self.v_prev = v_prev;
+        if let Some(c) = &self.constraints {
+            c.project(&mut self.st.v, &self.mass);
+            c.project(&mut self.v_prev, &self.mass);
+        }
+        self.st.d = vec![[0.0; 2]; np];
+        let kinetic_after = kinetic(&self.mass, &self.st.v);
+        self.st.energy.remap += kinetic_after - kinetic_before;
+        self.st.energy.kinetic += kinetic_after - kinetic_before;
+        self.st.reference = Some(reference);
+        self.st.stable_dt = self.critical_dt0;
+        self.st.max_stretch = 1.0;
+        Ok(())
+    }
+
+    /// The particles' cells and kernel volumes and the points' Jacobians of the current
+    /// reference (the lattice's before the first re-reference).
+    fn current_reference(&self) -> (Vec<[Real; 4]>, Vec<Real>, Vec<Real>) {
+        match &self.st.reference {
+            Some(r) => (r.cells.clone(), r.volumes.clone(), r.point_jacobian.clone()),
+            None => {
+                let [hx, hy] = self.spacing;
+                (
+                    vec![[hx, 0.0, 0.0, hy]; self.ref_pos.len()],
+                    self.lattice_volumes.clone(),
+                    vec![1.0; self.weights.len()],
+                )
+            }
+        }
+    }
+
+    /// `F`, `F_33` and the displacement at point `p` from the current coefficients.
+    fn point_motion(&self, p: usize, axi: bool) -> PointMotion {
+        let (mut f, mut u) = ([1.0, 0.0, 0.0, 1.0], [0.0; 2]);
+        for (i, [n, nx, ny]) in self.scatter.point_row(p) {
+            let d = self.st.d[i];
+            f[0] += d[0] * nx;
+            f[1] += d[0] * ny;
+            f[2] += d[1] * nx;
+            f[3] += d[1] * ny;
+            u[0] += d[0] * n;
+            u[1] += d[1] * n;
+        }
+        let f33 = match axi {
+            true => 1.0 + u[0] * self.inv_radius[p],
+            false => 1.0,
+        };
+        PointMotion { f, f33, u }
+    }
+
+    /// Builds the shape functions, the scatter, the essential conditions, the contact
+    /// stage and the critical step on `reference`; the state is left to the caller.
+    pub(super) fn install(&mut self, reference: &Reference) -> Result<()> {
+        let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
+        let s = self.scene.discretization.support;
+        let supports = reference
+            .cells
+            .iter()
+            .map(|g| [s[0] * g[0].hypot(g[1]), s[1] * g[2].hypot(g[3])])
+            .collect();
+        let cloud = KernelCloud::with_supports(
+            reference.particles.clone(),
+            reference.volumes.clone(),
+            supports,
+        );
+        let count = reference.count;
+        let pt = cloud.shape_table(&reference.points, &|p| {
+            format!("integration point {p} at re-reference {count}")
+        })?;
+        let mut nodal = cloud.shape_table(&reference.particles, &|j| {
+            format!("particle {j} at re-reference {count}")
+        })?;
+        nodal.drop_gradients();
+        let np = reference.particles.len();
+        self.scatter = super::layout::Scatter::new(&pt, np, self.scatter.chunk, super::MAX_GROUP);
+        if let Some(c) = &self.constraints {
+            self.constraints = Constraints::new(c.rows.clone(), &nodal, &self.mass)?;
+        }
+        self.contact = Contact::new(
+            &self.boundary,
+            &nodal,
+            &reference.particles,
+            &reference.points,
+            self.tools.iter().any(|t| t.friction.needs_flow_stress()),
+        );
+        self.nodal = nodal;
+        self.ref_pos.clone_from(&reference.particles);
+        self.points.positions.clone_from(&reference.points);
+        if axi {
+            self.inv_radius = reference.points.iter().map(|x| 1.0 / x[0]).collect();
+        }
+        self.reference_jacobian
+            .clone_from(&reference.point_jacobian);
+        // The critical step of the new shape functions, measured with unstressed points as
+        // at the start (the stressed ones would answer with their stress, not stiffness).
+        let (points, out) = (self.st.points.clone(), self.out.clone());
+        self.st.points = vec![PointState::default(); points.len()];
+        let measured = self.measure_critical_step();
+        self.st.points = points;
+        self.out = out;
+        self.critical_dt0 = measured?;
+        Ok(())
+    }
+}
+
+impl Simulation {
+    /// Takes the lattice discretisation of `fresh` (a new simulation of the same scene),
+    /// for a restore to a state saved before the first re-reference.
+    pub(super) fn take_discretization(&mut self, fresh: Simulation) {
+        self.nodal = fresh.nodal;
+        self.scatter = fresh.scatter;
+        self.constraints = fresh.constraints;
+        self.contact = fresh.contact;
+        self.ref_pos = fresh.ref_pos;
+        self.points = fresh.points;
+        self.inv_radius = fresh.inv_radius;
+        self.reference_jacobian = fresh.reference_jacobian;
+        self.critical_dt0 = fresh.critical_dt0;
+    }
+}
+
+/// Pushes a point's history forward to the new reference: `C_p'^{-1} = F C_p^{-1} F^T`
+/// in plane and `F_33^2 C_p^{-1}_33` out of plane.
+fn push_forward(state: &mut PointState, m: &PointMotion) {
+    let [c11, c12, c22, c33] = state.cp_inv;
+    let f = m.f;
+    let fc11 = f[0] * c11 + f[1] * c12;
+    let fc12 = f[0] * c12 + f[1] * c22;
+    let fc21 = f[2] * c11 + f[3] * c12;
+    let fc22 = f[2] * c12 + f[3] * c22;
+    state.cp_inv = [
+        fc11 * f[0] + fc12 * f[1],
+        fc11 * f[2] + fc12 * f[3],
+        fc21 * f[2] + fc22 * f[3],
+        m.f33 * m.f33 * c33,
+    ];
+}
+
+/// `sum m_I |v_I|^2 / 2` (J).
+fn kinetic(mass: &[Real], v: &[[Real; 2]]) -> Real {
+    0.5 * mass
+        .iter()
+        .zip(v)
+        .map(|(m, v)| m * (v[0] * v[0] + v[1] * v[1]))
+        .sum::<Real>()
+}
+
+/// The coefficients `c` with `sum_I N_I(X_J) c_I = target_J` at every particle: the
+/// least-squares solution of the nodal system `A c = b` by conjugate gradients on the normal
+/// equations (CGLS; Paige and Saunders 1982, Bjorck 1996 sec. 7.4), from `c = b`, each
+/// component on its own. Returns them with the relative residual `max |b - A c| / max |b|`
+/// reached (-).
+fn fit(nodal: &ShapeTable, target: &[[Real; 2]]) -> (Vec<[Real; 2]>, Real) {
+    let n = target.len();
+    let apply = |x: &[Real]| -> Vec<Real> {
+        (0..n)
+            .map(|j| {
+                nodal
+                    .row(j)
+                    .map(|e| nodal.n[e] * x[nodal.index[e] as usize])
+                    .sum()
+            })
+            .collect()
+    };
+    let apply_t = |y: &[Real]| -> Vec<Real> {
+        let mut out = vec![0.0; n];
+        for (j, yj) in y.iter().enumerate() {
+            for e in nodal.row(j) {
+                out[nodal.index[e] as usize] += nodal.n[e] * yj;
+            }
+        }
+        out
+    };
+    let dot = |a: &[Real], b: &[Real]| a.iter().zip(b).map(|(x, y)| x * y).sum::<Real>();
+    let largest = |a: &[Real]| a.iter().fold(0.0 as Real, |m, x| m.max(x.abs()));
+    let mut c = target.to_vec();
+    let mut worst: Real = 0.0;
+    for k in 0..2 {
+        let b: Vec<Real> = target.iter().map(|v| v[k]).collect();
+        let scale = largest(&b);
+        if scale == 0.0 {
+            continue;
+        }
+        let mut x = b.clone();
+        let ax = apply(&x);
+        let mut r: Vec<Real> = b.iter().zip(&ax).map(|(b, a)| b - a).collect();
+        let mut s = apply_t(&r);
+        let mut p = s.clone();
+        let mut gamma = dot(&s, &s);
+        for _ in 0..FIT_ITERATIONS {
+            if largest(&r) <= FIT_TOLERANCE * scale || gamma == 0.0 {
+                break;
+            }
+            let q = apply(&p);
+            let alpha = gamma / dot(&q, &q);
+            for (xi, pi) in x.iter_mut().zip(&p) {
+                *xi += alpha * pi;
+            }
+            for (ri, qi) in r.iter_mut().zip(&q) {
+                *ri -= alpha * qi;
+            }
+            s = apply_t(&r);
+            let next = dot(&s, &s);
+            let beta = next / gamma;
+            gamma = next;
+            for (pi, si) in p.iter_mut().zip(&s) {
+                *pi = si + beta * *pi;
+            }
+        }
+        worst = worst.max(largest(&r) / scale);
+        for (ci, xi) in c.iter_mut().zip(&x) {
+            ci[k] = *xi;
+        }
+    }
+    (c, worst)
+}
+
+/// A re-reference that failed names where it stopped.
+pub(super) fn failed(step: u64, time: Real, e: Error) -> Error {
+    Error::ShapeFunctions(format!(
+        "re-referencing the kernel at step {step} (t = {time:.6e} s): {e}"
+    ))
+}
