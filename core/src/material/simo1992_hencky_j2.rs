@@ -26,6 +26,24 @@ use crate::lanes::{self, Lanes, LANES};
 use crate::math::{sym_spectral2, Real};
 use serde::{Deserialize, Serialize};
 
+/// Trial elastic left Cauchy-Green tensor `b_e = F C_p^{-1} F^T` (step 1 of the module doc)
+/// as `[b_11, b_12, b_22, b_33]` (-), for `f = [F_xX, F_xY, F_yX, F_yY]`, the out-of-plane
+/// stretch `f33` and `cp_inv = [C_p^{-1}_11, _12, _22, _33]`.
+#[inline(always)]
+pub fn elastic_left_cauchy_green(f: [Real; 4], f33: Real, cp_inv: [Real; 4]) -> [Real; 4] {
+    let [c11, c12, c22, c33] = cp_inv;
+    let fc11 = f[0] * c11 + f[1] * c12;
+    let fc12 = f[0] * c12 + f[1] * c22;
+    let fc21 = f[2] * c11 + f[3] * c12;
+    let fc22 = f[2] * c12 + f[3] * c22;
+    [
+        fc11 * f[0] + fc12 * f[1],
+        fc11 * f[2] + fc12 * f[3],
+        fc21 * f[2] + fc22 * f[3],
+        f33 * f33 * c33,
+    ]
+}
+
 /// `sqrt(6)`: the Mises stress of a deviatoric logarithmic strain `e` is `sqrt(6) G |e|`.
 const SQRT_6: Real = 2.449_489_742_783_178;
 
@@ -244,15 +262,7 @@ impl HenckyJ2 {
                 p.cp_inv[2][l],
                 p.cp_inv[3][l],
             ];
-            // Trial b_e = F C_p^{-1} F^T (in-plane block) and its 33 entry.
-            let fc11 = f[0] * c11 + f[1] * c12;
-            let fc12 = f[0] * c12 + f[1] * c22;
-            let fc21 = f[2] * c11 + f[3] * c12;
-            let fc22 = f[2] * c12 + f[3] * c22;
-            let b11 = fc11 * f[0] + fc12 * f[1];
-            let b12 = fc11 * f[2] + fc12 * f[3];
-            let b22 = fc21 * f[2] + fc22 * f[3];
-            let b33 = f33 * f33 * c33;
+            let [b11, b12, b22, b33] = elastic_left_cauchy_green(f, f33, [c11, c12, c22, c33]);
             let (l1, l2, proj) = sym_spectral2(b11, b12, b22);
             let eps = [
                 0.5 * lanes::ln(l1),

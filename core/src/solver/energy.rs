@@ -35,6 +35,16 @@ pub struct Energy {
     pub remap: Real,
 }
 
+/// Kinetic energy `sum m_I |v_I|^2 / 2` (J) of coefficient velocities `v` (m/s) with the
+/// lumped masses `mass` (kg).
+pub(super) fn kinetic_energy(mass: &[Real], v: &[[Real; 2]]) -> Real {
+    0.5 * mass
+        .iter()
+        .zip(v)
+        .map(|(m, v)| m * (v[0] * v[0] + v[1] * v[1]))
+        .sum::<Real>()
+}
+
 impl Energy {
     /// Internal energy: stored elastic plus plastic dissipation.
     pub fn internal(&self) -> Real {

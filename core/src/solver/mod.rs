@@ -10,6 +10,9 @@
 //! One step `n -> n+1` of the central-difference scheme (Belytschko, Liu, Moran 2000,
 //! Box 6.1) with the paper's predictor-corrector contact (section II-3), as
 //! [`Simulation::step`] calls the stages:
+//! 0. when the scene sets `discretization.rereference_stretch` and the last stress stage
+//!    reached it, the kernel re-reference (`rereference.rs`); then a tool commanded too far
+//!    for the step stops the run (`stable_step.rs`);
 //! 1. stress (`stress.rs`): `F = I + sum_I d_I (x) grad N_I` at each point (plus
 //!    `F_33 = 1 + u_r / R` in axisymmetry), Hencky J2 update, first Piola-Kirchhoff stress
 //!    `P`, fused with the scatter of `w_p (P grad N_I + e_r P_33 N_I / R)` into chunk
@@ -63,7 +66,7 @@ use crate::rk_shape::{Lattice, ShapeTable, Site};
 use crate::scene::{Component, Edge, Kinematics, Scene};
 use crate::team::Team;
 use crate::tools::{Tool, SEARCH_DEPTH_SPACINGS};
-use energy::StepEnergy;
+use energy::{kinetic_energy, StepEnergy};
 use layout::{Scatter, MAX_GROUP};
 use mass_scaling::{stiffness_bounds, Plan};
 use stable_step::{landing_step, tool_step_limit};
@@ -111,7 +114,6 @@ pub struct Simulation {
     lattice_volumes: Vec<Real>,
     /// `J = det F` of each point at the last re-reference (-), 1 before one.
     reference_jacobian: Vec<Real>,
-
     /// Row-sum lumped masses `m_I` (kg; whole ring in axisymmetry, per depth in plane
     /// strain).
     mass: Vec<Real>,
@@ -522,10 +524,10 @@ impl Simulation {
     /// One central-difference step, at most `max_dt` long (s): the stages of the module
     /// doc, in order.
     pub fn step(&mut self, max_dt: Option<Real>) -> Result<()> {
-        // 0. Kernel re-reference, when the scene asks for it and the deformation reached it.
+        // 0a. Kernel re-reference, when the scene asks for it and the deformation reached it.
         self.rereference_if_due()
             .map_err(|e| rereference::failed(self.st.step, self.st.time, e))?;
-        // 0. A tool too fast for the step stops the run before anything changes.
+        // 0b. A tool too fast for the step stops the run before anything changes.
         let h_min = self.spacing[0].min(self.spacing[1]);
         let tool_dt =
             tool_step_limit(&self.tools, self.st.time, self.next_dt(), h_min).map_err(|what| {
@@ -906,11 +908,6 @@ fn initial_motion(
     if let Some(c) = constraints {
         c.project(&mut v, mass);
     }
-    let initial = 0.5
-        * mass
-            .iter()
-            .zip(&v)
-            .map(|(m, v)| m * (v[0] * v[0] + v[1] * v[1]))
-            .sum::<Real>();
+    let initial = kinetic_energy(mass, &v);
     (v, initial)
 }

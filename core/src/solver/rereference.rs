@@ -33,10 +33,12 @@
 //! Without re-referencing (the default) nothing here runs and the bits are those of the
 //! Lagrangian kernel. SCNI is refused by the scene: its nodal domains are not rebuilt.
 
+use super::energy::kinetic_energy;
 use super::Simulation;
 use crate::constraints::Constraints;
 use crate::contact::Contact;
 use crate::error::{Error, Result};
+use crate::material::simo1992_hencky_j2::elastic_left_cauchy_green;
 use crate::material::PointState;
 use crate::math::Real;
 use crate::rk_shape::{KernelCloud, ShapeTable};
@@ -140,8 +142,9 @@ impl Simulation {
             .zip(&old_jacobian)
             .map(|(m, j)| j * (m.f[0] * m.f[3] - m.f[1] * m.f[2]) * m.f33)
             .collect();
+        // The history pushed forward: C_p'^{-1} = b_e = F C_p^{-1} F^T (F_33^2 out of plane).
         for (state, m) in self.st.points.iter_mut().zip(&motions) {
-            push_forward(state, m);
+            state.cp_inv = elastic_left_cauchy_green(m.f, m.f33, state.cp_inv);
         }
         // Physical velocities before the new shape functions replace the old.
         let v_now: Vec<[Real; 2]> = (0..np)
@@ -150,7 +153,7 @@ impl Simulation {
         let v_before: Vec<[Real; 2]> = (0..np)
             .map(|j| self.nodal.interpolate(j, &self.v_prev))
             .collect();
-        let kinetic_before = kinetic(&self.mass, &self.st.v);
+        let kinetic_before = kinetic_energy(&self.mass, &self.st.v);
         let previous = self.st.reference.as_ref();
         let mut reference = Reference {
             count: previous.map_or(0, |r| r.count) + 1,
@@ -173,7 +176,7 @@ impl Simulation {
             c.project(&mut self.v_prev, &self.mass);
         }
         self.st.d = vec![[0.0; 2]; np];
-        let kinetic_after = kinetic(&self.mass, &self.st.v);
+        let kinetic_after = kinetic_energy(&self.mass, &self.st.v);
         self.st.energy.remap += kinetic_after - kinetic_before;
         self.st.energy.kinetic += kinetic_after - kinetic_before;
         self.st.reference = Some(reference);
@@ -286,32 +289,6 @@ impl Simulation {
         self.reference_jacobian = fresh.reference_jacobian;
         self.critical_dt0 = fresh.critical_dt0;
     }
-}
-
-/// Pushes a point's history forward to the new reference: `C_p'^{-1} = F C_p^{-1} F^T`
-/// in plane and `F_33^2 C_p^{-1}_33` out of plane.
-fn push_forward(state: &mut PointState, m: &PointMotion) {
-    let [c11, c12, c22, c33] = state.cp_inv;
-    let f = m.f;
-    let fc11 = f[0] * c11 + f[1] * c12;
-    let fc12 = f[0] * c12 + f[1] * c22;
-    let fc21 = f[2] * c11 + f[3] * c12;
-    let fc22 = f[2] * c12 + f[3] * c22;
-    state.cp_inv = [
-        fc11 * f[0] + fc12 * f[1],
-        fc11 * f[2] + fc12 * f[3],
-        fc21 * f[2] + fc22 * f[3],
-        m.f33 * m.f33 * c33,
-    ];
-}
-
-/// `sum m_I |v_I|^2 / 2` (J).
-fn kinetic(mass: &[Real], v: &[[Real; 2]]) -> Real {
-    0.5 * mass
-        .iter()
-        .zip(v)
-        .map(|(m, v)| m * (v[0] * v[0] + v[1] * v[1]))
-        .sum::<Real>()
 }
 
 /// The coefficients `c` with `sum_I N_I(X_J) c_I = target_J` at every particle: the
