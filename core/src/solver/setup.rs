@@ -1,0 +1,286 @@
+//! Building a [`Simulation`] from a validated scene: the particle lattice and the points of
+//! the integration rule with their RK shape functions, the points' volume weights, the
+//! row-sum lumped masses, the boundary ring, the essential conditions, the tools and the
+//! contact stage, the critical step and, if the scene asks, mass scaling.
+
+use super::energy::{kinetic_energy, Energy};
+use super::layout::{Scatter, MAX_GROUP};
+use super::mass_scaling::{stiffness_bounds, Plan};
+use super::state::State;
+use super::stress::PointOut;
+use super::{Simulation, StageTimes};
+use crate::constraints::Constraints;
+use crate::contact::Contact;
+use crate::error::{Error, Result};
+use crate::integration::{point_shapes, PointSet};
+use crate::material::{HenckyJ2, PointState};
+use crate::math::Real;
+use crate::rk_shape::{Lattice, ShapeTable, Site};
+use crate::scene::{Component, Edge, Kinematics, Scene};
+use crate::team::Team;
+use crate::tools::{Tool, SEARCH_DEPTH_SPACINGS};
+use std::f64::consts::PI;
+use std::time::Instant;
+
+impl Simulation {
+    /// Build the discretisation of a validated scene.
+    pub fn new(scene: &Scene) -> Result<Simulation> {
+        let t0 = Instant::now();
+        let axi = scene.model.kinematics == Kinematics::Axisymmetric;
+        let w = &scene.workpiece;
+        let [nx, ny] = w.particles;
+        let h = [
+            w.size_m[0] / (nx - 1) as Real,
+            w.size_m[1] / (ny - 1) as Real,
+        ];
+        let support = [
+            scene.discretization.support[0] * h[0],
+            scene.discretization.support[1] * h[1],
+        ];
+        let t_shapes = Instant::now();
+        let lattice = Lattice::new(w.origin_m, h, [nx, ny], support);
+        let ref_pos = lattice.cloud().positions.clone();
+        let (points, pt) = point_shapes(&lattice, scene.discretization.integration)?;
+        let particles: Vec<Site> = (0..ny)
+            .flat_map(|j| {
+                (0..nx).map(move |i| Site {
+                    node: [i, j],
+                    offset: [0.0; 2],
+                })
+            })
+            .collect();
+        let mut nodal = lattice.shape_table(&particles, &|j| format!("particle {j}"))?;
+        nodal.drop_gradients();
+        let shape_functions = t_shapes.elapsed();
+        let (weights, inv_radius) = point_weights(&points, scene);
+        let rho = scene.material.density_kg_per_m3;
+        let np = ref_pos.len();
+        let mass = lumped_masses(&pt, &weights, rho, &ref_pos)?;
+        // Chunks of about two rows of cells, at least 64 points: enough chunks to balance
+        // the threads, few enough that the buffers overlap little.
+        let chunk = (2 * pt.rows() / (ny - 1)).max(64);
+        let scatter = Scatter::new(&pt, np, chunk, MAX_GROUP);
+        let material = HenckyJ2::new(
+            scene.material.youngs_modulus_pa,
+            scene.material.poisson_ratio,
+            scene.material.hardening,
+        );
+        let wave_speed = material.wave_speed(rho);
+        let scaling = scene.time.mass_scaling.map(|ms| match ms.factor {
+            Some(f) => Plan::Uniform(f),
+            None => Plan::Selective {
+                target: ms.target_dt_s.unwrap_or(0.0),
+                stiffness: stiffness_bounds(
+                    &pt,
+                    &weights,
+                    &inv_radius,
+                    axi,
+                    rho * wave_speed * wave_speed,
+                    np,
+                ),
+            },
+        });
+        let boundary = boundary_ring(nx, ny);
+        let constraints = Constraints::new(essential_rows(scene), &nodal, &mass)?;
+        let depth = SEARCH_DEPTH_SPACINGS * h[0].max(h[1]);
+        let tools: Vec<Tool> = scene.tools.iter().map(|t| Tool::new(t, depth)).collect();
+        let (v, initial) = initial_motion(w.initial_velocity_m_per_s, constraints.as_ref(), &mass);
+        let npts = points.positions.len();
+        let stable_dt = h[0].min(h[1]) / wave_speed;
+        let contact = Contact::new(
+            &boundary,
+            &nodal,
+            &ref_pos,
+            &points.positions,
+            tools.iter().any(|t| t.friction.needs_flow_stress()),
+        );
+        let pairs = contact.candidate_count() * tools.len();
+        let held = match tools.iter().all(|t| t.separation) {
+            true => Vec::new(),
+            false => vec![false; pairs],
+        };
+        let stick = vec![None; pairs];
+        let mut sim = Simulation {
+            material,
+            nx,
+            ny,
+            spacing: h,
+            inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
+            mass,
+            weights,
+            inv_radius,
+            scatter,
+            contact,
+            boundary,
+            constraints,
+            st: State {
+                step: 0,
+                time: 0.0,
+                dt_prev: 0.0,
+                d: vec![[0.0; 2]; np],
+                v: v.clone(),
+                points: vec![PointState::default(); npts],
+                tools: tools.iter().map(|t| t.state).collect(),
+                energy: Energy {
+                    initial,
+                    kinetic: initial,
+                    ..Default::default()
+                },
+                max_penetration: 0.0,
+                stable_dt,
+                anchor_time: 0.0,
+                anchor_step: 0,
+                kinetic_to_internal_max: 0.0,
+                first_contact_s: None,
+                held,
+                stick,
+                fill: vec![None; scene.tools.iter().map(|t| t.fill_points.len()).sum()],
+                reference: None,
+                max_stretch: 0.0,
+            },
+            tools,
+            out: vec![PointOut::initial(&material); npts],
+            f_int: vec![[0.0; 2]; np],
+            v_prev: v,
+            critical_dt0: stable_dt,
+            mass_scaling: None,
+            simd: true,
+            team: Team::default(),
+            ref_pos,
+            original: lattice.cloud().positions.clone(),
+            lattice_volumes: lattice.cloud().volumes.clone(),
+            reference_jacobian: vec![1.0; npts],
+            points,
+            nodal,
+            scene: scene.clone(),
+            times: StageTimes {
+                setup: t0.elapsed(),
+                ..Default::default()
+            },
+        };
+        sim.critical_dt0 = sim.measure_critical_step()?;
+        if let Some(plan) = scaling {
+            sim.scale_masses(plan)?;
+        }
+        sim.stress_stage()?;
+        sim.force_stage(None);
+        sim.times = StageTimes {
+            setup: t0.elapsed(),
+            shape_functions,
+            ..Default::default()
+        };
+        sim.check_fixed_step(h[0].min(h[1]) / wave_speed)?;
+        Ok(sim)
+    }
+
+    /// A scene's fixed step (`time.dt_s`) above the critical step stops the setup; `h_c` is
+    /// `h_min / c` (s), quoted in the message.
+    fn check_fixed_step(&self, h_c: Real) -> Result<()> {
+        match self.scene.time.dt_s {
+            Some(dt) if dt > self.st.stable_dt => Err(Error::Unstable {
+                step: 0,
+                time: 0.0,
+                dt,
+                dt_crit: self.st.stable_dt,
+                detail: format!(
+                    "time.dt_s is above the critical step 2 / omega_max of this discretisation (h_min / c = {h_c:.4e} s); lower it or remove it to use dt_safety"
+                ),
+            }),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Volume weights `w_p` of the points (m^3: `2 pi R_p A_p` in axisymmetry, `A_p depth` in
+/// plane strain) and `1 / R_p` (1/m; 1 in plane strain).
+fn point_weights(points: &PointSet, scene: &Scene) -> (Vec<Real>, Vec<Real>) {
+    let axi = scene.model.kinematics == Kinematics::Axisymmetric;
+    points
+        .positions
+        .iter()
+        .zip(&points.areas)
+        .map(|(x, a)| {
+            if axi {
+                (a * 2.0 * PI * x[0], 1.0 / x[0])
+            } else {
+                (a * scene.model.depth_m, 1.0)
+            }
+        })
+        .unzip()
+}
+
+/// Row-sum lumped masses `m_I = sum_p rho N_I(x_p) w_p` (kg) from the points' rows `pt`,
+/// weights `weights` (m^3) and density `rho` (kg/m^3); a mass that is not positive (too
+/// small a support) is an error naming the particle at `positions` (m).
+fn lumped_masses(
+    pt: &ShapeTable,
+    weights: &[Real],
+    rho: Real,
+    positions: &[[Real; 2]],
+) -> Result<Vec<Real>> {
+    let mut mass = vec![0.0; positions.len()];
+    for (p, w) in weights.iter().enumerate() {
+        for e in pt.row(p) {
+            mass[pt.index[e] as usize] += rho * pt.n[e] * w;
+        }
+    }
+    match mass
+        .iter()
+        .enumerate()
+        .find(|(_, m)| m.is_nan() || **m <= 0.0)
+    {
+        Some((i, m)) => Err(Error::ShapeFunctions(format!(
+            "lumped mass of particle {i} at {:?} m is {m:.3e} kg; increase the support or the resolution",
+            positions[i]
+        ))),
+        None => Ok(mass),
+    }
+}
+
+/// The boundary particles of an `nx x ny` lattice, counter-clockwise from the lower-left.
+fn boundary_ring(nx: usize, ny: usize) -> Vec<u32> {
+    let id = |i: usize, j: usize| (j * nx + i) as u32;
+    let mut boundary = Vec::new();
+    boundary.extend((0..nx).map(|i| id(i, 0)));
+    boundary.extend((1..ny).map(|j| id(nx - 1, j)));
+    boundary.extend((0..nx - 1).rev().map(|i| id(i, ny - 1)));
+    boundary.extend((1..ny - 1).rev().map(|j| id(0, j)));
+    boundary
+}
+
+/// The essential conditions' rows `(particle, component)`: the scene's fixed edges, plus
+/// the radial component on the axis of an axisymmetric body that reaches it.
+fn essential_rows(scene: &Scene) -> Vec<(u32, usize)> {
+    let [nx, ny] = scene.workpiece.particles;
+    let mut rows = Vec::new();
+    for c in &scene.constraints {
+        for comp in &c.fix {
+            let k = match comp {
+                Component::X => 0,
+                Component::Y => 1,
+            };
+            rows.extend(c.edge.particles(nx, ny).into_iter().map(|j| (j, k)));
+        }
+    }
+    let axi = scene.model.kinematics == Kinematics::Axisymmetric;
+    if axi && scene.workpiece.origin_m[0] == 0.0 {
+        rows.extend(Edge::XMin.particles(nx, ny).into_iter().map(|j| (j, 0)));
+    }
+    rows
+}
+
+/// The initial coefficient velocities (m/s): the workpiece's initial velocity `v0` projected
+/// onto the essential conditions with the masses `mass` (kg), and their kinetic energy
+/// `sum m_I |v_I|^2 / 2` (J).
+pub(super) fn initial_motion(
+    v0: [Real; 2],
+    constraints: Option<&Constraints>,
+    mass: &[Real],
+) -> (Vec<[Real; 2]>, Real) {
+    let mut v = vec![v0; mass.len()];
+    if let Some(c) = constraints {
+        c.project(&mut v, mass);
+    }
+    let initial = kinetic_energy(mass, &v);
+    (v, initial)
+}
