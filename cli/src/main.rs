@@ -144,7 +144,7 @@ struct RunArgs {
     mcap: Option<PathBuf>,
     /// Chunk compression of the MCAP file: `zstd` or `none`.
     #[arg(long, default_value = "zstd")]
-    mcap_compression: rkforge_ros::record::Compression,
+    mcap_compression: rkforge_messages::record::Compression,
 }
 
 fn main() -> ExitCode {

@@ -3,7 +3,7 @@
 use crate::output::{plots, vtu, HistoryPlots};
 use indicatif::{ProgressBar, ProgressStyle};
 use rkforge_core::{Kinematics, Scene, Simulation};
-use rkforge_ros::record::{Compression, Provenance, Recorder};
+use rkforge_messages::record::{Compression, Provenance, Recorder};
 use rkforge_runner::Observer;
 use serde_json::Value;
 use std::path::PathBuf;
@@ -191,7 +191,7 @@ struct Mcap {
 
 impl Mcap {
     fn start(opts: &McapOptions, scene: &Scene) -> Result<Mcap, String> {
-        let topics = rkforge_ros::topics(scene, "/rkforge")?;
+        let topics = rkforge_messages::topics(scene, "/rkforge")?;
         let provenance = Provenance {
             scene,
             scene_file: &opts.scene_file,
@@ -199,12 +199,12 @@ impl Mcap {
         };
         Ok(Mcap {
             recorder: Recorder::create(&opts.path, &topics, &provenance, opts.compression)?,
-            stop: rkforge_ros::signals::stop_flag()?,
+            stop: rkforge_messages::signals::stop_flag()?,
         })
     }
 
     fn record(&mut self, sim: &Simulation) -> Result<(), String> {
-        self.recorder.write(&rkforge_ros::frame::sample(sim))
+        self.recorder.write(&rkforge_messages::frame::sample(sim))
     }
 
     /// The failure to report if a signal asked the run to stop.

@@ -402,7 +402,7 @@ fn main() {
     println!("cargo:rerun-if-changed={}", root.display());
     let mut all = BTreeMap::new();
     let mut packages: Vec<_> = std::fs::read_dir(&root)
-        .expect("ros_node/msg holds the message definitions")
+        .expect("messages/msg holds the message definitions")
         .map(|e| e.expect("readable msg directory").path())
         .filter(|p| p.is_dir())
         .collect();
