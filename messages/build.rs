@@ -2,8 +2,8 @@
 //! `msg/<package>/msg/<Type>.msg`, `msg/<package>/srv/<Service>.srv` and
 //! `msg/<package>/action/<Action>.action` (the one source of every message): for each
 //! message, part of a service (request, response) or part of an action (goal, result,
-//! feedback) a Rust struct with its constants and defaults, its CDR codec (`CdrMessage`,
-//! `CdrDecode`) and its `RosMessage` constants (type name, DDS type name, the text and the
+//! feedback) a Rust struct with its constants and defaults, its serde derives (the CDR
+//! codec is `cdr-encoding`'s, `src/msgs.rs`) and its `RosMessage` constants (type name, DDS type name, the text and the
 //! full `ros2msg` schema as rosbag2 writes it). The generated code is included by
 //! `src/msgs.rs`.
 
@@ -15,32 +15,24 @@ use std::path::{Path, PathBuf};
 const SEPARATOR: &str =
     "================================================================================";
 
-/// ROS 2 primitive types: (name, Rust type, codec suffix of `write_*`/`read_*`, float?).
-const PRIMITIVES: [(&str, &str, &str, bool); 10] = [
-    ("bool", "bool", "bool", false),
-    ("byte", "u8", "u8", false),
-    ("uint8", "u8", "u8", false),
-    ("uint16", "u16", "u16", false),
-    ("int32", "i32", "i32", false),
-    ("uint32", "u32", "u32", false),
-    ("uint64", "u64", "u64", false),
-    ("float32", "f32", "f32", true),
-    ("float64", "f64", "f64", true),
-    ("string", "String", "string", false),
+/// ROS 2 primitive types: (name, Rust type, float?).
+const PRIMITIVES: [(&str, &str, bool); 10] = [
+    ("bool", "bool", false),
+    ("byte", "u8", false),
+    ("uint8", "u8", false),
+    ("uint16", "u16", false),
+    ("int32", "i32", false),
+    ("uint32", "u32", false),
+    ("uint64", "u64", false),
+    ("float32", "f32", true),
+    ("float64", "f64", true),
+    ("string", "String", false),
 ];
 
 /// Primitive names rosbag2 does not treat as dependencies (all of ROS 2's, used or not).
 const ROS_PRIMITIVES: [&str; 14] = [
     "bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32",
     "uint32", "int64", "uint64", "string",
-];
-
-/// Sequences the codec reads and writes: element type -> codec suffix.
-const SEQUENCES: [(&str, &str); 4] = [
-    ("uint8", "u8_seq"),
-    ("uint16", "u16_seq"),
-    ("float64", "f64_seq"),
-    ("string", "string_seq"),
 ];
 
 /// Type names of Rust's prelude, which a message type must not shadow.
@@ -94,11 +86,9 @@ impl Message {
     }
 }
 
-fn primitive(ty: &str) -> Option<(&'static str, &'static str, bool)> {
-    PRIMITIVES
-        .iter()
-        .find(|p| p.0 == ty)
-        .map(|p| (p.1, p.2, p.3))
+/// The Rust type of a ROS 2 primitive and whether it is a float.
+fn primitive(ty: &str) -> Option<(&'static str, bool)> {
+    PRIMITIVES.iter().find(|p| p.0 == ty).map(|p| (p.1, p.2))
 }
 
 /// Parse the fields and constants of `text` (a `.msg` of package `package`).
@@ -138,13 +128,6 @@ fn parse(path: &Path, package: &str, text: &str) -> (Vec<Field>, Vec<(String, St
         } else {
             format!("{package}/{base}")
         };
-        if seq && primitive(&base).is_some() {
-            assert!(
-                SEQUENCES.iter().any(|s| s.0 == base),
-                "{}: sequences of {base} are not supported",
-                at()
-            );
-        }
         let mut words = rest.split_whitespace();
         let name = words.next().unwrap_or_default().to_owned();
         let default = words.next().map(str::to_owned);
@@ -211,7 +194,7 @@ fn schema(name: &str, all: &BTreeMap<String, Message>, seen: &mut BTreeSet<Strin
 /// Rust type of a field.
 fn rust_type(f: &Field, all: &BTreeMap<String, Message>) -> String {
     let base = match primitive(&f.ty) {
-        Some((rust, _, _)) => rust.to_owned(),
+        Some((rust, _)) => rust.to_owned(),
         None => all[&f.ty].ident(),
     };
     if f.seq {
@@ -226,7 +209,7 @@ fn traits(name: &str, all: &BTreeMap<String, Message>) -> (bool, bool) {
     let (mut copy, mut eq) = (true, true);
     for f in &all[name].fields {
         let (c, e) = match primitive(&f.ty) {
-            Some((rust, _, float)) => (rust != "String", !float),
+            Some((rust, float)) => (rust != "String", !float),
             None => traits(&f.ty, all),
         };
         copy &= c && !f.seq;
@@ -246,13 +229,13 @@ fn field_ident(name: &str) -> String {
 /// A `.msg` default or constant value as a Rust literal of `ty`.
 fn literal(ty: &str, value: &str) -> String {
     match primitive(ty) {
-        Some((_, _, true)) => format!(
+        Some((_, true)) => format!(
             "{:?}",
             value
                 .parse::<f64>()
                 .unwrap_or_else(|e| panic!("{value}: {e}"))
         ),
-        Some(("bool", _, _)) => value.to_lowercase(),
+        Some(("bool", _)) => value.to_lowercase(),
         _ => value.to_owned(),
     }
 }
@@ -279,14 +262,19 @@ fn generate(m: &Message, all: &BTreeMap<String, Message>) -> String {
     }
     let mut s = format!(
         "/// `{pkg}/{kind}/{ty}`, generated from `msg/{pkg}/{kind}/{file}`.\n#[derive({})]\n\
-         #[cfg_attr(feature = \"dds\", derive(serde::Serialize, serde::Deserialize))]\npub struct {ident} {{\n",
+         #[derive(serde::Serialize, serde::Deserialize)]\npub struct {ident} {{\n",
         derives.join(", ")
     );
     for f in &m.fields {
         let decl = format!("{}{} {}", f.ty, if f.seq { "[]" } else { "" }, f.name);
+        // A byte sequence goes to CDR in one piece (count, then the bytes).
+        let bytes = match f.seq && primitive(&f.ty).is_some_and(|p| p.0 == "u8") {
+            true => "    #[serde(with = \"serde_bytes\")]\n",
+            false => "",
+        };
         let _ = writeln!(
             s,
-            "    /// `{decl}`\n    pub {}: {},",
+            "    /// `{decl}`\n{bytes}    pub {}: {},",
             field_ident(&f.name),
             rust_type(f, all)
         );
@@ -318,41 +306,6 @@ fn generate(m: &Message, all: &BTreeMap<String, Message>) -> String {
         }
         s += "        }\n    }\n}\n\n";
     }
-    let mut write = String::new();
-    let mut read = String::new();
-    for f in &m.fields {
-        let id = field_ident(&f.name);
-        match (primitive(&f.ty), f.seq) {
-            (Some((_, "string", _)), false) => {
-                let _ = writeln!(write, "        w.write_string(&self.{id});");
-                let _ = writeln!(read, "            {id}: r.read_string()?,");
-            }
-            (Some((_, suffix, _)), false) => {
-                let _ = writeln!(write, "        w.write_{suffix}(self.{id});");
-                let _ = writeln!(read, "            {id}: r.read_{suffix}()?,");
-            }
-            (Some(_), true) => {
-                let suffix = SEQUENCES.iter().find(|q| q.0 == f.ty).map_or("", |q| q.1);
-                let _ = writeln!(write, "        w.write_{suffix}(&self.{id});");
-                let _ = writeln!(read, "            {id}: r.read_{suffix}()?,");
-            }
-            (None, true) => {
-                let _ = writeln!(write, "        w.write_seq(&self.{id});");
-                let _ = writeln!(read, "            {id}: r.read_seq()?,");
-            }
-            (None, false) => {
-                let _ = writeln!(write, "        self.{id}.write_cdr(w);");
-                let _ = writeln!(read, "            {id}: CdrDecode::read_cdr(r)?,");
-            }
-        }
-    }
-    let w = if m.fields.is_empty() { "_w" } else { "w" };
-    let r = if m.fields.is_empty() { "_r" } else { "r" };
-    let _ = write!(
-        s,
-        "impl CdrMessage for {ident} {{\n    fn write_cdr(&self, {w}: &mut CdrWriter) {{\n{write}    }}\n}}\n\n\
-         impl CdrDecode for {ident} {{\n    fn read_cdr({r}: &mut CdrReader<'_>) -> Result<Self, CdrError> {{\n        Ok(Self {{\n{read}        }})\n    }}\n}}\n\n"
-    );
     let full = schema(&m.name, all, &mut BTreeSet::new());
     let _ = write!(
         s,

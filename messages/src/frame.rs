@@ -22,8 +22,8 @@
 //! axisymmetry, as in history.csv.
 
 use crate::msgs::{
-    point_cloud_xyz_fields, CdrMessage, Clock, ColorRGBA, DieFill, Energy, Header, JointState,
-    Marker, MarkerArray, Point, StrainPoint, Time, Vector3, Wrench, WrenchStamped,
+    point_cloud_xyz_fields, Clock, ColorRGBA, DieFill, Energy, Header, JointState, Marker,
+    MarkerArray, Point, RosMessage, StrainPoint, Time, Vector3, Wrench, WrenchStamped,
 };
 use rkforge_core::Simulation;
 
@@ -223,7 +223,7 @@ fn tool_markers(sim: &Simulation, header: &Header) -> MarkerArray {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::msgs::{CdrDecode, Clock, Energy, JointState, WrenchStamped};
+    use crate::msgs::{Clock, Energy, JointState, RosMessage, WrenchStamped};
     use rkforge_core::Scene;
 
     fn block() -> Simulation {

@@ -17,12 +17,19 @@
 //! # CDR
 //!
 //! Serialization is plain CDR (XCDR1) little endian as `rmw_fastrtps` and `rmw_cyclonedds` put it
-//! on the wire and rosbag2 stores it: the encapsulation header `00 01 00 00`, then the fields in
-//! `.msg` order, every primitive aligned to its size relative to the first byte after the
-//! header, strings as a `u32` length counting the terminating NUL followed by the bytes and the
-//! NUL, sequences as a `u32` element count followed by the elements (an empty sequence of a
-//! primitive type adds no alignment padding), booleans as one byte.
+//! on the wire and rosbag2 stores it, written and read by the `cdr-encoding` crate through the
+//! types' serde derives: the encapsulation header `00 01 00 00`, then the fields in `.msg`
+//! order, every primitive aligned to its size relative to the first byte after the header,
+//! strings as a `u32` length counting the terminating NUL followed by the bytes and the NUL,
+//! sequences as a `u32` element count followed by the elements (`uint8[]` in one piece, through
+//! `serde_bytes`), booleans as one byte. Decoding takes little and big endian (`00 01`,
+//! `00 00`) and ignores the option bytes and anything after the last field; a string whose
+//! last byte is not the terminating NUL loses that byte (`cdr-encoding`'s reading, which some
+//! DDS peers need).
 
+use byteorder::{BigEndian, LittleEndian};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
 use std::fmt;
 
 /// Size of the CDR encapsulation header that precedes every payload.
@@ -30,185 +37,9 @@ const ENCAPSULATION_LEN: usize = 4;
 /// Encapsulation header of plain CDR, little endian, no options.
 const CDR_LE_HEADER: [u8; ENCAPSULATION_LEN] = [0x00, 0x01, 0x00, 0x00];
 
-/// Writes CDR (XCDR1, little endian) into a buffer that starts with the encapsulation header.
-#[derive(Debug, Clone)]
-pub struct CdrWriter {
-    buf: Vec<u8>,
-}
-
-impl Default for CdrWriter {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl CdrWriter {
-    /// A writer holding just the encapsulation header `00 01 00 00`.
-    #[must_use]
-    pub fn new() -> Self {
-        Self {
-            buf: CDR_LE_HEADER.to_vec(),
-        }
-    }
-
-    /// The serialized message: encapsulation header followed by the payload.
-    #[must_use]
-    pub fn into_bytes(self) -> Vec<u8> {
-        self.buf
-    }
-
-    /// Pad with zeros so that the payload offset is a multiple of `n`.
-    fn align(&mut self, n: usize) {
-        let offset = self.buf.len() - ENCAPSULATION_LEN;
-        let padding = (n - offset % n) % n;
-        self.buf.resize(self.buf.len() + padding, 0);
-    }
-
-    /// A length or element count as the `u32` CDR uses.
-    ///
-    /// # Panics
-    ///
-    /// If `len` does not fit in a `u32`: CDR cannot represent such a string or sequence.
-    fn write_len(&mut self, len: usize) {
-        let len = u32::try_from(len).expect("CDR lengths and counts must fit in a u32");
-        self.write_u32(len);
-    }
-
-    /// A `uint8` (or `byte`).
-    pub fn write_u8(&mut self, v: u8) {
-        self.buf.push(v);
-    }
-
-    /// A `bool`, as one byte 0 or 1.
-    pub fn write_bool(&mut self, v: bool) {
-        self.buf.push(u8::from(v));
-    }
-
-    /// A `uint16`, aligned to 2.
-    pub fn write_u16(&mut self, v: u16) {
-        self.align(2);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
-    /// A `uint64`, aligned to 8.
-    pub fn write_u64(&mut self, v: u64) {
-        self.align(8);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
-    /// An `int32`, aligned to 4.
-    pub fn write_i32(&mut self, v: i32) {
-        self.align(4);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
-    /// A `uint32`, aligned to 4.
-    pub fn write_u32(&mut self, v: u32) {
-        self.align(4);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
-    /// A `float32`, aligned to 4.
-    pub fn write_f32(&mut self, v: f32) {
-        self.align(4);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
-    /// A `float64`, aligned to 8.
-    pub fn write_f64(&mut self, v: f64) {
-        self.align(8);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
-    /// A `string`: `u32` length including the terminating NUL, the UTF-8 bytes, the NUL.
-    ///
-    /// # Panics
-    ///
-    /// If the string is longer than `u32::MAX - 1` bytes.
-    pub fn write_string(&mut self, v: &str) {
-        self.write_len(v.len() + 1);
-        self.buf.extend_from_slice(v.as_bytes());
-        self.buf.push(0);
-    }
-
-    /// A `uint8[]`: `u32` count then the bytes.
-    ///
-    /// # Panics
-    ///
-    /// If there are more than `u32::MAX` bytes.
-    pub fn write_u8_seq(&mut self, v: &[u8]) {
-        self.write_len(v.len());
-        self.buf.extend_from_slice(v);
-    }
-
-    /// A `uint16[]`: `u32` count then the values.
-    ///
-    /// # Panics
-    ///
-    /// If there are more than `u32::MAX` values.
-    pub fn write_u16_seq(&mut self, v: &[u16]) {
-        self.write_len(v.len());
-        for &x in v {
-            self.write_u16(x);
-        }
-    }
-
-    /// A `float64[]`: `u32` count then the values, aligned to 8 when there is at least one.
-    ///
-    /// # Panics
-    ///
-    /// If there are more than `u32::MAX` values.
-    pub fn write_f64_seq(&mut self, v: &[f64]) {
-        self.write_len(v.len());
-        if !v.is_empty() {
-            self.align(8);
-            for x in v {
-                self.buf.extend_from_slice(&x.to_le_bytes());
-            }
-        }
-    }
-
-    /// A `string[]`: `u32` count then each string.
-    ///
-    /// # Panics
-    ///
-    /// If there are more than `u32::MAX` strings.
-    pub fn write_string_seq(&mut self, v: &[String]) {
-        self.write_len(v.len());
-        for s in v {
-            self.write_string(s);
-        }
-    }
-
-    /// A sequence of messages: `u32` count then each message.
-    ///
-    /// # Panics
-    ///
-    /// If there are more than `u32::MAX` messages.
-    pub fn write_seq<T: CdrMessage>(&mut self, v: &[T]) {
-        self.write_len(v.len());
-        for m in v {
-            m.write_cdr(self);
-        }
-    }
-}
-
-/// A message that can be serialized to CDR.
-pub trait CdrMessage {
-    /// Write the fields of the message, in `.msg` order, after what `w` already holds.
-    fn write_cdr(&self, w: &mut CdrWriter);
-
-    /// The complete serialized message: encapsulation header `00 01 00 00`, then the payload.
-    #[must_use]
-    fn to_cdr(&self) -> Vec<u8> {
-        let mut w = CdrWriter::new();
-        self.write_cdr(&mut w);
-        w.into_bytes()
-    }
-}
-
-/// A message type with its names and definition texts, all derived from its `.msg` file.
-pub trait RosMessage: CdrMessage + CdrDecode {
+/// A message type with its names and definition texts, all derived from its `.msg` file, and
+/// its CDR encoding.
+pub trait RosMessage: Serialize + DeserializeOwned {
     /// Type name, e.g. `geometry_msgs/msg/WrenchStamped` (also the MCAP schema name).
     const TYPE_NAME: &'static str;
     /// DDS type name, e.g. `geometry_msgs::msg::dds_::WrenchStamped_`.
@@ -217,303 +48,74 @@ pub trait RosMessage: CdrMessage + CdrDecode {
     const DEFINITION: &'static str;
     /// Complete `ros2msg` definition with its dependencies, as rosbag2 writes it.
     const SCHEMA: &'static str;
-}
 
-/// Why a CDR buffer could not be decoded.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum CdrError {
-    /// The buffer ended before the field at payload offset `offset`, which needs `needed` bytes.
-    UnexpectedEnd {
-        /// Payload offset (after the encapsulation header) where the field starts.
-        offset: usize,
-        /// Bytes the field needs.
-        needed: usize,
-    },
-    /// The encapsulation identifier is not plain CDR (`00 00` big or `00 01` little endian).
-    UnsupportedEncapsulation([u8; 2]),
-    /// A string has length 0 (no room for the terminating NUL) or does not end with NUL.
-    UnterminatedString {
-        /// Payload offset of the string's length field.
-        offset: usize,
-    },
-    /// A string is not valid UTF-8.
-    InvalidUtf8 {
-        /// Payload offset of the string's length field.
-        offset: usize,
-    },
-}
-
-impl fmt::Display for CdrError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::UnexpectedEnd { offset, needed } => write!(
-                f,
-                "CDR buffer ends before the {needed} byte(s) needed at payload offset {offset}"
-            ),
-            Self::UnsupportedEncapsulation([a, b]) => write!(
-                f,
-                "unsupported CDR encapsulation {a:02x} {b:02x} (expected plain CDR: 00 00 or 00 01)"
-            ),
-            Self::UnterminatedString { offset } => {
-                write!(
-                    f,
-                    "CDR string at payload offset {offset} is not NUL-terminated"
-                )
-            }
-            Self::InvalidUtf8 { offset } => {
-                write!(
-                    f,
-                    "CDR string at payload offset {offset} is not valid UTF-8"
-                )
-            }
-        }
+    /// The complete serialized message: encapsulation header `00 01 00 00`, then the payload.
+    ///
+    /// # Panics
+    ///
+    /// If a string or sequence is longer than `u32::MAX`, which CDR cannot represent.
+    #[must_use]
+    fn to_cdr(&self) -> Vec<u8> {
+        let mut bytes = CDR_LE_HEADER.to_vec();
+        // The serializer counts alignment from its first byte, the first after the header;
+        // writing to a Vec fails only on lengths CDR cannot hold.
+        cdr_encoding::to_writer::<_, LittleEndian, _>(&mut bytes, self)
+            .expect("CDR lengths and counts must fit in a u32");
+        bytes
     }
-}
-
-impl std::error::Error for CdrError {}
-
-/// Reads plain CDR (XCDR1, either byte order) from a buffer that starts with the encapsulation
-/// header. The two option bytes of the header and any bytes after the last field (such as the
-/// end padding some writers add) are ignored.
-#[derive(Debug, Clone)]
-pub struct CdrReader<'a> {
-    payload: &'a [u8],
-    pos: usize,
-    big_endian: bool,
-}
-
-impl<'a> CdrReader<'a> {
-    /// A reader for `bytes`, which must start with the encapsulation header of plain CDR.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if `bytes` is shorter than the header,
-    /// [`CdrError::UnsupportedEncapsulation`] if it is not plain CDR (`00 00` or `00 01`).
-    pub fn new(bytes: &'a [u8]) -> Result<Self, CdrError> {
-        let Some((header, payload)) = bytes.split_first_chunk::<ENCAPSULATION_LEN>() else {
-            return Err(CdrError::UnexpectedEnd {
-                offset: 0,
-                needed: ENCAPSULATION_LEN,
-            });
-        };
-        let big_endian = match [header[0], header[1]] {
-            [0x00, 0x00] => true,
-            [0x00, 0x01] => false,
-            other => return Err(CdrError::UnsupportedEncapsulation(other)),
-        };
-        Ok(Self {
-            payload,
-            pos: 0,
-            big_endian,
-        })
-    }
-
-    /// Skip padding so that the payload offset is a multiple of `n`.
-    fn align(&mut self, n: usize) -> Result<(), CdrError> {
-        let padding = (n - self.pos % n) % n;
-        self.take(padding).map(|_| ())
-    }
-
-    /// The next `n` bytes.
-    fn take(&mut self, n: usize) -> Result<&'a [u8], CdrError> {
-        let end = self
-            .pos
-            .checked_add(n)
-            .filter(|&end| end <= self.payload.len())
-            .ok_or(CdrError::UnexpectedEnd {
-                offset: self.pos,
-                needed: n,
-            })?;
-        let bytes = &self.payload[self.pos..end];
-        self.pos = end;
-        Ok(bytes)
-    }
-
-    /// The next `N` bytes, aligned to `N`, in little-endian order.
-    fn take_le<const N: usize>(&mut self) -> Result<[u8; N], CdrError> {
-        self.align(N)?;
-        let mut raw = [0; N];
-        raw.copy_from_slice(self.take(N)?);
-        if self.big_endian {
-            raw.reverse();
-        }
-        Ok(raw)
-    }
-
-    /// A `uint8` (or `byte`).
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_u8(&mut self) -> Result<u8, CdrError> {
-        self.take(1).map(|b| b[0])
-    }
-
-    /// A `bool`: any nonzero byte is true.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_bool(&mut self) -> Result<bool, CdrError> {
-        self.read_u8().map(|b| b != 0)
-    }
-
-    /// A `uint16`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_u16(&mut self) -> Result<u16, CdrError> {
-        self.take_le().map(u16::from_le_bytes)
-    }
-
-    /// A `uint64`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_u64(&mut self) -> Result<u64, CdrError> {
-        self.take_le().map(u64::from_le_bytes)
-    }
-
-    /// A `float32`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_f32(&mut self) -> Result<f32, CdrError> {
-        self.take_le().map(f32::from_le_bytes)
-    }
-
-    /// An `int32`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_i32(&mut self) -> Result<i32, CdrError> {
-        self.take_le().map(i32::from_le_bytes)
-    }
-
-    /// A `uint32`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_u32(&mut self) -> Result<u32, CdrError> {
-        self.take_le().map(u32::from_le_bytes)
-    }
-
-    /// A `float64`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_f64(&mut self) -> Result<f64, CdrError> {
-        self.take_le().map(f64::from_le_bytes)
-    }
-
-    /// A sequence count, checked against the bytes left so that a corrupt count cannot
-    /// trigger a huge allocation: each element takes at least `min_element_len` bytes.
-    fn read_count(&mut self, min_element_len: usize) -> Result<usize, CdrError> {
-        let count = self.read_u32()? as usize;
-        let left = self.payload.len() - self.pos;
-        if count.saturating_mul(min_element_len) > left {
-            return Err(CdrError::UnexpectedEnd {
-                offset: self.pos,
-                needed: count.saturating_mul(min_element_len),
-            });
-        }
-        Ok(count)
-    }
-
-    /// A `string`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first, [`CdrError::UnterminatedString`] or
-    /// [`CdrError::InvalidUtf8`] for a malformed string.
-    pub fn read_string(&mut self) -> Result<String, CdrError> {
-        let len = self.read_u32()? as usize;
-        let offset = self.pos - 4;
-        let bytes = self.take(len)?;
-        let Some((0, text)) = bytes.split_last() else {
-            return Err(CdrError::UnterminatedString { offset });
-        };
-        String::from_utf8(text.to_vec()).map_err(|_| CdrError::InvalidUtf8 { offset })
-    }
-
-    /// A `uint8[]`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_u8_seq(&mut self) -> Result<Vec<u8>, CdrError> {
-        let count = self.read_count(1)?;
-        self.take(count).map(<[u8]>::to_vec)
-    }
-
-    /// A `uint16[]`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_u16_seq(&mut self) -> Result<Vec<u16>, CdrError> {
-        let count = self.read_count(2)?;
-        (0..count).map(|_| self.read_u16()).collect()
-    }
-
-    /// A sequence of messages.
-    ///
-    /// # Errors
-    ///
-    /// Any [`CdrError`] of the elements read.
-    pub fn read_seq<T: CdrDecode>(&mut self) -> Result<Vec<T>, CdrError> {
-        // Every message takes at least one byte (messages without fields are not sent).
-        let count = self.read_count(1)?;
-        (0..count).map(|_| T::read_cdr(self)).collect()
-    }
-
-    /// A `float64[]`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first.
-    pub fn read_f64_seq(&mut self) -> Result<Vec<f64>, CdrError> {
-        let count = self.read_count(8)?;
-        (0..count).map(|_| self.read_f64()).collect()
-    }
-
-    /// A `string[]`.
-    ///
-    /// # Errors
-    ///
-    /// [`CdrError::UnexpectedEnd`] if the buffer ends first, [`CdrError::UnterminatedString`] or
-    /// [`CdrError::InvalidUtf8`] for a malformed string.
-    pub fn read_string_seq(&mut self) -> Result<Vec<String>, CdrError> {
-        let count = self.read_count(5)?;
-        (0..count).map(|_| self.read_string()).collect()
-    }
-}
-
-/// A message that can be deserialized from CDR.
-pub trait CdrDecode: Sized {
-    /// Read the fields of the message, in `.msg` order.
-    ///
-    /// # Errors
-    ///
-    /// Any [`CdrError`] of the fields read.
-    fn read_cdr(r: &mut CdrReader<'_>) -> Result<Self, CdrError>;
 
     /// Decode a complete serialized message (encapsulation header included).
     ///
     /// # Errors
     ///
-    /// Any [`CdrError`]: not plain CDR, too short, or a malformed string.
+    /// [`CdrError::MissingHeader`] if `bytes` is shorter than the header,
+    /// [`CdrError::UnsupportedEncapsulation`] if it is not plain CDR, [`CdrError::Decode`] if
+    /// the payload ends early or holds a value its type cannot take (invalid UTF-8, a boolean
+    /// other than 0 or 1).
     fn from_cdr(bytes: &[u8]) -> Result<Self, CdrError> {
-        let mut r = CdrReader::new(bytes)?;
-        Self::read_cdr(&mut r)
+        let Some((header, payload)) = bytes.split_first_chunk::<ENCAPSULATION_LEN>() else {
+            return Err(CdrError::MissingHeader(bytes.len()));
+        };
+        let decoded = match [header[0], header[1]] {
+            [0x00, 0x00] => cdr_encoding::from_bytes::<Self, BigEndian>(payload),
+            [0x00, 0x01] => cdr_encoding::from_bytes::<Self, LittleEndian>(payload),
+            id => return Err(CdrError::UnsupportedEncapsulation(id)),
+        };
+        decoded
+            .map(|(message, _)| message)
+            .map_err(|e| CdrError::Decode(e.to_string()))
     }
 }
+
+/// Why a CDR buffer could not be decoded.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CdrError {
+    /// The buffer (of this many bytes) is shorter than the 4-byte encapsulation header.
+    MissingHeader(usize),
+    /// The encapsulation identifier is not plain CDR (`00 00` big or `00 01` little endian).
+    UnsupportedEncapsulation([u8; 2]),
+    /// The payload could not be decoded (`cdr-encoding`'s reason).
+    Decode(String),
+}
+
+impl fmt::Display for CdrError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::MissingHeader(len) => write!(
+                f,
+                "CDR buffer of {len} bytes is shorter than the {ENCAPSULATION_LEN}-byte encapsulation header"
+            ),
+            Self::UnsupportedEncapsulation(id) => write!(
+                f,
+                "CDR encapsulation {:02x} {:02x} is not plain CDR (00 00 or 00 01)",
+                id[0], id[1]
+            ),
+            Self::Decode(reason) => write!(f, "CDR payload: {reason}"),
+        }
+    }
+}
+
+impl std::error::Error for CdrError {}
 
 include!(concat!(env!("OUT_DIR"), "/msgs.rs"));
 
@@ -908,9 +510,11 @@ mod tests {
     /// An empty string is its length 1 and the NUL alone.
     #[test]
     fn empty_string_bytes() {
-        let mut w = CdrWriter::new();
-        w.write_string("");
-        assert_eq!(w.into_bytes(), [0x00, 0x01, 0x00, 0x00, 1, 0, 0, 0, 0]);
+        let header = Header::default().to_cdr();
+        assert_eq!(
+            header,
+            [0x00, 0x01, 0x00, 0x00, 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0]
+        );
     }
 
     /// WrenchStamped, frame "a". Payload offsets:
@@ -1146,54 +750,34 @@ mod tests {
 
     #[test]
     fn decode_errors() {
-        assert_eq!(
-            Float64::from_cdr(&[0, 1]),
-            Err(CdrError::UnexpectedEnd {
-                offset: 0,
-                needed: 4
-            })
-        );
-        assert_eq!(
+        assert_eq!(Float64::from_cdr(&[0, 1]), Err(CdrError::MissingHeader(2)));
+        assert!(matches!(
             Float64::from_cdr(&[0, 1, 0, 0, 1, 2, 3]),
-            Err(CdrError::UnexpectedEnd {
-                offset: 0,
-                needed: 8
-            })
-        );
+            Err(CdrError::Decode(_))
+        ));
         assert_eq!(
             Float64::from_cdr(&[0, 3, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]),
             Err(CdrError::UnsupportedEncapsulation([0, 3]))
         );
-        // Header with a string of length 2 whose last byte is not NUL.
-        let bad = [0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 2, 0, 0, 0, b'a', b'b'];
-        assert_eq!(
-            JointState::from_cdr(&bad),
-            Err(CdrError::UnterminatedString { offset: 8 })
-        );
-        let zero_len = [0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
-        assert_eq!(
-            JointState::from_cdr(&zero_len),
-            Err(CdrError::UnterminatedString { offset: 8 })
-        );
+        // A string of length 2 whose last byte is not NUL: cdr-encoding drops the last byte
+        // as if it were the NUL (and logs a warning), as the DDS peers it serves need.
+        let unterminated = [0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 2, 0, 0, 0, b'a', b'b'];
+        assert_eq!(Header::from_cdr(&unterminated).unwrap().frame_id, "a");
         let not_utf8 = [0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 2, 0, 0, 0, 0xff, 0];
-        assert_eq!(
+        assert!(matches!(
             JointState::from_cdr(&not_utf8),
-            Err(CdrError::InvalidUtf8 { offset: 8 })
-        );
-        // A name count of u32::MAX with nothing behind it fails before allocating.
+            Err(CdrError::Decode(m)) if m.contains("UTF-8")
+        ));
+        // A name count of u32::MAX with nothing behind it fails without allocating it.
         let mut huge = JointState::default().to_cdr();
         huge.truncate(4 + 16);
         huge.extend_from_slice(&u32::MAX.to_le_bytes());
         assert!(matches!(
             JointState::from_cdr(&huge),
-            Err(CdrError::UnexpectedEnd { offset: 20, .. })
+            Err(CdrError::Decode(_))
         ));
-        let msg = CdrError::UnexpectedEnd {
-            offset: 3,
-            needed: 8,
-        }
-        .to_string();
-        assert!(msg.contains("offset 3"), "{msg}");
+        let msg = CdrError::MissingHeader(3).to_string();
+        assert!(msg.contains("3 bytes"), "{msg}");
     }
 
     #[test]
@@ -1283,6 +867,6 @@ mod tests {
         assert_eq!(Quaternion::default().w, 1.0);
         assert_eq!(Pose::default().orientation, Quaternion::default());
         assert_eq!(Marker::default().r#type, Marker::ARROW);
-        assert_eq!(CdrWriter::default().into_bytes(), CDR_LE_HEADER);
+        assert_eq!(Float64::default().to_cdr()[..4], CDR_LE_HEADER);
     }
 }

@@ -6,7 +6,7 @@ use rkforge_core::{Scene, Simulation};
 use rkforge_ros::dds::Node;
 use rkforge_ros::frame::sample;
 use rkforge_ros::msgs::{
-    CdrDecode, Float64, JointState as JointStateMsg, WrenchStamped as WrenchMsg,
+    Float64, JointState as JointStateMsg, RosMessage, WrenchStamped as WrenchMsg,
 };
 use ros2_client::dds::Context;
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
