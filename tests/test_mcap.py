@@ -222,11 +222,15 @@ def test_the_node_records_the_same_bytes_as_rkforge_run(recorded, rkforge_ros_bi
     assert meta["rkforge"]["writer"] == "rkforge-ros"
     assert meta["rkforge"]["compression"] == compression
     summary = json.loads(meta["rkforge_summary"]["summary_json"])
-    assert summary["status"] == "finished"
-    assert summary["samples_published"] == len(rows)
-    assert summary["time_s"] == rows[-1]["time_s"]
-    # The node steps as `rkforge run --no-frames` does.
-    assert summary["steps"] == json.loads((run_out / "summary.json").read_text())["steps"]
+    assert summary["status"] == "ok" and summary["error"] is None
+    assert summary["ros"]["samples_published"] == len(rows)
+    assert summary["end_time_s"] == rows[-1]["time_s"]
+    # The node's summary is the runner's: that of `rkforge run --no-frames` for the same
+    # run, but for the wall times and the node's own figures.
+    run = json.loads((run_out / "summary.json").read_text())
+    volatile = ("wall_s", "stage_seconds", "ros")
+    assert {k: v for k, v in summary.items() if k not in volatile} == \
+        {k: v for k, v in run.items() if k not in volatile}
     assert attachments(out) == {scene.name: ("application/toml", scene.read_bytes())}
 
 
@@ -270,8 +274,8 @@ def test_sigterm_finishes_the_file_of_the_node(rkforge_ros_bin, tmp_path):
     assert 3 <= len(clocks) < 101
     assert len(msgs) == len(clocks) * len(TOPICS)
     summary = json.loads(metadata(path)["rkforge_summary"]["summary_json"])
-    assert summary["status"] == "stopped"
-    assert summary["samples_published"] == len(clocks)
+    assert summary["status"] == "stopped" and "stopped by a signal" in summary["error"]
+    assert summary["ros"]["samples_published"] == len(clocks)
 
 
 def test_a_killed_process_leaves_a_file_readable_to_its_last_chunk(rkforge_bin, tmp_path):

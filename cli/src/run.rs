@@ -129,7 +129,7 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
         &sim,
         wall.elapsed().as_secs_f64(),
         output_time.as_secs_f64(),
-        outcome.failure.as_deref(),
+        outcome.ending(),
     );
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     std::fs::write(opts.out.join("summary.json"), &text)

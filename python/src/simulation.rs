@@ -293,7 +293,9 @@ impl Simulation {
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let summary = self.with(py, |s| {
             let wall = s.started.elapsed().as_secs_f64();
-            Ok(s.install(|sim| rkforge_runner::summary(sim, wall, 0.0, None)))
+            Ok(s.install(|sim| {
+                rkforge_runner::summary(sim, wall, 0.0, rkforge_runner::Ending::Finished)
+            }))
         })?;
         to_dict(py, &summary)
     }
@@ -330,7 +332,7 @@ pub fn run_scene<'py>(
                     &sim,
                     wall.elapsed().as_secs_f64(),
                     outcome.output_time.as_secs_f64(),
-                    outcome.failure.as_deref(),
+                    outcome.ending(),
                 );
                 let columns = outcome.history.columns().to_vec();
                 let rows: Vec<f64> = outcome.history.rows().iter().flatten().copied().collect();

@@ -14,6 +14,7 @@ use rkforge_ros::frame::{sample, Sample};
 use rkforge_ros::msgs::{ResultMsg, SimulationState};
 use rkforge_ros::params::Settings;
 use rkforge_ros::record::{Compression, Provenance, Recorder};
+use rkforge_runner::{Ending, History};
 use serde_json::json;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -241,9 +242,9 @@ fn run(a: &Args) -> Result<(), String> {
     Ok(())
 }
 
-/// The run's summary as JSON, for the recording: status (`finished`, `stopped` by a signal,
-/// `error`), the error, final time, steps, samples published, messages dropped and the
-/// loop's wall time (s). The tools' final figures are the last sample's joint state.
+/// The run's summary for the recording: the runner's (`summary.json` of `rkforge run`:
+/// status `ok`, `stopped` by a signal or `error`), with the node's own figures under `ros`:
+/// samples published, messages dropped and the loop's wall time (s).
 fn summary(
     sim: &Simulation,
     outcome: &Result<u64, String>,
@@ -251,22 +252,19 @@ fn summary(
     dropped: u64,
     loop_wall: f64,
 ) -> String {
-    let status = match (outcome, stopped) {
-        (Err(_), _) => "error",
-        (Ok(_), true) => "stopped",
-        (Ok(_), false) => "finished",
+    let reason = format!("stopped by a signal at t = {:e} s", sim.time());
+    let ending = match (outcome, stopped) {
+        (Err(e), _) => Ending::Failed(e),
+        (Ok(_), true) => Ending::Stopped(&reason),
+        (Ok(_), false) => Ending::Finished,
     };
-    json!({
-        "scene": sim.scene().name,
-        "status": status,
-        "error": outcome.as_ref().err(),
-        "time_s": sim.time(),
-        "steps": sim.steps(),
+    let mut figures = rkforge_runner::summary(sim, loop_wall, 0.0, ending);
+    figures["ros"] = json!({
         "samples_published": outcome.as_ref().ok(),
         "messages_dropped": dropped,
         "loop_wall_s": loop_wall,
-    })
-    .to_string()
+    });
+    serde_json::to_string_pretty(&figures).unwrap_or_else(|e| e.to_string())
 }
 
 /// Sample times after t = 0, as `rkforge run` samples its history
@@ -299,8 +297,15 @@ fn simulate(
     // Index of the next sample time.
     let mut next = 0;
     let mut steps = 0;
+    // The runner's history measure at every sample (penetration of every particle, its
+    // bound), as `rkforge run` takes it.
+    let mut history = History::new(sim);
     loop {
         let at_end = next >= schedule.len();
+        if let Err(e) = history.record(sim) {
+            let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
+            return;
+        }
         if tx
             .send(FromSim::Sample(sample(sim), at_end, steps))
             .is_err()
@@ -321,7 +326,10 @@ fn simulate(
             ToSim::Step(n) => n,
             ToSim::Reset => {
                 match Simulation::new(scene) {
-                    Ok(s) => *sim = s,
+                    Ok(s) => {
+                        *sim = s;
+                        history = History::new(sim);
+                    }
                     Err(e) => {
                         let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
                         return;

@@ -12,6 +12,17 @@ pub mod summary;
 pub use history::History;
 pub use summary::{reference_table, summary, tool_json};
 
+impl Outcome {
+    /// How the run ended, for [`summary`].
+    pub fn ending(&self) -> Ending<'_> {
+        match (&self.failure, self.stopped) {
+            (None, _) => Ending::Finished,
+            (Some(reason), true) => Ending::Stopped(reason),
+            (Some(error), false) => Ending::Failed(error),
+        }
+    }
+}
+
 use rkforge_core::{Scene, Simulation};
 use std::time::{Duration, Instant};
 
@@ -84,12 +95,25 @@ pub struct Quiet;
 
 impl Observer for Quiet {}
 
+/// How a run ended, as its summary says it (`status` `ok`, `stopped` or `error`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ending<'a> {
+    /// It ran to its end time (or to the caller's last order).
+    Finished,
+    /// A signal or a request stopped it early, for this reason.
+    Stopped(&'a str),
+    /// It failed with this error.
+    Failed(&'a str),
+}
+
 /// What a run produced.
 pub struct Outcome {
     /// One row per sample (and a last one after a failure).
     pub history: History,
     /// Why the run stopped before its end (divergence, a signal), if it did.
     pub failure: Option<String>,
+    /// The observer stopped it ([`Observer::stop`]): `failure` is the reason.
+    pub stopped: bool,
     /// Wall time spent recording samples and in the observer's `sample` and `frame`.
     pub output_time: Duration,
 }
@@ -119,12 +143,14 @@ pub fn drive(
     }
     output_time += clock.elapsed();
     let mut recorded = true;
+    let mut stopped = false;
     for mark in marks {
         if failure.is_some() {
             break;
         }
         if let Some(e) = observer.stop(sim) {
             failure = Some(e);
+            stopped = true;
             break;
         }
         if mark.time > sim.time() + 1e-12 * end {
@@ -155,6 +181,7 @@ pub fn drive(
     Ok(Outcome {
         history,
         failure,
+        stopped,
         output_time,
     })
 }
@@ -200,7 +227,7 @@ mod tests {
         assert_eq!(outcome.history.column("time_s").unwrap().len(), 5);
         let csv = outcome.history.to_csv();
         assert!(csv.starts_with("time_s,dt_s,top.stroke_m,"), "{csv}");
-        let s = summary(&sim, 1.0, 0.0, None);
+        let s = summary(&sim, 1.0, 0.0, outcome.ending());
         assert_eq!(s["status"], "ok");
         assert_eq!(s["end_time_s"], 0.0006);
     }

@@ -2,14 +2,21 @@
 //! references.
 
 use crate::history::{face_values, measures, min_spacing, FACE_KEYS};
+use crate::Ending;
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 
-/// The summary (summary.json): scene, discretisation, run, workpiece, energy, tools, contact,
-/// and the wall time of each stage (s); `output_s` is the time the caller spent sampling the
+/// The summary (summary.json): how the run ended (`status` `ok`, `stopped` or `error`, with
+/// the reason or error), scene, discretisation, run, workpiece, energy, tools, contact, and
+/// the wall time of each stage (s); `output_s` is the time the caller spent sampling the
 /// history and writing files (history.csv, frames, plots, MCAP).
-pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>) -> Value {
+pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>) -> Value {
+    let (status, error) = match ending {
+        Ending::Finished => ("ok", None),
+        Ending::Stopped(reason) => ("stopped", Some(reason)),
+        Ending::Failed(error) => ("error", Some(error)),
+    };
     let m = measures(sim);
     let e = sim.energy();
     let x = m.extents;
@@ -31,7 +38,7 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, error: Option<&str>
     let times = sim.times;
     let scene = sim.scene();
     let mut summary = json!({
-        "status": if error.is_some() { "error" } else { "ok" },
+        "status": status,
         "error": error,
         "scene": scene.name,
         "kinematics": match scene.model.kinematics { Kinematics::Axisymmetric => "axisymmetric", Kinematics::PlaneStrain => "plane_strain" },
