@@ -4,12 +4,25 @@
 # history.csv, the VTK frames and summary.json (less the wall and stage times) byte for byte.
 #   scripts/same_bits.sh OLD_BINARY NEW_BINARY
 #   FULL=1 scripts/same_bits.sh OLD_BINARY NEW_BINARY   the shipped scenes as they are (minutes)
-# An older build: git worktree add /tmp/old <commit> && cargo build --release -p rkforge
-#   --manifest-path /tmp/old/Cargo.toml (its binary is /tmp/old/target/release/rkforge).
+#   scripts/same_bits.sh OLD_DIR NEW_DIR   two build directories (target/release): the command
+#     line as above, then every case through the FMU (DIR/rkforge fmu, simulated by fmpy), the
+#     ROS node's recording (DIR/rkforge-ros --record) and, where DIR/same_bits_python holds the
+#     build's Python package, rkforge.run (scripts/same_bits_front_ends.py, run by $PYTHON,
+#     default .venv/bin/python, which needs fmpy, mcap, numpy and pandas).
+# An older build: git worktree add /tmp/old <commit> && cd /tmp/old &&
+#   CARGO_TARGET_DIR=/tmp/old/target cargo build --release --workspace
+#   (its binaries are in /tmp/old/target/release); its Python package:
+#   maturin build --release -m python/Cargo.toml --out /tmp/old/wheel && pip install --no-deps
+#   --target /tmp/old/target/release/same_bits_python /tmp/old/wheel/rkforge-*.whl
 # Exit status 0 when every case matches, 1 otherwise (each difference is printed).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 old=$1; new=$2
+dirs=0
+if [ -d "$old" ] && [ -d "$new" ]; then
+  dirs=1; old_dir=$(cd "$old" && pwd); new_dir=$(cd "$new" && pwd)
+  old=$old_dir/rkforge; new=$new_dir/rkforge
+fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # name  scene  particles  end_s  keep the fixed step (1) or use dt_safety (0)
@@ -32,6 +45,7 @@ print(json.dumps(s, indent=1, sort_keys=True))
 PY
 }
 failed=0
+front_cases=""
 while read -r name scene particles end fixed; do
   if [ "$particles" = - ]; then
     cp "$scene" "$work/$name.toml"
@@ -61,5 +75,9 @@ while read -r name scene particles end fixed; do
       fi
     done
   done
+  front_cases="$front_cases $work/$name.toml:q4 $work/$name.toml:q2 $work/$name.toml:scni"
 done <<< "$cases"
+if [ "$dirs" = 1 ]; then
+  "${PYTHON:-.venv/bin/python}" scripts/same_bits_front_ends.py "$old_dir" "$new_dir" $front_cases || failed=1
+fi
 exit $failed

@@ -14,7 +14,7 @@ use rkforge_ros::frame::{sample, Sample};
 use rkforge_ros::msgs::{ResultMsg, SimulationState};
 use rkforge_ros::params::Settings;
 use rkforge_ros::record::{Compression, Provenance, Recorder};
-use rkforge_runner::{Ending, History};
+use rkforge_runner::{Ending, Mark, Run, Until};
 use serde_json::json;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -177,11 +177,11 @@ fn run(a: &Args) -> Result<(), String> {
     let progress = AtomicU64::new(0);
     let outcome = std::thread::scope(|s| {
         let sim = &mut sim;
-        let schedule = &schedule;
         let scene = &scene;
         let progress = &progress;
+        let mut sim_rx = sim_rx;
         s.spawn(move || {
-            rayon::scope(move |_| simulate(sim, scene, schedule, &sim_rx, &sim_tx, progress));
+            rayon::scope(move |_| simulate(sim, scene, schedule, &mut sim_rx, &sim_tx, progress));
         });
         let mut main = MainLoop {
             node: &mut node,
@@ -267,10 +267,10 @@ fn summary(
     serde_json::to_string_pretty(&figures).unwrap_or_else(|e| e.to_string())
 }
 
-/// Sample times after t = 0, as `rkforge run` samples its history
-/// ([`rkforge_core::sample_times`]).
-fn schedule(end: f64, interval: f64) -> Result<Vec<f64>, String> {
-    rkforge_core::sample_times(end, interval).ok_or_else(|| {
+/// The sample marks after t = 0 every `interval` (s), as `rkforge run` samples its history
+/// ([`rkforge_runner::schedule_every`]).
+fn schedule(end: f64, interval: f64) -> Result<Vec<Mark>, String> {
+    rkforge_runner::schedule_every(end, interval, 0).ok_or_else(|| {
         format!(
             "--publish-rate {:e} Hz gives {:e} samples over {end:e} s; at most {:e}",
             1.0 / interval,
@@ -280,34 +280,31 @@ fn schedule(end: f64, interval: f64) -> Result<Vec<f64>, String> {
     })
 }
 
-/// The simulation thread: a sample at t = 0, then one after each order of the main thread:
-/// [`ToSim::Continue`] steps to the next time of `schedule` as `Simulation::run_to` does
-/// (the last step of each interval shortened to land on it), [`ToSim::Step`] takes N of
-/// those steps (or fewer, on [`ToSim::Cancel`]), [`ToSim::Reset`] rebuilds the simulation
-/// from `scene` (the same bits as at start). Commands apply between steps as they come.
-/// `progress` counts the steps of the order under way.
+/// The simulation thread: a sample at t = 0, then one after each order of the main thread,
+/// stepped through the runner's [`Run`] over `schedule`: [`ToSim::Continue`] steps to the
+/// next mark (the last step of each interval shortened to land on it, as `rkforge run`),
+/// [`ToSim::Step`] takes N of those steps (fewer on [`ToSim::Cancel`] or at the end),
+/// [`ToSim::Reset`] rebuilds the simulation from `scene` (the same bits as at start).
+/// Commands apply between steps as they come; `progress` counts the steps of the order
+/// under way. Each sample records the runner's history row (penetration of every particle
+/// against its bound), as `rkforge run` does.
 fn simulate(
     sim: &mut Simulation,
     scene: &Scene,
-    schedule: &[f64],
-    rx: &Receiver<ToSim>,
+    schedule: Vec<Mark>,
+    rx: &mut Receiver<ToSim>,
     tx: &Sender<FromSim>,
     progress: &AtomicU64,
 ) {
-    // Index of the next sample time.
-    let mut next = 0;
+    let mut run = Run::new(sim, schedule);
     let mut steps = 0;
-    // The runner's history measure at every sample (penetration of every particle, its
-    // bound), as `rkforge run` takes it.
-    let mut history = History::new(sim);
     loop {
-        let at_end = next >= schedule.len();
-        if let Err(e) = history.record(sim) {
+        if let Err(e) = run.record(sim) {
             let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
             return;
         }
         if tx
-            .send(FromSim::Sample(sample(sim), at_end, steps))
+            .send(FromSim::Sample(sample(sim), run.finished(), steps))
             .is_err()
         {
             return;
@@ -321,48 +318,53 @@ fn simulate(
                 Err(_) => return,
             }
         };
-        let limit = match order {
-            ToSim::Continue => u64::MAX,
-            ToSim::Step(n) => n,
+        let until = match order {
+            ToSim::Continue => Until::NextMark,
+            ToSim::Step(n) => Until::Steps(n),
             ToSim::Reset => {
                 match Simulation::new(scene) {
                     Ok(s) => {
                         *sim = s;
-                        history = History::new(sim);
+                        run.restart(sim);
                     }
                     Err(e) => {
                         let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
                         return;
                     }
                 }
-                next = 0;
                 steps = 0;
                 continue;
             }
             ToSim::Command(_) | ToSim::Cancel | ToSim::Stop => return,
         };
-        steps = 0;
-        'steps: while steps < limit && next < schedule.len() {
-            while let Ok(msg) = rx.try_recv() {
+        // Between steps: the commands received apply; a cancel ends the order, a stop the
+        // thread.
+        let mut quit = false;
+        let (orders, quitting) = (&mut *rx, &mut quit);
+        let between = move |sim: &mut Simulation, taken: u64| {
+            progress.store(taken, Ordering::Relaxed);
+            while let Ok(msg) = orders.try_recv() {
                 match msg {
                     ToSim::Command(c) => command(sim, c),
-                    ToSim::Cancel => break 'steps,
-                    _ => return,
+                    ToSim::Cancel => return false,
+                    _ => {
+                        *quitting = true;
+                        return false;
+                    }
                 }
             }
-            let t = schedule[next];
-            if let Err(e) = sim.step(Some(t - sim.time())) {
+            true
+        };
+        match run.advance(sim, until, between) {
+            Ok(advance) => steps = advance.steps,
+            Err(e) => {
                 let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
                 return;
             }
-            steps += 1;
-            progress.store(steps, Ordering::Relaxed);
-            if sim.time() >= t - 1e-12 * t.abs() {
-                next += 1;
-                if limit == u64::MAX {
-                    break;
-                }
-            }
+        }
+        progress.store(steps, Ordering::Relaxed);
+        if quit {
+            return;
         }
     }
 }
@@ -780,15 +782,18 @@ mod tests {
 
     #[test]
     fn samples_fall_on_history_rows_and_reach_the_end() {
-        let s = schedule(0.003, 0.15e-3).unwrap();
+        let times = |end, interval| -> Result<Vec<f64>, String> {
+            Ok(schedule(end, interval)?.iter().map(|m| m.time).collect())
+        };
+        let s = times(0.003, 0.15e-3).unwrap();
         assert_eq!(s.len(), 20);
         assert_eq!(s[0], 0.15e-3);
         // 20 * 0.15e-3 as history.csv's last row has it, one rounding below 0.003.
         assert_eq!(*s.last().unwrap(), 20.0 * 0.15e-3);
         assert!(0.003 - s.last().unwrap() < 1e-18);
-        assert_eq!(schedule(1.0, 0.4).unwrap(), [0.4, 0.8, 1.0]);
-        assert_eq!(schedule(1.0, 2.0).unwrap(), [1.0]);
-        let e = schedule(1.0, 1e-9).unwrap_err();
+        assert_eq!(times(1.0, 0.4).unwrap(), [0.4, 0.8, 1.0]);
+        assert_eq!(times(1.0, 2.0).unwrap(), [1.0]);
+        let e = times(1.0, 1e-9).unwrap_err();
         assert!(e.contains("at most 1e7"), "{e}");
     }
 }

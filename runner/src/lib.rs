@@ -1,10 +1,13 @@
 //! rkforge-runner: one run of a scene as the command line and the Python package both do
 //! it, so that their results are the same bits.
 //!
-//! A run steps a [`Simulation`] from sample to sample of its [`schedule`] (history rows
-//! every `output.history_interval_s`, frame times merged in), records a [`History`] row at
-//! each sample, and ends with the [`summary`]. What a caller adds at the samples and frames
-//! (files, plots, MCAP, a progress bar) goes through an [`Observer`].
+//! A [`Run`] steps a [`Simulation`] from mark to mark of its [`schedule`] (history rows
+//! every `output.history_interval_s`, frame times merged in), or by a number of steps, with
+//! a hook between steps (commands, cancels), and records the [`History`]; the run ends with
+//! the [`summary`]. [`drive`] runs a scene to its end through one, for the command line and
+//! the Python package, with what a caller adds at the samples and frames (files, plots,
+//! MCAP, a progress bar) through an [`Observer`]; the ROS node steps its own [`Run`] as its
+//! services order.
 
 pub mod history;
 pub mod summary;
@@ -44,10 +47,15 @@ pub struct Mark {
 ///
 /// The scene's history interval gives more than [`rkforge_core::MAX_SAMPLES`] samples.
 pub fn schedule(scene: &Scene, frames: usize) -> Result<Vec<Mark>, String> {
-    let end = scene.time.end_s;
     let interval = scene.history_interval();
-    let mut marks: Vec<Mark> = rkforge_core::sample_times(end, interval)
-        .ok_or_else(|| format!("output.history_interval_s {interval:e} s: too many samples"))?
+    schedule_every(scene.time.end_s, interval, frames)
+        .ok_or_else(|| format!("output.history_interval_s {interval:e} s: too many samples"))
+}
+
+/// [`schedule`] with samples every `interval` (s) up to `end` (s); `None` if that gives
+/// more than [`rkforge_core::MAX_SAMPLES`] samples.
+pub fn schedule_every(end: f64, interval: f64, frames: usize) -> Option<Vec<Mark>> {
+    let mut marks: Vec<Mark> = rkforge_core::sample_times(end, interval)?
         .into_iter()
         .map(|time| Mark {
             time,
@@ -61,7 +69,120 @@ pub fn schedule(scene: &Scene, frames: usize) -> Result<Vec<Mark>, String> {
         frame: true,
     }));
     marks.sort_by(|a, b| a.time.total_cmp(&b.time));
-    Ok(marks)
+    Some(marks)
+}
+
+/// A run under way: the marks of its schedule still ahead and its history so far.
+pub struct Run {
+    marks: Vec<Mark>,
+    next: usize,
+    history: History,
+}
+
+/// How far [`Run::advance`] goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Until {
+    /// To the next mark of the schedule.
+    NextMark,
+    /// This many steps, each landing on the marks it crosses (fewer at the end).
+    Steps(u64),
+}
+
+/// What [`Run::advance`] did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Advance {
+    /// Steps taken.
+    pub steps: u64,
+    /// The mark reached, for [`Until::NextMark`].
+    pub mark: Option<Mark>,
+    /// The hook between steps stopped it.
+    pub interrupted: bool,
+}
+
+impl Run {
+    /// A run of `sim` from its current time over `marks` (from [`schedule`]).
+    pub fn new(sim: &Simulation, marks: Vec<Mark>) -> Run {
+        Run {
+            marks,
+            next: 0,
+            history: History::new(sim),
+        }
+    }
+
+    /// Back to the first mark with an empty history, for a simulation rebuilt at t = 0.
+    pub fn restart(&mut self, sim: &Simulation) {
+        self.next = 0;
+        self.history = History::new(sim);
+    }
+
+    /// Every mark is behind: the run is at its end.
+    pub fn finished(&self) -> bool {
+        self.next >= self.marks.len()
+    }
+
+    /// Record a history row of the current state ([`History::record`]).
+    ///
+    /// # Errors
+    ///
+    /// A particle is deeper in a tool than the scene's bound (the row is recorded).
+    pub fn record(&mut self, sim: &mut Simulation) -> Result<(), rkforge_core::Error> {
+        self.history.record(sim)
+    }
+
+    /// The history so far.
+    pub fn history(&self) -> &History {
+        &self.history
+    }
+
+    /// The history, at the end of the run.
+    pub fn into_history(self) -> History {
+        self.history
+    }
+
+    /// Step on as `until` says, each step shortened to land on the next mark
+    /// ([`Simulation::run_toward`]). `between(sim, taken)` is called before each step
+    /// with the steps taken so far in this call: it may change the simulation (a velocity
+    /// command) and returns `false` to stop there.
+    ///
+    /// # Errors
+    ///
+    /// A step failed; the simulation holds the state reached.
+    pub fn advance(
+        &mut self,
+        sim: &mut Simulation,
+        until: Until,
+        mut between: impl FnMut(&mut Simulation, u64) -> bool + Send,
+    ) -> Result<Advance, rkforge_core::Error> {
+        let mut steps = 0;
+        while let Some(&mark) = self.marks.get(self.next) {
+            let limit = match until {
+                Until::NextMark => u64::MAX,
+                Until::Steps(n) => n - steps,
+            };
+            let ran = sim.run_toward(mark.time, limit, |s, k| between(s, steps + k))?;
+            steps += ran.steps;
+            if !ran.reached {
+                return Ok(Advance {
+                    steps,
+                    mark: None,
+                    interrupted: ran.interrupted,
+                });
+            }
+            self.next += 1;
+            if until == Until::NextMark {
+                return Ok(Advance {
+                    steps,
+                    mark: Some(mark),
+                    interrupted: false,
+                });
+            }
+        }
+        Ok(Advance {
+            steps,
+            mark: None,
+            interrupted: false,
+        })
+    }
 }
 
 /// What a caller does at the instants of a run. Every method has a default that does nothing.
@@ -131,12 +252,10 @@ pub fn drive(
     frames: usize,
     observer: &mut impl Observer,
 ) -> Result<Outcome, String> {
-    let end = sim.scene().time.end_s;
-    let marks = schedule(sim.scene(), frames)?;
-    let mut history = History::new(sim);
+    let mut run = Run::new(sim, schedule(sim.scene(), frames)?);
     let mut output_time = Duration::ZERO;
     let clock = Instant::now();
-    let mut failure = history.record(sim).err().map(|e| e.to_string());
+    let mut failure = run.record(sim).err().map(|e| e.to_string());
     observer.sample(sim)?;
     if frames > 0 {
         observer.frame(sim)?;
@@ -144,25 +263,26 @@ pub fn drive(
     output_time += clock.elapsed();
     let mut recorded = true;
     let mut stopped = false;
-    for mark in marks {
-        if failure.is_some() {
-            break;
-        }
+    while failure.is_none() && !run.finished() {
         if let Some(e) = observer.stop(sim) {
             failure = Some(e);
             stopped = true;
             break;
         }
-        if mark.time > sim.time() + 1e-12 * end {
-            if let Err(e) = sim.run_to(mark.time, |_| {}) {
+        let mark = match run.advance(sim, Until::NextMark, |_, _| true) {
+            Ok(Advance {
+                mark: Some(mark), ..
+            }) => mark,
+            Ok(_) => break,
+            Err(e) => {
                 failure = Some(e.to_string());
                 recorded = false;
                 break;
             }
-        }
+        };
         let clock = Instant::now();
         if mark.sample {
-            failure = history.record(sim).err().map(|e| e.to_string());
+            failure = run.record(sim).err().map(|e| e.to_string());
             observer.sample(sim)?;
         }
         if mark.frame {
@@ -174,12 +294,12 @@ pub fn drive(
     if failure.is_some() && !recorded {
         let clock = Instant::now();
         // The run already failed: the row is what matters here, not the bound again.
-        let _ = history.record(sim);
+        let _ = run.record(sim);
         observer.sample(sim)?;
         output_time += clock.elapsed();
     }
     Ok(Outcome {
-        history,
+        history: run.into_history(),
         failure,
         stopped,
         output_time,

@@ -162,6 +162,17 @@ pub struct Simulation {
     pub times: StageTimes,
 }
 
+/// How far [`Simulation::run_toward`] went.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Ran {
+    /// Steps taken.
+    pub steps: u64,
+    /// The time reached the target.
+    pub reached: bool,
+    /// The caller's `between` stopped it before the target.
+    pub interrupted: bool,
+}
+
 impl Simulation {
     /// The scene being run.
     pub fn scene(&self) -> &Scene {
@@ -484,19 +495,68 @@ impl Simulation {
         Ok(())
     }
 
-    /// step start without a thread hand-off.
+    /// Step until `time` reaches `t_end` (s), the last step shortened to land on it, calling
+    /// `on_step` after each step.
+    ///
+    /// # Errors
+    ///
+    /// A step failed (see [`Simulation::step`]).
     pub fn run_to(
         &mut self,
         t_end: Real,
         mut on_step: impl FnMut(&Simulation) + Send,
     ) -> Result<()> {
-        let this = &mut *self;
-        let mut run = move || -> Result<()> {
-            while this.st.time < t_end - 1e-12 * t_end.abs() {
-                this.step(Some(t_end - this.st.time))?;
-                on_step(this);
+        let ran = self.run_toward(t_end, u64::MAX, |sim, taken| {
+            if taken > 0 {
+                on_step(sim);
             }
-            Ok(())
+            true
+        })?;
+        if ran.steps > 0 {
+            on_step(self);
+        }
+        Ok(())
+    }
+
+    /// Step toward `t_end` (s), the last step shortened to land on it, taking at most
+    /// `max_steps` steps. `between(sim, taken)` is called before each step with the steps
+    /// taken so far; it may change the simulation (a tool's velocity command) and returns
+    /// `false` to stop there. The one stepping loop of every front end.
+    ///
+    /// The loop runs on a worker of the current rayon pool, so the parallel stages of each
+    /// step start without a thread hand-off.
+    ///
+    /// # Errors
+    ///
+    /// A step failed (see [`Simulation::step`]).
+    pub fn run_toward(
+        &mut self,
+        t_end: Real,
+        max_steps: u64,
+        mut between: impl FnMut(&mut Simulation, u64) -> bool + Send,
+    ) -> Result<Ran> {
+        let this = &mut *self;
+        let mut run = move || -> Result<Ran> {
+            let mut ran = Ran {
+                steps: 0,
+                reached: false,
+                interrupted: false,
+            };
+            loop {
+                if this.st.time >= t_end - 1e-12 * t_end.abs() {
+                    ran.reached = true;
+                    return Ok(ran);
+                }
+                if ran.steps >= max_steps {
+                    return Ok(ran);
+                }
+                if !between(this, ran.steps) {
+                    ran.interrupted = true;
+                    return Ok(ran);
+                }
+                this.step(Some(t_end - this.st.time))?;
+                ran.steps += 1;
+            }
         };
         if rayon::current_thread_index().is_some() {
             run()

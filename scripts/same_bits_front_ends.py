@@ -1,0 +1,111 @@
+"""Do two builds give the same bits through the Python package, the FMU and the ROS node's
+recording? Called by scripts/same_bits.sh when it is given two build directories; see there.
+
+For each case (a coarse shipped scene and rule) and each build, with this interpreter:
+- Python: rkforge.run(scene) from DIR/same_bits_python (a `pip install --target` of the
+  build's wheel): the summary (less the wall and stage times) and the history's bytes;
+- FMU: the scene packed by DIR/rkforge fmu, simulated by fmpy over the scene's end time at
+  its history interval with the rule set through the FMU's parameter: every output's bytes;
+- ROS: DIR/rkforge-ros --record, uncompressed: every message's topic, log time and bytes,
+  and the embedded summary (less the wall times and the node's own figures).
+Prints one line per case and front end; exit status 1 when any differs.
+"""
+import hashlib
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+VOLATILE = ("wall_s", "stage_seconds", "ros")
+
+
+def digest(*parts):
+    h = hashlib.sha256()
+    for p in parts:
+        h.update(p if isinstance(p, bytes) else str(p).encode())
+    return h.hexdigest()[:16]
+
+
+def python_run(build, scene, rule):
+    code = (
+        "import json, sys, rkforge\n"
+        "s, h = rkforge.run(rkforge.Scene.from_file(sys.argv[1]), integration=sys.argv[2], check=False)\n"
+        f"s = {{k: v for k, v in s.items() if k not in {VOLATILE!r}}}\n"
+        "sys.stdout.write(json.dumps(s, sort_keys=True) + '\\n')\n"
+        "sys.stdout.write(','.join(h.columns) + '\\n' + h.to_numpy().tobytes().hex())\n"
+    )
+    env = dict(os.environ, PYTHONPATH=str(pathlib.Path(build) / "same_bits_python"))
+    out = subprocess.run([sys.executable, "-c", code, str(scene), rule], env=env,
+                         capture_output=True, text=True, check=True).stdout
+    return digest(out)
+
+
+def fmu_run(build, scene, rule, work):
+    from fmpy import simulate_fmu
+    import tomllib
+    fmu = work / f"{pathlib.Path(build).name}-{scene.stem}.fmu"
+    subprocess.run([str(pathlib.Path(build) / "rkforge"), "fmu", str(scene), "--out", str(fmu)],
+                   check=True, capture_output=True)
+    spec = tomllib.loads(scene.read_text())
+    end = spec["time"]["end_s"]
+    step = spec.get("output", {}).get("history_interval_s", end / 200)
+    names = [v for v in fmu_variables(fmu) if v[1] == "output"]
+    rule_key = next(n for n, c in fmu_variables(fmu) if c == "parameter" and
+                    n in ("integration", "discretization.integration"))
+    result = simulate_fmu(str(fmu), stop_time=end, output_interval=step, step_size=step,
+                          start_values={rule_key: rule}, output=[n for n, _ in names])
+    return digest(result.tobytes())
+
+
+def fmu_variables(fmu):
+    from fmpy import read_model_description
+    return [(v.name, v.causality) for v in read_model_description(str(fmu)).modelVariables]
+
+
+def ros_run(build, scene, rule, work, domain):
+    from mcap.reader import make_reader
+    rec = work / f"{pathlib.Path(build).name}-{scene.stem}-{rule}.mcap"
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    subprocess.run([str(pathlib.Path(build) / "rkforge-ros"), str(scene), "--record", str(rec),
+                    "--record-compression", "none", "--set",
+                    f"discretization.integration=\"{rule}\""],
+                   env=env, check=True, capture_output=True, timeout=600)
+    with open(rec, "rb") as f:
+        reader = make_reader(f)
+        messages = [(c.topic, m.log_time, bytes(m.data)) for _, c, m in reader.iter_messages()]
+    with open(rec, "rb") as f:
+        meta = {m.name: dict(m.metadata) for m in make_reader(f).iter_metadata()}
+    summary = json.loads(meta["rkforge_summary"]["summary_json"])
+    summary = {k: v for k, v in summary.items() if k not in VOLATILE}
+    return digest(json.dumps(summary, sort_keys=True), *[b"".join(
+        [t.encode(), str(lt).encode(), d]) for t, lt, d in messages]) + f" ({len(messages)} messages)"
+
+
+def main(old, new, cases):
+    failed = False
+    with tempfile.TemporaryDirectory() as d:
+        work = pathlib.Path(d)
+        domain = 180
+        for scene, rule in cases:
+            scene = pathlib.Path(scene)
+            fronts = {"fmu": lambda b: fmu_run(b, scene, rule, work),
+                      "ros": lambda b: ros_run(b, scene, rule, work, domain)}
+            if all((pathlib.Path(b) / "same_bits_python").is_dir() for b in (old, new)):
+                fronts["python"] = lambda b: python_run(b, scene, rule)
+            for name, front in fronts.items():
+                a, b = front(old), front(new)
+                tag = f"{name} {scene.stem} {rule}"
+                if a == b:
+                    print(f"same bits: {tag} {b}")
+                else:
+                    print(f"DIFFERENT: {tag}: {a} vs {b}")
+                    failed = True
+            domain += 1
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    old, new, *rest = sys.argv[1:]
+    sys.exit(main(old, new, [c.split(":") for c in rest]))
