@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Do two rkforge binaries give the same bits? Runs coarse versions of the shipped scenes with
+# Do two rkforge binaries give the same bits? Runs coarse versions of every shipped scene with
 # every rule (fixed and adaptive steps, with and without frames) through both and compares
 # history.csv, the VTK frames and summary.json (less the wall and stage times) byte for byte.
 #   scripts/same_bits.sh OLD_BINARY NEW_BINARY
@@ -29,11 +29,14 @@ trap 'rm -rf "$work"' EXIT
 cases="taylor scenes/taylor_bar.toml [11,26] 40.0e-6 1
 taylor_adaptive scenes/taylor_bar.toml [11,26] 40.0e-6 0
 block scenes/block_forging.toml [11,11] 0.015 1
-wheel scenes/wheel_forging.toml [15,15] 1.0e-3 1"
+wheel scenes/wheel_forging.toml [15,15] 1.0e-3 1
+hub scenes/closed_die_hub.toml [9,25] 0.03 1
+ring scenes/ring_compression.toml [11,7] 1.025e-3 1
+upsetting scenes/press_upsetting.toml [6,16] 0.3 1
+block_press scenes/block_forging_press.toml [11,11] 1.0 1
+wheel_press scenes/wheel_forging_press.toml [15,15] 0.2 1"
 if [ "${FULL:-0}" = 1 ]; then
-  cases="taylor_bar scenes/taylor_bar.toml - - 1
-block_forging scenes/block_forging.toml - - 1
-wheel_forging scenes/wheel_forging.toml - - 1"
+  cases=$(for f in scenes/*.toml; do echo "$(basename "$f" .toml) $f - - 1"; done)
 fi
 strip() {
   python3 - "$1" <<'PY'

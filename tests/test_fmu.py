@@ -30,7 +30,29 @@ def fmus(rkforge_bin, tmp_path_factory):
     return paths
 
 
-COARSE = {"resolution.nx": 11, "resolution.ny": 11, "dt_fixed": 0.0}
+@pytest.fixture(scope="module")
+def adaptive_fmus(rkforge_bin, tmp_path_factory):
+    """The block and the wheel with their fixed step left out (`dt_safety` times the stable
+    step): the coarse grids of the control loops run at their own stable step. A key the
+    scene leaves out is no FMU parameter: the scene decides what is modelled."""
+    out = tmp_path_factory.mktemp("adaptive")
+    paths = {}
+    for s in ["block_forging", "wheel_forging"]:
+        text = (ROOT / "scenes" / f"{s}.toml").read_text()
+        scene = out / f"{s}.toml"
+        scene.write_text("\n".join(l for l in text.splitlines() if not l.startswith("dt_s =")))
+        paths[s] = str(out / f"{s}.fmu")
+        subprocess.run([rkforge_bin, "fmu", str(scene), "--out", paths[s]], check=True,
+                       capture_output=True, text=True)
+    return paths
+
+
+def grid(nx, ny):
+    """The FMU parameters of the particle grid: the scene key `workpiece.particles`."""
+    return {"workpiece.particles[0]": nx, "workpiece.particles[1]": ny}
+
+
+COARSE = grid(11, 11)
 
 
 def test_every_shipped_scene_validates(fmus):
@@ -66,9 +88,9 @@ def test_input_table_drives_the_block_like_rkforge_run(fmus, rkforge_bin, tmp_pa
         assert r["top.stroke"] == pytest.approx(10.0 * r["time"], rel=1e-9, abs=1e-15)
 
 
-def test_stroke_follows_a_changing_velocity_input(fmus):
+def test_stroke_follows_a_changing_velocity_input(adaptive_fmus):
     """Strokes are the integrals of piecewise-constant velocity inputs."""
-    s = Slave(fmus["block_forging"], params=COARSE)
+    s = Slave(adaptive_fmus["block_forging"], params=COARSE)
     stroke = 0.0
     for k in range(40):
         v = 10.0 * math.sin(0.2 * k) + 2.0
@@ -85,7 +107,7 @@ def force_limited_press(path, set_point, t_end, h):
     proportional (the plant integrates: force follows stroke), a small integral term, a
     first-order filter on the measured force, and a velocity range that lets the press back
     off (a stopped punch keeps its load in a plastic workpiece)."""
-    s = Slave(path, params={"resolution.nx": 15, "resolution.ny": 15, "dt_fixed": 0.0})
+    s = Slave(path, params=grid(15, 15))
     kp, ki, v_min, v_max, alpha = 15.0, 500.0, -5.0, 10.0, 0.5
     integral, filtered, history = 0.0, None, []
     while s.t < t_end - 1e-12:
@@ -104,9 +126,9 @@ def force_limited_press(path, set_point, t_end, h):
     return history
 
 
-def test_force_limited_press_settles_within_5_percent(fmus):
+def test_force_limited_press_settles_within_5_percent(adaptive_fmus):
     set_point = 2.0e6
-    hist = force_limited_press(fmus["wheel_forging"], set_point, 3.0e-3, 10e-6)
+    hist = force_limited_press(adaptive_fmus["wheel_forging"], set_point, 3.0e-3, 10e-6)
     settled = [f for t, f, v, s in hist if t > 2.0e-3]
     assert settled and all(abs(f - set_point) < 0.05 * set_point for f in settled), \
         (min(settled), max(settled))
@@ -114,12 +136,12 @@ def test_force_limited_press_settles_within_5_percent(fmus):
     assert hist[-1][3] > 1e-3, "the punch advanced"
 
 
-def test_hydraulic_press_slows_with_load(fmus):
+def test_hydraulic_press_slows_with_load(adaptive_fmus):
     """A hydraulic press whose speed falls with load, v = v_max (1 - F / F_max), on both tools
     of the block forging. The valve is a first-order lag (0.5 ms): a press cannot jump its
     speed, and an instant jump of dv changes the contact stress elastically by rho c dv
     (266 MPa for 6.5 m/s in copper), which would make the loop chatter."""
-    s = Slave(fmus["block_forging"], params=COARSE)
+    s = Slave(adaptive_fmus["block_forging"], params=COARSE)
     v_max, f_max, h, tau = 10.0, 0.3e9, 20e-6, 0.5e-3
     v, stroke, speeds = v_max, 0.0, []
     for _ in range(750):
@@ -142,7 +164,7 @@ def test_hydraulic_press_slows_with_load(fmus):
 
 
 def test_rollback_and_serialization_continue_identically(fmus):
-    a = Slave(fmus["taylor_bar"], params={"resolution.nx": 7, "resolution.ny": 15})
+    a = Slave(fmus["taylor_bar"], params=grid(7, 15))
     out = ["wall.force", "workpiece.radius", "workpiece.height", "energy.plastic"]
     h = 2e-6
     for _ in range(3):
@@ -161,7 +183,7 @@ def test_rollback_and_serialization_continue_identically(fmus):
     a.t = t_saved
     blob = a.fmu.serializeFMUstate(state)
     a.fmu.freeFMUstate(state)
-    b = Slave(fmus["taylor_bar"], name="fresh", params={"resolution.nx": 7, "resolution.ny": 15})
+    b = Slave(fmus["taylor_bar"], name="fresh", params=grid(7, 15))
     restored = b.fmu.deSerializeFMUstate(blob)
     b.fmu.setFMUstate(restored)
     b.fmu.freeFMUstate(restored)
@@ -181,8 +203,8 @@ def raises(slave, call, *words):
         assert w in slave.last_error(), (w, slave.messages[-3:])
 
 
-def test_bad_inputs_are_refused_with_a_message_and_the_instance_lives_on(fmus):
-    s = Slave(fmus["block_forging"], params=COARSE)
+def test_bad_inputs_are_refused_with_a_message_and_the_instance_lives_on(adaptive_fmus):
+    s = Slave(adaptive_fmus["block_forging"], params=COARSE)
     fmu, vr = s.fmu, s.vr
     raises(s, lambda: s.set("top.velocity", float("nan")), "top.velocity", "not finite")
     raises(s, lambda: s.set("top.velocity", float("inf")), "not finite")
@@ -190,7 +212,8 @@ def test_bad_inputs_are_refused_with_a_message_and_the_instance_lives_on(fmus):
     raises(s, lambda: fmu.doStep(0.0, -1e-6), "must be positive")
     raises(s, lambda: fmu.doStep(1.0, 1e-6), "does not match")
     raises(s, lambda: fmu.getReal([9999]), "unknown value reference 9999")
-    raises(s, lambda: fmu.setInteger([vr["resolution.nx"]], [31]), "resolution.nx", "cannot be set")
+    raises(s, lambda: fmu.setInteger([vr["workpiece.particles[0]"]], [31]), "workpiece.particles[0]",
+           "cannot be set")
     raises(s, lambda: fmu.setReal([vr["top.force"]], [1.0]), "output")
     raises(s, lambda: fmu.enterInitializationMode(), "not allowed")
     raises(s, lambda: fmu.fmi2GetReal(fmu.component, None, 1, None), "null pointer")
@@ -205,11 +228,16 @@ def test_bad_inputs_are_refused_with_a_message_and_the_instance_lives_on(fmus):
 def test_parameters_out_of_range_and_wrong_state_calls(fmus):
     s = Slave(fmus["taylor_bar"], init=False)
     raises(s, lambda: s.fmu.doStep(0.0, 1e-6), "not allowed")
-    raises(s, lambda: s.fmu.setInteger([s.vr["resolution.nx"]], [1]), "resolution.nx", "[2, 4000]")
-    raises(s, lambda: s.fmu.setString([s.vr["integration"]], ["q3"]), "integration", "q4")
-    raises(s, lambda: s.fmu.setReal([s.vr["dt_safety"]], [1.5]), "dt_safety", "out of range")
-    raises(s, lambda: s.fmu.setReal([s.vr["wall.friction"]], [-0.1]), "wall.friction",
+    raises(s, lambda: s.fmu.setInteger([s.vr["workpiece.particles[0]"]], [1]), "workpiece.particles[0]",
+           "at least 2 particles")
+    raises(s, lambda: s.fmu.setString([s.vr["discretization.integration"]], ["q3"]),
+           "discretization.integration", "q4")
+    raises(s, lambda: s.fmu.setReal([s.vr["time.dt_safety"]], [1.5]), "time.dt_safety",
+           "must lie in (0, 1]")
+    raises(s, lambda: s.fmu.setReal([s.vr["tools.wall.friction"]], [-0.1]), "tools.wall.friction",
            "zero or positive")
+    raises(s, lambda: s.fmu.setReal([s.vr["workpiece.particles[0]"]], [11.0]),
+           "workpiece.particles[0]", "not a Real variable")
     s.fmu.freeInstance()
 
 
@@ -235,12 +263,12 @@ def run_block(path, name, out):
     s.close()
 
 
-def test_two_instances_on_two_threads_match_sequential_runs(fmus):
+def test_two_instances_on_two_threads_match_sequential_runs(adaptive_fmus):
     seq = {}
-    run_block(fmus["block_forging"], "a", seq)
-    run_block(fmus["block_forging"], "b", seq)
+    run_block(adaptive_fmus["block_forging"], "a", seq)
+    run_block(adaptive_fmus["block_forging"], "b", seq)
     par = {}
-    threads = [threading.Thread(target=run_block, args=(fmus["block_forging"], n, par)) for n in "ab"]
+    threads = [threading.Thread(target=run_block, args=(adaptive_fmus["block_forging"], n, par)) for n in "ab"]
     for t in threads:
         t.start()
     for t in threads:
@@ -248,9 +276,9 @@ def test_two_instances_on_two_threads_match_sequential_runs(fmus):
     assert par["a"] == par["b"] == seq["a"] == seq["b"]
 
 
-def test_a_velocity_that_would_pass_particles_in_one_step_is_refused_naming_the_tool(fmus):
+def test_a_velocity_that_would_pass_particles_in_one_step_is_refused_naming_the_tool(adaptive_fmus):
     # 1e300 m/s used to take the top tool through the block with a force of 0.
-    s = Slave(fmus["block_forging"], params=COARSE)
+    s = Slave(adaptive_fmus["block_forging"], params=COARSE)
     s.set("top.velocity", 1e300)
     raises(s, lambda: s.step(20e-6), "tool `top`", "1.0000e300 m/s", "commanded")
     s.close()
@@ -267,7 +295,7 @@ def test_die_fill_and_contact_outputs_match_rkforge_run(fmus, rkforge_bin, tmp_p
         rows = list(csv.DictReader(f))
     names = ["die.contact_fraction", "punch.contact_fraction", "die.hub_corner.filled",
              "die.rim_corner.filled", "punch.hub_corner.filled", "punch.rim_corner.filled"]
-    s = Slave(fmus["wheel_forging"], params={"resolution.nx": 11, "resolution.ny": 11})
+    s = Slave(fmus["wheel_forging"], params=COARSE)
     assert s.get(*names) == [0.0] * len(names)
     h = float(rows[1]["time_s"])
     for row in rows[1:]:
@@ -275,3 +303,67 @@ def test_die_fill_and_contact_outputs_match_rkforge_run(fmus, rkforge_bin, tmp_p
         assert s.get(*names) == [float(row[n]) for n in names], row["time_s"]
     assert 0.0 < s.get("punch.contact_fraction")[0] < 1.0
     s.close()
+
+
+def parameters(md):
+    """The parameters of a model description: {name: (type, start)}."""
+    return {v.name: (v.type, v.start) for v in md.modelVariables if v.causality == "parameter"}
+
+
+def test_every_parameter_is_a_scene_key_settable_to_its_start(fmus):
+    """The FMU's parameters are the scene's own dotted keys (as `--set` takes them), every
+    number and enumeration of the scene; fmpy sets each to its start value, the instance
+    initialises, and reads back what was set."""
+    for scene, path in fmus.items():
+        md = read_model_description(path)
+        params = parameters(md)
+        assert {"time.end_s", "workpiece.particles[0]", "workpiece.particles[1]",
+                "discretization.integration", "material.youngs_modulus_pa"} <= set(params), scene
+        assert params["discretization.integration"][0] == "String"
+        assert params["workpiece.particles[0]"][0] == "Integer"
+        s = Slave(path, init=False)
+        s.fmu.setupExperiment(startTime=0.0)
+        for name, (kind, start) in params.items():
+            vr = [s.vr[name]]
+            {"Real": lambda: s.fmu.setReal(vr, [float(start)]),
+             "Integer": lambda: s.fmu.setInteger(vr, [int(start)]),
+             "String": lambda: s.fmu.setString(vr, [start])}[kind]()
+        for name, (kind, start) in params.items():
+            vr = [s.vr[name]]
+            got = {"Real": lambda: s.fmu.getReal(vr)[0], "Integer": lambda: s.fmu.getInteger(vr)[0],
+                   "String": lambda: s.fmu.getString(vr)[0].decode()}[kind]()
+            assert str(got) == start or float(got) == float(start), (scene, name, got, start)
+        s.fmu.enterInitializationMode()
+        s.fmu.exitInitializationMode()
+        s.close()
+    hub = parameters(read_model_description(fmus["closed_die_hub"]))
+    # A shear-factor tool's factor, under the law's own key.
+    assert hub["tools.punch.friction.m"] == ("Real", "0.1") and "tools.punch.friction" not in hub
+
+
+def test_a_shear_factor_set_through_the_fmu_gives_the_bits_of_the_scene_file(rkforge_bin, tmp_path):
+    """closed_die_hub (shear factor m = 0.1 on both tools): m = 0.3 on the punch set through
+    the FMU and m = 0.3 written in the scene give the same outputs, bit for bit."""
+    text = (ROOT / "scenes/closed_die_hub.toml").read_text()
+    lines = text.splitlines()
+    punch = lines.index('name = "punch"')
+    at = next(i for i in range(punch, len(lines)) if lines[i].startswith("friction ="))
+    lines[at] = 'friction = { model = "shear", m = 0.3 }'
+    paths = {}
+    for name, t in [("shipped", text), ("written", "\n".join(lines))]:
+        (tmp_path / f"{name}.toml").write_text(t)
+        paths[name] = str(tmp_path / f"{name}.fmu")
+        subprocess.run([rkforge_bin, "fmu", str(tmp_path / f"{name}.toml"), "--out", paths[name]],
+                       check=True, capture_output=True)
+    outputs = ["punch.force", "punch.stroke", "die.force", "workpiece.height", "energy.plastic"]
+    coarse = {**grid(9, 13), "time.end_s": 0.02}
+    set_through_fmu = simulate_fmu(paths["shipped"], stop_time=0.02, output_interval=2.0e-3,
+                                   start_values={**coarse, "tools.punch.friction.m": 0.3},
+                                   output=outputs)
+    written = simulate_fmu(paths["written"], stop_time=0.02, output_interval=2.0e-3,
+                           start_values=coarse, output=outputs)
+    shipped = simulate_fmu(paths["shipped"], stop_time=0.02, output_interval=2.0e-3,
+                           start_values=coarse, output=outputs)
+    assert set_through_fmu.tobytes() == written.tobytes()
+    # And it is a different run from the shipped m = 0.1 once the punch presses.
+    assert set_through_fmu.tobytes() != shipped.tobytes()

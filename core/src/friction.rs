@@ -13,6 +13,7 @@
 //! `friction = { model = "capped", mu = 0.2, m = 0.5 }`.
 
 use crate::math::Real;
+use schemars::JsonSchema;
 use serde::de::{self, Deserializer, MapAccess, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
 use std::fmt;
@@ -123,12 +124,41 @@ impl Friction {
 }
 
 /// The table form in scene files.
-#[derive(Serialize, Deserialize)]
+#[derive(Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
 enum Table {
-    Coulomb { mu: Real },
-    Shear { m: Real },
-    Capped { mu: Real, m: Real },
+    /// Coulomb: `tau = mu p`.
+    Coulomb {
+        /// Coulomb coefficient `mu` (-).
+        mu: Real,
+    },
+    /// Shear friction factor: `tau = m k`.
+    Shear {
+        /// Shear friction factor `m` (-), 0 to 1.
+        m: Real,
+    },
+    /// Coulomb capped by the shear friction factor: `tau = min(mu p, m k)`.
+    Capped {
+        /// Coulomb coefficient `mu` (-).
+        mu: Real,
+        /// Shear friction factor `m` (-), 0 to 1.
+        m: Real,
+    },
+}
+
+/// The scene's two forms: a number (a Coulomb coefficient) or a [`Table`].
+impl JsonSchema for Friction {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Friction".into()
+    }
+    fn json_schema(generator: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "anyOf": [
+                { "type": "number", "description": "Coulomb coefficient `mu` (-)" },
+                generator.subschema_for::<Table>(),
+            ]
+        })
+    }
 }
 
 impl Serialize for Friction {

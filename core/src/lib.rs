@@ -26,6 +26,7 @@ pub mod sampling;
 pub mod scene;
 pub mod scene_keys;
 pub mod scene_overrides;
+pub mod scene_parameters;
 mod scene_validate;
 pub mod solver;
 pub mod team;

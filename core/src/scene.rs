@@ -11,10 +11,11 @@ pub use crate::friction::Friction;
 use crate::material::Hardening;
 use crate::math::Real;
 use crate::scene_keys::{key_line, syntax_message};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// A whole scene.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Short name, used for output folders and FMU identifiers.
@@ -51,7 +52,7 @@ pub struct Scene {
 }
 
 /// Plane strain (x, y) or axisymmetric (r, z) kinematics.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Kinematics {
     /// Plane strain in (x, y); forces per `depth_m` of depth.
@@ -61,7 +62,7 @@ pub enum Kinematics {
 }
 
 /// The kinematic model.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Model {
     /// `plane_strain` or `axisymmetric`.
@@ -76,7 +77,7 @@ fn one() -> Real {
 }
 
 /// A rectangular workpiece filled with a regular grid of particles.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Workpiece {
     /// Lower-left corner (m).
@@ -91,7 +92,7 @@ pub struct Workpiece {
 }
 
 /// Material constants.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
     /// Mass density (kg/m^3).
@@ -105,7 +106,7 @@ pub struct MaterialSpec {
 }
 
 /// Background-cell integration rule.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum IntegrationRule {
     /// 2x2 Gauss rule per cell.
@@ -139,10 +140,11 @@ impl IntegrationRule {
 }
 
 /// Discretisation knobs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Discretization {
-    /// `q4` or `q2`.
+    /// Integration rule: `q4` (2x2 Gauss per cell), `q2` (the paper's two-point rule) or
+    /// `scni` (stabilized conforming nodal integration).
     #[serde(default)]
     pub integration: IntegrationRule,
     /// Kernel support radius per direction, in particle spacings (-).
@@ -171,7 +173,7 @@ impl Default for Discretization {
 }
 
 /// Time span and step.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TimeSpec {
     /// End time (s).
@@ -192,7 +194,7 @@ pub struct TimeSpec {
 /// of the mass). For rate-independent forming, where inertia is negligible, a factor `f^2`
 /// on the mass has the effect of running the tools `f` times faster; the run watches that
 /// inertia stays negligible (`checks.kinetic_to_internal_max`). One of the two keys.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MassScaling {
     /// Uniform: every particle's mass times `factor` (-), at least 1.
@@ -210,7 +212,7 @@ fn default_safety() -> Real {
 }
 
 /// A workpiece edge.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Edge {
     /// Particles with the smallest x.
@@ -247,7 +249,7 @@ impl Edge {
 }
 
 /// A displacement component.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Component {
     /// x (or r).
@@ -258,7 +260,7 @@ pub enum Component {
 
 /// The physical displacement component `fix` of the particles on `edge` stays zero
 /// (a symmetry plane). The axis r = 0 of an axisymmetric workpiece is added automatically.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ConstraintSpec {
     /// Which edge.
@@ -268,7 +270,7 @@ pub struct ConstraintSpec {
 }
 
 /// How a tool moves along its axis.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Motion {
     /// Does not move.
@@ -293,7 +295,7 @@ pub enum Motion {
 
 /// A rigid tool: a polyline; the workpiece lies on the left of its direction of travel
 /// (the segment normal is the tangent turned +90 degrees).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ToolSpec {
     /// Name, used in outputs (`<name>.force_N`) and interfaces.
@@ -326,7 +328,7 @@ fn default_separation() -> bool {
 
 /// A named point of a tool's surface: the material has reached it once a particle in
 /// contact with the tool lies within `output.fill_distance_rel` smallest spacings of it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FillPoint {
     /// Name, used in outputs (`<tool>.<name>.filled`).
@@ -336,7 +338,7 @@ pub struct FillPoint {
 }
 
 /// What is recorded.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
     /// Interval between rows of the time history (s); default: end time / 200
@@ -383,7 +385,7 @@ impl Default for OutputSpec {
 }
 
 /// Run-time checks.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Checks {
     /// Largest energy balance error, relative to the reference energy, before the run stops.
@@ -435,7 +437,7 @@ impl Default for Checks {
 }
 
 /// A published result to compare with: `values` maps summary keys to numbers.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Reference {
     /// Where the numbers come from.

@@ -172,12 +172,15 @@ fn build(text: &str, file: &str, overrides: &[(String, Value)]) -> Result<Scene>
     };
     let original: Table = toml::from_str(text).map_err(syntax)?;
     // The file alone must deserialise: its errors are reported with their lines.
-    toml::from_str::<Scene>(text).map_err(syntax)?;
+    let alone = toml::from_str::<Scene>(text).map_err(syntax)?;
+    // The file's scene with its defaults written out: an override inside a key the file
+    // leaves to its default (`workpiece.initial_velocity_m_per_s[0]`) starts from it.
+    let defaults = Table::try_from(&alone).unwrap_or_default();
     let mut doc = original.clone();
     let mut paths = Vec::with_capacity(overrides.len());
     let mut scene = None;
     for (key, value) in overrides {
-        paths.push(apply(&mut doc, key, value.clone())?);
+        paths.push(apply(&mut doc, &defaults, key, value.clone())?);
         // Deserialising after each override names the first one that breaks the scene.
         scene = Some(
             Scene::deserialize_table(doc.clone()).map_err(|message| Error::Override {
@@ -246,9 +249,10 @@ fn kind(v: &Value) -> &'static str {
     }
 }
 
-/// Set `key` in `doc` to `value`; returns the key's path in the form validation uses
-/// (`tools[0].friction`).
-fn apply(doc: &mut Table, key: &str, value: Value) -> Result<String> {
+/// Set `key` in `doc` to `value`; a key on the way that `doc` lacks is taken from `defaults`
+/// (the same scene with its defaults written out) when it has it, else an empty table.
+/// Returns the key's path in the form validation uses (`tools[0].friction`).
+fn apply(doc: &mut Table, defaults: &Table, key: &str, value: Value) -> Result<String> {
     let fail = |message: String| Error::Override {
         key: key.to_string(),
         message,
@@ -261,6 +265,7 @@ fn apply(doc: &mut Table, key: &str, value: Value) -> Result<String> {
     }
     let mut path = String::new();
     let mut table = doc;
+    let mut fallback = Some(defaults);
     let mut k = 0;
     loop {
         let (name, index) = split_part(parts[k]).map_err(&fail)?;
@@ -273,9 +278,13 @@ fn apply(doc: &mut Table, key: &str, value: Value) -> Result<String> {
             table.insert(name.to_string(), value);
             return Ok(path);
         }
-        let entry = table
-            .entry(name.to_string())
-            .or_insert_with(|| Value::Table(Table::new()));
+        let default = fallback.and_then(|t| t.get(name));
+        let entry = table.entry(name.to_string()).or_insert_with(|| {
+            default
+                .cloned()
+                .unwrap_or_else(|| Value::Table(Table::new()))
+        });
+        let mut default = default;
         let mut current = entry;
         if let Value::Array(items) = current {
             let i = match index {
@@ -305,6 +314,7 @@ fn apply(doc: &mut Table, key: &str, value: Value) -> Result<String> {
                 None => unreachable!("the last part without an index was set above"),
             };
             let count = items.len();
+            default = default.and_then(|d| d.as_array()?.get(i));
             path.push_str(&format!("[{i}]"));
             current = items
                 .get_mut(i)
@@ -320,6 +330,7 @@ fn apply(doc: &mut Table, key: &str, value: Value) -> Result<String> {
             Value::Table(t) => t,
             other => return Err(fail(format!("`{path}` is {}, not a table", kind(other)))),
         };
+        fallback = default.and_then(Value::as_table);
         k += 1;
     }
 }

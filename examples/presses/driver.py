@@ -35,6 +35,7 @@ from fmpy.logging import addLoggerProxy
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SCENE = ROOT / "scenes" / "press_upsetting.toml"
 RAM_LINE = "points_m = [[0.080, 0.060], [-0.002, 0.060]]"
+MASS_SCALING_LINE = "mass_scaling = { target_dt_s = 20.0e-6 }"
 
 
 class Slave:
@@ -60,6 +61,11 @@ class Slave:
         self.t = 0.0
         if init:
             self.fmu.setupExperiment(startTime=0.0)
+            unknown = [k for k in (params or {}) if k not in self.vr]
+            if unknown:
+                known = sorted(v.name for v in self.md.modelVariables if v.causality == "parameter")
+                raise ValueError(f"{path}: no parameter {', '.join(unknown)} (its parameters: "
+                                 f"{', '.join(known)})")
             for k, v in (params or {}).items():
                 if isinstance(v, str):
                     self.fmu.setString([self.vr[k]], [v])
@@ -88,13 +94,17 @@ class Slave:
         self.fmu.freeInstance()
 
 
-def upsetting_scene(ram_gap_m=0.0):
-    """The text of scenes/press_upsetting.toml with the ram `ram_gap_m` (m) above the billet."""
+def upsetting_scene(ram_gap_m=0.0, mass_scaling=True):
+    """The text of scenes/press_upsetting.toml with the ram `ram_gap_m` (m) above the billet;
+    without its selective mass scaling when `mass_scaling` is false (a key the scene leaves
+    out is no FMU parameter: the scene decides what is modelled)."""
     text = SCENE.read_text()
-    if text.count(RAM_LINE) != 1:
-        raise ValueError(f"{SCENE}: the ram line {RAM_LINE!r} is not there exactly once")
+    for line in [RAM_LINE] + ([] if mass_scaling else [MASS_SCALING_LINE]):
+        if text.count(line) != 1:
+            raise ValueError(f"{SCENE}: the line {line!r} is not there exactly once")
     y = 0.060 + ram_gap_m
-    return text.replace(RAM_LINE, f"points_m = [[0.080, {y!r}], [-0.002, {y!r}]]")
+    text = text.replace(RAM_LINE, f"points_m = [[0.080, {y!r}], [-0.002, {y!r}]]")
+    return text if mass_scaling else text.replace(MASS_SCALING_LINE + "\n", "")
 
 
 def rkforge_binary():
@@ -156,17 +166,20 @@ def read_outputs(slave):
     return Outputs(force=-f, stroke=s, tool_work=w, height=height, kinetic_to_internal_max=ratio)
 
 
-def fmu_params(nx, ny, factor=1.0, target_dt=0.0):
-    """FMU parameters: resolution (particles along r and z) and mass scaling (uniform
-    `factor`, or selective with the target step `target_dt` in s; 1 and 0 for none)."""
-    return {"resolution.nx": nx, "resolution.ny": ny, "mass_scaling.factor": factor,
-            "mass_scaling.target_dt": target_dt}
+def fmu_params(nx, ny, target_dt=None):
+    """FMU parameters, the scene's own keys: the particle grid (`workpiece.particles`, along
+    r and z) and, when given, the target step (s) of the scene's selective mass scaling
+    (`time.mass_scaling.target_dt_s`)."""
+    params = {"workpiece.particles[0]": nx, "workpiece.particles[1]": ny}
+    if target_dt is not None:
+        params["time.mass_scaling.target_dt_s"] = target_dt
+    return params
 
 
-def simulate(path, plant, h, t_max, nx, ny, factor=1.0, target_dt=0.0):
-    """`co_simulate` on a fresh instance of the FMU `path` with the given resolution and mass
-    scaling (see `fmu_params`)."""
-    slave = Slave(path, params=fmu_params(nx, ny, factor, target_dt))
+def simulate(path, plant, h, t_max, nx, ny, target_dt=None):
+    """`co_simulate` on a fresh instance of the FMU `path` with the given grid and mass
+    scaling target (see `fmu_params`)."""
+    slave = Slave(path, params=fmu_params(nx, ny, target_dt))
     try:
         return co_simulate(slave, plant, h, t_max)
     except FMICallException as e:
@@ -193,7 +206,7 @@ def argument_parser(doc, step, time, target_dt=None, ram_gap_m=0.0, nx=6, ny=16)
     when `target_dt` (s) is given as its default."""
     p = argparse.ArgumentParser(description=doc.split("\n\n")[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.set_defaults(ram_gap=ram_gap_m, target_dt=0.0)
+    p.set_defaults(ram_gap=ram_gap_m, target_dt=None)
     where = "on the billet" if ram_gap_m == 0 else f"{ram_gap_m * 1e3:g} mm above the billet"
     p.add_argument("--fmu", help=f"an FMU of scenes/press_upsetting.toml with the ram {where} "
                    "(built with `rkforge fmu` into a temporary directory when not given)")
@@ -204,7 +217,7 @@ def argument_parser(doc, step, time, target_dt=None, ram_gap_m=0.0, nx=6, ny=16)
                    help="largest press time (s); the press may finish earlier")
     if target_dt is not None:
         p.add_argument("--target-dt", type=float, default=target_dt,
-                       help="selective mass scaling: target solver step (s), 0 for none")
+                       help="selective mass scaling: target solver step (s)")
     p.add_argument("--csv", help="write the history to this CSV file")
     p.add_argument("--plot", help="plot force and speed against stroke into this image "
                    "(needs matplotlib)")
@@ -218,7 +231,8 @@ def script(parser, argv, make_plant, summarise, title):
     args = parser.parse_args(argv)
     plant = make_plant(args)
     with tempfile.TemporaryDirectory() as d:
-        path = args.fmu or build_fmu(upsetting_scene(args.ram_gap),
+        scaled = args.target_dt is not None
+        path = args.fmu or build_fmu(upsetting_scene(args.ram_gap, mass_scaling=scaled),
                                      pathlib.Path(d) / "press_upsetting.fmu")
         hist = simulate(path, plant, args.step, args.time, args.nx, args.ny,
                         target_dt=args.target_dt)

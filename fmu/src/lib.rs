@@ -7,9 +7,9 @@
 
 pub mod ffi;
 
-use rkforge_core::scene::MassScaling;
-use rkforge_core::{Error, IntegrationRule, Result, Scene, Simulation, State};
-use rkforge_model_description::{variable_table, xml, Binding, Causality, Variable};
+use rkforge_core::scene_parameters::{parameters, Parameter};
+use rkforge_core::{Error, Result, Scene, SceneSource, Simulation, State};
+use rkforge_model_description::{variable_table, xml, Binding, Causality, Kind, Variable};
 use serde::{Deserialize, Serialize};
 
 /// Where an instance is in the FMI 2.0 Co-Simulation state machine.
@@ -27,44 +27,9 @@ pub enum Phase {
     Failed,
 }
 
-/// The speed/accuracy knobs, settable before initialisation.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Params {
-    /// Integration rule.
-    pub integration: IntegrationRule,
-    /// Particles along x and y.
-    pub particles: [usize; 2],
-    /// Fraction of the stable step.
-    pub dt_safety: f64,
-    /// Fixed step (s), 0 for adaptive.
-    pub dt_fixed: f64,
-    /// Coulomb coefficient of each tool.
-    pub friction: Vec<f64>,
-    /// Uniform mass scaling factor, 1 for none.
-    pub mass_factor: f64,
-    /// Target step of selective mass scaling (s), 0 for none.
-    pub mass_target_dt: f64,
-}
-
-impl Params {
-    /// The scene's own values.
-    fn of(scene: &Scene) -> Params {
-        let scaling = scene.time.mass_scaling;
-        Params {
-            integration: scene.discretization.integration,
-            particles: scene.workpiece.particles,
-            dt_safety: scene.time.dt_safety,
-            dt_fixed: scene.time.dt_s.unwrap_or(0.0),
-            friction: scene
-                .tools
-                .iter()
-                .map(|t| t.friction.coefficient())
-                .collect(),
-            mass_factor: scaling.and_then(|m| m.factor).unwrap_or(1.0),
-            mass_target_dt: scaling.and_then(|m| m.target_dt_s).unwrap_or(0.0),
-        }
-    }
-}
+/// The values set on the scene's parameters, by parameter index
+/// ([`rkforge_core::scene_parameters::parameters`]); `None` keeps the scene's own.
+pub type Params = Vec<Option<toml::Value>>;
 
 /// A saved FMU state: everything needed to continue bit for bit, also in a fresh instance.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -79,7 +44,11 @@ pub struct Snapshot {
 
 /// One co-simulation instance.
 pub struct Instance {
+    /// The scene as packed, and its name in errors.
+    text: String,
+    label: String,
     scene: Scene,
+    parameters: Vec<Parameter>,
     guid: String,
     table: Vec<Variable>,
     params: Params,
@@ -97,13 +66,16 @@ impl Instance {
     /// An instance of the scene given as TOML text; `label` names it in errors.
     pub fn new(scene_text: &str, label: &str) -> Result<Instance> {
         let scene = Scene::from_str_named(scene_text, label)?;
-        let params = Params::of(&scene);
+        let parameters = parameters(&scene);
         Ok(Instance {
+            text: scene_text.to_string(),
+            label: label.to_string(),
             table: variable_table(&scene),
             guid: xml::guid(scene_text),
             commands: vec![None; scene.tools.len()],
+            params: vec![None; parameters.len()],
+            parameters,
             scene,
-            params,
             sim: None,
             phase: Phase::Instantiated,
             start_time: 0.0,
@@ -137,27 +109,41 @@ impl Instance {
             .ok_or_else(|| request(format!("unknown value reference {vr}")))
     }
 
-    /// The scene with the current parameters applied and validated.
+    /// The scene with `params` applied, as `--set` applies dotted keys, and validated by
+    /// the scene's own rules: an error names the key.
+    fn scene_with(&self, params: &Params) -> Result<Scene> {
+        let overrides = self
+            .parameters
+            .iter()
+            .zip(params)
+            .filter_map(|(p, v)| Some((p.key.clone(), v.clone()?)))
+            .collect();
+        Ok(
+            SceneSource::with_overrides(&self.text, &self.label, overrides)?
+                .scene()
+                .clone(),
+        )
+    }
+
+    /// The scene with the current parameters applied.
     fn configured_scene(&self) -> Result<Scene> {
-        let mut s = self.scene.clone();
-        s.discretization.integration = self.params.integration;
-        s.workpiece.particles = self.params.particles;
-        s.time.dt_safety = self.params.dt_safety;
-        s.time.dt_s = (self.params.dt_fixed > 0.0).then_some(self.params.dt_fixed);
-        for (t, f) in s.tools.iter_mut().zip(&self.params.friction) {
-            t.friction = t.friction.with_coefficient(*f);
-        }
-        let (factor, target) = (self.params.mass_factor, self.params.mass_target_dt);
-        s.time.mass_scaling = (factor != 1.0 || target > 0.0).then_some(MassScaling {
-            factor: (factor != 1.0).then_some(factor),
-            target_dt_s: (target > 0.0).then_some(target),
-        });
-        if let Some((key, msg)) = s.validate().into_iter().next() {
-            return Err(request(format!(
-                "parameters give an invalid scene: `{key}`: {msg}"
-            )));
-        }
-        Ok(s)
+        self.scene_with(&self.params)
+    }
+
+    /// Set parameter `k` (the variable `v`) to `value` if the scene it gives is valid.
+    fn set_parameter(&mut self, v: &Variable, k: usize, value: toml::Value) -> Result<()> {
+        let mut params = self.params.clone();
+        params[k] = Some(value.clone());
+        self.scene_with(&params)
+            .map_err(|e| request(format!("`{}` = {value}: {e}", v.name)))?;
+        self.params = params;
+        self.sim = None;
+        Ok(())
+    }
+
+    /// The current value of parameter `k`.
+    fn parameter(&self, k: usize) -> &toml::Value {
+        self.params[k].as_ref().unwrap_or(&self.parameters[k].start)
     }
 
     fn build(&mut self) -> Result<()> {
@@ -218,7 +204,7 @@ impl Instance {
 
     /// `fmi2Reset`: back to the freshly instantiated state with the scene's own values.
     pub fn reset(&mut self) {
-        self.params = Params::of(&self.scene);
+        self.params = vec![None; self.parameters.len()];
         self.commands = vec![None; self.scene.tools.len()];
         self.sim = None;
         self.phase = Phase::Instantiated;
@@ -247,7 +233,15 @@ impl Instance {
     /// `fmi2GetReal`.
     pub fn get_real(&mut self, vr: u32) -> Result<f64> {
         let binding = self.variable(vr)?.binding;
-        let (params, commands) = (self.params.clone(), self.commands.clone());
+        if let Binding::Parameter(k) = binding {
+            return match self.parameter(k) {
+                toml::Value::Float(x) => Ok(*x),
+                _ => Err(request(format!(
+                    "value reference {vr} is not a Real variable"
+                ))),
+            };
+        }
+        let commands = self.commands.clone();
         let sim = self.readable_sim()?;
         let tools = sim.tools();
         Ok(match binding {
@@ -271,24 +265,20 @@ impl Instance {
             Binding::PlasticEnergy => sim.energy().plastic,
             Binding::ToolWork => sim.energy().tool_work,
             Binding::KineticToInternalMax => sim.kinetic_to_internal_max(),
-            Binding::MassScalingFactor => params.mass_factor,
-            Binding::MassScalingTarget => params.mass_target_dt,
-            Binding::DtSafety => params.dt_safety,
-            Binding::DtFixed => params.dt_fixed,
-            Binding::Friction(k) => params.friction[k],
-            Binding::Integration | Binding::ParticlesX | Binding::ParticlesY => {
-                return Err(request(format!(
-                    "value reference {vr} is not a Real variable"
-                )))
-            }
+            Binding::Parameter(_) => unreachable!("answered above"),
         })
     }
 
     /// `fmi2GetInteger`.
     pub fn get_integer(&mut self, vr: u32) -> Result<i32> {
         match self.variable(vr)?.binding {
-            Binding::ParticlesX => Ok(self.params.particles[0] as i32),
-            Binding::ParticlesY => Ok(self.params.particles[1] as i32),
+            Binding::Parameter(k) => match self.parameter(k) {
+                toml::Value::Integer(i) => i32::try_from(*i)
+                    .map_err(|_| request(format!("value reference {vr}: {i} overflows"))),
+                _ => Err(request(format!(
+                    "value reference {vr} is not an Integer variable"
+                ))),
+            },
             _ => Err(request(format!(
                 "value reference {vr} is not an Integer variable"
             ))),
@@ -298,7 +288,12 @@ impl Instance {
     /// `fmi2GetString`.
     pub fn get_string(&mut self, vr: u32) -> Result<String> {
         match self.variable(vr)?.binding {
-            Binding::Integration => Ok(self.params.integration.name().to_string()),
+            Binding::Parameter(k) => match self.parameter(k) {
+                toml::Value::String(s) => Ok(s.clone()),
+                _ => Err(request(format!(
+                    "value reference {vr} is not a String variable"
+                ))),
+            },
             _ => Err(request(format!(
                 "value reference {vr} is not a String variable"
             ))),
@@ -336,72 +331,43 @@ impl Instance {
                 v.name
             )));
         }
-        match v.binding {
-            Binding::ToolVelocity(k) => {
+        match (v.binding, &v.kind) {
+            (Binding::ToolVelocity(k), _) => {
                 self.commands[k] = Some(value);
                 if let Some(sim) = self.sim.as_mut() {
                     sim.set_tool_velocity(k, value)?;
                 }
-                return Ok(());
+                Ok(())
             }
-            Binding::DtSafety if value > 0.0 && value <= 1.0 => self.params.dt_safety = value,
-            Binding::DtFixed if value >= 0.0 => self.params.dt_fixed = value,
-            Binding::Friction(k) => {
-                let law = self.scene.tools[k].friction.with_coefficient(value);
-                if let Some((_, why)) = law.validate().into_iter().next() {
-                    return Err(request(format!("`{}` = {value}: {why}", v.name)));
-                }
-                self.params.friction[k] = value
+            (Binding::Parameter(k), Kind::Real(_)) => {
+                self.set_parameter(&v, k, toml::Value::Float(value))
             }
-            Binding::MassScalingFactor if value >= 1.0 => self.params.mass_factor = value,
-            Binding::MassScalingTarget if value >= 0.0 => self.params.mass_target_dt = value,
-            Binding::DtSafety
-            | Binding::DtFixed
-            | Binding::MassScalingFactor
-            | Binding::MassScalingTarget => {
-                return Err(request(format!("`{}` = {value} is out of range", v.name)))
-            }
-            _ => return Err(request(format!("`{}` is not a Real variable", v.name))),
+            _ => Err(request(format!("`{}` is not a Real variable", v.name))),
         }
-        self.sim = None;
-        Ok(())
     }
 
-    /// `fmi2SetInteger`: the resolution parameters.
+    /// `fmi2SetInteger`: an Integer parameter (`workpiece.particles[0]`).
     pub fn set_integer(&mut self, vr: u32, value: i32) -> Result<()> {
         let v = self.variable(vr)?.clone();
         self.settable(&v)?;
-        let k = match v.binding {
-            Binding::ParticlesX => 0,
-            Binding::ParticlesY => 1,
-            _ => return Err(request(format!("`{}` is not an Integer variable", v.name))),
-        };
-        if !(2..=4000).contains(&value) {
-            return Err(request(format!(
-                "`{}` = {value} must lie in [2, 4000]",
-                v.name
-            )));
+        match (v.binding, &v.kind) {
+            (Binding::Parameter(k), Kind::Integer(_)) => {
+                self.set_parameter(&v, k, toml::Value::Integer(value.into()))
+            }
+            _ => Err(request(format!("`{}` is not an Integer variable", v.name))),
         }
-        self.params.particles[k] = value as usize;
-        self.sim = None;
-        Ok(())
     }
 
-    /// `fmi2SetString`: the integration rule.
+    /// `fmi2SetString`: an enumerated parameter (`discretization.integration`).
     pub fn set_string(&mut self, vr: u32, value: &str) -> Result<()> {
         let v = self.variable(vr)?.clone();
         self.settable(&v)?;
-        if v.binding != Binding::Integration {
-            return Err(request(format!("`{}` is not a String variable", v.name)));
+        match (v.binding, &v.kind) {
+            (Binding::Parameter(k), Kind::String(_)) => {
+                self.set_parameter(&v, k, toml::Value::String(value.into()))
+            }
+            _ => Err(request(format!("`{}` is not a String variable", v.name))),
         }
-        self.params.integration = IntegrationRule::parse(value).ok_or_else(|| {
-            request(format!(
-                "`{}` = \"{value}\": expected \"q4\", \"q2\" or \"scni\"",
-                v.name
-            ))
-        })?;
-        self.sim = None;
-        Ok(())
     }
 
     /// `fmi2DoStep` from the communication point `t` (s) by `h` (s), sub-cycled at the
@@ -546,7 +512,8 @@ mod tests {
         assert!(inst.set_real(vel, f64::NAN).is_err());
         assert!(inst.set_real(vr(&inst, "wall.force"), 1.0).is_err());
         assert!(
-            inst.set_integer(vr(&inst, "resolution.nx"), 9).is_err(),
+            inst.set_integer(vr(&inst, "workpiece.particles[0]"), 9)
+                .is_err(),
             "parameter after initialisation"
         );
         inst.do_step(0.0, 1e-6).unwrap();
@@ -568,9 +535,21 @@ mod tests {
     #[test]
     fn parameters_change_the_discretisation() {
         let mut i = Instance::new(&scene_text(), "t").unwrap();
-        i.set_integer(vr(&i, "resolution.nx"), 5).unwrap();
-        i.set_string(vr(&i, "integration"), "q4").unwrap();
-        assert!(i.set_string(vr(&i, "integration"), "q3").is_err());
+        i.set_integer(vr(&i, "workpiece.particles[0]"), 5).unwrap();
+        i.set_string(vr(&i, "discretization.integration"), "q4")
+            .unwrap();
+        let err = i
+            .set_string(vr(&i, "discretization.integration"), "q3")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("`discretization.integration`") && err.contains("q4"),
+            "{err}"
+        );
+        assert_eq!(
+            i.get_string(vr(&i, "discretization.integration")).unwrap(),
+            "q4"
+        );
         i.enter_initialization().unwrap();
         i.exit_initialization().unwrap();
         let sim = i.simulation().unwrap();
@@ -578,29 +557,51 @@ mod tests {
         assert_eq!(sim.point_count(), 4 * 4 * 14);
     }
 
-    /// `mass_scaling.factor` multiplies the masses (the critical step by its square root);
-    /// a factor below 1 is refused, and a factor together with a target step gives an
-    /// invalid scene at initialisation, naming the key.
+    /// A parameter is the scene key: the same value set through the FMU and written in the
+    /// scene give the same scene; a bad value is refused at once with the key's name and
+    /// the scene's own message, and the instance keeps its previous value.
+    #[test]
+    fn parameters_are_scene_keys_validated_by_the_scene() {
+        let shear = scene_text().replace(
+            "friction = 0.0",
+            "friction = { model = \"shear\", m = 0.5 }",
+        );
+        let mut i = Instance::new(&shear, "t").unwrap();
+        let m = vr(&i, "tools.wall.friction.m");
+        let err = i.set_real(m, 1.5).unwrap_err().to_string();
+        assert!(
+            err.contains("`tools.wall.friction.m`") && err.contains("between 0 and 1"),
+            "{err}"
+        );
+        assert_eq!(i.get_real(m).unwrap(), 0.5);
+        i.set_real(m, 0.25).unwrap();
+        let written = shear.replace("m = 0.5", "m = 0.25");
+        assert_eq!(
+            i.configured_scene().unwrap(),
+            Scene::from_str_named(&written, "t").unwrap()
+        );
+    }
+
+    /// `time.mass_scaling.factor`, a key of a scene with mass scaling, multiplies the
+    /// masses (the critical step by its square root); a factor below 1 is refused, naming
+    /// the key.
     #[test]
     fn mass_scaling_parameters_scale_the_masses() {
         let plain = ready();
-        let mut i = Instance::new(&scene_text(), "t").unwrap();
-        let (factor, target) = (
-            vr(&i, "mass_scaling.factor"),
-            vr(&i, "mass_scaling.target_dt"),
-        );
-        assert!(i.set_real(factor, 0.5).is_err());
+        let scaled = scene_text().replace("[time]\n", "[time]\nmass_scaling = { factor = 2.0 }\n");
+        let mut i = Instance::new(&scaled, "t").unwrap();
+        let factor = vr(&i, "time.mass_scaling.factor");
+        let err = i.set_real(factor, 0.5).unwrap_err().to_string();
+        assert!(err.contains("`time.mass_scaling.factor`"), "{err}");
         i.set_real(factor, 100.0).unwrap();
         i.enter_initialization().unwrap();
         i.exit_initialization().unwrap();
         let (a, b) = (plain.simulation().unwrap(), i.simulation().unwrap());
         assert!((b.total_mass() / a.total_mass() - 100.0).abs() < 1e-9);
         assert!((b.critical_dt0() / a.critical_dt0() - 10.0).abs() < 1e-4);
-        let mut both = Instance::new(&scene_text(), "t").unwrap();
-        both.set_real(factor, 4.0).unwrap();
-        both.set_real(target, 1e-7).unwrap();
-        both.enter_initialization().unwrap();
-        let err = both.exit_initialization().unwrap_err().to_string();
-        assert!(err.contains("`time.mass_scaling`"), "{err}");
+        assert!(!plain
+            .variables()
+            .iter()
+            .any(|v| v.name.starts_with("time.mass_scaling")));
     }
 }

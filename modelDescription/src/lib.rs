@@ -2,14 +2,17 @@
 //!
 //! Variables are named after the scene's tools: `<tool>.velocity` (input, m/s, for every
 //! tool that is not fixed), `<tool>.force` and `<tool>.stroke` (outputs); the workpiece's
-//! extents, largest plastic strain and energies are outputs; the speed/accuracy knobs are
-//! parameters. Value references are assigned in table order, so the same scene always gives
+//! extents, largest plastic strain and energies are outputs; the parameters are the scene's
+//! own keys under their dotted names (`discretization.integration`, `workpiece.particles[0]`,
+//! `tools.top.friction`), as the scene's schema lists them
+//! ([`rkforge_core::scene_parameters`]). Value references are assigned in table order, so the same scene always gives
 //! the same table. The same table is meant to drive `modelDescription.xml` and the FMU's
 //! getters and setters, so the two cannot drift.
 
 pub mod xml;
 
-use rkforge_core::scene::{Friction, Kinematics, Motion, Scene};
+use rkforge_core::scene::{Kinematics, Motion, Scene};
+use rkforge_core::scene_parameters::{parameters, ParameterKind};
 
 /// FMI 2.0 causality.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -71,22 +74,9 @@ pub enum Binding {
     ToolWork,
     /// Largest kinetic-to-internal energy ratio after the start-up (-).
     KineticToInternalMax,
-    /// Integration rule name (`q4` or `q2`).
-    Integration,
-    /// Particles along x (or r).
-    ParticlesX,
-    /// Particles along y (or z).
-    ParticlesY,
-    /// Time-step safety factor (-).
-    DtSafety,
-    /// Fixed time step (s); 0 for `dt_safety` times the stable step.
-    DtFixed,
-    /// Uniform mass scaling factor (-); 1 for none.
-    MassScalingFactor,
-    /// Target step of selective mass scaling (s); 0 for none.
-    MassScalingTarget,
-    /// Coulomb coefficient of tool `k` (-).
-    Friction(usize),
+    /// Parameter `k` of the scene ([`rkforge_core::scene_parameters::parameters`]): a
+    /// scene key under its dotted name.
+    Parameter(usize),
 }
 
 /// One row of the table.
@@ -266,91 +256,43 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
             b,
         );
     }
-    push(
-        "integration".into(),
-        Parameter,
-        Fixed,
-        Kind::String(Some(scene.discretization.integration.name().into())),
-        None,
-        "integration rule: q4 (2x2 Gauss), q2 (two-point) or scni (nodal)".into(),
-        Binding::Integration,
-    );
-    let [nx, ny] = scene.workpiece.particles;
-    push(
-        "resolution.nx".into(),
-        Parameter,
-        Fixed,
-        Kind::Integer(Some(nx as i32)),
-        None,
-        "particles along x (r)".into(),
-        Binding::ParticlesX,
-    );
-    push(
-        "resolution.ny".into(),
-        Parameter,
-        Fixed,
-        Kind::Integer(Some(ny as i32)),
-        None,
-        "particles along y (z)".into(),
-        Binding::ParticlesY,
-    );
-    push(
-        "dt_safety".into(),
-        Parameter,
-        Fixed,
-        Kind::Real(Some(scene.time.dt_safety)),
-        None,
-        "fraction of the stable time step".into(),
-        Binding::DtSafety,
-    );
-    push(
-        "dt_fixed".into(),
-        Parameter,
-        Fixed,
-        Kind::Real(Some(scene.time.dt_s.unwrap_or(0.0))),
-        Some("s"),
-        "fixed time step; 0 for dt_safety times the stable step".into(),
-        Binding::DtFixed,
-    );
-    let scaling = scene.time.mass_scaling;
-    push(
-        "mass_scaling.factor".into(),
-        Parameter,
-        Fixed,
-        Kind::Real(Some(scaling.and_then(|m| m.factor).unwrap_or(1.0))),
-        None,
-        "uniform mass scaling factor; 1 for none".into(),
-        Binding::MassScalingFactor,
-    );
-    push(
-        "mass_scaling.target_dt".into(),
-        Parameter,
-        Fixed,
-        Kind::Real(Some(scaling.and_then(|m| m.target_dt_s).unwrap_or(0.0))),
-        Some("s"),
-        "target step of selective mass scaling; 0 for none".into(),
-        Binding::MassScalingTarget,
-    );
-    for (k, tool) in scene.tools.iter().enumerate() {
+    for (k, p) in parameters(scene).into_iter().enumerate() {
+        if writes_files_only(&p.key) {
+            continue;
+        }
+        let kind = match (&p.kind, &p.start) {
+            (ParameterKind::Integer, toml::Value::Integer(i)) => {
+                Kind::Integer(i32::try_from(*i).ok())
+            }
+            (ParameterKind::Enumeration(_), toml::Value::String(s)) => {
+                Kind::String(Some(s.clone()))
+            }
+            (_, v) => Kind::Real(v.as_float()),
+        };
+        let description = match &p.kind {
+            ParameterKind::Enumeration(names) => {
+                format!("{} (one of: {})", p.description, names.join(", "))
+            }
+            _ => p.description,
+        };
         push(
-            format!("{}.friction", tool.name),
+            p.key,
             Parameter,
             Fixed,
-            Kind::Real(Some(tool.friction.coefficient())),
-            None,
-            format!(
-                "friction of tool {}: {}",
-                tool.name,
-                match tool.friction {
-                    Friction::Shear { .. } => "shear friction factor m (tau = m k)",
-                    Friction::Capped { .. } => "Coulomb coefficient mu, capped by m k",
-                    Friction::Coulomb { .. } => "Coulomb coefficient mu",
-                }
-            ),
-            Binding::Friction(k),
+            kind,
+            p.unit,
+            description,
+            Binding::Parameter(k),
         );
     }
     t
+}
+
+/// Keys that only shape the files `rkforge run` writes (frames, the history's rows and
+/// faces), which an FMU does not write: no parameters. `output.fill_distance_rel` decides
+/// the fill outputs and stays one.
+fn writes_files_only(key: &str) -> bool {
+    key.starts_with("output.") && key != "output.fill_distance_rel"
 }
 
 #[cfg(test)]
@@ -448,12 +390,17 @@ mod tests {
     #[test]
     fn knobs_are_parameters_with_the_scene_as_start() {
         let t = variable_table(&scene());
-        let i = t.iter().find(|v| v.name == "integration").unwrap();
+        let i = t
+            .iter()
+            .find(|v| v.name == "discretization.integration")
+            .unwrap();
         assert_eq!(i.kind, Kind::String(Some("q2".into())));
         assert!(t
             .iter()
             .filter(|v| v.causality == Causality::Parameter)
             .all(|v| v.variability == Variability::Fixed));
         assert!(t.iter().any(|v| v.name == "workpiece.radius"));
+        assert!(t.iter().any(|v| v.name == "time.end_s"));
+        assert!(!t.iter().any(|v| v.name == "output.frames"));
     }
 }

@@ -2,10 +2,11 @@
 
 use crate::lanes;
 use crate::math::Real;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Flow stress `sigma_y(eps_p)` (Pa) as a function of equivalent plastic strain (-).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Hardening {
     /// Linear: `sigma_y = sigma_y0 + H eps_p` (paper Table 2: 400 MPa, H = 100 MPa).
