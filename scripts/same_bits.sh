@@ -30,7 +30,7 @@ cases="taylor scenes/taylor_bar.toml [11,26] 40.0e-6 1
 taylor_adaptive scenes/taylor_bar.toml [11,26] 40.0e-6 0
 block scenes/block_forging.toml [11,11] 0.015 1
 wheel scenes/wheel_forging.toml [15,15] 1.0e-3 1
-hub scenes/closed_die_hub.toml [9,25] 0.03 1
+hub scenes/closed_die_hub.toml [11,31] 0.03 1
 ring scenes/ring_compression.toml [11,7] 1.025e-3 1
 upsetting scenes/press_upsetting.toml [6,16] 0.3 1
 block_press scenes/block_forging_press.toml [11,11] 1.0 1

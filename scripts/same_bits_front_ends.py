@@ -6,8 +6,8 @@ For each case (a coarse shipped scene and rule) and each build, with this interp
   build's wheel): the summary (less the wall and stage times) and the history's bytes;
 - FMU: the scene packed by DIR/rkforge fmu, simulated by fmpy over the scene's end time at
   its history interval with the rule set through the FMU's parameter: every output's bytes;
-- ROS: DIR/rkforge-ros --record, uncompressed: every message's topic, log time and bytes,
-  and the embedded summary (less the wall times and the node's own figures).
+- ROS: DIR/rkforge-ros --record, uncompressed: every message's topic, log time and bytes;
+  and, apart, the embedded summary (less the wall times and the node's own figures).
 Prints one line per case and front end; exit status 1 when any differs.
 """
 import hashlib
@@ -65,6 +65,7 @@ def fmu_variables(fmu):
 
 
 def ros_run(build, scene, rule, work, domain):
+    """The recording's messages and its embedded summary, each as a digest."""
     from mcap.reader import make_reader
     rec = work / f"{pathlib.Path(build).name}-{scene.stem}-{rule}.mcap"
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
@@ -73,14 +74,14 @@ def ros_run(build, scene, rule, work, domain):
                     f"discretization.integration=\"{rule}\""],
                    env=env, check=True, capture_output=True, timeout=600)
     with open(rec, "rb") as f:
-        reader = make_reader(f)
-        messages = [(c.topic, m.log_time, bytes(m.data)) for _, c, m in reader.iter_messages()]
+        messages = [(c.topic, m.log_time, bytes(m.data))
+                    for _, c, m in make_reader(f).iter_messages()]
     with open(rec, "rb") as f:
         meta = {m.name: dict(m.metadata) for m in make_reader(f).iter_metadata()}
     summary = json.loads(meta["rkforge_summary"]["summary_json"])
     summary = {k: v for k, v in summary.items() if k not in VOLATILE}
-    return digest(json.dumps(summary, sort_keys=True), *[b"".join(
-        [t.encode(), str(lt).encode(), d]) for t, lt, d in messages]) + f" ({len(messages)} messages)"
+    return (digest(*[t.encode() + str(lt).encode() + d for t, lt, d in messages])
+            + f" ({len(messages)} messages)", digest(json.dumps(summary, sort_keys=True)))
 
 
 def main(old, new, cases):
@@ -90,12 +91,15 @@ def main(old, new, cases):
         domain = 180
         for scene, rule in cases:
             scene = pathlib.Path(scene)
-            fronts = {"fmu": lambda b: fmu_run(b, scene, rule, work),
-                      "ros": lambda b: ros_run(b, scene, rule, work, domain)}
-            if all((pathlib.Path(b) / "same_bits_python").is_dir() for b in (old, new)):
-                fronts["python"] = lambda b: python_run(b, scene, rule)
-            for name, front in fronts.items():
-                a, b = front(old), front(new)
+            results = {}
+            for b in (old, new):
+                ros = ros_run(b, scene, rule, work, domain)
+                results[b] = {"fmu": fmu_run(b, scene, rule, work), "ros messages": ros[0],
+                              "ros summary": ros[1]}
+                if all((pathlib.Path(d) / "same_bits_python").is_dir() for d in (old, new)):
+                    results[b]["python"] = python_run(b, scene, rule)
+            for name in results[new]:
+                a, b = results[old][name], results[new][name]
                 tag = f"{name} {scene.stem} {rule}"
                 if a == b:
                     print(f"same bits: {tag} {b}")
