@@ -1,11 +1,13 @@
-//! `rkforge fmu SCENE --out FILE.fmu`: one FMI 2.0 Co-Simulation FMU per scene.
+//! `rkforge fmu SCENE --out FILE.fmu [--fmi 3]`: one FMI 2.0 (default) or FMI 3.0
+//! Co-Simulation FMU per scene.
 //!
 //! The archive holds `modelDescription.xml` (written from the scene's variable table),
-//! `binaries/linux64/<modelIdentifier>.so` (the `rkforge-fmu` shared library), the scene in
-//! `resources/scene.toml` and `documentation/index.html`.
+//! the `rkforge-fmu` shared library (it exports both APIs) as
+//! `binaries/linux64/<modelIdentifier>.so` (2.0) or `binaries/x86_64-linux/...` (3.0), the
+//! scene in `resources/scene.toml` and `documentation/index.html`.
 
 use rkforge_core::Scene;
-use rkforge_model_description::{variable_table, xml};
+use rkforge_model_description::{variable_table, xml, xml3};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -43,7 +45,11 @@ fn shared_library() -> Result<PathBuf, String> {
     }
 }
 
-fn documentation(scene: &Scene, vars: &[rkforge_model_description::Variable]) -> String {
+fn documentation(
+    scene: &Scene,
+    vars: &[rkforge_model_description::Variable],
+    version: Version,
+) -> String {
     let rows: String = vars
         .iter()
         .map(|v| {
@@ -60,19 +66,43 @@ fn documentation(scene: &Scene, vars: &[rkforge_model_description::Variable]) ->
     format!(
         "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{name}</title></head><body>\n\
          <h1>{name}: rkforge FMU</h1>\n<p>{desc}</p>\n\
-         <p>FMI 2.0 Co-Simulation of an RKPM forging/impact scene. Inputs are tool velocities along\n\
+         <p>FMI {fmi} Co-Simulation of an RKPM forging/impact scene. Inputs are tool velocities along\n\
          each tool's axis (m/s); outputs are tool forces along the axis (N, exerted by the workpiece,\n\
          positive along +axis) and strokes (m). Any communication step is accepted and sub-cycled at\n\
          the solver's stable step. The scene is in resources/scene.toml.</p>\n\
          <table border=\"1\"><tr><th>variable</th><th>causality</th><th>unit</th><th>start</th><th>description</th></tr>\n{rows}</table>\n\
          </body></html>\n",
         name = scene.name,
-        desc = scene.description
+        desc = scene.description,
+        fmi = match version {
+            Version::Fmi2 => "2.0",
+            Version::Fmi3 => "3.0",
+        }
     )
 }
 
+/// The FMI version of an FMU.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Version {
+    /// FMI 2.0 Co-Simulation.
+    Fmi2,
+    /// FMI 3.0 Co-Simulation.
+    Fmi3,
+}
+
+impl Version {
+    /// From `--fmi`: "3" is FMI 3.0, anything else (clap allows "2") FMI 2.0.
+    pub fn from_arg(arg: &str) -> Version {
+        if arg == "3" {
+            Version::Fmi3
+        } else {
+            Version::Fmi2
+        }
+    }
+}
+
 /// Write the FMU of the scene file `scene_path` to `out`; returns the model identifier.
-pub fn pack(scene_path: &Path, out: &Path) -> Result<String, String> {
+pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, String> {
     let text = std::fs::read_to_string(scene_path)
         .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
     let scene = Scene::from_str_named(&text, &scene_path.display().to_string())
@@ -96,7 +126,10 @@ pub fn pack(scene_path: &Path, out: &Path) -> Result<String, String> {
         stop_time: scene.time.end_s,
         step_size: scene.history_interval(),
     };
-    let md = xml::write(&header, &vars)?;
+    let (md, platform) = match version {
+        Version::Fmi2 => (xml::write(&header, &vars)?, "linux64"),
+        Version::Fmi3 => (xml3::write(&header, &vars)?, "x86_64-linux"),
+    };
     let lib =
         std::fs::read(shared_library()?).map_err(|e| format!("cannot read {LIBRARY}: {e}"))?;
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -108,10 +141,10 @@ pub fn pack(scene_path: &Path, out: &Path) -> Result<String, String> {
     let mut zip = zip::ZipWriter::new(file);
     let opts = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated);
-    let doc = documentation(&scene, &vars);
+    let doc = documentation(&scene, &vars, version);
     let entries: [(String, &[u8]); 4] = [
         ("modelDescription.xml".into(), md.as_bytes()),
-        (format!("binaries/linux64/{id}.so"), &lib),
+        (format!("binaries/{platform}/{id}.so"), &lib),
         ("resources/scene.toml".into(), text.as_bytes()),
         ("documentation/index.html".into(), doc.as_bytes()),
     ];

@@ -97,6 +97,9 @@ struct FmuArgs {
     /// The .fmu file to write.
     #[arg(long)]
     out: PathBuf,
+    /// FMI version: 2 (FMI 2.0 Co-Simulation) or 3 (FMI 3.0 Co-Simulation).
+    #[arg(long, default_value = "2", value_parser = clap::builder::PossibleValuesParser::new(["2", "3"]))]
+    fmi: String,
 }
 
 #[derive(clap::Args)]
@@ -155,7 +158,7 @@ fn main() -> ExitCode {
         Some(Command::Compare(a)) => compare_command(a),
         Some(Command::Sweep(a)) => sweep_command(a),
         Some(Command::RingChart(a)) => ring_chart_command(a),
-        Some(Command::Fmu(a)) => fmu::pack(&a.scene, &a.out)
+        Some(Command::Fmu(a)) => fmu::pack(&a.scene, &a.out, fmu::Version::from_arg(&a.fmi))
             .map(|id| println!("wrote {} (model identifier {id})", a.out.display())),
     };
     match result {

@@ -7,22 +7,13 @@
 
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
-use crate::{Instance, Phase, Snapshot};
-use std::ffi::{c_char, c_int, c_uint, c_void, CStr, CString};
+use crate::{Instance, Phase};
+use std::ffi::{c_char, c_int, c_uint, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-/// `fmi2Status`.
+/// `fmi2Status` (the same codes as `fmi3Status`, [`crate::host`]).
 pub type fmi2Status = c_int;
-/// `fmi2OK`.
-pub const OK: fmi2Status = 0;
-/// `fmi2Warning`.
-pub const WARNING: fmi2Status = 1;
-/// `fmi2Discard`.
-pub const DISCARD: fmi2Status = 2;
-/// `fmi2Error`.
-pub const ERROR: fmi2Status = 3;
-/// `fmi2Fatal`.
-pub const FATAL: fmi2Status = 4;
+use crate::host::{self, slice, slice_mut, text, Host, DISCARD, ERROR, OK, WARNING};
 
 type Env = *mut c_void;
 type Logger =
@@ -78,69 +69,25 @@ impl Component {
             };
         }
     }
+}
 
+impl Host for Component {
+    fn instance(&mut self) -> &mut Instance {
+        &mut self.instance
+    }
     fn fail(&self, status: fmi2Status, message: &str) -> fmi2Status {
         self.log(status, message);
         status
     }
 }
 
-/// Run `body` on the component behind `c`, catching panics and turning errors into a
-/// logged `fmi2Error`.
+/// [`host::with`] on an FMI 2.0 [`Component`].
 fn with(
     c: *mut c_void,
     what: &str,
     body: impl FnOnce(&mut Component) -> Result<fmi2Status, String>,
 ) -> fmi2Status {
-    if c.is_null() {
-        return ERROR;
-    }
-    // SAFETY: a non-null component is a pointer returned by fmi2Instantiate and not yet freed
-    // (the host's duty under the FMI standard); only one call uses it at a time.
-    let comp = unsafe { &mut *(c as *mut Component) };
-    match catch_unwind(AssertUnwindSafe(|| body(comp))) {
-        Ok(Ok(status)) => status,
-        Ok(Err(msg)) => comp.fail(ERROR, &format!("{what}: {msg}")),
-        Err(p) => {
-            let why = p
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| p.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "unknown panic".into());
-            comp.fail(FATAL, &format!("{what}: internal error (panic): {why}"))
-        }
-    }
-}
-
-/// A slice from a host pointer and length, refusing a null pointer with a non-zero length.
-unsafe fn slice<'a, T>(p: *const T, n: usize, name: &str) -> Result<&'a [T], String> {
-    if n == 0 {
-        return Ok(&[]);
-    }
-    if p.is_null() {
-        return Err(format!("{name} is a null pointer for {n} values"));
-    }
-    // SAFETY: the host promises `n` readable values at `p` (FMI 2.0, 2.1.7).
-    Ok(unsafe { std::slice::from_raw_parts(p, n) })
-}
-
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize, name: &str) -> Result<&'a mut [T], String> {
-    if n == 0 {
-        return Ok(&mut []);
-    }
-    if p.is_null() {
-        return Err(format!("{name} is a null pointer for {n} values"));
-    }
-    // SAFETY: the host promises `n` writable values at `p`.
-    Ok(unsafe { std::slice::from_raw_parts_mut(p, n) })
-}
-
-unsafe fn text(p: *const c_char) -> Option<String> {
-    if p.is_null() {
-        return None;
-    }
-    // SAFETY: a non-null string from the host is NUL-terminated.
-    Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
+    host::with::<Component>(c, what, body)
 }
 
 /// The folder of a `file:` URI (`file:///a/b%20c`, `file:/a/b`).
@@ -625,28 +572,18 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn fmi2GetFMUstate(c: *mut c_void, state: *mut *mut c_void) -> fmi2Status {
+pub unsafe extern "C" fn fmi2GetFMUstate(c: *mut c_void, slot: *mut *mut c_void) -> fmi2Status {
     with(c, "fmi2GetFMUstate", |comp| {
-        // SAFETY: one writable slot for the state pointer.
-        let slot = unsafe { slice_mut(state, 1, "FMUstate") }?;
-        let snap = Box::new(comp.instance.snapshot());
-        if !slot[0].is_null() {
-            // SAFETY: a non-null state given back to us was made here and not yet freed.
-            drop(unsafe { Box::from_raw(slot[0] as *mut Snapshot) });
-        }
-        slot[0] = Box::into_raw(snap) as *mut c_void;
-        Ok(OK)
+        // SAFETY: the host's slot for the state pointer.
+        unsafe { host::get_state(&comp.instance, slot) }.map(|()| OK)
     })
 }
 
 #[no_mangle]
-pub extern "C" fn fmi2SetFMUstate(c: *mut c_void, state: *mut c_void) -> fmi2Status {
+pub unsafe extern "C" fn fmi2SetFMUstate(c: *mut c_void, state: *mut c_void) -> fmi2Status {
     with(c, "fmi2SetFMUstate", |comp| {
-        if state.is_null() {
-            return Err("FMUstate is null".into());
-        }
         // SAFETY: made by fmi2GetFMUstate / fmi2DeSerializeFMUstate and not yet freed.
-        let snap = unsafe { &*(state as *const Snapshot) };
+        let snap = unsafe { host::state(state) }?;
         comp.instance
             .restore(snap)
             .map(|_| OK)
@@ -655,17 +592,10 @@ pub extern "C" fn fmi2SetFMUstate(c: *mut c_void, state: *mut c_void) -> fmi2Sta
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, state: *mut *mut c_void) -> fmi2Status {
+pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, slot: *mut *mut c_void) -> fmi2Status {
     with(c, "fmi2FreeFMUstate", |_| {
-        if state.is_null() {
-            return Ok(OK);
-        }
-        // SAFETY: `state` points to a slot holding a state made here, or null.
-        let slot = unsafe { &mut *state };
-        if !slot.is_null() {
-            drop(unsafe { Box::from_raw(*slot as *mut Snapshot) });
-            *slot = std::ptr::null_mut();
-        }
+        // SAFETY: the host's slot, holding a state made here or null.
+        unsafe { host::free_state(slot) };
         Ok(OK)
     })
 }
@@ -677,13 +607,9 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     size: *mut usize,
 ) -> fmi2Status {
     with(c, "fmi2SerializedFMUstateSize", |_| {
-        if state.is_null() {
-            return Err("FMUstate is null".into());
-        }
         // SAFETY: a state made here; one writable size slot.
-        let snap = unsafe { &*(state as *const Snapshot) };
-        let out = unsafe { slice_mut(size, 1, "size") }?;
-        out[0] = snap.to_bytes().len();
+        let n = unsafe { host::state(state) }?.to_bytes().len();
+        unsafe { slice_mut(size, 1, "size") }?[0] = n;
         Ok(OK)
     })
 }
@@ -696,21 +622,8 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     size: usize,
 ) -> fmi2Status {
     with(c, "fmi2SerializeFMUstate", |_| {
-        if state.is_null() {
-            return Err("FMUstate is null".into());
-        }
         // SAFETY: a state made here; `size` writable bytes.
-        let snap = unsafe { &*(state as *const Snapshot) };
-        let data = snap.to_bytes();
-        if data.len() != size {
-            return Err(format!(
-                "size {size} does not match the serialized size {}",
-                data.len()
-            ));
-        }
-        let out = unsafe { slice_mut(bytes as *mut u8, size, "serializedState") }?;
-        out.copy_from_slice(&data);
-        Ok(OK)
+        unsafe { host::serialize_state(state, bytes as *mut u8, size) }.map(|()| OK)
     })
 }
 
@@ -719,15 +632,11 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     c: *mut c_void,
     bytes: *const c_char,
     size: usize,
-    state: *mut *mut c_void,
+    slot: *mut *mut c_void,
 ) -> fmi2Status {
     with(c, "fmi2DeSerializeFMUstate", |_| {
         // SAFETY: `size` readable bytes; one writable slot.
-        let data = unsafe { slice(bytes as *const u8, size, "serializedState") }?;
-        let slot = unsafe { slice_mut(state, 1, "FMUstate") }?;
-        let snap = Snapshot::from_bytes(data).map_err(|e| e.to_string())?;
-        slot[0] = Box::into_raw(Box::new(snap)) as *mut c_void;
-        Ok(OK)
+        unsafe { host::deserialize_state(bytes as *const u8, size, slot) }.map(|()| OK)
     })
 }
 

@@ -6,6 +6,8 @@
 //! place.
 
 pub mod ffi;
+pub mod ffi3;
+pub mod host;
 
 use rkforge_core::scene_parameters::{parameters, Parameter};
 use rkforge_core::{Error, Result, Scene, SceneSource, Simulation, State};

@@ -10,6 +10,7 @@
 //! getters and setters, so the two cannot drift.
 
 pub mod xml;
+pub mod xml3;
 
 use rkforge_core::scene::{Kinematics, Motion, Scene};
 use rkforge_core::scene_parameters::{parameters, ParameterKind};

@@ -1,5 +1,6 @@
 //! `modelDescription.xml` (FMI 2.0 Co-Simulation) written from the variable table with
-//! quick-xml, and read back with quick-xml to check what a host will see.
+//! quick-xml, and read back with quick-xml to check what a host will see; the parts FMI 3.0
+//! shares with it (units, log categories, default experiment) for [`crate::xml3`].
 
 use crate::{Causality, Kind, Variability, Variable};
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
@@ -64,7 +65,63 @@ fn unit_base(unit: &str) -> &'static [(&'static str, &'static str)] {
     }
 }
 
-fn causality(c: Causality) -> &'static str {
+/// The document under construction.
+pub(crate) type Doc = Writer<Vec<u8>>;
+
+fn err(e: std::io::Error) -> String {
+    e.to_string()
+}
+
+/// `<UnitDefinitions>`: every unit the variables use, with its SI base units.
+pub(crate) fn write_units(w: &mut Doc, vars: &[Variable]) -> Result<(), String> {
+    let mut units: Vec<&str> = vars.iter().filter_map(|v| v.unit).collect();
+    units.sort_unstable();
+    units.dedup();
+    w.write_event(Event::Start(BytesStart::new("UnitDefinitions")))
+        .map_err(err)?;
+    for u in units {
+        let mut e = BytesStart::new("Unit");
+        e.push_attribute(("name", u));
+        w.write_event(Event::Start(e)).map_err(err)?;
+        let mut b = BytesStart::new("BaseUnit");
+        for &(k, v) in unit_base(u) {
+            b.push_attribute((k, v));
+        }
+        w.write_event(Event::Empty(b)).map_err(err)?;
+        w.write_event(Event::End(BytesEnd::new("Unit")))
+            .map_err(err)?;
+    }
+    w.write_event(Event::End(BytesEnd::new("UnitDefinitions")))
+        .map_err(err)?;
+    Ok(())
+}
+
+/// `<LogCategories>` from [`LOG_CATEGORIES`].
+pub(crate) fn write_log_categories(w: &mut Doc) -> Result<(), String> {
+    w.write_event(Event::Start(BytesStart::new("LogCategories")))
+        .map_err(err)?;
+    for (name, description) in LOG_CATEGORIES {
+        let mut e = BytesStart::new("Category");
+        e.push_attribute(("name", name));
+        e.push_attribute(("description", description));
+        w.write_event(Event::Empty(e)).map_err(err)?;
+    }
+    w.write_event(Event::End(BytesEnd::new("LogCategories")))
+        .map_err(err)?;
+    Ok(())
+}
+
+/// `<DefaultExperiment>`: from 0 to the scene's end at its history interval.
+pub(crate) fn write_default_experiment(w: &mut Doc, header: &Header) -> Result<(), String> {
+    let mut de = BytesStart::new("DefaultExperiment");
+    de.push_attribute(("startTime", "0"));
+    de.push_attribute(("stopTime", header.stop_time.to_string().as_str()));
+    de.push_attribute(("stepSize", header.step_size.to_string().as_str()));
+    w.write_event(Event::Empty(de)).map_err(err)?;
+    Ok(())
+}
+
+pub(crate) fn causality(c: Causality) -> &'static str {
     match c {
         Causality::Parameter => "parameter",
         Causality::Input => "input",
@@ -72,7 +129,7 @@ fn causality(c: Causality) -> &'static str {
     }
 }
 
-fn variability(v: Variability) -> &'static str {
+pub(crate) fn variability(v: Variability) -> &'static str {
     match v {
         Variability::Fixed => "fixed",
         Variability::Continuous => "continuous",
@@ -82,7 +139,6 @@ fn variability(v: Variability) -> &'static str {
 /// Write the whole document.
 pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    let err = |e: std::io::Error| e.to_string();
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
         .map_err(err)?;
     let mut root = BytesStart::new("fmiModelDescription");
@@ -106,42 +162,9 @@ pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
     cs.push_attribute(("canNotUseMemoryManagementFunctions", "true"));
     w.write_event(Event::Empty(cs)).map_err(err)?;
 
-    let mut units: Vec<&str> = vars.iter().filter_map(|v| v.unit).collect();
-    units.sort_unstable();
-    units.dedup();
-    w.write_event(Event::Start(BytesStart::new("UnitDefinitions")))
-        .map_err(err)?;
-    for u in units {
-        let mut e = BytesStart::new("Unit");
-        e.push_attribute(("name", u));
-        w.write_event(Event::Start(e)).map_err(err)?;
-        let mut b = BytesStart::new("BaseUnit");
-        for &(k, v) in unit_base(u) {
-            b.push_attribute((k, v));
-        }
-        w.write_event(Event::Empty(b)).map_err(err)?;
-        w.write_event(Event::End(BytesEnd::new("Unit")))
-            .map_err(err)?;
-    }
-    w.write_event(Event::End(BytesEnd::new("UnitDefinitions")))
-        .map_err(err)?;
-
-    w.write_event(Event::Start(BytesStart::new("LogCategories")))
-        .map_err(err)?;
-    for (name, description) in LOG_CATEGORIES {
-        let mut e = BytesStart::new("Category");
-        e.push_attribute(("name", name));
-        e.push_attribute(("description", description));
-        w.write_event(Event::Empty(e)).map_err(err)?;
-    }
-    w.write_event(Event::End(BytesEnd::new("LogCategories")))
-        .map_err(err)?;
-
-    let mut de = BytesStart::new("DefaultExperiment");
-    de.push_attribute(("startTime", "0"));
-    de.push_attribute(("stopTime", header.stop_time.to_string().as_str()));
-    de.push_attribute(("stepSize", header.step_size.to_string().as_str()));
-    w.write_event(Event::Empty(de)).map_err(err)?;
+    write_units(&mut w, vars)?;
+    write_log_categories(&mut w)?;
+    write_default_experiment(&mut w, header)?;
 
     w.write_event(Event::Start(BytesStart::new("ModelVariables")))
         .map_err(err)?;

@@ -1,0 +1,186 @@
+//! What the FMI 2.0 and 3.0 C APIs ([`crate::ffi`], [`crate::ffi3`]) share: the status
+//! codes (the same numbers in both), the panic barrier every exported function runs its body
+//! in, the checked conversions of host pointers, and the FMU state handles (a boxed
+//! [`Snapshot`]).
+
+use crate::{Instance, Snapshot};
+use std::ffi::{c_char, c_int, c_void, CStr};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// `fmi2OK` / `fmi3OK`.
+pub const OK: c_int = 0;
+/// `fmi2Warning` / `fmi3Warning`.
+pub const WARNING: c_int = 1;
+/// `fmi2Discard` / `fmi3Discard`.
+pub const DISCARD: c_int = 2;
+/// `fmi2Error` / `fmi3Error`.
+pub const ERROR: c_int = 3;
+/// `fmi2Fatal` / `fmi3Fatal`.
+pub const FATAL: c_int = 4;
+
+/// What the host's instance pointer points to: an [`Instance`] and the host's logger.
+pub trait Host {
+    /// The co-simulation instance.
+    fn instance(&mut self) -> &mut Instance;
+    /// Log `message` with `status` through the host's logger; returns `status`.
+    fn fail(&self, status: c_int, message: &str) -> c_int;
+}
+
+/// Run `body` on the component behind `c`, catching panics and turning errors into a
+/// logged error status (a panic into `Fatal`).
+pub fn with<C: Host>(
+    c: *mut c_void,
+    what: &str,
+    body: impl FnOnce(&mut C) -> Result<c_int, String>,
+) -> c_int {
+    if c.is_null() {
+        return ERROR;
+    }
+    // SAFETY: a non-null component is a pointer returned by the instantiate function of its
+    // API and not yet freed (the host's duty under the FMI standard); one call at a time.
+    let comp = unsafe { &mut *(c as *mut C) };
+    match catch_unwind(AssertUnwindSafe(|| body(comp))) {
+        Ok(Ok(status)) => status,
+        Ok(Err(msg)) => comp.fail(ERROR, &format!("{what}: {msg}")),
+        Err(p) => {
+            let why = p
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| p.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            comp.fail(FATAL, &format!("{what}: internal error (panic): {why}"))
+        }
+    }
+}
+
+/// A slice from a host pointer and length, refusing a null pointer with a non-zero length.
+///
+/// # Safety
+///
+/// `p` points to `n` readable values when it is not null.
+pub unsafe fn slice<'a, T>(p: *const T, n: usize, name: &str) -> Result<&'a [T], String> {
+    if n == 0 {
+        return Ok(&[]);
+    }
+    if p.is_null() {
+        return Err(format!("{name} is a null pointer for {n} values"));
+    }
+    // SAFETY: the host promises `n` readable values at `p` (FMI 2.0 2.1.7, FMI 3.0 2.2.6).
+    Ok(unsafe { std::slice::from_raw_parts(p, n) })
+}
+
+/// A mutable slice from a host pointer and length, as [`slice`].
+///
+/// # Safety
+///
+/// `p` points to `n` writable values when it is not null.
+pub unsafe fn slice_mut<'a, T>(p: *mut T, n: usize, name: &str) -> Result<&'a mut [T], String> {
+    if n == 0 {
+        return Ok(&mut []);
+    }
+    if p.is_null() {
+        return Err(format!("{name} is a null pointer for {n} values"));
+    }
+    // SAFETY: the host promises `n` writable values at `p`.
+    Ok(unsafe { std::slice::from_raw_parts_mut(p, n) })
+}
+
+/// A host string, `None` when null.
+///
+/// # Safety
+///
+/// `p` is null or NUL-terminated.
+pub unsafe fn text(p: *const c_char) -> Option<String> {
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: a non-null string from the host is NUL-terminated.
+    Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
+}
+
+/// Get the FMU state into the host's slot: a new boxed [`Snapshot`] (the one the slot held,
+/// if any, is reused by freeing it).
+///
+/// # Safety
+///
+/// `slot` is a writable pointer slot holding null or a state made here.
+pub unsafe fn get_state(instance: &Instance, slot: *mut *mut c_void) -> Result<(), String> {
+    // SAFETY: one writable slot for the state pointer.
+    let slot = unsafe { slice_mut(slot, 1, "FMUState") }?;
+    let snap = Box::new(instance.snapshot());
+    if !slot[0].is_null() {
+        // SAFETY: a non-null state given back to us was made here and not yet freed.
+        drop(unsafe { Box::from_raw(slot[0] as *mut Snapshot) });
+    }
+    slot[0] = Box::into_raw(snap) as *mut c_void;
+    Ok(())
+}
+
+/// The [`Snapshot`] behind a state handle.
+///
+/// # Safety
+///
+/// `state` is null or a state made here and not yet freed.
+pub unsafe fn state<'a>(state: *mut c_void) -> Result<&'a Snapshot, String> {
+    if state.is_null() {
+        return Err("FMUState is null".into());
+    }
+    // SAFETY: made by get_state / deserialize_state and not yet freed.
+    Ok(unsafe { &*(state as *const Snapshot) })
+}
+
+/// Free the state in the host's slot and null it.
+///
+/// # Safety
+///
+/// `slot` is null or a slot holding null or a state made here.
+pub unsafe fn free_state(slot: *mut *mut c_void) {
+    if slot.is_null() {
+        return;
+    }
+    // SAFETY: `slot` points to a slot holding a state made here, or null.
+    let slot = unsafe { &mut *slot };
+    if !slot.is_null() {
+        drop(unsafe { Box::from_raw(*slot as *mut Snapshot) });
+        *slot = std::ptr::null_mut();
+    }
+}
+
+/// Serialize the state into `size` bytes at `bytes` (`size` must be the serialized size).
+///
+/// # Safety
+///
+/// As [`state`]; `bytes` holds `size` writable bytes.
+pub unsafe fn serialize_state(
+    handle: *mut c_void,
+    bytes: *mut u8,
+    size: usize,
+) -> Result<(), String> {
+    let data = unsafe { state(handle) }?.to_bytes();
+    if data.len() != size {
+        return Err(format!(
+            "size {size} does not match the serialized size {}",
+            data.len()
+        ));
+    }
+    let out = unsafe { slice_mut(bytes, size, "serializedState") }?;
+    out.copy_from_slice(&data);
+    Ok(())
+}
+
+/// A new state from `size` serialized bytes, into the host's slot.
+///
+/// # Safety
+///
+/// `bytes` holds `size` readable bytes; `slot` is one writable pointer slot.
+pub unsafe fn deserialize_state(
+    bytes: *const u8,
+    size: usize,
+    slot: *mut *mut c_void,
+) -> Result<(), String> {
+    let data = unsafe { slice(bytes, size, "serializedState") }?;
+    let slot = unsafe { slice_mut(slot, 1, "FMUState") }?;
+    let snap = Snapshot::from_bytes(data).map_err(|e| e.to_string())?;
+    slot[0] = Box::into_raw(Box::new(snap)) as *mut c_void;
+    Ok(())
+}

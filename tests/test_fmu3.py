@@ -1,0 +1,144 @@
+"""The FMI 3.0 Co-Simulation FMU (`rkforge fmu SCENE --fmi 3`) through fmpy: validation of
+every shipped scene, the same bits as the FMI 2.0 FMU of the scene for the same inputs and
+steps, rollback and serialization, and bad calls refused with a message."""
+import subprocess
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description, simulate_fmu
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi3 import FMU3Slave
+from fmpy.validation import validate_fmu
+
+from conftest import ROOT
+
+SCENES = ["taylor_bar", "block_forging", "wheel_forging", "closed_die_hub", "ring_compression",
+          "press_upsetting", "block_forging_press", "wheel_forging_press"]
+COARSE = {"workpiece.particles[0]": 9, "workpiece.particles[1]": 9}
+
+
+def pack(rkforge_bin, scene, out, fmi):
+    subprocess.run([rkforge_bin, "fmu", str(scene), "--out", str(out), "--fmi", fmi],
+                   check=True, capture_output=True, text=True)
+    return str(out)
+
+
+@pytest.fixture(scope="module")
+def fmus(rkforge_bin, tmp_path_factory):
+    out = tmp_path_factory.mktemp("fmu3")
+    return {s: pack(rkforge_bin, ROOT / "scenes" / f"{s}.toml", out / f"{s}.fmu", "3") for s in SCENES}
+
+
+def test_every_shipped_scene_validates_as_fmi3(fmus):
+    for s, p in fmus.items():
+        assert validate_fmu(p) == [], s
+        md = read_model_description(p)
+        assert md.fmiVersion == "3.0" and md.coSimulation is not None, s
+        assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+        time = [v for v in md.modelVariables if v.causality == "independent"]
+        assert [v.name for v in time] == ["time"], s
+        types = {v.name: v.type for v in md.modelVariables}
+        assert types["discretization.integration"] == "String"
+        assert types["workpiece.particles[0]"] == "Int32"
+        assert types["time.end_s"] == "Float64"
+
+
+def test_fmi2_and_fmi3_give_the_same_bits(rkforge_bin, tmp_path):
+    """The block forging, coarse and with its fixed step, driven by the same velocity table
+    at the same communication points through both FMUs: every output the same bits."""
+    scene = ROOT / "scenes" / "block_forging.toml"
+    two = pack(rkforge_bin, scene, tmp_path / "b2.fmu", "2")
+    three = pack(rkforge_bin, scene, tmp_path / "b3.fmu", "3")
+    outputs = [v.name for v in read_model_description(two).modelVariables if v.causality == "output"]
+    assert outputs == [v.name for v in read_model_description(three).modelVariables
+                       if v.causality == "output"]
+    inp = np.array([(0.0, 10.0, 10.0), (2e-3, 6.0, 12.0), (4e-3, 6.0, 12.0)],
+                   dtype=[("time", float), ("top.velocity", float), ("bottom.velocity", float)])
+    runs = [simulate_fmu(p, stop_time=4e-3, output_interval=1e-4, input=inp,
+                         start_values={**COARSE, "discretization.integration": "q4"},
+                         output=outputs) for p in (two, three)]
+    assert len(runs[0]) == len(runs[1]) == 41
+    for name in outputs:
+        assert runs[0][name].tobytes() == runs[1][name].tobytes(), name
+    assert runs[1]["top.force"][-1] < 0.0
+
+
+class Slave3:
+    """One FMI 3.0 instance, initialised, with its log messages kept."""
+
+    def __init__(self, path, params=None):
+        self.md = read_model_description(path)
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.messages = []
+
+        def log(env, status, category, message):
+            self.messages.append(message.decode())
+
+        self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=extract(path),
+                             modelIdentifier=self.md.coSimulation.modelIdentifier,
+                             instanceName="rkforge3")
+        self.fmu.instantiate(loggingOn=True, logMessage=log)
+        for k, v in (params or {}).items():
+            if isinstance(v, int):
+                self.fmu.setInt32([self.vr[k]], [v])
+            else:
+                self.fmu.setFloat64([self.vr[k]], [v])
+        self.fmu.enterInitializationMode(startTime=0.0)
+        self.fmu.exitInitializationMode()
+        self.t = 0.0
+
+    def step(self, h):
+        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
+        self.t += h
+
+    def get(self, *names):
+        return self.fmu.getFloat64([self.vr[n] for n in names])
+
+
+def test_rollback_and_serialization_continue_with_the_same_bits(fmus):
+    s = Slave3(fmus["block_forging"], COARSE)
+    names = ["top.force", "top.stroke", "workpiece.width", "energy.plastic", "time"]
+    for _ in range(5):
+        s.step(1e-4)
+    state = s.fmu.getFMUState()
+    saved = s.fmu.serializeFMUState(state)
+    s.fmu.setFloat64([s.vr["top.velocity"]], [4.0])
+    s.step(5e-4)
+    first = s.get(*names)
+    s.fmu.setFMUState(state)
+    s.t = 5e-4
+    assert s.get("time") == [pytest.approx(5e-4)]
+    s.fmu.setFloat64([s.vr["top.velocity"]], [4.0])
+    s.step(5e-4)
+    assert s.get(*names) == first
+    # A serialized state restored into a fresh instance continues the same way.
+    t = Slave3(fmus["block_forging"], COARSE)
+    restored = t.fmu.deserializeFMUState(saved)
+    t.fmu.setFMUState(restored)
+    t.t = 5e-4
+    t.fmu.setFloat64([t.vr["top.velocity"]], [4.0])
+    t.step(5e-4)
+    assert t.get(*names) == first
+    for x in (s, t):
+        x.fmu.terminate()
+        x.fmu.freeInstance()
+
+
+def test_bad_calls_are_refused_with_a_message(fmus):
+    s = Slave3(fmus["taylor_bar"])
+    with pytest.raises(FMICallException):
+        s.fmu.setFloat64([s.vr["time"]], [1.0])
+    assert "`time` is the independent variable" in s.messages[-1]
+    with pytest.raises(FMICallException):
+        s.fmu.setFloat64([s.vr["time.end_s"]], [1.0])
+    assert "`time.end_s`" in s.messages[-1] and "cannot be set" in s.messages[-1]
+    with pytest.raises(FMICallException):
+        s.fmu.getBoolean([s.vr["wall.force"]])
+    assert "no Boolean variables" in s.messages[-1]
+    with pytest.raises(FMICallException):
+        s.fmu.doStep(currentCommunicationPoint=1.0, communicationStepSize=1e-6)
+    assert "does not match" in s.messages[-1]
+    s.step(1e-6)
+    assert s.get("time") == [pytest.approx(1e-6)]
+    s.fmu.terminate()
+    s.fmu.freeInstance()
