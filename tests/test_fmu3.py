@@ -10,6 +10,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 from fmpy.validation import validate_fmu
 
+import rkforge
 from conftest import ROOT
 
 SCENES = ["taylor_bar", "block_forging", "wheel_forging", "closed_die_hub", "ring_compression",
@@ -66,7 +67,7 @@ def test_fmi2_and_fmi3_give_the_same_bits(rkforge_bin, tmp_path):
 class Slave3:
     """One FMI 3.0 instance, initialised, with its log messages kept."""
 
-    def __init__(self, path, params=None):
+    def __init__(self, path, params=None, early_return=False):
         self.md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.messages = []
@@ -77,9 +78,11 @@ class Slave3:
         self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=extract(path),
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName="rkforge3")
-        self.fmu.instantiate(loggingOn=True, logMessage=log)
+        self.fmu.instantiate(loggingOn=True, logMessage=log, earlyReturnAllowed=early_return)
         for k, v in (params or {}).items():
-            if isinstance(v, int):
+            if isinstance(v, bool):
+                self.fmu.setBoolean([self.vr[k]], [v])
+            elif isinstance(v, int):
                 self.fmu.setInt32([self.vr[k]], [v])
             else:
                 self.fmu.setFloat64([self.vr[k]], [v])
@@ -88,8 +91,10 @@ class Slave3:
         self.t = 0.0
 
     def step(self, h):
-        self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
-        self.t += h
+        """One communication step; returns (earlyReturn, lastSuccessfulTime)."""
+        _, _, early, last = self.fmu.doStep(currentCommunicationPoint=self.t, communicationStepSize=h)
+        self.t = last if early else self.t + h
+        return early, last
 
     def get(self, *names):
         return self.fmu.getFloat64([self.vr[n] for n in names])
@@ -134,11 +139,74 @@ def test_bad_calls_are_refused_with_a_message(fmus):
     assert "`time.end_s`" in s.messages[-1] and "cannot be set" in s.messages[-1]
     with pytest.raises(FMICallException):
         s.fmu.getBoolean([s.vr["wall.force"]])
-    assert "no Boolean variables" in s.messages[-1]
+    assert "not a Boolean variable" in s.messages[-1]
     with pytest.raises(FMICallException):
         s.fmu.doStep(currentCommunicationPoint=1.0, communicationStepSize=1e-6)
     assert "does not match" in s.messages[-1]
     s.step(1e-6)
     assert s.get("time") == [pytest.approx(1e-6)]
     s.fmu.terminate()
+    s.fmu.freeInstance()
+
+
+def approach(rkforge_bin, tmp_path, gap):
+    """The press upsetting billet with the ram `gap` (m) above it, coarse: its FMI 3.0 FMU,
+    the FMU's parameters, and the same scene for the Python package."""
+    from driver import upsetting_scene
+    text = upsetting_scene(gap)
+    (tmp_path / "approach.toml").write_text(text)
+    fmu = pack(rkforge_bin, tmp_path / "approach.toml", tmp_path / "approach.fmu", "3")
+    params = {"workpiece.particles[0]": 6, "workpiece.particles[1]": 16}
+    scene = rkforge.Scene.from_toml(text, "approach")
+    scene.set("workpiece.particles", [6, 16])
+    return fmu, params, scene
+
+
+def first_step_where(scene, toward, condition):
+    """The time after the first solver step at which `condition(sample)` holds, stepping
+    the scene through the Python package one solver step at a time toward `toward` (s), the
+    steps a run to that time (a communication step of that length) takes."""
+    sim = rkforge.Simulation(scene)
+    while sim.time < toward:
+        sim.step(toward=toward)
+        if condition(sim.sample()):
+            return sim.time
+    return None
+
+
+def test_early_return_stops_at_the_first_contact_step(rkforge_bin, tmp_path):
+    """The ram 2 mm above the billet at 20 mm/s: one 0.5 s communication step returns early
+    at the solver step where the ram first touches, the time of that step in a run without
+    early return (the Python package stepping the same scene) to the bit; stepping on from
+    there does not return again for the same contact."""
+    fmu, params, scene = approach(rkforge_bin, tmp_path, 0.002)
+    s = Slave3(fmu, {**params, "ram.early_return.contact": True}, early_return=True)
+    early, last = s.step(0.5)
+    assert early
+    expected = first_step_where(scene, 0.5, lambda row: row["ram.contact_fraction"] > 0.0)
+    assert last == expected and 0.09 < last < 0.11, (last, expected)
+    assert s.get("time") == [last]
+    assert s.get("ram.contact_fraction")[0] > 0.0
+    assert s.get("ram.stroke")[0] == pytest.approx(0.020 * last, rel=1e-9)
+    early, last = s.step(0.05)
+    assert not early and last == pytest.approx(expected + 0.05)
+    s.fmu.terminate()
+    s.fmu.freeInstance()
+    # Without the importer's leave, the same step runs to its end.
+    plain = Slave3(fmu, {**params, "ram.early_return.contact": True}, early_return=False)
+    assert plain.step(0.5) == (False, 0.5)
+    plain.fmu.freeInstance()
+
+
+def test_early_return_when_the_force_reaches_a_level(rkforge_bin, tmp_path):
+    """The ram on the billet: the step returns at the solver step where the force magnitude
+    first reaches 200 kN, as stepping the scene one solver step at a time finds it."""
+    fmu, params, scene = approach(rkforge_bin, tmp_path, 0.0)
+    s = Slave3(fmu, {**params, "ram.early_return.force": True,
+                     "ram.early_return.force_level": 2.0e5}, early_return=True)
+    early, last = s.step(1.0)
+    assert early
+    expected = first_step_where(scene, 1.0, lambda row: abs(row["ram.force_N"]) >= 2.0e5)
+    assert last == expected, (last, expected)
+    assert abs(s.get("ram.force")[0]) >= 2.0e5
     s.fmu.freeInstance()

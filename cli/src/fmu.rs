@@ -7,7 +7,7 @@
 //! scene in `resources/scene.toml` and `documentation/index.html`.
 
 use rkforge_core::Scene;
-use rkforge_model_description::{variable_table, xml, xml3};
+use rkforge_model_description::{time_value_reference, variable_table, variable_table3, xml, xml3};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -128,7 +128,11 @@ pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, S
     };
     let (md, platform) = match version {
         Version::Fmi2 => (xml::write(&header, &vars)?, "linux64"),
-        Version::Fmi3 => (xml3::write(&header, &vars)?, "x86_64-linux"),
+        Version::Fmi3 => {
+            let vars3 = variable_table3(&scene);
+            let time = time_value_reference(&scene);
+            (xml3::write(&header, &vars3, time)?, "x86_64-linux")
+        }
     };
     let lib =
         std::fs::read(shared_library()?).map_err(|e| format!("cannot read {LIBRARY}: {e}"))?;

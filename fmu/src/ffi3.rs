@@ -3,7 +3,10 @@
 //! Every exported function runs its body inside [`host::with`] (no panic crosses into the
 //! host; an error is logged through the host's `logMessage` and returned as `fmi3Error`).
 //! The variables are the 2.0 table's with the same value references (`Float64`, `Int32`,
-//! `String`), plus the independent variable `time`. Every function of the standard's
+//! `String`), plus the independent variable `time` and the early-return switches (`Boolean`
+//! `<tool>.early_return.contact` and `.force`, `Float64` `.force_level`): with
+//! `earlyReturnAllowed`, `fmi3DoStep` ends at the solver step where an armed event happens,
+//! with `earlyReturn` and `lastSuccessfulTime`. Every function of the standard's
 //! headers is exported (importers such as fmpy bind them all); the other types, Model
 //! Exchange, Scheduled Execution, event mode, clocks and derivatives are not provided and
 //! answer `fmi3Error` with a message naming what was asked.
@@ -12,7 +15,6 @@
 
 use crate::host::{self, slice, slice_mut, text, Host, ERROR, OK, WARNING};
 use crate::Instance;
-use rkforge_model_description::xml3::time_value_reference;
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -39,6 +41,8 @@ pub struct Component {
     categories: [bool; 3],
     strings: Vec<CString>,
     time_vr: Vr,
+    /// The importer allows `fmi3DoStep` to return early (`earlyReturnAllowed`).
+    early_return: bool,
 }
 
 impl Component {
@@ -137,7 +141,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
     _visible: bool,
     logging_on: bool,
     event_mode_used: bool,
-    _early_return_allowed: bool,
+    early_return_allowed: bool,
     _required_intermediate: *const Vr,
     _n_required_intermediate: usize,
     env: Env,
@@ -165,7 +169,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
                 ));
             }
         }
-        let time_vr = time_value_reference(instance.variables());
+        let time_vr = instance.time_value_reference();
         Ok(Box::new(Component {
             instance,
             log_message,
@@ -174,6 +178,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             categories: [true; 3],
             strings: Vec::new(),
             time_vr,
+            early_return: early_return_allowed,
         }))
     }));
     match made {
@@ -481,8 +486,48 @@ no_variables! {
     fmi3SetInt64(*const i64), "Int64";
     fmi3GetUInt64(*mut u64), "UInt64";
     fmi3SetUInt64(*const u64), "UInt64";
-    fmi3GetBoolean(*mut bool), "Boolean";
-    fmi3SetBoolean(*const bool), "Boolean";
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi3GetBoolean(
+    c: *mut c_void,
+    vr: *const Vr,
+    n_vr: usize,
+    values: *mut bool,
+    n_values: usize,
+) -> fmi3Status {
+    with(c, "fmi3GetBoolean", |comp| {
+        scalars("Boolean", n_vr, n_values)?;
+        // SAFETY: as in fmi3GetFloat64.
+        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
+        let out = unsafe { slice_mut(values, n_values, "values") }?;
+        for (v, o) in vrs.iter().zip(out.iter_mut()) {
+            *o = comp.instance.get_boolean(*v).map_err(|e| e.to_string())?;
+        }
+        Ok(OK)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi3SetBoolean(
+    c: *mut c_void,
+    vr: *const Vr,
+    n_vr: usize,
+    values: *const bool,
+    n_values: usize,
+) -> fmi3Status {
+    with(c, "fmi3SetBoolean", |comp| {
+        scalars("Boolean", n_vr, n_values)?;
+        // SAFETY: as in fmi3SetFloat64.
+        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
+        let vals = unsafe { slice(values, n_values, "values") }?;
+        for (v, x) in vrs.iter().zip(vals) {
+            comp.instance
+                .set_boolean(*v, *x)
+                .map_err(|e| e.to_string())?;
+        }
+        Ok(OK)
+    })
 }
 
 #[no_mangle]
@@ -585,12 +630,16 @@ pub unsafe extern "C" fn fmi3DoStep(
         let terminate = unsafe { slice_mut(terminate_simulation, 1, "terminateSimulation") }?;
         let early = unsafe { slice_mut(early_return, 1, "earlyReturn") }?;
         let last = unsafe { slice_mut(last_successful_time, 1, "lastSuccessfulTime") }?;
-        let stepped = comp.instance.do_step(t, h);
+        let stepped = if comp.early_return {
+            comp.instance.do_step_early(t, h)
+        } else {
+            comp.instance.do_step(t, h).map(|()| None)
+        };
         event[0] = false;
         terminate[0] = false;
-        early[0] = false;
+        early[0] = matches!(stepped, Ok(Some(_)));
         last[0] = comp.instance.time();
-        stepped.map(|()| OK).map_err(|e| e.to_string())
+        stepped.map(|_| OK).map_err(|e| e.to_string())
     })
 }
 

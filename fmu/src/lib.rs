@@ -11,7 +11,7 @@ pub mod host;
 
 use rkforge_core::scene_parameters::{parameters, Parameter};
 use rkforge_core::{Error, Result, Scene, SceneSource, Simulation, State};
-use rkforge_model_description::{variable_table, xml, Binding, Causality, Kind, Variable};
+use rkforge_model_description::{variable_table3, xml, Binding, Causality, Kind, Variable};
 use serde::{Deserialize, Serialize};
 
 /// Where an instance is in the FMI 2.0 Co-Simulation state machine.
@@ -33,6 +33,32 @@ pub enum Phase {
 /// ([`rkforge_core::scene_parameters::parameters`]); `None` keeps the scene's own.
 pub type Params = Vec<Option<toml::Value>>;
 
+/// The early-return events of one tool (FMI 3.0 `fmi3DoStep`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct EarlyReturn {
+    /// At the first touch of the workpiece.
+    contact: bool,
+    /// When the force magnitude first reaches `level`.
+    force: bool,
+    /// Force level (N).
+    level: f64,
+}
+
+/// Whether tool `k` touches the workpiece, and whether its force magnitude has reached its
+/// early-return level: the states whose rise ends a step early.
+fn event_states(sim: &Simulation, early: &[EarlyReturn]) -> Vec<(bool, bool)> {
+    early
+        .iter()
+        .enumerate()
+        .map(|(k, e)| {
+            (
+                sim.contact_fraction(k) > 0.0,
+                sim.tools()[k].axial_force().abs() >= e.level,
+            )
+        })
+        .collect()
+}
+
 /// A saved FMU state: everything needed to continue bit for bit, also in a fresh instance.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot {
@@ -52,7 +78,9 @@ pub struct Instance {
     scene: Scene,
     parameters: Vec<Parameter>,
     guid: String,
+    /// The FMI 3.0 table (the 2.0 table and, after `time`, the early-return switches).
     table: Vec<Variable>,
+    early: Vec<EarlyReturn>,
     params: Params,
     commands: Vec<Option<f64>>,
     sim: Option<Simulation>,
@@ -72,7 +100,8 @@ impl Instance {
         Ok(Instance {
             text: scene_text.to_string(),
             label: label.to_string(),
-            table: variable_table(&scene),
+            table: variable_table3(&scene),
+            early: vec![EarlyReturn::default(); scene.tools.len()],
             guid: xml::guid(scene_text),
             commands: vec![None; scene.tools.len()],
             params: vec![None; parameters.len()],
@@ -88,7 +117,11 @@ impl Instance {
     pub fn guid(&self) -> &str {
         &self.guid
     }
-    /// The variable table.
+    /// Value reference of FMI 3.0's independent variable `time`.
+    pub fn time_value_reference(&self) -> u32 {
+        rkforge_model_description::time_value_reference(&self.scene)
+    }
+    /// The variable table (FMI 3.0's: the 2.0 table, then the early-return switches).
     pub fn variables(&self) -> &[Variable] {
         &self.table
     }
@@ -107,7 +140,8 @@ impl Instance {
 
     fn variable(&self, vr: u32) -> Result<&Variable> {
         self.table
-            .get(vr as usize)
+            .iter()
+            .find(|v| v.value_reference == vr)
             .ok_or_else(|| request(format!("unknown value reference {vr}")))
     }
 
@@ -208,6 +242,7 @@ impl Instance {
     pub fn reset(&mut self) {
         self.params = vec![None; self.parameters.len()];
         self.commands = vec![None; self.scene.tools.len()];
+        self.early = vec![EarlyReturn::default(); self.scene.tools.len()];
         self.sim = None;
         self.phase = Phase::Instantiated;
         self.start_time = 0.0;
@@ -235,6 +270,9 @@ impl Instance {
     /// `fmi2GetReal`.
     pub fn get_real(&mut self, vr: u32) -> Result<f64> {
         let binding = self.variable(vr)?.binding;
+        if let Binding::ReturnForceLevel(k) = binding {
+            return Ok(self.early[k].level);
+        }
         if let Binding::Parameter(k) = binding {
             return match self.parameter(k) {
                 toml::Value::Float(x) => Ok(*x),
@@ -267,7 +305,14 @@ impl Instance {
             Binding::PlasticEnergy => sim.energy().plastic,
             Binding::ToolWork => sim.energy().tool_work,
             Binding::KineticToInternalMax => sim.kinetic_to_internal_max(),
-            Binding::Parameter(_) => unreachable!("answered above"),
+            Binding::Parameter(_) | Binding::ReturnForceLevel(_) => {
+                unreachable!("answered above")
+            }
+            Binding::ReturnOnContact(_) | Binding::ReturnOnForce(_) => {
+                return Err(request(format!(
+                    "value reference {vr} is not a Real variable"
+                )))
+            }
         })
     }
 
@@ -344,6 +389,14 @@ impl Instance {
             (Binding::Parameter(k), Kind::Real(_)) => {
                 self.set_parameter(&v, k, toml::Value::Float(value))
             }
+            (Binding::ReturnForceLevel(k), _) if value >= 0.0 => {
+                self.early[k].level = value;
+                Ok(())
+            }
+            (Binding::ReturnForceLevel(_), _) => Err(request(format!(
+                "`{}` = {value}: a force level is a magnitude, zero or positive",
+                v.name
+            ))),
             _ => Err(request(format!("`{}` is not a Real variable", v.name))),
         }
     }
@@ -375,7 +428,19 @@ impl Instance {
     /// `fmi2DoStep` from the communication point `t` (s) by `h` (s), sub-cycled at the
     /// solver's step. A failed step leaves the instance in [`Phase::Failed`].
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<()> {
-        self.expect(&[Phase::Stepping], "fmi2DoStep")?;
+        self.step(t, h, false).map(|_| ())
+    }
+
+    /// `fmi3DoStep` with early return allowed: as [`Instance::do_step`], but the step ends
+    /// after the solver step at which an armed event first happens (a tool's first touch of
+    /// the workpiece, a tool's force magnitude first reaching its level); returns that time
+    /// (s), or `None` when the step ran to its end.
+    pub fn do_step_early(&mut self, t: f64, h: f64) -> Result<Option<f64>> {
+        self.step(t, h, true)
+    }
+
+    fn step(&mut self, t: f64, h: f64, early: bool) -> Result<Option<f64>> {
+        self.expect(&[Phase::Stepping], "doStep")?;
         if !(h > 0.0 && h.is_finite()) {
             return Err(request(format!(
                 "communication step size {h} s must be positive and finite"
@@ -388,13 +453,62 @@ impl Instance {
             )));
         }
         let target = now - self.start_time + h;
+        let armed: Vec<EarlyReturn> = self
+            .early
+            .iter()
+            .map(|e| EarlyReturn {
+                contact: e.contact && early,
+                force: e.force && early,
+                level: e.level,
+            })
+            .collect();
         let sim = self
             .sim
             .as_mut()
             .ok_or_else(|| request("not initialised".into()))?;
-        if let Err(e) = sim.run_to(target, |_| {}) {
-            self.phase = Phase::Failed;
-            return Err(e);
+        let mut before = event_states(sim, &armed);
+        // Before each solver step after the first: did an armed state rise in the last one?
+        let ran = sim.run_toward(target, u64::MAX, |sim, taken| {
+            if taken == 0 || !armed.iter().any(|e| e.contact || e.force) {
+                return true;
+            }
+            let now = event_states(sim, &armed);
+            let fired = armed
+                .iter()
+                .zip(before.iter().zip(&now))
+                .any(|(e, (b, n))| (e.contact && !b.0 && n.0) || (e.force && !b.1 && n.1));
+            before = now;
+            !fired
+        });
+        match ran {
+            Ok(r) if r.interrupted => Ok(Some(self.start_time + sim.time())),
+            Ok(_) => Ok(None),
+            Err(e) => {
+                self.phase = Phase::Failed;
+                Err(e)
+            }
+        }
+    }
+
+    /// `fmi3GetBoolean`: an early-return switch.
+    pub fn get_boolean(&self, vr: u32) -> Result<bool> {
+        match self.variable(vr)?.binding {
+            Binding::ReturnOnContact(k) => Ok(self.early[k].contact),
+            Binding::ReturnOnForce(k) => Ok(self.early[k].force),
+            _ => Err(request(format!(
+                "value reference {vr} is not a Boolean variable"
+            ))),
+        }
+    }
+
+    /// `fmi3SetBoolean`: an early-return switch, before initialisation.
+    pub fn set_boolean(&mut self, vr: u32, value: bool) -> Result<()> {
+        let v = self.variable(vr)?.clone();
+        self.settable(&v)?;
+        match v.binding {
+            Binding::ReturnOnContact(k) => self.early[k].contact = value,
+            Binding::ReturnOnForce(k) => self.early[k].force = value,
+            _ => return Err(request(format!("`{}` is not a Boolean variable", v.name))),
         }
         Ok(())
     }

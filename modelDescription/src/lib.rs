@@ -44,6 +44,8 @@ pub enum Kind {
     Integer(Option<i32>),
     /// `String` with an optional start value.
     String(Option<String>),
+    /// `Boolean` with an optional start value (FMI 3.0 only: the early-return switches).
+    Boolean(Option<bool>),
 }
 
 /// What a variable reads or writes in the simulation.
@@ -78,6 +80,12 @@ pub enum Binding {
     /// Parameter `k` of the scene ([`rkforge_core::scene_parameters::parameters`]): a
     /// scene key under its dotted name.
     Parameter(usize),
+    /// FMI 3.0: return early from a step when tool `k` first touches the workpiece.
+    ReturnOnContact(usize),
+    /// FMI 3.0: return early from a step when the force on tool `k` first reaches its level.
+    ReturnOnForce(usize),
+    /// FMI 3.0: the force level of [`Binding::ReturnOnForce`] (N, magnitude).
+    ReturnForceLevel(usize),
 }
 
 /// One row of the table.
@@ -108,6 +116,7 @@ impl Variable {
             Kind::Real(s) => s.map_or(String::new(), |x| x.to_string()),
             Kind::Integer(s) => s.map_or(String::new(), |x| x.to_string()),
             Kind::String(s) => s.clone().unwrap_or_default(),
+            Kind::Boolean(s) => s.map_or(String::new(), |x| x.to_string()),
         }
     }
 }
@@ -289,6 +298,60 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
     t
 }
 
+/// Value reference of FMI 3.0's independent variable `time`: the one after the 2.0 table's.
+pub fn time_value_reference(scene: &Scene) -> u32 {
+    variable_table(scene).len() as u32
+}
+
+/// The FMI 3.0 table: the 2.0 table (same value references), then, after `time`, per tool
+/// the early-return events of `fmi3DoStep` as parameters: `<tool>.early_return.contact`
+/// (Boolean), `<tool>.early_return.force` (Boolean) and `<tool>.early_return.force_level`
+/// (N).
+pub fn variable_table3(scene: &Scene) -> Vec<Variable> {
+    let mut t = variable_table(scene);
+    let mut vr = time_value_reference(scene);
+    for (k, tool) in scene.tools.iter().enumerate() {
+        let name = &tool.name;
+        let rows = [
+            (
+                "contact",
+                Kind::Boolean(Some(false)),
+                None,
+                format!("return early from a step at the solver step where tool {name} first touches the workpiece (when the importer allows early return)"),
+                Binding::ReturnOnContact(k),
+            ),
+            (
+                "force",
+                Kind::Boolean(Some(false)),
+                None,
+                format!("return early from a step at the solver step where the magnitude of the force on tool {name} first reaches {name}.early_return.force_level"),
+                Binding::ReturnOnForce(k),
+            ),
+            (
+                "force_level",
+                Kind::Real(Some(0.0)),
+                Some("N"),
+                format!("force level of {name}.early_return.force (magnitude of the force along the axis)"),
+                Binding::ReturnForceLevel(k),
+            ),
+        ];
+        for (what, kind, unit, description, binding) in rows {
+            vr += 1;
+            t.push(Variable {
+                name: format!("{name}.early_return.{what}"),
+                value_reference: vr,
+                causality: Causality::Parameter,
+                variability: Variability::Fixed,
+                kind,
+                unit,
+                description,
+                binding,
+            });
+        }
+    }
+    t
+}
+
 /// Keys that only shape the files `rkforge run` writes (frames, the history's rows and
 /// faces), which an FMU does not write: no parameters. `output.fill_distance_rel` decides
 /// the fill outputs and stays one.
@@ -365,6 +428,7 @@ mod tests {
                 Kind::Real(_) => "Real",
                 Kind::Integer(_) => "Integer",
                 Kind::String(_) => "String",
+                Kind::Boolean(_) => "Boolean",
             };
             assert_eq!(r.kind, kind);
         }

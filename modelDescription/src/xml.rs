@@ -185,6 +185,7 @@ pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
             Kind::Real(s) => ("Real", s.map(|x| x.to_string())),
             Kind::Integer(s) => ("Integer", s.map(|x| x.to_string())),
             Kind::String(s) => ("String", s.clone()),
+            Kind::Boolean(s) => ("Boolean", s.map(|x| x.to_string())),
         };
         let mut t = BytesStart::new(tag);
         if let Some(u) = v.unit {

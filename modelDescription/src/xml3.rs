@@ -1,7 +1,8 @@
-//! `modelDescription.xml` for FMI 3.0 Co-Simulation, written from the same variable table as
-//! the 2.0 one ([`crate::xml`]): `Float64`, `Int32` and `String` variables with the same names
-//! and value references, the independent variable `time` after them, the
-//! `instantiationToken` (the 2.0 GUID) and the capabilities of `fmu/src/ffi3.rs`.
+//! `modelDescription.xml` for FMI 3.0 Co-Simulation, written from [`crate::variable_table3`]:
+//! the 2.0 variables as `Float64`, `Int32` and `String` with the same names and value
+//! references, the independent variable `time` after them, the early-return switches
+//! (`Boolean`), the `instantiationToken` (the 2.0 GUID) and the capabilities of
+//! `fmu/src/ffi3.rs` (early return).
 
 use crate::xml::{
     causality, variability, write_default_experiment, write_log_categories, write_units, Doc,
@@ -11,17 +12,12 @@ use crate::{Causality, Kind, Variable};
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
 
-/// Value reference of the independent variable `time`: the one after the table's.
-pub fn time_value_reference(vars: &[Variable]) -> u32 {
-    vars.len() as u32
-}
-
 fn err(e: std::io::Error) -> String {
     e.to_string()
 }
 
-/// Write the whole FMI 3.0 document.
-pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
+/// Write the whole FMI 3.0 document; `time_vr` is the value reference of `time`.
+pub fn write(header: &Header, vars: &[Variable], time_vr: u32) -> Result<String, String> {
     let mut w: Doc = Writer::new_with_indent(Vec::new(), b' ', 2);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
         .map_err(err)?;
@@ -42,6 +38,7 @@ pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
     cs.push_attribute(("canHandleVariableCommunicationStepSize", "true"));
     cs.push_attribute(("canGetAndSetFMUState", "true"));
     cs.push_attribute(("canSerializeFMUState", "true"));
+    cs.push_attribute(("mightReturnEarlyFromDoStep", "true"));
     w.write_event(Event::Empty(cs)).map_err(err)?;
 
     write_units(&mut w, vars)?;
@@ -50,7 +47,7 @@ pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
 
     w.write_event(Event::Start(BytesStart::new("ModelVariables")))
         .map_err(err)?;
-    let time_vr = time_value_reference(vars).to_string();
+    let time_vr = time_vr.to_string();
     let mut time = BytesStart::new("Float64");
     time.push_attribute(("name", "time"));
     time.push_attribute(("valueReference", time_vr.as_str()));
@@ -64,6 +61,7 @@ pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
             Kind::Real(_) => "Float64",
             Kind::Integer(_) => "Int32",
             Kind::String(_) => "String",
+            Kind::Boolean(_) => "Boolean",
         };
         let mut e = BytesStart::new(tag);
         e.push_attribute(("name", v.name.as_str()));
@@ -82,6 +80,7 @@ pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
         match &v.kind {
             Kind::Real(Some(x)) => e.push_attribute(("start", x.to_string().as_str())),
             Kind::Integer(Some(i)) => e.push_attribute(("start", i.to_string().as_str())),
+            Kind::Boolean(Some(b)) => e.push_attribute(("start", b.to_string().as_str())),
             _ => {}
         }
         if let Kind::String(Some(s)) = &v.kind {

@@ -62,8 +62,10 @@ class Simulation:
     def __init__(self, scene: Scene, integration: Optional[str] = None, threads: Optional[int] = None) -> None:
         """Set up the discretisation; ``integration`` ("q4", "q2", "scni") overrides the
         scene's rule, ``threads`` gives the simulation its own pool of that many threads."""
-    def step(self) -> float:
-        """One time step; returns the new time (s). SimulationError on divergence."""
+    def step(self, toward: Optional[float] = None) -> float:
+        """One time step; returns the new time (s). With ``toward`` (s), the step
+        ``run_to(toward)`` would take next (shortened and evened out to land on it).
+        SimulationError on divergence; ValueError when ``toward`` is not after now."""
     def run_to(self, t: float) -> float:
         """Step until the time reaches ``t`` (s), the last step shortened to land on it."""
     def set_tool_velocity(self, name: str, velocity: float) -> None:

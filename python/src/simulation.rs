@@ -155,9 +155,22 @@ impl Simulation {
     }
 
     /// One time step (at the scene's step or the stable step); returns the new time (s).
-    fn step(&self, py: Python<'_>) -> PyResult<f64> {
+    /// With `toward` (s), the step is the one `run_to(toward)` would take next: shortened
+    /// and evened out to land on that time (as the FMU steps to its communication point).
+    #[pyo3(signature = (toward = None))]
+    fn step(&self, py: Python<'_>, toward: Option<f64>) -> PyResult<f64> {
         self.with(py, |s| {
-            s.install(|sim| sim.step(None).map(|()| sim.time()))
+            let now = s.sim.time();
+            let limit = match toward {
+                Some(t) if !(t.is_finite() && t > now) => {
+                    return Err(PyValueError::new_err(format!(
+                        "step(toward={t}): the time must be finite and after the current time {now:e} s"
+                    )))
+                }
+                Some(t) => Some(t - now),
+                None => None,
+            };
+            s.install(|sim| sim.step(limit).map(|()| sim.time()))
                 .map_err(to_py)
         })
     }
