@@ -107,7 +107,10 @@ pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, S
         .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
     let scene = Scene::from_str_named(&text, &scene_path.display().to_string())
         .map_err(|e| e.to_string())?;
-    let vars = variable_table(&scene);
+    let vars = match version {
+        Version::Fmi2 => variable_table(&scene),
+        Version::Fmi3 => variable_table3(&scene),
+    };
     let id: String = scene
         .name
         .chars()
@@ -128,11 +131,10 @@ pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, S
     };
     let (md, platform) = match version {
         Version::Fmi2 => (xml::write(&header, &vars)?, "linux64"),
-        Version::Fmi3 => {
-            let vars3 = variable_table3(&scene);
-            let time = time_value_reference(&scene);
-            (xml3::write(&header, &vars3, time)?, "x86_64-linux")
-        }
+        Version::Fmi3 => (
+            xml3::write(&header, &vars, time_value_reference(&scene))?,
+            "x86_64-linux",
+        ),
     };
     let lib =
         std::fs::read(shared_library()?).map_err(|e| format!("cannot read {LIBRARY}: {e}"))?;
