@@ -67,7 +67,7 @@ def test_fmi2_and_fmi3_give_the_same_bits(rkforge_bin, tmp_path):
 class Slave3:
     """One FMI 3.0 instance, initialised, with its log messages kept."""
 
-    def __init__(self, path, params=None, early_return=False):
+    def __init__(self, path, params=None, early_return=False, intermediate_update=None):
         self.md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.messages = []
@@ -78,7 +78,8 @@ class Slave3:
         self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=extract(path),
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName="rkforge3")
-        self.fmu.instantiate(loggingOn=True, logMessage=log, earlyReturnAllowed=early_return)
+        self.fmu.instantiate(loggingOn=True, logMessage=log, earlyReturnAllowed=early_return,
+                             intermediateUpdate=intermediate_update)
         for k, v in (params or {}).items():
             if isinstance(v, bool):
                 self.fmu.setBoolean([self.vr[k]], [v])
@@ -209,4 +210,49 @@ def test_early_return_when_the_force_reaches_a_level(rkforge_bin, tmp_path):
     expected = first_step_where(scene, 1.0, lambda row: abs(row["ram.force_N"]) >= 2.0e5)
     assert last == expected, (last, expected)
     assert abs(s.get("ram.force")[0]) >= 2.0e5
+    s.fmu.freeInstance()
+
+
+def test_intermediate_updates_follow_every_solver_step(rkforge_bin, tmp_path):
+    """One 1 ms communication step of the coarse block: the intermediate-update callback
+    sees every solver step, its time and force the bits of the Python package stepping the
+    same scene toward the same point; a setter called in it is refused (the instance is being
+    stepped); asking for an early return in the fifth update ends the step there."""
+    scene = ROOT / "scenes" / "block_forging.toml"
+    fmu = pack(rkforge_bin, scene, tmp_path / "b3.fmu", "3")
+    seen, refused, stop_at = [], [], [None]
+    holder = {}
+
+    def update(env, time, set_requested, get_allowed, finished, can_return, early, when):
+        s = holder["s"]
+        assert get_allowed and finished and not set_requested
+        seen.append((time, *s.fmu.getFloat64([s.vr["time"], s.vr["top.force"]])))
+        try:
+            s.fmu.setFloat64([s.vr["top.velocity"]], [1.0])
+        except FMICallException:
+            refused.append(time)
+        if stop_at[0] is not None and len(seen) == stop_at[0] and can_return:
+            early[0] = True
+            when[0] = time
+
+    holder["s"] = s = Slave3(fmu, COARSE, intermediate_update=update)
+    assert s.step(1e-3) == (False, 1e-3)
+    py = rkforge.Scene.from_file(str(scene))
+    py.set("workpiece.particles", [9, 9])
+    sim = rkforge.Simulation(py)
+    expected = []
+    while sim.time < 1e-3:
+        sim.step(toward=1e-3)
+        expected.append((sim.time, sim.time, sim.tool_forces()["top"]))
+    assert len(seen) == len(expected) > 10
+    assert seen == expected
+    assert seen[-1][2] == s.get("top.force")[0]
+    assert refused == [t for t, _, _ in seen]
+    s.fmu.freeInstance()
+
+    seen.clear()
+    stop_at[0] = 5
+    holder["s"] = s = Slave3(fmu, COARSE, early_return=True, intermediate_update=update)
+    early, last = s.step(1e-3)
+    assert early and last == expected[4][0] and len(seen) == 5
     s.fmu.freeInstance()

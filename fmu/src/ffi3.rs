@@ -6,7 +6,10 @@
 //! `String`), plus the independent variable `time` and the early-return switches (`Boolean`
 //! `<tool>.early_return.contact` and `.force`, `Float64` `.force_level`): with
 //! `earlyReturnAllowed`, `fmi3DoStep` ends at the solver step where an armed event happens,
-//! with `earlyReturn` and `lastSuccessfulTime`. Every function of the standard's
+//! with `earlyReturn` and `lastSuccessfulTime`. With an `intermediateUpdate` callback, it
+//! is called after every solver step (on the thread that steps, while the host waits in
+//! `fmi3DoStep`); the time and the outputs are readable in it, and with early return
+//! allowed it may ask the step to return there. Every function of the standard's
 //! headers is exported (importers such as fmpy bind them all); the other types, Model
 //! Exchange, Scheduled Execution, event mode, clocks and derivatives are not provided and
 //! answer `fmi3Error` with a message naming what was asked.
@@ -25,8 +28,7 @@ type Vr = u32;
 type Env = *mut c_void;
 /// `fmi3LogMessageCallback`.
 type LogMessage = unsafe extern "C" fn(Env, fmi3Status, *const c_char, *const c_char);
-/// `fmi3IntermediateUpdateCallback` (accepted, not called: `providesIntermediateUpdate` is
-/// false).
+/// `fmi3IntermediateUpdateCallback`: called after every solver step of a `fmi3DoStep`.
 type IntermediateUpdate =
     unsafe extern "C" fn(Env, f64, bool, bool, bool, bool, *mut bool, *mut f64);
 
@@ -43,6 +45,23 @@ pub struct Component {
     time_vr: Vr,
     /// The importer allows `fmi3DoStep` to return early (`earlyReturnAllowed`).
     early_return: bool,
+    /// The importer's intermediate-update callback.
+    intermediate_update: Option<IntermediateUpdate>,
+}
+
+/// The host's environment pointer, carried into the stepping thread (the host's callback
+/// is called there while the host waits in `fmi3DoStep`).
+#[derive(Clone, Copy)]
+struct HostEnv(Env);
+// SAFETY: the pointer is only handed back to the host's own callback, synchronously, while
+// the host's thread is blocked in fmi3DoStep.
+unsafe impl Send for HostEnv {}
+
+impl HostEnv {
+    /// The pointer (a method, so that a closure captures the whole `HostEnv`).
+    fn get(self) -> Env {
+        self.0
+    }
 }
 
 impl Component {
@@ -146,7 +165,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
     _n_required_intermediate: usize,
     env: Env,
     log_message: Option<LogMessage>,
-    _intermediate_update: Option<IntermediateUpdate>,
+    intermediate_update: Option<IntermediateUpdate>,
 ) -> *mut c_void {
     let made = catch_unwind(AssertUnwindSafe(|| -> Result<Box<Component>, String> {
         // SAFETY (all three): host strings, NUL-terminated when non-null.
@@ -179,6 +198,7 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
             strings: Vec::new(),
             time_vr,
             early_return: early_return_allowed,
+            intermediate_update,
         }))
     }));
     match made {
@@ -317,6 +337,9 @@ pub unsafe extern "C" fn fmi3GetFloat64(
     values: *mut f64,
     n_values: usize,
 ) -> fmi3Status {
+    if host::in_intermediate(c as usize) {
+        return intermediate_floats(c as usize, vr, n_vr, values, n_values);
+    }
     with(c, "fmi3GetFloat64", |comp| {
         scalars("Float64", n_vr, n_values)?;
         // SAFETY: `n_vr` value references and as many output slots from the host.
@@ -331,6 +354,40 @@ pub unsafe extern "C" fn fmi3GetFloat64(
         }
         Ok(OK)
     })
+}
+
+/// `fmi3GetFloat64` inside an intermediate update: the time and the outputs after the
+/// solver step, from [`host::intermediate_value`]; anything else is an error (the instance
+/// is being stepped and is not touched).
+unsafe fn intermediate_floats(
+    c: usize,
+    vr: *const Vr,
+    n_vr: usize,
+    values: *mut f64,
+    n_values: usize,
+) -> fmi3Status {
+    let read = || -> Result<(), String> {
+        scalars("Float64", n_vr, n_values)?;
+        // SAFETY: as in fmi3GetFloat64.
+        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
+        let out = unsafe { slice_mut(values, n_values, "values") }?;
+        let time_vr = STEP_TIME_VR.with(|t| t.get());
+        for (v, o) in vrs.iter().zip(out.iter_mut()) {
+            *o = host::intermediate_value(c, *v, time_vr)
+                .flatten()
+                .ok_or("not an output")?;
+        }
+        Ok(())
+    };
+    match catch_unwind(AssertUnwindSafe(read)) {
+        Ok(Ok(())) => OK,
+        _ => ERROR,
+    }
+}
+
+thread_local! {
+    /// The `time` value reference of the instance in its intermediate update.
+    static STEP_TIME_VR: std::cell::Cell<Vr> = const { std::cell::Cell::new(0) };
 }
 
 #[no_mangle]
@@ -630,10 +687,39 @@ pub unsafe extern "C" fn fmi3DoStep(
         let terminate = unsafe { slice_mut(terminate_simulation, 1, "terminateSimulation") }?;
         let early = unsafe { slice_mut(early_return, 1, "earlyReturn") }?;
         let last = unsafe { slice_mut(last_successful_time, 1, "lastSuccessfulTime") }?;
-        let stepped = if comp.early_return {
-            comp.instance.do_step_early(t, h)
-        } else {
-            comp.instance.do_step(t, h).map(|()| None)
+        let stepped = match comp.intermediate_update {
+            Some(update) => {
+                let (env, key, early, time_vr) = (
+                    HostEnv(comp.env),
+                    c as usize,
+                    comp.early_return,
+                    comp.time_vr,
+                );
+                let mut observe = move |time: f64, outputs: &[(Vr, f64)]| -> bool {
+                    let (mut requested, mut when) = (false, 0.0);
+                    host::during_intermediate(key, time, outputs.to_vec(), || {
+                        STEP_TIME_VR.with(|t| t.set(time_vr));
+                        // SAFETY: the host's callback with its environment and two
+                        // writable locals, called synchronously.
+                        unsafe {
+                            update(
+                                env.get(),
+                                time,
+                                false,
+                                true,
+                                true,
+                                early,
+                                &mut requested,
+                                &mut when,
+                            )
+                        }
+                    });
+                    requested
+                };
+                comp.instance.do_step_observed(t, h, early, &mut observe)
+            }
+            None if comp.early_return => comp.instance.do_step_early(t, h),
+            None => comp.instance.do_step(t, h).map(|()| None),
         };
         event[0] = false;
         terminate[0] = false;

@@ -4,6 +4,7 @@
 //! [`Snapshot`]).
 
 use crate::{Instance, Snapshot};
+use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -26,14 +27,74 @@ pub trait Host {
     fn fail(&self, status: c_int, message: &str) -> c_int;
 }
 
+/// The outputs of an instance while its step calls the host back (FMI 3.0 intermediate
+/// update): the instance's address, the time (s) and the Float64 outputs by value
+/// reference. Kept per thread: the host's callback runs on the thread that steps.
+pub struct Intermediate {
+    /// Address of the component being stepped.
+    pub component: usize,
+    /// Time after the solver step (s).
+    pub time: f64,
+    /// Float64 outputs by value reference.
+    pub values: Vec<(u32, f64)>,
+}
+
+thread_local! {
+    static STEPPING: Cell<usize> = const { Cell::new(0) };
+    static INTERMEDIATE: RefCell<Option<Intermediate>> = const { RefCell::new(None) };
+}
+
+/// Call `host` (the host's intermediate-update callback) with `values` readable through
+/// [`intermediate_value`], the component at `c` marked busy meanwhile: a call into it other
+/// than an intermediate read answers `Error` without touching it (it is being stepped).
+pub fn during_intermediate<R>(
+    c: usize,
+    time: f64,
+    values: Vec<(u32, f64)>,
+    host: impl FnOnce() -> R,
+) -> R {
+    STEPPING.with(|s| s.set(c));
+    INTERMEDIATE.with(|i| {
+        *i.borrow_mut() = Some(Intermediate {
+            component: c,
+            time,
+            values,
+        })
+    });
+    let r = host();
+    INTERMEDIATE.with(|i| *i.borrow_mut() = None);
+    STEPPING.with(|s| s.set(0));
+    r
+}
+
+/// During an intermediate update of the component at `c`: the value of `vr` (`time_vr` is
+/// the time), `Some(None)` for a variable not readable then; `None` outside one.
+pub fn intermediate_value(c: usize, vr: u32, time_vr: u32) -> Option<Option<f64>> {
+    INTERMEDIATE.with(|i| {
+        let i = i.borrow();
+        let i = i.as_ref().filter(|i| i.component == c)?;
+        Some(if vr == time_vr {
+            Some(i.time)
+        } else {
+            i.values.iter().find(|(v, _)| *v == vr).map(|(_, x)| *x)
+        })
+    })
+}
+
+/// Whether the component at `c` is inside its own step's intermediate update.
+pub fn in_intermediate(c: usize) -> bool {
+    c != 0 && STEPPING.with(|s| s.get()) == c
+}
+
 /// Run `body` on the component behind `c`, catching panics and turning errors into a
-/// logged error status (a panic into `Fatal`).
+/// logged error status (a panic into `Fatal`). A call into a component that is inside its
+/// own step's intermediate update answers `Error` without touching it.
 pub fn with<C: Host>(
     c: *mut c_void,
     what: &str,
     body: impl FnOnce(&mut C) -> Result<c_int, String>,
 ) -> c_int {
-    if c.is_null() {
+    if c.is_null() || in_intermediate(c as usize) {
         return ERROR;
     }
     // SAFETY: a non-null component is a pointer returned by the instantiate function of its

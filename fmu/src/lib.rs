@@ -59,6 +59,50 @@ fn event_states(sim: &Simulation, early: &[EarlyReturn]) -> Vec<(bool, bool)> {
         .collect()
 }
 
+/// The value of a Real variable that the simulation answers (an input's current value, an
+/// output), `None` for the other bindings.
+fn output_value(binding: Binding, sim: &Simulation, commands: &[Option<f64>]) -> Option<f64> {
+    let tools = sim.tools();
+    Some(match binding {
+        Binding::ToolVelocity(k) => commands[k].unwrap_or_else(|| tools[k].velocity_at(sim.time())),
+        Binding::ToolForce(k) => tools[k].axial_force(),
+        Binding::ToolStroke(k) => tools[k].state.stroke,
+        Binding::ToolContactFraction(k) => sim.contact_fraction(k),
+        Binding::FillPoint(k) => match sim.fill_points()[k].filled {
+            Some(_) => 1.0,
+            None => 0.0,
+        },
+        Binding::WorkpieceLateral => sim.extents().lateral(sim.scene().model.kinematics).1,
+        Binding::WorkpieceHeight => {
+            let e = sim.extents();
+            e.y[1] - e.y[0]
+        }
+        Binding::MaxPlasticStrain => sim.max_plastic_strain(),
+        Binding::KineticEnergy => sim.energy().kinetic,
+        Binding::PlasticEnergy => sim.energy().plastic,
+        Binding::ToolWork => sim.energy().tool_work,
+        Binding::KineticToInternalMax => sim.kinetic_to_internal_max(),
+        Binding::Parameter(_)
+        | Binding::ReturnForceLevel(_)
+        | Binding::ReturnOnContact(_)
+        | Binding::ReturnOnForce(_) => return None,
+    })
+}
+
+/// The Float64 outputs of `table` now, by value reference (FMI 3.0 intermediate updates).
+fn outputs_of(table: &[Variable], sim: &Simulation, commands: &[Option<f64>]) -> Vec<(u32, f64)> {
+    table
+        .iter()
+        .filter(|v| v.causality == Causality::Output)
+        .filter_map(|v| Some((v.value_reference, output_value(v.binding, sim, commands)?)))
+        .collect()
+}
+
+/// What a step reports after each solver step (FMI 3.0 intermediate update): the time (s)
+/// and the Float64 outputs by value reference; it returns true to ask the step to return
+/// early there.
+pub type Observer<'a> = &'a mut (dyn FnMut(f64, &[(u32, f64)]) -> bool + Send);
+
 /// A saved FMU state: everything needed to continue bit for bit, also in a fresh instance.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot {
@@ -283,37 +327,8 @@ impl Instance {
         }
         let commands = self.commands.clone();
         let sim = self.readable_sim()?;
-        let tools = sim.tools();
-        Ok(match binding {
-            Binding::ToolVelocity(k) => {
-                commands[k].unwrap_or_else(|| tools[k].velocity_at(sim.time()))
-            }
-            Binding::ToolForce(k) => tools[k].axial_force(),
-            Binding::ToolStroke(k) => tools[k].state.stroke,
-            Binding::ToolContactFraction(k) => sim.contact_fraction(k),
-            Binding::FillPoint(k) => match sim.fill_points()[k].filled {
-                Some(_) => 1.0,
-                None => 0.0,
-            },
-            Binding::WorkpieceLateral => sim.extents().lateral(sim.scene().model.kinematics).1,
-            Binding::WorkpieceHeight => {
-                let e = sim.extents();
-                e.y[1] - e.y[0]
-            }
-            Binding::MaxPlasticStrain => sim.max_plastic_strain(),
-            Binding::KineticEnergy => sim.energy().kinetic,
-            Binding::PlasticEnergy => sim.energy().plastic,
-            Binding::ToolWork => sim.energy().tool_work,
-            Binding::KineticToInternalMax => sim.kinetic_to_internal_max(),
-            Binding::Parameter(_) | Binding::ReturnForceLevel(_) => {
-                unreachable!("answered above")
-            }
-            Binding::ReturnOnContact(_) | Binding::ReturnOnForce(_) => {
-                return Err(request(format!(
-                    "value reference {vr} is not a Real variable"
-                )))
-            }
-        })
+        output_value(binding, sim, &commands)
+            .ok_or_else(|| request(format!("value reference {vr} is not a Real variable")))
     }
 
     /// `fmi2GetInteger`.
@@ -428,7 +443,7 @@ impl Instance {
     /// `fmi2DoStep` from the communication point `t` (s) by `h` (s), sub-cycled at the
     /// solver's step. A failed step leaves the instance in [`Phase::Failed`].
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<()> {
-        self.step(t, h, false).map(|_| ())
+        self.step(t, h, false, None).map(|_| ())
     }
 
     /// `fmi3DoStep` with early return allowed: as [`Instance::do_step`], but the step ends
@@ -436,10 +451,29 @@ impl Instance {
     /// the workpiece, a tool's force magnitude first reaching its level); returns that time
     /// (s), or `None` when the step ran to its end.
     pub fn do_step_early(&mut self, t: f64, h: f64) -> Result<Option<f64>> {
-        self.step(t, h, true)
+        self.step(t, h, true, None)
     }
 
-    fn step(&mut self, t: f64, h: f64, early: bool) -> Result<Option<f64>> {
+    /// `fmi3DoStep` with an intermediate update: as [`Instance::do_step_early`] (events
+    /// armed only when `early`), and `observe` called after every solver step with the time
+    /// and the outputs; when `early` and it returns true, the step returns there.
+    pub fn do_step_observed(
+        &mut self,
+        t: f64,
+        h: f64,
+        early: bool,
+        observe: Observer<'_>,
+    ) -> Result<Option<f64>> {
+        self.step(t, h, early, Some(observe))
+    }
+
+    fn step(
+        &mut self,
+        t: f64,
+        h: f64,
+        early: bool,
+        mut observe: Option<Observer<'_>>,
+    ) -> Result<Option<f64>> {
         self.expect(&[Phase::Stepping], "doStep")?;
         if !(h > 0.0 && h.is_finite()) {
             return Err(request(format!(
@@ -462,26 +496,42 @@ impl Instance {
                 level: e.level,
             })
             .collect();
+        let (table, commands, start) = (&self.table, &self.commands, self.start_time);
         let sim = self
             .sim
             .as_mut()
             .ok_or_else(|| request("not initialised".into()))?;
         let mut before = event_states(sim, &armed);
-        // Before each solver step after the first: did an armed state rise in the last one?
+        let any_armed = armed.iter().any(|e| e.contact || e.force);
+        // Before each solver step after the first: what the last one did. An armed state
+        // that rose ends the step; so does the observer's request, when early return is on.
         let ran = sim.run_toward(target, u64::MAX, |sim, taken| {
-            if taken == 0 || !armed.iter().any(|e| e.contact || e.force) {
+            if taken == 0 {
                 return true;
             }
-            let now = event_states(sim, &armed);
-            let fired = armed
-                .iter()
-                .zip(before.iter().zip(&now))
-                .any(|(e, (b, n))| (e.contact && !b.0 && n.0) || (e.force && !b.1 && n.1));
-            before = now;
-            !fired
+            if any_armed {
+                let now = event_states(sim, &armed);
+                let fired = armed
+                    .iter()
+                    .zip(before.iter().zip(&now))
+                    .any(|(e, (b, n))| (e.contact && !b.0 && n.0) || (e.force && !b.1 && n.1));
+                before = now;
+                if fired {
+                    return false;
+                }
+            }
+            match observe.as_mut() {
+                Some(o) => !(o(start + sim.time(), &outputs_of(table, sim, commands)) && early),
+                None => true,
+            }
         });
+        if let (Ok(r), Some(o)) = (&ran, observe.as_mut()) {
+            if r.reached && r.steps > 0 {
+                o(start + sim.time(), &outputs_of(table, sim, commands));
+            }
+        }
         match ran {
-            Ok(r) if r.interrupted => Ok(Some(self.start_time + sim.time())),
+            Ok(r) if r.interrupted => Ok(Some(start + sim.time())),
             Ok(_) => Ok(None),
             Err(e) => {
                 self.phase = Phase::Failed;

@@ -39,6 +39,7 @@ pub fn write(header: &Header, vars: &[Variable], time_vr: u32) -> Result<String,
     cs.push_attribute(("canGetAndSetFMUState", "true"));
     cs.push_attribute(("canSerializeFMUState", "true"));
     cs.push_attribute(("mightReturnEarlyFromDoStep", "true"));
+    cs.push_attribute(("providesIntermediateUpdate", "true"));
     w.write_event(Event::Empty(cs)).map_err(err)?;
 
     write_units(&mut w, vars)?;
@@ -70,7 +71,10 @@ pub fn write(header: &Header, vars: &[Variable], time_vr: u32) -> Result<String,
         e.push_attribute(("causality", causality(v.causality)));
         e.push_attribute(("variability", variability(v.variability)));
         match v.causality {
-            Causality::Output => e.push_attribute(("initial", "calculated")),
+            Causality::Output => {
+                e.push_attribute(("initial", "calculated"));
+                e.push_attribute(("intermediateUpdate", "true"));
+            }
             Causality::Parameter => e.push_attribute(("initial", "exact")),
             Causality::Input => {}
         }
