@@ -7,7 +7,9 @@
 //! scene in `resources/scene.toml` and `documentation/index.html`.
 
 use rkforge_core::Scene;
-use rkforge_model_description::{time_value_reference, variable_table, variable_table3, xml, xml3};
+use rkforge_model_description::{
+    press, time_value_reference, variable_table, variable_table3, xml, xml3,
+};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -46,7 +48,8 @@ fn shared_library() -> Result<PathBuf, String> {
 }
 
 fn documentation(
-    scene: &Scene,
+    name: &str,
+    description: &str,
     vars: &[rkforge_model_description::Variable],
     version: Version,
 ) -> String {
@@ -72,8 +75,8 @@ fn documentation(
          the solver's stable step. The scene is in resources/scene.toml.</p>\n\
          <table border=\"1\"><tr><th>variable</th><th>causality</th><th>unit</th><th>start</th><th>description</th></tr>\n{rows}</table>\n\
          </body></html>\n",
-        name = scene.name,
-        desc = scene.description,
+        name = name,
+        desc = description,
         fmi = match version {
             Version::Fmi2 => "2.0",
             Version::Fmi3 => "3.0",
@@ -136,6 +139,26 @@ pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, S
             "x86_64-linux",
         ),
     };
+    let doc = documentation(&scene.name, &scene.description, &vars, version);
+    write_archive(
+        out,
+        &md,
+        &format!("binaries/{platform}/{id}.so"),
+        ("resources/scene.toml", text.as_bytes()),
+        &doc,
+    )?;
+    Ok(id)
+}
+
+/// Write an FMU archive: the model description, the shared library at `library`, one
+/// resource file and the documentation.
+fn write_archive(
+    out: &Path,
+    md: &str,
+    library: &str,
+    resource: (&str, &[u8]),
+    doc: &str,
+) -> Result<(), String> {
     let lib =
         std::fs::read(shared_library()?).map_err(|e| format!("cannot read {LIBRARY}: {e}"))?;
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -147,19 +170,43 @@ pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, S
     let mut zip = zip::ZipWriter::new(file);
     let opts = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated);
-    let doc = documentation(&scene, &vars, version);
-    let entries: [(String, &[u8]); 4] = [
-        ("modelDescription.xml".into(), md.as_bytes()),
-        (format!("binaries/{platform}/{id}.so"), &lib),
-        ("resources/scene.toml".into(), text.as_bytes()),
-        ("documentation/index.html".into(), doc.as_bytes()),
+    let entries: [(&str, &[u8]); 4] = [
+        ("modelDescription.xml", md.as_bytes()),
+        (library, &lib),
+        resource,
+        ("documentation/index.html", doc.as_bytes()),
     ];
     for (name, data) in entries {
-        zip.start_file(name.as_str(), opts)
+        zip.start_file(name, opts)
             .map_err(|e| format!("zip {name}: {e}"))?;
         zip.write_all(data)
             .map_err(|e| format!("zip {name}: {e}"))?;
     }
     zip.finish().map_err(|e| format!("zip: {e}"))?;
+    Ok(())
+}
+
+/// Write the FMI 2.0 FMU of the press plant `name` (hydraulic, crank, hammer, screw) to
+/// `out`; returns the model identifier (`<name>_press`).
+pub fn pack_press(name: &str, out: &Path) -> Result<String, String> {
+    let kind = press::parse(name).ok_or_else(|| format!("--press {name}: no such press"))?;
+    let id = format!("{name}_press");
+    let header = press::header(kind, &id);
+    let vars = press::variable_table(kind);
+    let md = xml::write(&header, &vars)?;
+    let doc = documentation(
+        &header.model_name,
+        &header.description,
+        &vars,
+        Version::Fmi2,
+    );
+    let resource = format!("press = \"{name}\"\n");
+    write_archive(
+        out,
+        &md,
+        &format!("binaries/linux64/{id}.so"),
+        ("resources/press.toml", resource.as_bytes()),
+        &doc,
+    )?;
     Ok(id)
 }

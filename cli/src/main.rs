@@ -92,8 +92,13 @@ struct SweepArgs {
 
 #[derive(clap::Args)]
 struct FmuArgs {
-    /// Scene file (TOML).
-    scene: PathBuf,
+    /// Scene file (TOML): a forging FMU of the scene.
+    #[arg(required_unless_present = "press")]
+    scene: Option<PathBuf>,
+    /// Instead of a scene, a press plant: hydraulic, crank, hammer or screw (FMI 2.0;
+    /// examples/presses' equations and defaults).
+    #[arg(long, conflicts_with = "scene", value_parser = clap::builder::PossibleValuesParser::new(["hydraulic", "crank", "hammer", "screw"]))]
+    press: Option<String>,
     /// The .fmu file to write.
     #[arg(long)]
     out: PathBuf,
@@ -158,8 +163,13 @@ fn main() -> ExitCode {
         Some(Command::Compare(a)) => compare_command(a),
         Some(Command::Sweep(a)) => sweep_command(a),
         Some(Command::RingChart(a)) => ring_chart_command(a),
-        Some(Command::Fmu(a)) => fmu::pack(&a.scene, &a.out, fmu::Version::from_arg(&a.fmi))
-            .map(|id| println!("wrote {} (model identifier {id})", a.out.display())),
+        Some(Command::Fmu(a)) => match (&a.scene, &a.press) {
+            (Some(scene), _) => fmu::pack(scene, &a.out, fmu::Version::from_arg(&a.fmi)),
+            (None, Some(press)) if a.fmi == "2" => fmu::pack_press(press, &a.out),
+            (None, Some(_)) => Err("--press packs an FMI 2.0 FMU (leave out --fmi 3)".into()),
+            (None, None) => Err("give a scene file or --press".into()),
+        }
+        .map(|id| println!("wrote {} (model identifier {id})", a.out.display())),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -7,7 +7,7 @@
 
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
-use crate::{Instance, Phase};
+use crate::{press, Instance, Phase, Slave};
 use std::ffi::{c_char, c_int, c_uint, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -31,7 +31,7 @@ pub struct CallbackFunctions {
 
 /// What the host's `fmi2Component` points to.
 pub struct Component {
-    instance: Instance,
+    model: Box<dyn Slave>,
     name: CString,
     logger: Option<Logger>,
     env: Env,
@@ -72,9 +72,6 @@ impl Component {
 }
 
 impl Host for Component {
-    fn instance(&mut self) -> &mut Instance {
-        &mut self.instance
-    }
     fn fail(&self, status: fmi2Status, message: &str) -> fmi2Status {
         self.log(status, message);
         status
@@ -88,6 +85,34 @@ fn with(
     body: impl FnOnce(&mut Component) -> Result<fmi2Status, String>,
 ) -> fmi2Status {
     host::with::<Component>(c, what, body)
+}
+
+/// The slave the FMU's resources describe: a press plant (`press.toml`: `press = "crank"`)
+/// or a forging scene (`scene.toml`).
+fn slave(folder: &std::path::Path) -> Result<Box<dyn Slave>, String> {
+    let press = folder.join("press.toml");
+    if press.is_file() {
+        let text = std::fs::read_to_string(&press)
+            .map_err(|e| format!("cannot read {}: {e}", press.display()))?;
+        let name = text
+            .lines()
+            .find_map(|l| l.trim().strip_prefix("press = "))
+            .map(|v| v.trim().trim_matches('"'))
+            .unwrap_or_default();
+        let kind = press::parse(name).ok_or_else(|| {
+            format!(
+                "{}: `press = \"{name}\"` is no press of rkforge",
+                press.display()
+            )
+        })?;
+        return Ok(Box::new(press::Press::new(kind)));
+    }
+    let path = folder.join("scene.toml");
+    let scene = std::fs::read_to_string(&path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    Ok(Box::new(
+        Instance::new(&scene, &path.display().to_string()).map_err(|e| e.to_string())?,
+    ))
 }
 
 /// The folder of a `file:` URI (`file:///a/b%20c`, `file:/a/b`).
@@ -172,16 +197,12 @@ pub unsafe extern "C" fn fmi2Instantiate(
             .ok_or("fmuResourceLocation is null: the scene lives in resources/")?;
         let folder = uri_to_path(&uri)
             .ok_or_else(|| format!("fmuResourceLocation `{uri}` is not a file: URI"))?;
-        let path = folder.join("scene.toml");
-        let scene = std::fs::read_to_string(&path)
-            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        let instance =
-            Instance::new(&scene, &path.display().to_string()).map_err(|e| e.to_string())?;
+        let model = slave(&folder)?;
         if let Some(g) = unsafe { text(guid) } {
-            if g != instance.guid() {
+            if g != model.guid() {
                 return Err(format!(
-                    "GUID {g} does not match the scene in resources/ ({})",
-                    instance.guid()
+                    "GUID {g} does not match the model in resources/ ({})",
+                    model.guid()
                 ));
             }
         }
@@ -192,7 +213,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
             unsafe { ((*functions).logger, (*functions).component_environment) }
         };
         Ok(Box::new(Component {
-            instance,
+            model,
             name: CString::new(name.replace('\0', " ")).unwrap_or_default(),
             logger,
             env,
@@ -267,7 +288,7 @@ pub extern "C" fn fmi2SetupExperiment(
     _stop: f64,
 ) -> fmi2Status {
     with(c, "fmi2SetupExperiment", |comp| {
-        comp.instance
+        comp.model
             .setup_experiment(start)
             .map(|_| OK)
             .map_err(|e| e.to_string())
@@ -277,7 +298,7 @@ pub extern "C" fn fmi2SetupExperiment(
 #[no_mangle]
 pub extern "C" fn fmi2EnterInitializationMode(c: *mut c_void) -> fmi2Status {
     with(c, "fmi2EnterInitializationMode", |comp| {
-        comp.instance
+        comp.model
             .enter_initialization()
             .map(|_| OK)
             .map_err(|e| e.to_string())
@@ -287,7 +308,7 @@ pub extern "C" fn fmi2EnterInitializationMode(c: *mut c_void) -> fmi2Status {
 #[no_mangle]
 pub extern "C" fn fmi2ExitInitializationMode(c: *mut c_void) -> fmi2Status {
     with(c, "fmi2ExitInitializationMode", |comp| {
-        comp.instance
+        comp.model
             .exit_initialization()
             .map(|_| OK)
             .map_err(|e| e.to_string())
@@ -297,7 +318,7 @@ pub extern "C" fn fmi2ExitInitializationMode(c: *mut c_void) -> fmi2Status {
 #[no_mangle]
 pub extern "C" fn fmi2Terminate(c: *mut c_void) -> fmi2Status {
     with(c, "fmi2Terminate", |comp| {
-        comp.instance
+        comp.model
             .terminate()
             .map(|_| OK)
             .map_err(|e| e.to_string())
@@ -307,7 +328,7 @@ pub extern "C" fn fmi2Terminate(c: *mut c_void) -> fmi2Status {
 #[no_mangle]
 pub extern "C" fn fmi2Reset(c: *mut c_void) -> fmi2Status {
     with(c, "fmi2Reset", |comp| {
-        comp.instance.reset();
+        comp.model.reset();
         Ok(OK)
     })
 }
@@ -326,7 +347,7 @@ macro_rules! getter {
                 let vrs = unsafe { slice(vr, n, "vr") }?;
                 let out = unsafe { slice_mut(values, n, "value") }?;
                 for (v, o) in vrs.iter().zip(out.iter_mut()) {
-                    let x = comp.instance.$get(*v).map_err(|e| e.to_string())?;
+                    let x = comp.model.$get(*v).map_err(|e| e.to_string())?;
                     *o = $conv(x);
                 }
                 Ok(OK)
@@ -367,7 +388,7 @@ pub unsafe extern "C" fn fmi2GetString(
         let out = unsafe { slice_mut(values, n, "value") }?;
         comp.strings.clear();
         for v in vrs {
-            let s = comp.instance.get_string(*v).map_err(|e| e.to_string())?;
+            let s = comp.model.get_string(*v).map_err(|e| e.to_string())?;
             comp.strings.push(CString::new(s).unwrap_or_default());
         }
         for (o, s) in out.iter_mut().zip(&comp.strings) {
@@ -389,7 +410,7 @@ pub unsafe extern "C" fn fmi2SetReal(
         let vrs = unsafe { slice(vr, n, "vr") }?;
         let vals = unsafe { slice(values, n, "value") }?;
         for (v, x) in vrs.iter().zip(vals) {
-            comp.instance.set_real(*v, *x).map_err(|e| e.to_string())?;
+            comp.model.set_real(*v, *x).map_err(|e| e.to_string())?;
         }
         Ok(OK)
     })
@@ -407,9 +428,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
         let vrs = unsafe { slice(vr, n, "vr") }?;
         let vals = unsafe { slice(values, n, "value") }?;
         for (v, x) in vrs.iter().zip(vals) {
-            comp.instance
-                .set_integer(*v, *x)
-                .map_err(|e| e.to_string())?;
+            comp.model.set_integer(*v, *x).map_err(|e| e.to_string())?;
         }
         Ok(OK)
     })
@@ -444,9 +463,7 @@ pub unsafe extern "C" fn fmi2SetString(
         let vals = unsafe { slice(values, n, "value") }?;
         for (v, p) in vrs.iter().zip(vals) {
             let s = unsafe { text(*p) }.ok_or("a String value is a null pointer")?;
-            comp.instance
-                .set_string(*v, &s)
-                .map_err(|e| e.to_string())?;
+            comp.model.set_string(*v, &s).map_err(|e| e.to_string())?;
         }
         Ok(OK)
     })
@@ -455,7 +472,7 @@ pub unsafe extern "C" fn fmi2SetString(
 #[no_mangle]
 pub extern "C" fn fmi2DoStep(c: *mut c_void, t: f64, h: f64, _no_prior: c_int) -> fmi2Status {
     with(c, "fmi2DoStep", |comp| {
-        comp.instance
+        comp.model
             .do_step(t, h)
             .map(|_| OK)
             .map_err(|e| e.to_string())
@@ -531,7 +548,7 @@ pub unsafe extern "C" fn fmi2GetRealStatus(
         }
         // SAFETY: one writable value.
         let out = unsafe { slice_mut(value, 1, "value") }?;
-        out[0] = comp.instance.time();
+        out[0] = comp.model.time();
         Ok(OK)
     })
 }
@@ -557,7 +574,7 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
         }
         // SAFETY: one writable value.
         let out = unsafe { slice_mut(value, 1, "value") }?;
-        out[0] = c_int::from(comp.instance.phase() == Phase::Terminated);
+        out[0] = c_int::from(comp.model.phase() == Phase::Terminated);
         Ok(OK)
     })
 }
@@ -571,21 +588,38 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     with(c, "fmi2GetStringStatus", |_| Ok(DISCARD))
 }
 
+/// An FMI 2.0 FMU state: the slave's [`Slave::save`] bytes.
+type State = Vec<u8>;
+
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: *mut c_void, slot: *mut *mut c_void) -> fmi2Status {
     with(c, "fmi2GetFMUstate", |comp| {
-        // SAFETY: the host's slot for the state pointer.
-        unsafe { host::get_state(&comp.instance, slot) }.map(|()| OK)
+        // SAFETY: one writable slot holding null or a state made here.
+        let slot = unsafe { slice_mut(slot, 1, "FMUstate") }?;
+        if !slot[0].is_null() {
+            drop(unsafe { Box::from_raw(slot[0] as *mut State) });
+        }
+        slot[0] = Box::into_raw(Box::new(comp.model.save())) as *mut c_void;
+        Ok(OK)
     })
 }
 
+/// The bytes behind a state handle made here.
+unsafe fn state<'a>(state: *mut c_void) -> Result<&'a State, String> {
+    if state.is_null() {
+        return Err("FMUstate is null".into());
+    }
+    // SAFETY: made by fmi2GetFMUstate / fmi2DeSerializeFMUstate and not yet freed.
+    Ok(unsafe { &*(state as *const State) })
+}
+
 #[no_mangle]
-pub unsafe extern "C" fn fmi2SetFMUstate(c: *mut c_void, state: *mut c_void) -> fmi2Status {
+pub unsafe extern "C" fn fmi2SetFMUstate(c: *mut c_void, handle: *mut c_void) -> fmi2Status {
     with(c, "fmi2SetFMUstate", |comp| {
-        // SAFETY: made by fmi2GetFMUstate / fmi2DeSerializeFMUstate and not yet freed.
-        let snap = unsafe { host::state(state) }?;
-        comp.instance
-            .restore(snap)
+        // SAFETY: a state made here.
+        let bytes = unsafe { state(handle) }?;
+        comp.model
+            .load(bytes)
             .map(|_| OK)
             .map_err(|e| e.to_string())
     })
@@ -594,8 +628,14 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: *mut c_void, state: *mut c_void) -> 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, slot: *mut *mut c_void) -> fmi2Status {
     with(c, "fmi2FreeFMUstate", |_| {
-        // SAFETY: the host's slot, holding a state made here or null.
-        unsafe { host::free_state(slot) };
+        if !slot.is_null() {
+            // SAFETY: the host's slot, holding a state made here or null.
+            let slot = unsafe { &mut *slot };
+            if !slot.is_null() {
+                drop(unsafe { Box::from_raw(*slot as *mut State) });
+                *slot = std::ptr::null_mut();
+            }
+        }
         Ok(OK)
     })
 }
@@ -603,12 +643,12 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, slot: *mut *mut c_void
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     c: *mut c_void,
-    state: *mut c_void,
+    handle: *mut c_void,
     size: *mut usize,
 ) -> fmi2Status {
     with(c, "fmi2SerializedFMUstateSize", |_| {
         // SAFETY: a state made here; one writable size slot.
-        let n = unsafe { host::state(state) }?.to_bytes().len();
+        let n = unsafe { state(handle) }?.len();
         unsafe { slice_mut(size, 1, "size") }?[0] = n;
         Ok(OK)
     })
@@ -617,13 +657,21 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SerializeFMUstate(
     c: *mut c_void,
-    state: *mut c_void,
+    handle: *mut c_void,
     bytes: *mut c_char,
     size: usize,
 ) -> fmi2Status {
     with(c, "fmi2SerializeFMUstate", |_| {
         // SAFETY: a state made here; `size` writable bytes.
-        unsafe { host::serialize_state(state, bytes as *mut u8, size) }.map(|()| OK)
+        let data = unsafe { state(handle) }?;
+        if data.len() != size {
+            return Err(format!(
+                "size {size} does not match the serialized size {}",
+                data.len()
+            ));
+        }
+        unsafe { slice_mut(bytes as *mut u8, size, "serializedState") }?.copy_from_slice(data);
+        Ok(OK)
     })
 }
 
@@ -636,7 +684,10 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
 ) -> fmi2Status {
     with(c, "fmi2DeSerializeFMUstate", |_| {
         // SAFETY: `size` readable bytes; one writable slot.
-        unsafe { host::deserialize_state(bytes as *const u8, size, slot) }.map(|()| OK)
+        let data = unsafe { slice(bytes as *const u8, size, "serializedState") }?.to_vec();
+        let slot = unsafe { slice_mut(slot, 1, "FMUstate") }?;
+        slot[0] = Box::into_raw(Box::new(data)) as *mut c_void;
+        Ok(OK)
     })
 }
 

@@ -84,9 +84,6 @@ impl Component {
 }
 
 impl Host for Component {
-    fn instance(&mut self) -> &mut Instance {
-        &mut self.instance
-    }
     fn fail(&self, status: fmi3Status, message: &str) -> fmi3Status {
         self.log(status, message);
         status

@@ -19,10 +19,8 @@ pub const ERROR: c_int = 3;
 /// `fmi2Fatal` / `fmi3Fatal`.
 pub const FATAL: c_int = 4;
 
-/// What the host's instance pointer points to: an [`Instance`] and the host's logger.
+/// What the host's instance pointer points to: a slave and the host's logger.
 pub trait Host {
-    /// The co-simulation instance.
-    fn instance(&mut self) -> &mut Instance;
     /// Log `message` with `status` through the host's logger; returns `status`.
     fn fail(&self, status: c_int, message: &str) -> c_int;
 }

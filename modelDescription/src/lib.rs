@@ -9,6 +9,7 @@
 //! the same table. The same table is meant to drive `modelDescription.xml` and the FMU's
 //! getters and setters, so the two cannot drift.
 
+pub mod press;
 pub mod xml;
 pub mod xml3;
 
@@ -80,6 +81,8 @@ pub enum Binding {
     /// Parameter `k` of the scene ([`rkforge_core::scene_parameters::parameters`]): a
     /// scene key under its dotted name.
     Parameter(usize),
+    /// Variable `k` of a press plant's own table (`fmu/src/press.rs`).
+    Press(usize),
     /// FMI 3.0: return early from a step when tool `k` first touches the workpiece.
     ReturnOnContact(usize),
     /// FMI 3.0: return early from a step when the force on tool `k` first reaches its level.

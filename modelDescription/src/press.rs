@@ -1,0 +1,269 @@
+//! The variable tables of the press plants (`fmu/src/press.rs`): inputs read from a forging
+//! FMU, `ram.velocity` written to it, the press's own outputs and its parameters with the
+//! defaults of `examples/presses`.
+
+use crate::{xml, Binding, Causality, Kind, Variability, Variable};
+use std::f64::consts::PI;
+
+/// Which press.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PressKind {
+    /// Pump, compressible oil column and relief valve.
+    Hydraulic,
+    /// Flywheel, crank and connecting rod.
+    Crank,
+    /// A falling ram, blow after blow.
+    Hammer,
+    /// Flywheel and screw.
+    Screw,
+}
+
+/// A press's name as `rkforge fmu --press` takes it.
+pub fn parse(name: &str) -> Option<PressKind> {
+    match name {
+        "hydraulic" => Some(PressKind::Hydraulic),
+        "crank" => Some(PressKind::Crank),
+        "hammer" => Some(PressKind::Hammer),
+        "screw" => Some(PressKind::Screw),
+        _ => None,
+    }
+}
+
+/// One parameter: name, default, unit, description.
+pub type Param = (&'static str, f64, Option<&'static str>, &'static str);
+
+/// The parameters of each press, with the Python examples' defaults.
+pub fn parameters(kind: PressKind) -> &'static [Param] {
+    match kind {
+        PressKind::Hydraulic => &[
+            ("flow", 1.0e-3, None, "pump flow Q (m^3/s)"),
+            ("area", 0.05, None, "ram (piston) area A (m^2)"),
+            ("oil_volume", 0.005, None, "oil under compression V (m^3)"),
+            ("bulk_modulus", 1.4e9, Some("Pa"), "oil bulk modulus beta"),
+            (
+                "relief_pressure",
+                20.0e6,
+                Some("Pa"),
+                "relief valve setting: the tonnage is p_relief A",
+            ),
+            ("ram_mass", 2000.0, None, "ram and moving platen m_r (kg)"),
+            ("damping", 5.0e5, None, "seals and guides c (N s/m)"),
+            (
+                "substeps",
+                20.0,
+                None,
+                "plant steps per communication step (-)",
+            ),
+        ],
+        PressKind::Crank => &[
+            ("crank_radius", 0.10, Some("m"), "crank radius r"),
+            ("rod_length", 0.50, Some("m"), "connecting rod l"),
+            (
+                "strokes_per_minute",
+                20.0,
+                None,
+                "strokes per minute at no load (1/min)",
+            ),
+            (
+                "inertia",
+                3.0e4,
+                None,
+                "flywheel inertia referred to the crankshaft I (kg m^2)",
+            ),
+            ("rated_force", 1.2e6, Some("N"), "rated tonnage"),
+            (
+                "rated_angle",
+                20.0 * PI / 180.0,
+                None,
+                "rated angle before bottom dead centre (rad)",
+            ),
+            (
+                "shut_height",
+                0.040,
+                Some("m"),
+                "billet height at bottom dead centre",
+            ),
+            (
+                "billet_height",
+                0.060,
+                Some("m"),
+                "billet height when the co-simulation starts",
+            ),
+            (
+                "ram_gap",
+                0.150,
+                Some("m"),
+                "ram above the billet when the co-simulation starts",
+            ),
+            (
+                "end_angle",
+                15.0 * PI / 180.0,
+                None,
+                "after bottom dead centre, where the cycle ends (rad)",
+            ),
+        ],
+        PressKind::Hammer => &[
+            ("ram_mass", 200.0, None, "ram mass m (kg)"),
+            (
+                "impact_speed",
+                5.0,
+                Some("m/s"),
+                "speed v0 at each blow's start",
+            ),
+            (
+                "target_height",
+                0.045,
+                Some("m"),
+                "billet height that ends the forging",
+            ),
+            (
+                "gap",
+                1.0e-3,
+                Some("m"),
+                "ram backed off above the billet between blows",
+            ),
+            (
+                "lift_speed",
+                1.0,
+                Some("m/s"),
+                "speed of the lift between blows",
+            ),
+            ("max_blows", 20.0, None, "most blows (-)"),
+        ],
+        PressKind::Screw => &[
+            (
+                "inertia",
+                40.0,
+                None,
+                "inertia of flywheel, screw and ram referred to the screw I (kg m^2)",
+            ),
+            ("lead", 0.25, Some("m"), "screw lead p, ram travel per turn"),
+            ("omega", 12.0, None, "flywheel speed at contact (rad/s)"),
+        ],
+    }
+}
+
+/// The outputs of each press besides `ram.velocity`: name, unit, description.
+pub fn outputs(kind: PressKind) -> &'static [(&'static str, Option<&'static str>, &'static str)] {
+    match kind {
+        PressKind::Hydraulic => &[("pressure", Some("Pa"), "cylinder pressure")],
+        PressKind::Crank => &[
+            (
+                "crank_angle",
+                None,
+                "crank angle from top dead centre (rad)",
+            ),
+            ("crank_speed", None, "crank speed (rad/s)"),
+            (
+                "flywheel_energy",
+                Some("J"),
+                "kinetic energy of the flywheel",
+            ),
+            (
+                "allowed_force",
+                Some("N"),
+                "the press's load limit at the crank angle",
+            ),
+            (
+                "overload",
+                None,
+                "1 once the forging force exceeded the allowed force, else 0",
+            ),
+        ],
+        PressKind::Hammer => &[("blow", None, "number of the blow under way (-)")],
+        PressKind::Screw => &[
+            ("flywheel_speed", None, "flywheel speed (rad/s)"),
+            (
+                "flywheel_energy",
+                Some("J"),
+                "kinetic energy of the flywheel",
+            ),
+        ],
+    }
+}
+
+/// The forging outputs a press reads.
+const INPUTS: [(&str, &str, &str); 4] = [
+    ("ram.force", "N", "force of the workpiece on the ram along the ram's axis (the forging FMU's ram.force; negative while pressing)"),
+    ("ram.stroke", "m", "ram displacement along its axis (the forging FMU's ram.stroke)"),
+    ("ram.tool_work", "J", "work the ram delivered to the workpiece (the forging FMU's energy.tool_work)"),
+    ("workpiece.height", "m", "workpiece height (the forging FMU's workpiece.height)"),
+];
+
+/// The variable table of a press: inputs, `ram.velocity`, its outputs, its parameters.
+pub fn variable_table(kind: PressKind) -> Vec<Variable> {
+    let mut t = Vec::new();
+    let mut push = |name: String, causality, variability, kind, unit, description: String| {
+        let value_reference = t.len() as u32;
+        t.push(Variable {
+            name,
+            value_reference,
+            causality,
+            variability,
+            kind,
+            unit,
+            description,
+            binding: Binding::Press(value_reference as usize),
+        });
+    };
+    for (name, unit, d) in INPUTS {
+        push(
+            name.into(),
+            Causality::Input,
+            Variability::Continuous,
+            Kind::Real(Some(0.0)),
+            Some(unit),
+            d.into(),
+        );
+    }
+    push(
+        "ram.velocity".into(),
+        Causality::Output,
+        Variability::Continuous,
+        Kind::Real(None),
+        Some("m/s"),
+        "ram velocity along the ram's axis (the forging FMU's ram.velocity input)".into(),
+    );
+    push(
+        "finished".into(),
+        Causality::Output,
+        Variability::Continuous,
+        Kind::Real(None),
+        None,
+        "1 once the press's cycle is over (stall, overload, end angle, target height, stopped flywheel), else 0".into(),
+    );
+    for (name, unit, d) in outputs(kind) {
+        push(
+            (*name).into(),
+            Causality::Output,
+            Variability::Continuous,
+            Kind::Real(None),
+            *unit,
+            (*d).into(),
+        );
+    }
+    for (name, default, unit, d) in parameters(kind) {
+        push(
+            (*name).into(),
+            Causality::Parameter,
+            Variability::Fixed,
+            Kind::Real(Some(*default)),
+            *unit,
+            (*d).into(),
+        );
+    }
+    t
+}
+
+/// A press's model description header.
+pub fn header(kind: PressKind, model_identifier: &str) -> xml::Header {
+    let name = format!("{kind:?}").to_lowercase();
+    xml::Header {
+        model_name: format!("{name}_press"),
+        model_identifier: model_identifier.to_string(),
+        guid: xml::guid(&format!("rkforge press {name}")),
+        description: format!("rkforge {name} press plant (examples/presses/{name}.py)"),
+        stop_time: 1.0,
+        step_size: 1.0e-4,
+    }
+}
