@@ -8,6 +8,7 @@ mod fmu;
 mod output;
 mod ring_chart;
 mod run;
+mod ssp;
 mod sweep;
 
 use clap::{Parser, Subcommand};
@@ -41,6 +42,9 @@ enum Command {
     Fmu(FmuArgs),
     /// Run a grid of resolutions, rules and time-step safety factors; error against wall time.
     Sweep(SweepArgs),
+    /// A press plant and the scene's forging as one system (SSP 1.0): both FMUs connected,
+    /// velocity to the forging, force, stroke, work and height back to the press
+    Ssp(SspArgs),
     /// Friction calibration chart of a ring compression scene: inner diameter decrease
     /// against height reduction per friction law, beside Avitzur's upper bound for each
     /// shear factor m (ring_chart.csv, ring_chart_comparison.csv and ring_chart.png).
@@ -108,6 +112,21 @@ struct FmuArgs {
 }
 
 #[derive(clap::Args)]
+struct SspArgs {
+    /// Scene file (TOML) of the forging.
+    scene: PathBuf,
+    /// The press: hydraulic, crank, hammer or screw.
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(["hydraulic", "crank", "hammer", "screw"]))]
+    press: String,
+    /// The scene's tool the press drives.
+    #[arg(long, default_value = "ram")]
+    tool: String,
+    /// The .ssp file to write.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+#[derive(clap::Args)]
 struct CompareArgs {
     /// Scene files (TOML).
     #[arg(required = true)]
@@ -162,6 +181,8 @@ fn main() -> ExitCode {
         Some(Command::Run(a)) => run_command(a),
         Some(Command::Compare(a)) => compare_command(a),
         Some(Command::Sweep(a)) => sweep_command(a),
+        Some(Command::Ssp(a)) => ssp::pack(&a.scene, &a.press, &a.tool, &a.out)
+            .map(|()| println!("wrote {}", a.out.display())),
         Some(Command::RingChart(a)) => ring_chart_command(a),
         Some(Command::Fmu(a)) => match (&a.scene, &a.press) {
             (Some(scene), _) => fmu::pack(scene, &a.out, fmu::Version::from_arg(&a.fmi)),

@@ -1,0 +1,216 @@
+//! `rkforge ssp SCENE --press NAME --out FILE.ssp`: a press and a forging as one system any
+//! SSP (System Structure and Parameterization 1.0) tool opens: the press FMU
+//! (`rkforge fmu --press`) and the scene's forging FMU in `resources/`, and
+//! `SystemStructure.ssd` connecting them: the press's `ram.velocity` to the forging's
+//! `<tool>.velocity`; the forging's `<tool>.force`, `<tool>.stroke`, `energy.tool_work` and
+//! `workpiece.height` to the press's `ram.force`, `ram.stroke`, `ram.tool_work` and
+//! `workpiece.height`. The forging's parameters are the scene's (write them into the scene),
+//! the press's its defaults.
+
+use crate::fmu;
+use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
+use quick_xml::Writer;
+use rkforge_core::Scene;
+use rkforge_model_description::{press, variable_table, Causality, Variable};
+use std::io::Write;
+use std::path::Path;
+
+/// The forging outputs each press input reads, and the tool's velocity input.
+fn connections(tool: &str) -> Vec<(String, String, String, String)> {
+    let c = |a: &str, b: String, d: &str, e: String| (a.to_string(), b, d.to_string(), e);
+    vec![
+        c(
+            "press",
+            "ram.velocity".into(),
+            "forging",
+            format!("{tool}.velocity"),
+        ),
+        c(
+            "forging",
+            format!("{tool}.force"),
+            "press",
+            "ram.force".into(),
+        ),
+        c(
+            "forging",
+            format!("{tool}.stroke"),
+            "press",
+            "ram.stroke".into(),
+        ),
+        c(
+            "forging",
+            "energy.tool_work".into(),
+            "press",
+            "ram.tool_work".into(),
+        ),
+        c(
+            "forging",
+            "workpiece.height".into(),
+            "press",
+            "workpiece.height".into(),
+        ),
+    ]
+}
+
+fn err(e: std::io::Error) -> String {
+    e.to_string()
+}
+
+/// `<ssd:Component>` with the connectors of `vars` (inputs and outputs).
+fn component(
+    w: &mut Writer<Vec<u8>>,
+    name: &str,
+    source: &str,
+    vars: &[Variable],
+) -> Result<(), String> {
+    let mut c = BytesStart::new("ssd:Component");
+    c.push_attribute(("name", name));
+    c.push_attribute(("type", "application/x-fmu-sharedlibrary"));
+    c.push_attribute(("source", source));
+    w.write_event(Event::Start(c)).map_err(err)?;
+    w.write_event(Event::Start(BytesStart::new("ssd:Connectors")))
+        .map_err(err)?;
+    for v in vars {
+        let kind = match v.causality {
+            Causality::Input => "input",
+            Causality::Output => "output",
+            Causality::Parameter => continue,
+        };
+        let mut e = BytesStart::new("ssd:Connector");
+        e.push_attribute(("name", v.name.as_str()));
+        e.push_attribute(("kind", kind));
+        w.write_event(Event::Start(e)).map_err(err)?;
+        w.write_event(Event::Empty(BytesStart::new("ssc:Real")))
+            .map_err(err)?;
+        w.write_event(Event::End(BytesEnd::new("ssd:Connector")))
+            .map_err(err)?;
+    }
+    w.write_event(Event::End(BytesEnd::new("ssd:Connectors")))
+        .map_err(err)?;
+    w.write_event(Event::End(BytesEnd::new("ssd:Component")))
+        .map_err(err)?;
+    Ok(())
+}
+
+/// The system description.
+fn ssd(scene: &Scene, kind: press::PressKind, name: &str, tool: &str) -> Result<String, String> {
+    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
+    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
+        .map_err(err)?;
+    let mut root = BytesStart::new("ssd:SystemStructureDescription");
+    root.push_attribute((
+        "xmlns:ssc",
+        "http://ssp-standard.org/SSP1/SystemStructureCommon",
+    ));
+    root.push_attribute((
+        "xmlns:ssd",
+        "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    ));
+    root.push_attribute(("version", "1.0"));
+    let system_name = format!("{name}_press_{}", scene.name);
+    root.push_attribute(("name", system_name.as_str()));
+    root.push_attribute((
+        "generationTool",
+        concat!("rkforge ", env!("CARGO_PKG_VERSION")),
+    ));
+    w.write_event(Event::Start(root)).map_err(err)?;
+    let mut system = BytesStart::new("ssd:System");
+    system.push_attribute(("name", system_name.as_str()));
+    w.write_event(Event::Start(system)).map_err(err)?;
+    w.write_event(Event::Start(BytesStart::new("ssd:Elements")))
+        .map_err(err)?;
+    component(
+        &mut w,
+        "press",
+        &format!("resources/{name}.fmu"),
+        &press::variable_table(kind),
+    )?;
+    component(
+        &mut w,
+        "forging",
+        "resources/forging.fmu",
+        &variable_table(scene),
+    )?;
+    w.write_event(Event::End(BytesEnd::new("ssd:Elements")))
+        .map_err(err)?;
+    w.write_event(Event::Start(BytesStart::new("ssd:Connections")))
+        .map_err(err)?;
+    for (a, ac, b, bc) in connections(tool) {
+        let mut e = BytesStart::new("ssd:Connection");
+        e.push_attribute(("startElement", a.as_str()));
+        e.push_attribute(("startConnector", ac.as_str()));
+        e.push_attribute(("endElement", b.as_str()));
+        e.push_attribute(("endConnector", bc.as_str()));
+        w.write_event(Event::Empty(e)).map_err(err)?;
+    }
+    w.write_event(Event::End(BytesEnd::new("ssd:Connections")))
+        .map_err(err)?;
+    w.write_event(Event::End(BytesEnd::new("ssd:System")))
+        .map_err(err)?;
+    let mut de = BytesStart::new("ssd:DefaultExperiment");
+    de.push_attribute(("startTime", "0"));
+    de.push_attribute(("stopTime", scene.time.end_s.to_string().as_str()));
+    w.write_event(Event::Empty(de)).map_err(err)?;
+    w.write_event(Event::End(BytesEnd::new("ssd:SystemStructureDescription")))
+        .map_err(err)?;
+    String::from_utf8(w.into_inner()).map_err(|e| e.to_string())
+}
+
+/// Write the SSP of the press `name` driving the tool `tool` of the scene file `scene_path`.
+pub fn pack(scene_path: &Path, name: &str, tool: &str, out: &Path) -> Result<(), String> {
+    let kind = press::parse(name).ok_or_else(|| format!("--press {name}: no such press"))?;
+    let text = std::fs::read_to_string(scene_path)
+        .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
+    let scene = Scene::from_str_named(&text, &scene_path.display().to_string())
+        .map_err(|e| e.to_string())?;
+    let table = variable_table(&scene);
+    for needed in ["velocity", "force", "stroke"].map(|v| format!("{tool}.{v}")) {
+        if !table.iter().any(|v| v.name == needed) {
+            return Err(format!(
+                "--tool {tool}: the scene's FMU has no variable `{needed}` (the press drives a tool of the scene that is not fixed)"
+            ));
+        }
+    }
+    let dir = tempfile_dir(out)?;
+    let press_fmu = dir.join(format!("{name}.fmu"));
+    let forging_fmu = dir.join("forging.fmu");
+    fmu::pack_press(name, &press_fmu)?;
+    fmu::pack(scene_path, &forging_fmu, fmu::Version::Fmi2)?;
+    let ssd = ssd(&scene, kind, name, tool)?;
+    let file =
+        std::fs::File::create(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let opts = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated);
+    let entries = [
+        ("SystemStructure.ssd".to_string(), ssd.into_bytes()),
+        (format!("resources/{name}.fmu"), read(&press_fmu)?),
+        ("resources/forging.fmu".to_string(), read(&forging_fmu)?),
+    ];
+    for (entry, data) in entries {
+        zip.start_file(entry.as_str(), opts)
+            .map_err(|e| format!("zip {entry}: {e}"))?;
+        zip.write_all(&data)
+            .map_err(|e| format!("zip {entry}: {e}"))?;
+    }
+    zip.finish().map_err(|e| format!("zip: {e}"))?;
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+fn read(p: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(p).map_err(|e| format!("cannot read {}: {e}", p.display()))
+}
+
+/// A fresh folder beside `out` for the FMUs on their way into the archive.
+fn tempfile_dir(out: &Path) -> Result<std::path::PathBuf, String> {
+    let parent = out
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent)
+        .map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
+    let dir = parent.join(format!(".rkforge-ssp-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    Ok(dir)
+}
