@@ -256,3 +256,33 @@ def test_intermediate_updates_follow_every_solver_step(rkforge_bin, tmp_path):
     early, last = s.step(1e-3)
     assert early and last == expected[4][0] and len(seen) == 5
     s.fmu.freeInstance()
+
+
+def test_contact_pressure_is_an_array_output(rkforge_bin, tmp_path):
+    """The block with `output.pressure_stations = 40`: `top.contact_pressure` is a Float64
+    array of 40 values (2 m of tool in 5 cm stations); its pressures times the stations'
+    areas add up to the force on the tool, the stations beyond the block carry none."""
+    text = (ROOT / "scenes" / "block_forging.toml").read_text().replace(
+        "[output]", "[output]\npressure_stations = 40")
+    scene = tmp_path / "block.toml"
+    scene.write_text(text)
+    fmu = pack(rkforge_bin, scene, tmp_path / "block3.fmu", "3")
+    assert validate_fmu(fmu) == []
+    md = read_model_description(fmu)
+    pressure = next(v for v in md.modelVariables if v.name == "top.contact_pressure")
+    assert pressure.type == "Float64" and pressure.causality == "output"
+    assert [int(d.start) for d in pressure.dimensions] == [40]
+    s = Slave3(fmu, COARSE)
+    s.step(2e-3)
+    p = np.array(s.fmu.getFloat64([s.vr["top.contact_pressure"]], nValues=40))
+    force = s.get("top.force")[0]
+    assert p.max() > 1e8
+    assert np.sum(p) * 0.05 == pytest.approx(abs(force), rel=1e-9)
+    # The block is 0.5 m wide (a little wider now) in the middle of the 2 m tool.
+    assert np.all(p[:12] == 0.0) and np.all(p[-12:] == 0.0)
+    both = s.fmu.getFloat64([s.vr["top.force"], s.vr["top.contact_pressure"]], nValues=41)
+    assert both[0] == force and list(both[1:]) == list(p)
+    with pytest.raises(FMICallException):
+        s.fmu.getFloat64([s.vr["top.contact_pressure"]], nValues=1)
+    assert "holding 40 values" in s.messages[-1]
+    s.fmu.freeInstance()

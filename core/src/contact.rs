@@ -102,6 +102,11 @@ pub struct Pairs<'a> {
     /// The particle's friction state while it stays in contact with a tool that has
     /// friction.
     pub stick: &'a mut [Option<Stick>],
+    /// Normal force (N) on each tool's pressure stations, tool by tool, `stations` per tool
+    /// (empty without stations); filled by the stage.
+    pub pressure: &'a mut [Real],
+    /// Pressure stations per tool (0: none).
+    pub stations: usize,
 }
 
 /// A particle's friction on a tool, kept from one step to the next.
@@ -376,7 +381,13 @@ impl Contact {
             }
         });
         let mut any = false;
-        let Pairs { held, stick } = pairs;
+        let Pairs {
+            held,
+            stick,
+            pressure,
+            stations,
+        } = pairs;
+        pressure.fill(0.0);
         self.touched.clear();
         for (k, ((&j, &[x, vj]), &c)) in self
             .candidates
@@ -444,6 +455,13 @@ impl Contact {
                 }
                 tool.state.force[0] -= f[0];
                 tool.state.force[1] -= f[1];
+                if stations > 0 {
+                    // The normal part of the penalty force, at the station of the closest
+                    // point of the tool's polyline.
+                    let normal = f[0] * pen.normal[0] + f[1] * pen.normal[1];
+                    let s = tool.station(x, stations);
+                    pressure[t * stations + s] += normal;
+                }
                 tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
                 spread(&mut self.force, nodal, j, f);
                 self.near.push(Near {

@@ -360,6 +360,11 @@ pub struct OutputSpec {
     /// a fraction of a spacing off the corner).
     #[serde(default = "default_fill_distance")]
     pub fill_distance_rel: Real,
+    /// Stations along each tool at which the contact pressure is measured (the FMI 3.0
+    /// FMU's array output `<tool>.contact_pressure`): the tool's polyline cut into this many
+    /// pieces of equal length; none when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure_stations: Option<usize>,
 }
 
 /// History rows over a run whose scene sets no `output.history_interval_s`.
@@ -380,6 +385,7 @@ impl Default for OutputSpec {
             frames: default_frames(),
             faces: Vec::new(),
             fill_distance_rel: default_fill_distance(),
+            pressure_stations: None,
         }
     }
 }

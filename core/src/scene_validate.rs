@@ -356,6 +356,13 @@ impl Scene {
             "output.fill_distance_rel",
             format!("must be positive, got {fill}"),
         );
+        if let Some(n) = self.output.pressure_stations {
+            out.check(
+                (1..=10_000).contains(&n),
+                "output.pressure_stations",
+                format!("must lie in [1, 10000], got {n}"),
+            );
+        }
         let pen = self.checks.max_penetration_rel;
         out.check(
             pos(pen),

@@ -157,6 +157,64 @@ impl Tool {
         )
     }
 
+    /// Length of the tool's polyline (m).
+    pub fn length(&self) -> Real {
+        self.points0
+            .windows(2)
+            .map(|s| (s[1][0] - s[0][0]).hypot(s[1][1] - s[0][1]))
+            .sum()
+    }
+
+    /// The station (of `stations` equal pieces of the polyline, from its first point) of
+    /// the polyline's point closest to `x` (m, physical).
+    pub fn station(&self, x: [Real; 2], stations: usize) -> usize {
+        let s = self.state.stroke;
+        let p = [x[0] - s * self.axis[0], x[1] - s * self.axis[1]];
+        let (mut best, mut along, mut walked) = (Real::INFINITY, 0.0, 0.0);
+        for seg in self.points0.windows(2) {
+            let (a, b) = (seg[0], seg[1]);
+            let d = [b[0] - a[0], b[1] - a[1]];
+            let len2 = d[0] * d[0] + d[1] * d[1];
+            let t = if len2 > 0.0 {
+                (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let q = [a[0] + t * d[0], a[1] + t * d[1]];
+            let dist = (p[0] - q[0]).hypot(p[1] - q[1]);
+            if dist < best {
+                best = dist;
+                along = walked + t * len2.sqrt();
+            }
+            walked += len2.sqrt();
+        }
+        ((along / walked * stations as Real) as usize).min(stations - 1)
+    }
+
+    /// The area (m^2) of station `k` of `stations`: its length times the depth in plane
+    /// strain, times `2 pi r` at its middle (the tool where it is now) in axisymmetry, as
+    /// contact forces are for the whole ring there.
+    pub fn station_area(&self, k: usize, stations: usize, axisymmetric: bool, depth: Real) -> Real {
+        let length = self.length();
+        let piece = length / stations as Real;
+        if !axisymmetric {
+            return piece * depth;
+        }
+        let mid = (k as Real + 0.5) * piece;
+        let mut walked = 0.0;
+        let mut r = self.points0[0][0];
+        for seg in self.points0.windows(2) {
+            let l = (seg[1][0] - seg[0][0]).hypot(seg[1][1] - seg[0][1]);
+            if walked + l >= mid && l > 0.0 {
+                r = seg[0][0] + (mid - walked) / l * (seg[1][0] - seg[0][0]);
+                break;
+            }
+            walked += l;
+        }
+        let r = r + self.state.stroke * self.axis[0];
+        piece * 2.0 * std::f64::consts::PI * r.abs()
+    }
+
     /// Whether the tool can move (its velocity is an input of the FMU and ROS node).
     pub fn is_movable(&self) -> bool {
         !matches!(self.motion, Motion::Fixed)

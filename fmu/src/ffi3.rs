@@ -6,7 +6,9 @@
 //! `String`), plus the independent variable `time` and the early-return switches (`Boolean`
 //! `<tool>.early_return.contact` and `.force`, `Float64` `.force_level`): with
 //! `earlyReturnAllowed`, `fmi3DoStep` ends at the solver step where an armed event happens,
-//! with `earlyReturn` and `lastSuccessfulTime`. With an `intermediateUpdate` callback, it
+//! with `earlyReturn` and `lastSuccessfulTime`. With `output.pressure_stations` in the
+//! scene, `<tool>.contact_pressure` is a `Float64` array output (one value per station). With
+//! an `intermediateUpdate` callback, it
 //! is called after every solver step (on the thread that steps, while the host waits in
 //! `fmi3DoStep`); the time and the outputs are readable in it, and with early return
 //! allowed it may ask the step to return there. Every function of the standard's
@@ -338,16 +340,35 @@ pub unsafe extern "C" fn fmi3GetFloat64(
         return intermediate_floats(c as usize, vr, n_vr, values, n_values);
     }
     with(c, "fmi3GetFloat64", |comp| {
-        scalars("Float64", n_vr, n_values)?;
-        // SAFETY: `n_vr` value references and as many output slots from the host.
+        // SAFETY: `n_vr` value references and `n_values` output slots from the host.
         let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
         let out = unsafe { slice_mut(values, n_values, "values") }?;
-        for (v, o) in vrs.iter().zip(out.iter_mut()) {
-            *o = if *v == comp.time_vr {
-                comp.instance.time()
+        let sizes: Vec<usize> = vrs
+            .iter()
+            .map(|v| comp.instance.array_len(*v).unwrap_or(1))
+            .collect();
+        let total: usize = sizes.iter().sum();
+        if total != n_values {
+            return Err(format!(
+                "{n_values} values for {n_vr} value references holding {total} values"
+            ));
+        }
+        let mut at = 0;
+        for (v, n) in vrs.iter().zip(sizes) {
+            if comp.instance.array_len(*v).is_some() {
+                let array = comp
+                    .instance
+                    .get_real_array(*v)
+                    .map_err(|e| e.to_string())?;
+                out[at..at + n].copy_from_slice(&array);
             } else {
-                comp.instance.get_real(*v).map_err(|e| e.to_string())?
-            };
+                out[at] = if *v == comp.time_vr {
+                    comp.instance.time()
+                } else {
+                    comp.instance.get_real(*v).map_err(|e| e.to_string())?
+                };
+            }
+            at += n;
         }
         Ok(OK)
     })

@@ -84,6 +84,7 @@ fn output_value(binding: Binding, sim: &Simulation, commands: &[Option<f64>]) ->
         Binding::ToolWork => sim.energy().tool_work,
         Binding::KineticToInternalMax => sim.kinetic_to_internal_max(),
         Binding::Parameter(_)
+        | Binding::ContactPressure(_)
         | Binding::Press(_)
         | Binding::ReturnForceLevel(_)
         | Binding::ReturnOnContact(_)
@@ -632,6 +633,22 @@ impl Instance {
                 self.phase = Phase::Failed;
                 Err(e)
             }
+        }
+    }
+
+    /// How many values variable `vr` has when it is an array (FMI 3.0).
+    pub fn array_len(&self, vr: u32) -> Option<usize> {
+        match self.variable(vr).ok()?.kind {
+            Kind::RealArray(n) => Some(n),
+            _ => None,
+        }
+    }
+
+    /// `fmi3GetFloat64` of an array variable: the contact pressure at a tool's stations (Pa).
+    pub fn get_real_array(&mut self, vr: u32) -> Result<Vec<f64>> {
+        match self.variable(vr)?.binding {
+            Binding::ContactPressure(k) => Ok(self.readable_sim()?.contact_pressure(k)),
+            _ => Err(request(format!("value reference {vr} is not an array"))),
         }
     }
 

@@ -47,6 +47,9 @@ pub enum Kind {
     String(Option<String>),
     /// `Boolean` with an optional start value (FMI 3.0 only: the early-return switches).
     Boolean(Option<bool>),
+    /// A `Float64` array of this many values, no start (FMI 3.0 only: the contact
+    /// pressure along a tool).
+    RealArray(usize),
 }
 
 /// What a variable reads or writes in the simulation.
@@ -81,6 +84,8 @@ pub enum Binding {
     /// Parameter `k` of the scene ([`rkforge_core::scene_parameters::parameters`]): a
     /// scene key under its dotted name.
     Parameter(usize),
+    /// FMI 3.0: the contact pressure at tool `k`'s stations (Pa), an array.
+    ContactPressure(usize),
     /// Variable `k` of a press plant's own table (`fmu/src/press.rs`).
     Press(usize),
     /// FMI 3.0: return early from a step when tool `k` first touches the workpiece.
@@ -120,6 +125,7 @@ impl Variable {
             Kind::Integer(s) => s.map_or(String::new(), |x| x.to_string()),
             Kind::String(s) => s.clone().unwrap_or_default(),
             Kind::Boolean(s) => s.map_or(String::new(), |x| x.to_string()),
+            Kind::RealArray(_) => String::new(),
         }
     }
 }
@@ -309,7 +315,8 @@ pub fn time_value_reference(scene: &Scene) -> u32 {
 /// The FMI 3.0 table: the 2.0 table (same value references), then, after `time`, per tool
 /// the early-return events of `fmi3DoStep` as parameters: `<tool>.early_return.contact`
 /// (Boolean), `<tool>.early_return.force` (Boolean) and `<tool>.early_return.force_level`
-/// (N).
+/// (N); with `output.pressure_stations`, per tool the array output
+/// `<tool>.contact_pressure` (Pa, one value per station).
 pub fn variable_table3(scene: &Scene) -> Vec<Variable> {
     let mut t = variable_table(scene);
     let mut vr = time_value_reference(scene);
@@ -349,6 +356,24 @@ pub fn variable_table3(scene: &Scene) -> Vec<Variable> {
                 unit,
                 description,
                 binding,
+            });
+        }
+    }
+    if let Some(n) = scene.output.pressure_stations {
+        for (k, tool) in scene.tools.iter().enumerate() {
+            vr += 1;
+            t.push(Variable {
+                name: format!("{}.contact_pressure", tool.name),
+                value_reference: vr,
+                causality: Causality::Output,
+                variability: Variability::Continuous,
+                kind: Kind::RealArray(n),
+                unit: Some("Pa"),
+                description: format!(
+                    "contact pressure along tool {}: its polyline in {n} stations of equal length from its first point, the normal contact force on each over its area",
+                    tool.name
+                ),
+                binding: Binding::ContactPressure(k),
             });
         }
     }
@@ -428,7 +453,7 @@ mod tests {
             assert_eq!(r.value_reference, v.value_reference);
             assert_eq!(r.unit.as_deref(), v.unit);
             let kind = match &v.kind {
-                Kind::Real(_) => "Real",
+                Kind::Real(_) | Kind::RealArray(_) => "Real",
                 Kind::Integer(_) => "Integer",
                 Kind::String(_) => "String",
                 Kind::Boolean(_) => "Boolean",

@@ -186,6 +186,9 @@ pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
             Kind::Integer(s) => ("Integer", s.map(|x| x.to_string())),
             Kind::String(s) => ("String", s.clone()),
             Kind::Boolean(s) => ("Boolean", s.map(|x| x.to_string())),
+            Kind::RealArray(_) => {
+                return Err(format!("`{}`: FMI 2.0 has no arrays", v.name));
+            }
         };
         let mut t = BytesStart::new(tag);
         if let Some(u) = v.unit {

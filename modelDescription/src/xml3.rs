@@ -59,7 +59,7 @@ pub fn write(header: &Header, vars: &[Variable], time_vr: u32) -> Result<String,
     w.write_event(Event::Empty(time)).map_err(err)?;
     for v in vars {
         let tag = match v.kind {
-            Kind::Real(_) => "Float64",
+            Kind::Real(_) | Kind::RealArray(_) => "Float64",
             Kind::Integer(_) => "Int32",
             Kind::String(_) => "String",
             Kind::Boolean(_) => "Boolean",
@@ -87,7 +87,13 @@ pub fn write(header: &Header, vars: &[Variable], time_vr: u32) -> Result<String,
             Kind::Boolean(Some(b)) => e.push_attribute(("start", b.to_string().as_str())),
             _ => {}
         }
-        if let Kind::String(Some(s)) = &v.kind {
+        if let Kind::RealArray(n) = v.kind {
+            w.write_event(Event::Start(e)).map_err(err)?;
+            let mut dim = BytesStart::new("Dimension");
+            dim.push_attribute(("start", n.to_string().as_str()));
+            w.write_event(Event::Empty(dim)).map_err(err)?;
+            w.write_event(Event::End(BytesEnd::new(tag))).map_err(err)?;
+        } else if let Kind::String(Some(s)) = &v.kind {
             w.write_event(Event::Start(e)).map_err(err)?;
             let mut start = BytesStart::new("Start");
             start.push_attribute(("value", s.as_str()));

@@ -128,13 +128,25 @@ impl Simulation {
             .sum()
     }
 
+    /// Contact pressure (Pa) at each of tool `t`'s `output.pressure_stations`: the normal
+    /// penalty forces of the last contact stage on the station over its area (length times
+    /// depth, or times `2 pi r` in axisymmetry); empty without stations. Vertex forces of
+    /// the corner pass are not included.
+    pub fn contact_pressure(&self, t: usize) -> Vec<Real> {
+        let Some(n) = self.scene.output.pressure_stations else {
+            return Vec::new();
+        };
+        let axi = self.scene.model.kinematics == crate::scene::Kinematics::Axisymmetric;
+        let tool = &self.tools[t];
+        self.st.pressure[t * n..(t + 1) * n]
+            .iter()
+            .enumerate()
+            .map(|(k, f)| f / tool.station_area(k, n, axi, self.scene.model.depth_m))
+            .collect()
+    }
+
     /// [`Simulation::contact_length`] over the length of the tool's polyline (-).
     pub fn contact_fraction(&self, t: usize) -> Real {
-        let length: Real = self.tools[t]
-            .points0
-            .windows(2)
-            .map(|s| (s[1][0] - s[0][0]).hypot(s[1][1] - s[0][1]))
-            .sum();
-        self.contact_length(t) / length
+        self.contact_length(t) / self.tools[t].length()
     }
 }

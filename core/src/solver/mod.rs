@@ -389,6 +389,8 @@ impl Simulation {
             Pairs {
                 held: &mut self.st.held,
                 stick: &mut self.st.stick,
+                pressure: &mut self.st.pressure,
+                stations: self.scene.output.pressure_stations.unwrap_or(0),
             },
             dt_full,
             dt_avg,

@@ -137,6 +137,10 @@ impl Simulation {
                 fill: vec![None; scene.tools.iter().map(|t| t.fill_points.len()).sum()],
                 reference: None,
                 max_stretch: 0.0,
+                pressure: vec![
+                    0.0;
+                    scene.tools.len() * scene.output.pressure_stations.unwrap_or(0)
+                ],
             },
             tools,
             out: vec![PointOut::initial(&material); npts],

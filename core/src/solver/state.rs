@@ -62,6 +62,10 @@ pub struct State {
     /// when the scene re-references the kernel (0 otherwise).
     #[serde(default)]
     pub max_stretch: Real,
+    /// Normal contact force (N) on each pressure station of each tool in the last contact
+    /// stage, tool by tool (`output.pressure_stations` per tool); empty without stations.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pressure: Vec<Real>,
 }
 
 /// The moment the material first reached a tool's fill point.
