@@ -1,7 +1,9 @@
 """The FMI 3.0 Co-Simulation FMU (`rkforge fmu SCENE --fmi 3`) through fmpy: validation of
 every shipped scene, the same bits as the FMI 2.0 FMU of the scene for the same inputs and
 steps, rollback and serialization, and bad calls refused with a message."""
+import json
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -286,3 +288,39 @@ def test_contact_pressure_is_an_array_output(rkforge_bin, tmp_path):
         s.fmu.getFloat64([s.vr["top.contact_pressure"]], nValues=1)
     assert "holding 40 values" in s.messages[-1]
     s.fmu.freeInstance()
+
+
+def test_an_fmi3_container_of_the_fmu_gives_the_same_bits(rkforge_bin, tmp_path):
+    """The FMU Manipulation Toolbox wraps the 3.0 FMU of the coarse block in an FMI 3.0
+    container (`fmucontainer -fmi 3`); fmpy validates the container and, driven by the
+    same velocity table at the same steps, it gives the FMU's own force and stroke bit for
+    bit."""
+    text = (ROOT / "scenes" / "block_forging.toml").read_text().replace(
+        "particles = [21, 21]", "particles = [9, 9]")
+    (tmp_path / "block.toml").write_text(text)
+    pack(rkforge_bin, tmp_path / "block.toml", tmp_path / "block3.fmu", "3")
+    (tmp_path / "c.json").write_text(json.dumps({
+        "name": "container3.fmu", "step_size": 1e-4, "auto_input": False,
+        "auto_output": False, "auto_link": False, "fmu": ["block3.fmu"],
+        "input": [["top_velocity", "block3.fmu", "top.velocity"]],
+        "output": [["block3.fmu", "top.force", "top_force"],
+                   ["block3.fmu", "top.stroke", "top_stroke"]]}))
+    made = subprocess.run([sys.executable, "-m", "fmu_manipulation_toolbox.cli.fmucontainer",
+                           "-container", "c.json", "-fmu-directory", str(tmp_path), "-fmi", "3"],
+                          cwd=tmp_path, capture_output=True, text=True)
+    container = tmp_path / "container3.fmu"
+    assert made.returncode == 0 and container.is_file(), made.stdout + made.stderr
+    assert validate_fmu(str(container)) == []
+    assert read_model_description(str(container)).fmiVersion == "3.0"
+
+    def table(name):
+        return np.array([(0.0, 10.0), (2e-3, 5.0)], dtype=[("time", float), (name, float)])
+
+    a = simulate_fmu(str(container), stop_time=3e-3, step_size=1e-4, output_interval=1e-4,
+                     input=table("top_velocity"), output=["top_force", "top_stroke"])
+    b = simulate_fmu(str(tmp_path / "block3.fmu"), stop_time=3e-3, step_size=1e-4,
+                     output_interval=1e-4, input=table("top.velocity"),
+                     output=["top.force", "top.stroke"])
+    assert len(a) == len(b) == 31 and b["top.force"][-1] < 0.0
+    assert a["top_force"].tobytes() == b["top.force"].tobytes()
+    assert a["top_stroke"].tobytes() == b["top.stroke"].tobytes()

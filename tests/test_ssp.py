@@ -4,11 +4,16 @@ SSP 1.0 system. fmpy reads the system description against the SSP schema and sim
 zero, so the system lags the Python examples' loop by about one communication step): the
 force-stroke curve of each press follows its Python example (examples/presses) within what
 that lag moves."""
+import pathlib
 import subprocess
+import sys
+import zipfile
 
 import numpy as np
 import pytest
+from fmpy import simulate_fmu
 from fmpy.ssp.simulation import simulate_ssp
+from fmpy.validation import validate_fmu
 from fmpy.ssp.ssd import read_ssd
 
 from crank import RAM_GAP, CrankPress
@@ -98,3 +103,36 @@ def test_the_hammer_ssp_forges_the_python_examples_blows(rkforge_bin, tmp_path):
     assert r["press.blow"][-1] == len(hammer.blows)
     drop = 0.060 - py["height"][-1]
     assert abs(r["press.workpiece.height"][-1] - py["height"][-1]) <= 0.01 * drop
+
+
+def test_the_fmu_manipulation_toolbox_builds_and_runs_a_container_from_the_ssp(rkforge_bin,
+                                                                               tmp_path):
+    """A second SSP tool: the FMU Manipulation Toolbox's `fmucontainer` makes one FMU of the
+    hydraulic press system from the SSP; fmpy validates and simulates it, and its
+    force-stroke curve follows the Python example as fmpy's SSP runner's does."""
+    h = 2e-4
+    text = upsetting_scene()
+    ssp = system(rkforge_bin, tmp_path, "hydraulic", coarse(text, 2e-5))
+    with zipfile.ZipFile(ssp) as z:
+        for name in z.namelist():
+            if name.startswith("resources/") and name.endswith(".fmu"):
+                (tmp_path / pathlib.Path(name).name).write_bytes(z.read(name))
+    made = subprocess.run([sys.executable, "-m", "fmu_manipulation_toolbox.cli.fmucontainer",
+                           "-container", f"{pathlib.Path(ssp).name}:{h}",
+                           "-fmu-directory", str(tmp_path)],
+                          cwd=tmp_path, capture_output=True, text=True)
+    container = tmp_path / "hydraulic.fmu"
+    assert made.returncode == 0 and container.is_file(), made.stdout + made.stderr
+    assert validate_fmu(str(container)) == []
+    py = simulate(build_fmu(text, tmp_path / "f.fmu", rkforge_bin), HydraulicPress(), h, 1.6,
+                  NX, NY, target_dt=2e-5)
+    r = simulate_fmu(str(container), stop_time=1.6, step_size=h, output_interval=h)
+    stroke, force = r["forging.ram.stroke"], -r["forging.ram.force"]
+    deepest = int(np.argmax(stroke))
+    pk = int(np.argmax(py["stroke"]))
+    s, f = stroke[:deepest + 1], force[:deepest + 1]
+    keep = s <= py["stroke"][pk]
+    expected = np.interp(s[keep], py["stroke"][:pk + 1], py["force"][:pk + 1])
+    error = np.max(np.abs(f[keep] - expected)) / py["force"].max()
+    print(f"container: force-stroke within {error:.2e} of the peak force")
+    assert error <= 0.005
