@@ -14,7 +14,7 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.ssp.simulation import simulate_ssp
 from fmpy.validation import validate_fmu
-from fmpy.ssp.ssd import read_ssd
+from fmpy.ssp.ssd import Parameter, ParameterSet, read_ssd
 
 from crank import RAM_GAP, CrankPress
 from driver import build_fmu, simulate, upsetting_scene
@@ -136,3 +136,31 @@ def test_the_fmu_manipulation_toolbox_builds_and_runs_a_container_from_the_ssp(r
     error = np.max(np.abs(f[keep] - expected)) / py["force"].max()
     print(f"container: force-stroke within {error:.2e} of the peak force")
     assert error <= 0.005
+
+
+def test_the_parameters_are_bound_in_the_system(rkforge_bin, tmp_path):
+    """Every parameter of both FMUs is bound inline in the SSD at its start value (the
+    press's defaults, the scene's keys with the scene's values). fmpy's runner takes a
+    parameter set rather than applying bindings itself: the bindings given to it, with the
+    relief valve set to 10 MPa, make the hydraulic press stall at half its tonnage."""
+    text = coarse(upsetting_scene(), 2e-5)
+    ssp = system(rkforge_bin, tmp_path, "hydraulic", text)
+    ssd = read_ssd(ssp, validate=True)
+    bound = {}
+    for c in ssd.system.elements:
+        for b in c.parameterBindings:
+            for values in b.parameterValues:
+                for p in values.parameters:
+                    bound[f"{c.name}.{p.name}"] = p
+    assert bound["press.relief_pressure"].value == "20000000"
+    assert bound["press.area"].value == "0.05"
+    assert bound["forging.workpiece.particles[0]"].value == str(NX)
+    assert bound["forging.discretization.integration"].value == "q2"
+    relief = ParameterSet(name="relief")
+    relief.parameters = [Parameter(name=name, type=p.type, value=p.value)
+                         for name, p in bound.items() if name.startswith("press.")]
+    for p in relief.parameters:
+        if p.name == "press.relief_pressure":
+            p.value = "10.0e6"
+    r = simulate_ssp(ssp, stop_time=1.6, step_size=2e-4, parameter_set=relief)
+    assert -r["press.ram.force"][-1] == pytest.approx(10.0e6 * 0.05, rel=0.01)

@@ -4,14 +4,14 @@
 //! `SystemStructure.ssd` connecting them: the press's `ram.velocity` to the forging's
 //! `<tool>.velocity`; the forging's `<tool>.force`, `<tool>.stroke`, `energy.tool_work` and
 //! `workpiece.height` to the press's `ram.force`, `ram.stroke`, `ram.tool_work` and
-//! `workpiece.height`. The forging's parameters are the scene's (write them into the scene),
-//! the press's its defaults.
+//! `workpiece.height`. Each component's parameters are bound inline at their start values
+//! (the press's defaults, the scene's own keys with the scene's values).
 
 use crate::fmu;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
 use rkforge_core::Scene;
-use rkforge_model_description::{press, variable_table, Causality, Variable};
+use rkforge_model_description::{press, variable_table, Causality, Kind, Variable};
 use std::io::Write;
 use std::path::Path;
 
@@ -87,8 +87,63 @@ fn component(
     }
     w.write_event(Event::End(BytesEnd::new("ssd:Connectors")))
         .map_err(err)?;
+    bindings(w, name, vars)?;
     w.write_event(Event::End(BytesEnd::new("ssd:Component")))
         .map_err(err)?;
+    Ok(())
+}
+
+/// `<ssd:ParameterBindings>`: every parameter of `vars` at its start value, inline, so that
+/// a tool shows them and a user edits them in the system.
+fn bindings(w: &mut Writer<Vec<u8>>, name: &str, vars: &[Variable]) -> Result<(), String> {
+    let params: Vec<&Variable> = vars
+        .iter()
+        .filter(|v| v.causality == Causality::Parameter)
+        .collect();
+    if params.is_empty() {
+        return Ok(());
+    }
+    for tag in [
+        "ssd:ParameterBindings",
+        "ssd:ParameterBinding",
+        "ssd:ParameterValues",
+    ] {
+        w.write_event(Event::Start(BytesStart::new(tag)))
+            .map_err(err)?;
+    }
+    let mut set = BytesStart::new("ssv:ParameterSet");
+    set.push_attribute(("version", "1.0"));
+    set.push_attribute(("name", name));
+    w.write_event(Event::Start(set)).map_err(err)?;
+    w.write_event(Event::Start(BytesStart::new("ssv:Parameters")))
+        .map_err(err)?;
+    for v in params {
+        let mut p = BytesStart::new("ssv:Parameter");
+        p.push_attribute(("name", v.name.as_str()));
+        w.write_event(Event::Start(p)).map_err(err)?;
+        let tag = match v.kind {
+            Kind::Real(_) | Kind::RealArray(_) => "ssv:Real",
+            Kind::Integer(_) => "ssv:Integer",
+            Kind::String(_) => "ssv:String",
+            Kind::Boolean(_) => "ssv:Boolean",
+        };
+        let mut value = BytesStart::new(tag);
+        value.push_attribute(("value", v.start_text().as_str()));
+        w.write_event(Event::Empty(value)).map_err(err)?;
+        w.write_event(Event::End(BytesEnd::new("ssv:Parameter")))
+            .map_err(err)?;
+    }
+    w.write_event(Event::End(BytesEnd::new("ssv:Parameters")))
+        .map_err(err)?;
+    w.write_event(Event::End(BytesEnd::new("ssv:ParameterSet")))
+        .map_err(err)?;
+    for tag in [
+        "ssd:ParameterValues",
+        "ssd:ParameterBinding",
+        "ssd:ParameterBindings",
+    ] {
+        w.write_event(Event::End(BytesEnd::new(tag))).map_err(err)?;
+    }
     Ok(())
 }
 
@@ -105,6 +160,10 @@ fn ssd(scene: &Scene, kind: press::PressKind, name: &str, tool: &str) -> Result<
     root.push_attribute((
         "xmlns:ssd",
         "http://ssp-standard.org/SSP1/SystemStructureDescription",
+    ));
+    root.push_attribute((
+        "xmlns:ssv",
+        "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
     ));
     root.push_attribute(("version", "1.0"));
     let system_name = format!("{name}_press_{}", scene.name);
