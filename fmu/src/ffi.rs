@@ -13,7 +13,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// `fmi2Status` (the same codes as `fmi3Status`, [`crate::host`]).
 pub type fmi2Status = c_int;
-use crate::host::{self, slice, slice_mut, text, Host, DISCARD, ERROR, OK, WARNING};
+use crate::host::{self, slice, slice_mut, text, Host, DISCARD, ERROR, OK};
 
 type Env = *mut c_void;
 type Logger =
@@ -40,21 +40,15 @@ pub struct Component {
     strings: Vec<CString>,
 }
 
-const CATEGORY_NAMES: [&str; 3] = ["logStatusWarning", "logStatusError", "logAll"];
-
 impl Component {
     fn log(&self, status: fmi2Status, message: &str) {
-        let category = match status {
-            OK => 2,
-            WARNING => 0,
-            _ => 1,
-        };
+        let category = host::category(status);
         if !(self.logging && (self.categories[category] || self.categories[2])) {
             return;
         }
         if let Some(logger) = self.logger {
             let msg = CString::new(message.replace('\0', " ")).unwrap_or_default();
-            let cat = CString::new(CATEGORY_NAMES[category]).unwrap_or_default();
+            let cat = CString::new(host::CATEGORY_NAMES[category]).unwrap_or_default();
             // SAFETY: the host gave this logger for this environment; the format string is a
             // literal "%s" and its one argument a valid NUL-terminated string.
             unsafe {
@@ -245,12 +239,8 @@ pub unsafe extern "C" fn fmi2Instantiate(
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeInstance(c: *mut c_void) {
-    if !c.is_null() {
-        // SAFETY: created by Box::into_raw in fmi2Instantiate; the host frees it once.
-        let _ = catch_unwind(AssertUnwindSafe(|| {
-            drop(unsafe { Box::from_raw(c as *mut Component) })
-        }));
-    }
+    // SAFETY: made by fmi2Instantiate and not yet freed (the host's duty).
+    unsafe { host::free::<Component>(c) }
 }
 
 #[no_mangle]
@@ -262,16 +252,7 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
 ) -> fmi2Status {
     with(c, "fmi2SetDebugLogging", |comp| {
         // SAFETY: `n` category strings at `categories`.
-        let list = unsafe { slice(categories, n, "categories") }?;
-        let mut wanted = [n == 0; 3];
-        for &p in list {
-            let name = unsafe { text(p) }.ok_or("a category is a null pointer")?;
-            let k = CATEGORY_NAMES
-                .iter()
-                .position(|c| *c == name)
-                .ok_or_else(|| format!("unknown log category `{name}`"))?;
-            wanted[k] = true;
-        }
+        let wanted = unsafe { host::wanted_categories(n, categories) }?;
         comp.logging = on != 0;
         comp.categories = wanted;
         Ok(OK)

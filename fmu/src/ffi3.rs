@@ -18,7 +18,7 @@
 
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
-use crate::host::{self, slice, slice_mut, text, Host, ERROR, OK, WARNING};
+use crate::host::{self, slice, slice_mut, text, Host, ERROR, OK};
 use crate::Instance;
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -33,8 +33,6 @@ type LogMessage = unsafe extern "C" fn(Env, fmi3Status, *const c_char, *const c_
 /// `fmi3IntermediateUpdateCallback`: called after every solver step of a `fmi3DoStep`.
 type IntermediateUpdate =
     unsafe extern "C" fn(Env, f64, bool, bool, bool, bool, *mut bool, *mut f64);
-
-const CATEGORY_NAMES: [&str; 3] = ["logStatusWarning", "logStatusError", "logAll"];
 
 /// What the host's `fmi3Instance` points to.
 pub struct Component {
@@ -68,17 +66,13 @@ impl HostEnv {
 
 impl Component {
     fn log(&self, status: fmi3Status, message: &str) {
-        let category = match status {
-            OK => 2,
-            WARNING => 0,
-            _ => 1,
-        };
+        let category = host::category(status);
         if !(self.logging && (self.categories[category] || self.categories[2])) {
             return;
         }
         if let Some(log) = self.log_message {
             let msg = CString::new(message.replace('\0', " ")).unwrap_or_default();
-            let cat = CString::new(CATEGORY_NAMES[category]).unwrap_or_default();
+            let cat = CString::new(host::CATEGORY_NAMES[category]).unwrap_or_default();
             // SAFETY: the host's callback for this environment, with valid C strings.
             unsafe { log(self.env, status, cat.as_ptr(), msg.as_ptr()) };
         }
@@ -126,16 +120,7 @@ pub unsafe extern "C" fn fmi3SetDebugLogging(
 ) -> fmi3Status {
     with(c, "fmi3SetDebugLogging", |comp| {
         // SAFETY: `n` category strings at `categories`.
-        let list = unsafe { slice(categories, n, "categories") }?;
-        let mut wanted = [n == 0; 3];
-        for &p in list {
-            let name = unsafe { text(p) }.ok_or("a category is a null pointer")?;
-            let k = CATEGORY_NAMES
-                .iter()
-                .position(|c| *c == name)
-                .ok_or_else(|| format!("unknown log category `{name}`"))?;
-            wanted[k] = true;
-        }
+        let wanted = unsafe { host::wanted_categories(n, categories) }?;
         comp.logging = on;
         comp.categories = wanted;
         Ok(OK)
@@ -274,12 +259,8 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi3FreeInstance(c: *mut c_void) {
-    if !c.is_null() {
-        // SAFETY: created by Box::into_raw in fmi3InstantiateCoSimulation; freed once.
-        let _ = catch_unwind(AssertUnwindSafe(|| {
-            drop(unsafe { Box::from_raw(c as *mut Component) })
-        }));
-    }
+    // SAFETY: made by fmi3InstantiateCoSimulation and not yet freed (the host's duty).
+    unsafe { host::free::<Component>(c) }
 }
 
 #[no_mangle]
@@ -431,6 +412,46 @@ pub unsafe extern "C" fn fmi3SetFloat64(
     })
 }
 
+/// `fmi3Get<Type>` of scalars: one value per value reference through `get`.
+unsafe fn get_scalars<T>(
+    c: *mut c_void,
+    what: &str,
+    (vr, n_vr): (*const Vr, usize),
+    (values, n_values): (*mut T, usize),
+    get: impl Fn(&mut Instance, Vr) -> crate::Result<T>,
+) -> fmi3Status {
+    with(c, what, |comp| {
+        scalars(what, n_vr, n_values)?;
+        // SAFETY: `n_vr` value references and as many output slots from the host.
+        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
+        let out = unsafe { slice_mut(values, n_values, "values") }?;
+        for (v, o) in vrs.iter().zip(out.iter_mut()) {
+            *o = get(&mut comp.instance, *v).map_err(|e| e.to_string())?;
+        }
+        Ok(OK)
+    })
+}
+
+/// `fmi3Set<Type>` of scalars: one value per value reference through `set`.
+unsafe fn set_scalars<T: Copy>(
+    c: *mut c_void,
+    what: &str,
+    (vr, n_vr): (*const Vr, usize),
+    (values, n_values): (*const T, usize),
+    set: impl Fn(&mut Instance, Vr, T) -> Result<(), String>,
+) -> fmi3Status {
+    with(c, what, |comp| {
+        scalars(what, n_vr, n_values)?;
+        // SAFETY: `n_vr` value references and as many values from the host.
+        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
+        let vals = unsafe { slice(values, n_values, "values") }?;
+        for (v, x) in vrs.iter().zip(vals) {
+            set(&mut comp.instance, *v, *x)?;
+        }
+        Ok(OK)
+    })
+}
+
 #[no_mangle]
 pub unsafe extern "C" fn fmi3GetInt32(
     c: *mut c_void,
@@ -439,16 +460,16 @@ pub unsafe extern "C" fn fmi3GetInt32(
     values: *mut i32,
     n_values: usize,
 ) -> fmi3Status {
-    with(c, "fmi3GetInt32", |comp| {
-        scalars("Int32", n_vr, n_values)?;
-        // SAFETY: as in fmi3GetFloat64.
-        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
-        let out = unsafe { slice_mut(values, n_values, "values") }?;
-        for (v, o) in vrs.iter().zip(out.iter_mut()) {
-            *o = comp.instance.get_integer(*v).map_err(|e| e.to_string())?;
-        }
-        Ok(OK)
-    })
+    // SAFETY: the host's arrays, checked in get_scalars.
+    unsafe {
+        get_scalars(
+            c,
+            "fmi3GetInt32",
+            (vr, n_vr),
+            (values, n_values),
+            Instance::get_integer,
+        )
+    }
 }
 
 #[no_mangle]
@@ -459,18 +480,79 @@ pub unsafe extern "C" fn fmi3SetInt32(
     values: *const i32,
     n_values: usize,
 ) -> fmi3Status {
-    with(c, "fmi3SetInt32", |comp| {
-        scalars("Int32", n_vr, n_values)?;
-        // SAFETY: as in fmi3SetFloat64.
-        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
-        let vals = unsafe { slice(values, n_values, "values") }?;
-        for (v, x) in vrs.iter().zip(vals) {
-            comp.instance
-                .set_integer(*v, *x)
-                .map_err(|e| e.to_string())?;
-        }
-        Ok(OK)
-    })
+    // SAFETY: the host's arrays, checked in set_scalars.
+    unsafe {
+        set_scalars(
+            c,
+            "fmi3SetInt32",
+            (vr, n_vr),
+            (values, n_values),
+            |i, v, x| i.set_integer(v, x).map_err(|e| e.to_string()),
+        )
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi3GetBoolean(
+    c: *mut c_void,
+    vr: *const Vr,
+    n_vr: usize,
+    values: *mut bool,
+    n_values: usize,
+) -> fmi3Status {
+    // SAFETY: the host's arrays, checked in get_scalars.
+    unsafe {
+        get_scalars(
+            c,
+            "fmi3GetBoolean",
+            (vr, n_vr),
+            (values, n_values),
+            |i, v| i.get_boolean(v),
+        )
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi3SetBoolean(
+    c: *mut c_void,
+    vr: *const Vr,
+    n_vr: usize,
+    values: *const bool,
+    n_values: usize,
+) -> fmi3Status {
+    // SAFETY: the host's arrays, checked in set_scalars.
+    unsafe {
+        set_scalars(
+            c,
+            "fmi3SetBoolean",
+            (vr, n_vr),
+            (values, n_values),
+            |i, v, x| i.set_boolean(v, x).map_err(|e| e.to_string()),
+        )
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi3SetString(
+    c: *mut c_void,
+    vr: *const Vr,
+    n_vr: usize,
+    values: *const *const c_char,
+    n_values: usize,
+) -> fmi3Status {
+    // SAFETY: the host's arrays, checked in set_scalars; each string NUL-terminated.
+    unsafe {
+        set_scalars(
+            c,
+            "fmi3SetString",
+            (vr, n_vr),
+            (values, n_values),
+            |i, v, p| {
+                let s = text(p).ok_or("a String value is a null pointer")?;
+                i.set_string(v, &s).map_err(|e| e.to_string())
+            },
+        )
+    }
 }
 
 #[no_mangle]
@@ -493,29 +575,6 @@ pub unsafe extern "C" fn fmi3GetString(
         }
         for (o, s) in out.iter_mut().zip(&comp.strings) {
             *o = s.as_ptr();
-        }
-        Ok(OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SetString(
-    c: *mut c_void,
-    vr: *const Vr,
-    n_vr: usize,
-    values: *const *const c_char,
-    n_values: usize,
-) -> fmi3Status {
-    with(c, "fmi3SetString", |comp| {
-        scalars("String", n_vr, n_values)?;
-        // SAFETY: as in fmi3SetFloat64; each string NUL-terminated.
-        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
-        let vals = unsafe { slice(values, n_values, "values") }?;
-        for (v, p) in vrs.iter().zip(vals) {
-            let s = unsafe { text(*p) }.ok_or("a String value is a null pointer")?;
-            comp.instance
-                .set_string(*v, &s)
-                .map_err(|e| e.to_string())?;
         }
         Ok(OK)
     })
@@ -561,48 +620,6 @@ no_variables! {
     fmi3SetInt64(*const i64), "Int64";
     fmi3GetUInt64(*mut u64), "UInt64";
     fmi3SetUInt64(*const u64), "UInt64";
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3GetBoolean(
-    c: *mut c_void,
-    vr: *const Vr,
-    n_vr: usize,
-    values: *mut bool,
-    n_values: usize,
-) -> fmi3Status {
-    with(c, "fmi3GetBoolean", |comp| {
-        scalars("Boolean", n_vr, n_values)?;
-        // SAFETY: as in fmi3GetFloat64.
-        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
-        let out = unsafe { slice_mut(values, n_values, "values") }?;
-        for (v, o) in vrs.iter().zip(out.iter_mut()) {
-            *o = comp.instance.get_boolean(*v).map_err(|e| e.to_string())?;
-        }
-        Ok(OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SetBoolean(
-    c: *mut c_void,
-    vr: *const Vr,
-    n_vr: usize,
-    values: *const bool,
-    n_values: usize,
-) -> fmi3Status {
-    with(c, "fmi3SetBoolean", |comp| {
-        scalars("Boolean", n_vr, n_values)?;
-        // SAFETY: as in fmi3SetFloat64.
-        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
-        let vals = unsafe { slice(values, n_values, "values") }?;
-        for (v, x) in vrs.iter().zip(vals) {
-            comp.instance
-                .set_boolean(*v, *x)
-                .map_err(|e| e.to_string())?;
-        }
-        Ok(OK)
-    })
 }
 
 #[no_mangle]

@@ -19,6 +19,56 @@ pub const ERROR: c_int = 3;
 /// `fmi2Fatal` / `fmi3Fatal`.
 pub const FATAL: c_int = 4;
 
+/// The log categories both APIs declare (`modelDescription.xml`'s `LogCategories`).
+pub const CATEGORY_NAMES: [&str; 3] = ["logStatusWarning", "logStatusError", "logAll"];
+
+/// The category a message of `status` is logged under (an index into [`CATEGORY_NAMES`]).
+pub fn category(status: c_int) -> usize {
+    match status {
+        OK => 2,
+        WARNING => 0,
+        _ => 1,
+    }
+}
+
+/// The categories a `SetDebugLogging` call asks for: all when it names none.
+///
+/// # Safety
+///
+/// `categories` holds `n` NUL-terminated strings when `n` is not zero.
+pub unsafe fn wanted_categories(
+    n: usize,
+    categories: *const *const c_char,
+) -> Result<[bool; 3], String> {
+    // SAFETY: `n` category strings at `categories`.
+    let list = unsafe { slice(categories, n, "categories") }?;
+    let mut wanted = [n == 0; 3];
+    for &p in list {
+        let name = unsafe { text(p) }.ok_or("a category is a null pointer")?;
+        let k = CATEGORY_NAMES
+            .iter()
+            .position(|c| *c == name)
+            .ok_or_else(|| format!("unknown log category `{name}`"))?;
+        wanted[k] = true;
+    }
+    Ok(wanted)
+}
+
+/// Free the component behind `c` (made by `Box::into_raw` of a `Box<C>`), catching a panic.
+///
+/// # Safety
+///
+/// `c` is null or a component of type `C` made by its API's instantiate function and not
+/// yet freed.
+pub unsafe fn free<C>(c: *mut c_void) {
+    if !c.is_null() {
+        // SAFETY: as the caller promises; the host frees it once.
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            drop(unsafe { Box::from_raw(c as *mut C) })
+        }));
+    }
+}
+
 /// What the host's instance pointer points to: a slave and the host's logger.
 pub trait Host {
     /// Log `message` with `status` through the host's logger; returns `status`.

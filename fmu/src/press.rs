@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// The state of a press that changes in time.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 struct State {
     /// Time (s).
     time: f64,
@@ -73,17 +73,7 @@ impl Press {
             table,
             guid,
             values,
-            state: State {
-                time: 0.0,
-                v: 0.0,
-                p: 0.0,
-                theta: 0.0,
-                omega: 0.0,
-                finished: false,
-                overload: false,
-                blow: 0.0,
-                lifting_to: None,
-            },
+            state: State::default(),
             phase: Phase::Instantiated,
         };
         p.start();
@@ -104,17 +94,9 @@ impl Press {
 
     /// The state at the start from the parameters.
     fn start(&mut self) {
-        let time = self.state.time;
         self.state = State {
-            time,
-            v: 0.0,
-            p: 0.0,
-            theta: 0.0,
-            omega: 0.0,
-            finished: false,
-            overload: false,
-            blow: 0.0,
-            lifting_to: None,
+            time: self.state.time,
+            ..State::default()
         };
         match self.kind {
             PressKind::Hydraulic => {}
