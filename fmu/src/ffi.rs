@@ -7,7 +7,7 @@
 
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
-use crate::{press, Instance, Phase, Slave};
+use crate::{press, Instance, Phase, Saved, Slave};
 use std::ffi::{c_char, c_int, c_uint, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -569,38 +569,35 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     with(c, "fmi2GetStringStatus", |_| Ok(DISCARD))
 }
 
-/// An FMI 2.0 FMU state: the slave's [`Slave::save`] bytes.
-type State = Vec<u8>;
-
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: *mut c_void, slot: *mut *mut c_void) -> fmi2Status {
     with(c, "fmi2GetFMUstate", |comp| {
         // SAFETY: one writable slot holding null or a state made here.
         let slot = unsafe { slice_mut(slot, 1, "FMUstate") }?;
         if !slot[0].is_null() {
-            drop(unsafe { Box::from_raw(slot[0] as *mut State) });
+            drop(unsafe { Box::from_raw(slot[0] as *mut Saved) });
         }
         slot[0] = Box::into_raw(Box::new(comp.model.save())) as *mut c_void;
         Ok(OK)
     })
 }
 
-/// The bytes behind a state handle made here.
-unsafe fn state<'a>(state: *mut c_void) -> Result<&'a State, String> {
+/// The state behind a handle made here.
+unsafe fn state<'a>(state: *mut c_void) -> Result<&'a Saved, String> {
     if state.is_null() {
         return Err("FMUstate is null".into());
     }
     // SAFETY: made by fmi2GetFMUstate / fmi2DeSerializeFMUstate and not yet freed.
-    Ok(unsafe { &*(state as *const State) })
+    Ok(unsafe { &*(state as *const Saved) })
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: *mut c_void, handle: *mut c_void) -> fmi2Status {
     with(c, "fmi2SetFMUstate", |comp| {
         // SAFETY: a state made here.
-        let bytes = unsafe { state(handle) }?;
+        let saved = unsafe { state(handle) }?;
         comp.model
-            .load(bytes)
+            .load(saved)
             .map(|_| OK)
             .map_err(|e| e.to_string())
     })
@@ -613,7 +610,7 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, slot: *mut *mut c_void
             // SAFETY: the host's slot, holding a state made here or null.
             let slot = unsafe { &mut *slot };
             if !slot.is_null() {
-                drop(unsafe { Box::from_raw(*slot as *mut State) });
+                drop(unsafe { Box::from_raw(*slot as *mut Saved) });
                 *slot = std::ptr::null_mut();
             }
         }
@@ -627,9 +624,13 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     handle: *mut c_void,
     size: *mut usize,
 ) -> fmi2Status {
-    with(c, "fmi2SerializedFMUstateSize", |_| {
+    with(c, "fmi2SerializedFMUstateSize", |comp| {
         // SAFETY: a state made here; one writable size slot.
-        let n = unsafe { state(handle) }?.len();
+        let n = comp
+            .model
+            .serialize(unsafe { state(handle) }?)
+            .map_err(|e| e.to_string())?
+            .len();
         unsafe { slice_mut(size, 1, "size") }?[0] = n;
         Ok(OK)
     })
@@ -642,16 +643,19 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     bytes: *mut c_char,
     size: usize,
 ) -> fmi2Status {
-    with(c, "fmi2SerializeFMUstate", |_| {
+    with(c, "fmi2SerializeFMUstate", |comp| {
         // SAFETY: a state made here; `size` writable bytes.
-        let data = unsafe { state(handle) }?;
+        let data = comp
+            .model
+            .serialize(unsafe { state(handle) }?)
+            .map_err(|e| e.to_string())?;
         if data.len() != size {
             return Err(format!(
                 "size {size} does not match the serialized size {}",
                 data.len()
             ));
         }
-        unsafe { slice_mut(bytes as *mut u8, size, "serializedState") }?.copy_from_slice(data);
+        unsafe { slice_mut(bytes as *mut u8, size, "serializedState") }?.copy_from_slice(&data);
         Ok(OK)
     })
 }
@@ -663,11 +667,12 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     slot: *mut *mut c_void,
 ) -> fmi2Status {
-    with(c, "fmi2DeSerializeFMUstate", |_| {
+    with(c, "fmi2DeSerializeFMUstate", |comp| {
         // SAFETY: `size` readable bytes; one writable slot.
-        let data = unsafe { slice(bytes as *const u8, size, "serializedState") }?.to_vec();
+        let data = unsafe { slice(bytes as *const u8, size, "serializedState") }?;
+        let saved = comp.model.deserialize(data).map_err(|e| e.to_string())?;
         let slot = unsafe { slice_mut(slot, 1, "FMUstate") }?;
-        slot[0] = Box::into_raw(Box::new(data)) as *mut c_void;
+        slot[0] = Box::into_raw(Box::new(saved)) as *mut c_void;
         Ok(OK)
     })
 }

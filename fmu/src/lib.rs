@@ -106,8 +106,11 @@ fn outputs_of(table: &[Variable], sim: &Simulation, commands: &[Option<f64>]) ->
 /// early there.
 pub type Observer<'a> = &'a mut (dyn FnMut(f64, &[(u32, f64)]) -> bool + Send);
 
+/// A saved FMU state of a [`Slave`], kept as it is (serialized only when the host asks).
+pub type Saved = Box<dyn std::any::Any>;
+
 /// An FMI 2.0 Co-Simulation slave behind the C API ([`ffi`]): a forging scene
-/// ([`Instance`]) or a press plant ([`press::Press`]). Its FMU states are serialized bytes.
+/// ([`Instance`]) or a press plant ([`press::Press`]).
 pub trait Slave {
     /// The GUID of its model description.
     fn guid(&self) -> &str;
@@ -139,10 +142,21 @@ pub trait Slave {
     fn set_string(&mut self, vr: u32, value: &str) -> Result<()>;
     /// `fmi2DoStep` from `t` by `h` (s).
     fn do_step(&mut self, t: f64, h: f64) -> Result<()>;
-    /// `fmi2GetFMUstate` then `fmi2SerializeFMUstate`: everything to continue bit for bit.
-    fn save(&self) -> Vec<u8>;
-    /// `fmi2SetFMUstate` from [`Slave::save`]'s bytes.
-    fn load(&mut self, bytes: &[u8]) -> Result<()>;
+    /// `fmi2GetFMUstate`: everything to continue bit for bit.
+    fn save(&self) -> Saved;
+    /// `fmi2SetFMUstate` from [`Slave::save`] or [`Slave::deserialize`].
+    fn load(&mut self, state: &Saved) -> Result<()>;
+    /// `fmi2SerializeFMUstate`.
+    fn serialize(&self, state: &Saved) -> Result<Vec<u8>>;
+    /// `fmi2DeSerializeFMUstate`.
+    fn deserialize(&self, bytes: &[u8]) -> Result<Saved>;
+}
+
+/// The state of type `T` behind a [`Saved`] of a slave of that kind.
+fn saved<T: 'static>(state: &Saved) -> Result<&T> {
+    state
+        .downcast_ref::<T>()
+        .ok_or_else(|| Error::State("the FMU state belongs to another kind of FMU".into()))
 }
 
 impl Slave for Instance {
@@ -191,11 +205,17 @@ impl Slave for Instance {
     fn do_step(&mut self, t: f64, h: f64) -> Result<()> {
         Instance::do_step(self, t, h)
     }
-    fn save(&self) -> Vec<u8> {
-        self.snapshot().to_bytes()
+    fn save(&self) -> Saved {
+        Box::new(self.snapshot())
     }
-    fn load(&mut self, bytes: &[u8]) -> Result<()> {
-        self.restore(&Snapshot::from_bytes(bytes)?)
+    fn load(&mut self, state: &Saved) -> Result<()> {
+        self.restore(saved::<Snapshot>(state)?)
+    }
+    fn serialize(&self, state: &Saved) -> Result<Vec<u8>> {
+        Ok(saved::<Snapshot>(state)?.to_bytes())
+    }
+    fn deserialize(&self, bytes: &[u8]) -> Result<Saved> {
+        Ok(Box::new(Snapshot::from_bytes(bytes)?))
     }
 }
 

@@ -15,7 +15,7 @@
 //! the first step it cannot know the step and gives `s'(theta0) omega0`, which moves the
 //! force history by 3.5e-5 of its peak (tests/test_press_fmus.py).
 
-use crate::{Phase, Result};
+use crate::{Phase, Result, Saved};
 use rkforge_core::Error;
 pub use rkforge_model_description::press::{header, parse, variable_table, PressKind};
 use rkforge_model_description::{Causality, Kind, Variable};
@@ -40,6 +40,15 @@ struct State {
     /// Hammer: blow under way, the stroke the ram is lifted to (between blows).
     blow: f64,
     lifting_to: Option<f64>,
+}
+
+/// A saved press state.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct PressState {
+    kind: PressKind,
+    values: Vec<f64>,
+    state: State,
+    phase: Phase,
 }
 
 /// One press instance.
@@ -434,18 +443,33 @@ impl crate::Slave for Press {
         self.state.time += h;
         Ok(())
     }
-    fn save(&self) -> Vec<u8> {
-        serde_json::to_vec(&(&self.values, &self.state, self.phase)).unwrap_or_default()
+    fn save(&self) -> Saved {
+        Box::new(PressState {
+            kind: self.kind,
+            values: self.values.clone(),
+            state: self.state.clone(),
+            phase: self.phase,
+        })
     }
-    fn load(&mut self, bytes: &[u8]) -> Result<()> {
-        let (values, state, phase): (Vec<f64>, State, Phase) = serde_json::from_slice(bytes)
-            .map_err(|e| Error::State(format!("cannot read the press state: {e}")))?;
-        if values.len() != self.values.len() {
-            return Err(Error::State("the state belongs to another press".into()));
-        }
-        self.values = values;
-        self.state = state;
-        self.phase = phase;
+    fn load(&mut self, state: &Saved) -> Result<()> {
+        let s = state
+            .downcast_ref::<PressState>()
+            .filter(|s| s.kind == self.kind)
+            .ok_or_else(|| Error::State("the state belongs to another press".into()))?;
+        self.values = s.values.clone();
+        self.state = s.state.clone();
+        self.phase = s.phase;
         Ok(())
+    }
+    fn serialize(&self, state: &Saved) -> Result<Vec<u8>> {
+        let s = state
+            .downcast_ref::<PressState>()
+            .ok_or_else(|| Error::State("the state belongs to another kind of FMU".into()))?;
+        serde_json::to_vec(s).map_err(|e| Error::State(e.to_string()))
+    }
+    fn deserialize(&self, bytes: &[u8]) -> Result<Saved> {
+        let s: PressState = serde_json::from_slice(bytes)
+            .map_err(|e| Error::State(format!("cannot read the press state: {e}")))?;
+        Ok(Box::new(s))
     }
 }

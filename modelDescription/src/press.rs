@@ -3,10 +3,12 @@
 //! defaults of `examples/presses`.
 
 use crate::{xml, Binding, Causality, Kind, Variability, Variable};
+use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// Which press.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum PressKind {
     /// Pump, compressible oil column and relief valve.
     Hydraulic,
