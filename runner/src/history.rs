@@ -13,12 +13,14 @@ pub struct History {
 pub(crate) struct Measures {
     pub(crate) extents: Extents,
     pub(crate) volume_change_rel: f64,
+    pub(crate) integrated_volume_change_rel: f64,
 }
 
 pub(crate) fn measures(sim: &Simulation) -> Measures {
     Measures {
         extents: sim.extents(),
         volume_change_rel: sim.volume() / sim.reference_volume() - 1.0,
+        integrated_volume_change_rel: sim.integrated_volume_change(),
     }
 }
 
@@ -50,6 +52,7 @@ impl History {
             lat,
             "height_m",
             "volume_change_rel",
+            "integrated_volume_change_rel",
             "max_plastic_strain",
             "max_penetration_rel",
         ] {
@@ -115,6 +118,7 @@ impl History {
             x.lateral(sim.scene().model.kinematics).1,
             x.y[1] - x.y[0],
             m.volume_change_rel,
+            m.integrated_volume_change_rel,
             sim.max_plastic_strain(),
             pen / h,
         ]);

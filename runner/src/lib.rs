@@ -349,6 +349,11 @@ mod tests {
         assert!(csv.starts_with("time_s,dt_s,top.stroke_m,"), "{csv}");
         let s = summary(&sim, 1.0, 0.0, outcome.ending());
         assert_eq!(s["status"], "ok");
+        // The material's own volume: compressed elastically under the tools, a little.
+        let v = s["workpiece"]["integrated_volume_change_rel"]
+            .as_f64()
+            .unwrap();
+        assert!(v < 0.0 && v > -1e-2, "{v}");
         assert_eq!(s["end_time_s"], 0.0006);
     }
 }

@@ -26,6 +26,7 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
         "x_range_m": x.x,
         "y_range_m": x.y,
         "volume_change_rel": m.volume_change_rel,
+        "integrated_volume_change_rel": m.integrated_volume_change_rel,
         "max_plastic_strain": sim.max_plastic_strain(),
     });
     workpiece[lat] = json!(lat_v);

@@ -48,6 +48,15 @@ impl Simulation {
             .sum()
     }
 
+    /// Relative change of the material's own volume, `sum_p J_p w_p / sum_p w_p - 1` (-)
+    /// with `w_p` the points' initial volumes: elastic only, as plastic flow is isochoric
+    /// (`det F_p = 1`, Simo 1992). Beside the boundary's [`Simulation::volume`], the
+    /// difference between the two is volume the discretisation gains or loses (a fold of
+    /// the boundary, material inside a tool), not compression.
+    pub fn integrated_volume_change(&self) -> Real {
+        self.integrated_volume() / self.weights.iter().sum::<Real>() - 1.0
+    }
+
     /// Volume of the undeformed workpiece (m^3).
     pub fn reference_volume(&self) -> Real {
         self.volume_of(&self.original)
