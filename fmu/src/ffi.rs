@@ -7,7 +7,7 @@
 
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
-use crate::{press, Instance, Phase, Saved, Slave};
+use crate::{press, Instance, Phase, Slave};
 use std::ffi::{c_char, c_int, c_uint, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -572,48 +572,24 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: *mut c_void, slot: *mut *mut c_void) -> fmi2Status {
     with(c, "fmi2GetFMUstate", |comp| {
-        // SAFETY: one writable slot holding null or a state made here.
-        let slot = unsafe { slice_mut(slot, 1, "FMUstate") }?;
-        if !slot[0].is_null() {
-            drop(unsafe { Box::from_raw(slot[0] as *mut Saved) });
-        }
-        slot[0] = Box::into_raw(Box::new(comp.model.save())) as *mut c_void;
-        Ok(OK)
+        // SAFETY: the host's slot for the state pointer.
+        unsafe { host::get_state(comp.model.as_ref(), slot) }.map(|()| OK)
     })
 }
 
-/// The state behind a handle made here.
-unsafe fn state<'a>(state: *mut c_void) -> Result<&'a Saved, String> {
-    if state.is_null() {
-        return Err("FMUstate is null".into());
-    }
-    // SAFETY: made by fmi2GetFMUstate / fmi2DeSerializeFMUstate and not yet freed.
-    Ok(unsafe { &*(state as *const Saved) })
-}
-
 #[no_mangle]
-pub unsafe extern "C" fn fmi2SetFMUstate(c: *mut c_void, handle: *mut c_void) -> fmi2Status {
+pub unsafe extern "C" fn fmi2SetFMUstate(c: *mut c_void, state: *mut c_void) -> fmi2Status {
     with(c, "fmi2SetFMUstate", |comp| {
-        // SAFETY: a state made here.
-        let saved = unsafe { state(handle) }?;
-        comp.model
-            .load(saved)
-            .map(|_| OK)
-            .map_err(|e| e.to_string())
+        // SAFETY: made by fmi2GetFMUstate / fmi2DeSerializeFMUstate and not yet freed.
+        unsafe { host::set_state(comp.model.as_mut(), state) }.map(|()| OK)
     })
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, slot: *mut *mut c_void) -> fmi2Status {
     with(c, "fmi2FreeFMUstate", |_| {
-        if !slot.is_null() {
-            // SAFETY: the host's slot, holding a state made here or null.
-            let slot = unsafe { &mut *slot };
-            if !slot.is_null() {
-                drop(unsafe { Box::from_raw(*slot as *mut Saved) });
-                *slot = std::ptr::null_mut();
-            }
-        }
+        // SAFETY: the host's slot, holding a state made here or null.
+        unsafe { host::free_state(slot) };
         Ok(OK)
     })
 }
@@ -621,42 +597,26 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, slot: *mut *mut c_void
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     c: *mut c_void,
-    handle: *mut c_void,
+    state: *mut c_void,
     size: *mut usize,
 ) -> fmi2Status {
     with(c, "fmi2SerializedFMUstateSize", |comp| {
         // SAFETY: a state made here; one writable size slot.
-        let n = comp
-            .model
-            .serialize(unsafe { state(handle) }?)
-            .map_err(|e| e.to_string())?
-            .len();
-        unsafe { slice_mut(size, 1, "size") }?[0] = n;
-        Ok(OK)
+        unsafe { host::state_size(comp.model.as_ref(), state, size) }.map(|()| OK)
     })
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SerializeFMUstate(
     c: *mut c_void,
-    handle: *mut c_void,
+    state: *mut c_void,
     bytes: *mut c_char,
     size: usize,
 ) -> fmi2Status {
     with(c, "fmi2SerializeFMUstate", |comp| {
         // SAFETY: a state made here; `size` writable bytes.
-        let data = comp
-            .model
-            .serialize(unsafe { state(handle) }?)
-            .map_err(|e| e.to_string())?;
-        if data.len() != size {
-            return Err(format!(
-                "size {size} does not match the serialized size {}",
-                data.len()
-            ));
-        }
-        unsafe { slice_mut(bytes as *mut u8, size, "serializedState") }?.copy_from_slice(&data);
-        Ok(OK)
+        unsafe { host::serialize_state(comp.model.as_ref(), state, bytes as *mut u8, size) }
+            .map(|()| OK)
     })
 }
 
@@ -669,11 +629,8 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
 ) -> fmi2Status {
     with(c, "fmi2DeSerializeFMUstate", |comp| {
         // SAFETY: `size` readable bytes; one writable slot.
-        let data = unsafe { slice(bytes as *const u8, size, "serializedState") }?;
-        let saved = comp.model.deserialize(data).map_err(|e| e.to_string())?;
-        let slot = unsafe { slice_mut(slot, 1, "FMUstate") }?;
-        slot[0] = Box::into_raw(Box::new(saved)) as *mut c_void;
-        Ok(OK)
+        unsafe { host::deserialize_state(comp.model.as_ref(), bytes as *const u8, size, slot) }
+            .map(|()| OK)
     })
 }
 

@@ -370,9 +370,8 @@ unsafe fn intermediate_floats(
         // SAFETY: as in fmi3GetFloat64.
         let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
         let out = unsafe { slice_mut(values, n_values, "values") }?;
-        let time_vr = STEP_TIME_VR.with(|t| t.get());
         for (v, o) in vrs.iter().zip(out.iter_mut()) {
-            *o = host::intermediate_value(c, *v, time_vr)
+            *o = host::intermediate_value(c, *v)
                 .flatten()
                 .ok_or("not an output")?;
         }
@@ -382,11 +381,6 @@ unsafe fn intermediate_floats(
         Ok(Ok(())) => OK,
         _ => ERROR,
     }
-}
-
-thread_local! {
-    /// The `time` value reference of the instance in its intermediate update.
-    static STEP_TIME_VR: std::cell::Cell<Vr> = const { std::cell::Cell::new(0) };
 }
 
 #[no_mangle]
@@ -732,8 +726,7 @@ pub unsafe extern "C" fn fmi3DoStep(
                 );
                 let mut observe = move |time: f64, outputs: &[(Vr, f64)]| -> bool {
                     let (mut requested, mut when) = (false, 0.0);
-                    host::during_intermediate(key, time, outputs.to_vec(), || {
-                        STEP_TIME_VR.with(|t| t.set(time_vr));
+                    host::during_intermediate(key, (time, time_vr), outputs.to_vec(), || {
                         // SAFETY: the host's callback with its environment and two
                         // writable locals, called synchronously.
                         unsafe {
@@ -776,11 +769,7 @@ pub unsafe extern "C" fn fmi3GetFMUState(c: *mut c_void, slot: *mut *mut c_void)
 pub unsafe extern "C" fn fmi3SetFMUState(c: *mut c_void, state: *mut c_void) -> fmi3Status {
     with(c, "fmi3SetFMUState", |comp| {
         // SAFETY: made by fmi3GetFMUState / fmi3DeserializeFMUState and not yet freed.
-        let snap = unsafe { host::state(state) }?;
-        comp.instance
-            .restore(snap)
-            .map(|()| OK)
-            .map_err(|e| e.to_string())
+        unsafe { host::set_state(&mut comp.instance, state) }.map(|()| OK)
     })
 }
 
@@ -799,11 +788,9 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     state: *mut c_void,
     size: *mut usize,
 ) -> fmi3Status {
-    with(c, "fmi3SerializedFMUStateSize", |_| {
+    with(c, "fmi3SerializedFMUStateSize", |comp| {
         // SAFETY: a state made here; one writable size slot.
-        let n = unsafe { host::state(state) }?.to_bytes().len();
-        unsafe { slice_mut(size, 1, "size") }?[0] = n;
-        Ok(OK)
+        unsafe { host::state_size(&comp.instance, state, size) }.map(|()| OK)
     })
 }
 
@@ -814,9 +801,9 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     bytes: *mut u8,
     size: usize,
 ) -> fmi3Status {
-    with(c, "fmi3SerializeFMUState", |_| {
+    with(c, "fmi3SerializeFMUState", |comp| {
         // SAFETY: a state made here; `size` writable bytes.
-        unsafe { host::serialize_state(state, bytes, size) }.map(|()| OK)
+        unsafe { host::serialize_state(&comp.instance, state, bytes, size) }.map(|()| OK)
     })
 }
 
@@ -827,9 +814,9 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     size: usize,
     slot: *mut *mut c_void,
 ) -> fmi3Status {
-    with(c, "fmi3DeserializeFMUState", |_| {
+    with(c, "fmi3DeserializeFMUState", |comp| {
         // SAFETY: `size` readable bytes; one writable slot.
-        unsafe { host::deserialize_state(bytes, size, slot) }.map(|()| OK)
+        unsafe { host::deserialize_state(&comp.instance, bytes, size, slot) }.map(|()| OK)
     })
 }
 

@@ -1,9 +1,9 @@
 //! What the FMI 2.0 and 3.0 C APIs ([`crate::ffi`], [`crate::ffi3`]) share: the status
 //! codes (the same numbers in both), the panic barrier every exported function runs its body
 //! in, the checked conversions of host pointers, and the FMU state handles (a boxed
-//! [`Snapshot`]).
+//! [`Saved`]).
 
-use crate::{Instance, Snapshot};
+use crate::{Saved, Slave};
 use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -85,6 +85,8 @@ pub struct Intermediate {
     pub time: f64,
     /// Float64 outputs by value reference.
     pub values: Vec<(u32, f64)>,
+    /// Value reference of the independent variable `time`.
+    pub time_vr: u32,
 }
 
 thread_local! {
@@ -97,7 +99,7 @@ thread_local! {
 /// than an intermediate read answers `Error` without touching it (it is being stepped).
 pub fn during_intermediate<R>(
     c: usize,
-    time: f64,
+    (time, time_vr): (f64, u32),
     values: Vec<(u32, f64)>,
     host: impl FnOnce() -> R,
 ) -> R {
@@ -107,6 +109,7 @@ pub fn during_intermediate<R>(
             component: c,
             time,
             values,
+            time_vr,
         })
     });
     let r = host();
@@ -115,13 +118,13 @@ pub fn during_intermediate<R>(
     r
 }
 
-/// During an intermediate update of the component at `c`: the value of `vr` (`time_vr` is
-/// the time), `Some(None)` for a variable not readable then; `None` outside one.
-pub fn intermediate_value(c: usize, vr: u32, time_vr: u32) -> Option<Option<f64>> {
+/// During an intermediate update of the component at `c`: the value of `vr` (`time` or an
+/// output), `Some(None)` for a variable not readable then; `None` outside one.
+pub fn intermediate_value(c: usize, vr: u32) -> Option<Option<f64>> {
     INTERMEDIATE.with(|i| {
         let i = i.borrow();
         let i = i.as_ref().filter(|i| i.component == c)?;
-        Some(if vr == time_vr {
+        Some(if vr == i.time_vr {
             Some(i.time)
         } else {
             i.values.iter().find(|(v, _)| *v == vr).map(|(_, x)| *x)
@@ -207,38 +210,47 @@ pub unsafe fn text(p: *const c_char) -> Option<String> {
     Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
 }
 
-/// Get the FMU state into the host's slot: a new boxed [`Snapshot`] (the one the slot held,
-/// if any, is reused by freeing it).
+/// `GetFMUState`: a new handle holding the slave's [`Slave::save`] in the host's slot (the
+/// state the slot held, if any, is freed).
 ///
 /// # Safety
 ///
 /// `slot` is a writable pointer slot holding null or a state made here.
-pub unsafe fn get_state(instance: &Instance, slot: *mut *mut c_void) -> Result<(), String> {
+pub unsafe fn get_state(slave: &dyn Slave, slot: *mut *mut c_void) -> Result<(), String> {
     // SAFETY: one writable slot for the state pointer.
     let slot = unsafe { slice_mut(slot, 1, "FMUState") }?;
-    let snap = Box::new(instance.snapshot());
     if !slot[0].is_null() {
         // SAFETY: a non-null state given back to us was made here and not yet freed.
-        drop(unsafe { Box::from_raw(slot[0] as *mut Snapshot) });
+        drop(unsafe { Box::from_raw(slot[0] as *mut Saved) });
     }
-    slot[0] = Box::into_raw(snap) as *mut c_void;
+    slot[0] = Box::into_raw(Box::new(slave.save())) as *mut c_void;
     Ok(())
 }
 
-/// The [`Snapshot`] behind a state handle.
+/// The saved state behind a handle.
 ///
 /// # Safety
 ///
-/// `state` is null or a state made here and not yet freed.
-pub unsafe fn state<'a>(state: *mut c_void) -> Result<&'a Snapshot, String> {
-    if state.is_null() {
+/// `handle` is null or a state made here and not yet freed.
+pub unsafe fn state<'a>(handle: *mut c_void) -> Result<&'a Saved, String> {
+    if handle.is_null() {
         return Err("FMUState is null".into());
     }
     // SAFETY: made by get_state / deserialize_state and not yet freed.
-    Ok(unsafe { &*(state as *const Snapshot) })
+    Ok(unsafe { &*(handle as *const Saved) })
 }
 
-/// Free the state in the host's slot and null it.
+/// `SetFMUState`.
+///
+/// # Safety
+///
+/// As [`state`].
+pub unsafe fn set_state(slave: &mut dyn Slave, handle: *mut c_void) -> Result<(), String> {
+    let saved = unsafe { state(handle) }?;
+    slave.load(saved).map_err(|e| e.to_string())
+}
+
+/// `FreeFMUState`: free the state in the host's slot and null it.
 ///
 /// # Safety
 ///
@@ -250,46 +262,67 @@ pub unsafe fn free_state(slot: *mut *mut c_void) {
     // SAFETY: `slot` points to a slot holding a state made here, or null.
     let slot = unsafe { &mut *slot };
     if !slot.is_null() {
-        drop(unsafe { Box::from_raw(*slot as *mut Snapshot) });
+        drop(unsafe { Box::from_raw(*slot as *mut Saved) });
         *slot = std::ptr::null_mut();
     }
 }
 
-/// Serialize the state into `size` bytes at `bytes` (`size` must be the serialized size).
+/// `SerializedFMUStateSize`.
+///
+/// # Safety
+///
+/// As [`state`]; `size` is one writable value.
+pub unsafe fn state_size(
+    slave: &dyn Slave,
+    handle: *mut c_void,
+    size: *mut usize,
+) -> Result<(), String> {
+    let n = slave
+        .serialize(unsafe { state(handle) }?)
+        .map_err(|e| e.to_string())?
+        .len();
+    unsafe { slice_mut(size, 1, "size") }?[0] = n;
+    Ok(())
+}
+
+/// `SerializeFMUState` into `size` bytes at `bytes` (`size` must be the serialized size).
 ///
 /// # Safety
 ///
 /// As [`state`]; `bytes` holds `size` writable bytes.
 pub unsafe fn serialize_state(
+    slave: &dyn Slave,
     handle: *mut c_void,
     bytes: *mut u8,
     size: usize,
 ) -> Result<(), String> {
-    let data = unsafe { state(handle) }?.to_bytes();
+    let data = slave
+        .serialize(unsafe { state(handle) }?)
+        .map_err(|e| e.to_string())?;
     if data.len() != size {
         return Err(format!(
             "size {size} does not match the serialized size {}",
             data.len()
         ));
     }
-    let out = unsafe { slice_mut(bytes, size, "serializedState") }?;
-    out.copy_from_slice(&data);
+    unsafe { slice_mut(bytes, size, "serializedState") }?.copy_from_slice(&data);
     Ok(())
 }
 
-/// A new state from `size` serialized bytes, into the host's slot.
+/// `DeserializeFMUState`: a new state from `size` serialized bytes, into the host's slot.
 ///
 /// # Safety
 ///
 /// `bytes` holds `size` readable bytes; `slot` is one writable pointer slot.
 pub unsafe fn deserialize_state(
+    slave: &dyn Slave,
     bytes: *const u8,
     size: usize,
     slot: *mut *mut c_void,
 ) -> Result<(), String> {
     let data = unsafe { slice(bytes, size, "serializedState") }?;
+    let saved = slave.deserialize(data).map_err(|e| e.to_string())?;
     let slot = unsafe { slice_mut(slot, 1, "FMUState") }?;
-    let snap = Snapshot::from_bytes(data).map_err(|e| e.to_string())?;
-    slot[0] = Box::into_raw(Box::new(snap)) as *mut c_void;
+    slot[0] = Box::into_raw(Box::new(saved)) as *mut c_void;
     Ok(())
 }

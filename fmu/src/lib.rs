@@ -507,8 +507,12 @@ impl Instance {
             .sim
             .as_mut()
             .ok_or_else(|| request("not initialised".into()))?;
-        let mut before = event_states(sim, &armed);
         let any_armed = armed.iter().any(|e| e.contact || e.force);
+        let mut before = if any_armed {
+            event_states(sim, &armed)
+        } else {
+            Vec::new()
+        };
         // Before each solver step after the first: what the last one did. An armed state
         // that rose ends the step; so does the observer's request, when early return is on.
         let ran = sim.run_toward(target, u64::MAX, |sim, taken| {
