@@ -261,14 +261,18 @@ fn write_frame(
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     let f = sim.fields();
     let name = format!("frame_{:04}.vtu", list.len());
+    let mut scalars: Vec<(&str, &[f64])> = vec![
+        ("plastic_strain", &f.plastic_strain),
+        ("von_mises_Pa", &f.von_mises),
+    ];
+    if let Some(t) = &f.temperature {
+        scalars.push(("temperature_C", t));
+    }
     vtu::write_vtu(
         &dir.join(&name),
         &f.positions,
         &quads(sim),
-        &[
-            ("plastic_strain", &f.plastic_strain),
-            ("von_mises_Pa", &f.von_mises),
-        ],
+        &scalars,
         &[
             ("displacement_m", &f.displacement),
             ("velocity_m_per_s", &f.velocity),

@@ -68,6 +68,9 @@ pub struct Body<'a> {
     pub points: &'a [PointState],
     /// The hardening law giving the flow stress.
     pub hardening: &'a Hardening,
+    /// The points' temperatures (degrees C) in a thermal scene, where the flow stress
+    /// depends on them.
+    pub temperature: Option<&'a [Real]>,
     /// Plane strain (areas per `depth_m`) or axisymmetry (areas of whole rings).
     pub kinematics: Kinematics,
     /// Depth of a plane-strain model (m).
@@ -584,11 +587,13 @@ impl Contact {
                 Kinematics::Axisymmetric => 2.0 * PI * length * x[0].max(0.0),
             };
         }
-        let eps_p = body.points[self.nearest_point[k] as usize].eps_p;
-        Interface {
-            flow_stress: body.hardening.flow_stress(eps_p),
-            area,
-        }
+        let p = self.nearest_point[k] as usize;
+        let eps_p = body.points[p].eps_p;
+        let flow_stress = match body.temperature {
+            Some(t) if body.hardening.is_thermal() => body.hardening.flow(eps_p, 0.0, t[p]).stress,
+            _ => body.hardening.flow_stress(eps_p),
+        };
+        Interface { flow_stress, area }
     }
 }
 

@@ -37,7 +37,9 @@ pub use geometry::Extents;
 pub use sampling::{sample_times, MAX_SAMPLES};
 pub use scene::{IntegrationRule, Kinematics, Scene};
 pub use scene_overrides::SceneSource;
-pub use solver::{Energy, Fields, MassScalingReport, Ran, Simulation, StageTimes, State};
+pub use solver::{
+    Energy, Fields, MassScalingReport, Ran, Simulation, StageTimes, State, THERMAL_MEASURES,
+};
 
 /// Size rayon's global pool, which runs the parallel stages, to `threads` worker threads
 /// (a `--threads` option); `None` keeps rayon's default of one per core. Results are the

@@ -29,6 +29,9 @@ pub struct Scene {
     pub workpiece: Workpiece,
     /// Its material.
     pub material: MaterialSpec,
+    /// Temperature and heat; a scene without it is isothermal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thermal: Option<ThermalSpec>,
     /// Speed/accuracy knobs of the discretisation.
     #[serde(default)]
     pub discretization: Discretization,
@@ -103,6 +106,28 @@ pub struct MaterialSpec {
     pub poisson_ratio: Real,
     /// Isotropic hardening law (`law = "linear"` or `"power"`).
     pub hardening: Hardening,
+}
+
+/// Temperature and heat in the workpiece (`[thermal]`): its initial temperature, heat
+/// capacity and conductivity, and the share of plastic work that becomes heat. Needed by
+/// the flow stresses of rate and temperature (`material.hardening.law = "johnson_cook"`,
+/// `"hensel_spittel"`, `"table"`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ThermalSpec {
+    /// Initial temperature of the workpiece (degrees C).
+    pub initial_temperature_c: Real,
+    /// Specific heat capacity `c` (J/(kg K)), of the physical density: mass scaling adds
+    /// inertia, never heat capacity.
+    pub specific_heat_j_per_kg_k: Real,
+    /// Taylor-Quinney coefficient `beta` (-): the fraction of the plastic work that becomes
+    /// heat (Taylor and Quinney 1934); 0.9 by default.
+    #[serde(default = "taylor_quinney")]
+    pub taylor_quinney: Real,
+}
+
+fn taylor_quinney() -> Real {
+    0.9
 }
 
 /// Background-cell integration rule.

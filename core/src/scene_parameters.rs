@@ -36,7 +36,8 @@ pub struct Parameter {
     pub kind: ParameterKind,
     /// The scene's value.
     pub start: toml::Value,
-    /// SI unit read from the key's suffix (`_s`, `_m`, `_m_per_s`, `_pa`, `_kg_per_m3`).
+    /// SI unit read from the key's suffix (`_s`, `_m`, `_m_per_s`, `_pa`, `_kg_per_m3`,
+    /// `_per_s`, `_c` for degrees Celsius, `_j_per_kg_k`).
     pub unit: Option<&'static str>,
     /// The schema's description (the doc comment of the field).
     pub description: String,
@@ -69,9 +70,12 @@ fn unit(key: &str) -> Option<&'static str> {
     [
         ("_m_per_s", "m/s"),
         ("_kg_per_m3", "kg/m3"),
+        ("_j_per_kg_k", "J/(kg.K)"),
+        ("_per_s", "1/s"),
         ("_pa", "Pa"),
         ("_s", "s"),
         ("_m", "m"),
+        ("_c", "degC"),
     ]
     .into_iter()
     .find(|(suffix, _)| last.ends_with(suffix))

@@ -37,6 +37,7 @@ impl Scene {
         self.check_identity(&mut out);
         self.check_workpiece(&mut out);
         self.check_material(&mut out);
+        self.check_thermal(&mut out);
         self.check_discretization(&mut out);
         self.check_time(&mut out);
         self.check_constraints(&mut out);
@@ -151,6 +152,9 @@ impl Scene {
                     format!("must be zero or positive, got {modulus_pa}"),
                 );
             }
+            Hardening::JohnsonCook { .. }
+            | Hardening::HenselSpittel { .. }
+            | Hardening::Table { .. } => check_rate_temperature_law(&m.hardening, out),
             Hardening::Power { k_pa, eps0, n } => {
                 out.check(
                     pos(k_pa),
@@ -169,6 +173,38 @@ impl Scene {
                 );
             }
         }
+    }
+
+    /// The `[thermal]` section, and that a law of rate and temperature has one.
+    fn check_thermal(&self, out: &mut Checks) {
+        let Some(t) = &self.thermal else {
+            out.check(
+                !self.material.hardening.is_thermal(),
+                "material.hardening.law",
+                "a flow stress of rate and temperature needs the [thermal] section \
+                 (initial_temperature_c, specific_heat_j_per_kg_k)"
+                    .into(),
+            );
+            return;
+        };
+        out.check(
+            t.initial_temperature_c.is_finite() && t.initial_temperature_c > -273.15,
+            "thermal.initial_temperature_c",
+            format!(
+                "must be above absolute zero (-273.15), got {}",
+                t.initial_temperature_c
+            ),
+        );
+        out.check(
+            pos(t.specific_heat_j_per_kg_k),
+            "thermal.specific_heat_j_per_kg_k",
+            format!("must be positive, got {}", t.specific_heat_j_per_kg_k),
+        );
+        out.check(
+            t.taylor_quinney.is_finite() && (0.0..=1.0).contains(&t.taylor_quinney),
+            "thermal.taylor_quinney",
+            format!("must lie in [0, 1], got {}", t.taylor_quinney),
+        );
     }
 
     /// Kernel support and re-referencing.
@@ -398,5 +434,150 @@ impl Scene {
                 ),
             }
         }
+    }
+}
+
+/// A law of rate and temperature: finite constants in their ranges, increasing table axes.
+fn check_rate_temperature_law(law: &Hardening, out: &mut Checks) {
+    let key = |k: &str| format!("material.hardening.{k}");
+    let increasing =
+        |v: &[Real]| v.windows(2).all(|w| w[0] < w[1]) && v.iter().all(|x| x.is_finite());
+    match law {
+        Hardening::JohnsonCook {
+            a_pa,
+            b_pa,
+            n,
+            c,
+            reference_strain_rate_per_s,
+            m,
+            reference_temperature_c,
+            melting_temperature_c,
+        } => {
+            for (name, v) in [("a_pa", a_pa), ("b_pa", b_pa), ("n", n), ("c", c)] {
+                out.check(
+                    v.is_finite() && *v >= 0.0,
+                    &key(name),
+                    format!("must be zero or positive, got {v}"),
+                );
+            }
+            out.check(
+                pos(*a_pa + *b_pa),
+                &key("a_pa"),
+                "A + B must be positive".into(),
+            );
+            out.check(
+                pos(*reference_strain_rate_per_s),
+                &key("reference_strain_rate_per_s"),
+                format!("must be positive, got {reference_strain_rate_per_s}"),
+            );
+            out.check(pos(*m), &key("m"), format!("must be positive, got {m}"));
+            out.check(
+                reference_temperature_c.is_finite()
+                    && melting_temperature_c.is_finite()
+                    && melting_temperature_c > reference_temperature_c,
+                &key("melting_temperature_c"),
+                format!(
+                    "must be above reference_temperature_c ({reference_temperature_c}), got {melting_temperature_c}"
+                ),
+            );
+        }
+        Hardening::HenselSpittel {
+            a_pa,
+            m1,
+            m2,
+            m3,
+            m4,
+            m5,
+            m7,
+            m8,
+            m9,
+            strain_range,
+            strain_rate_range_per_s,
+            temperature_range_c,
+        } => {
+            out.check(
+                pos(*a_pa),
+                &key("a_pa"),
+                format!("must be positive, got {a_pa}"),
+            );
+            for (name, v) in [
+                ("m1", m1),
+                ("m2", m2),
+                ("m3", m3),
+                ("m4", m4),
+                ("m5", m5),
+                ("m7", m7),
+                ("m8", m8),
+                ("m9", m9),
+            ] {
+                out.check(
+                    v.is_finite(),
+                    &key(name),
+                    format!("must be finite, got {v}"),
+                );
+            }
+            out.check(
+                pos(strain_range[0]) && increasing(strain_range),
+                &key("strain_range"),
+                format!("must be [least, largest] with 0 < least < largest, got {strain_range:?}"),
+            );
+            out.check(
+                pos(strain_rate_range_per_s[0]) && increasing(strain_rate_range_per_s),
+                &key("strain_rate_range_per_s"),
+                format!(
+                    "must be [least, largest] with 0 < least < largest, got {strain_rate_range_per_s:?}"
+                ),
+            );
+            out.check(
+                increasing(temperature_range_c) && (*m9 == 0.0 || temperature_range_c[0] > 0.0),
+                &key("temperature_range_c"),
+                format!(
+                    "must be [least, largest] with least < largest (and least > 0 with m9 set), got {temperature_range_c:?}"
+                ),
+            );
+        }
+        Hardening::Table {
+            strains,
+            strain_rates_per_s,
+            temperatures_c,
+            flow_stress_pa,
+        } => {
+            for (name, axis) in [
+                ("strains", strains),
+                ("strain_rates_per_s", strain_rates_per_s),
+                ("temperatures_c", temperatures_c),
+            ] {
+                out.check(
+                    !axis.is_empty() && increasing(axis),
+                    &key(name),
+                    format!("must be one or more increasing values, got {axis:?}"),
+                );
+            }
+            out.check(
+                strain_rates_per_s.iter().all(|&r| pos(r)),
+                &key("strain_rates_per_s"),
+                "every rate must be positive".into(),
+            );
+            let cells = strains.len() * strain_rates_per_s.len() * temperatures_c.len();
+            out.check(
+                flow_stress_pa.len() == cells,
+                &key("flow_stress_pa"),
+                format!(
+                    "needs {} x {} x {} = {cells} values (strains x rates x temperatures), got {}",
+                    strains.len(),
+                    strain_rates_per_s.len(),
+                    temperatures_c.len(),
+                    flow_stress_pa.len()
+                ),
+            );
+            if let Some(i) = flow_stress_pa.iter().position(|&s| !pos(s)) {
+                out.check(
+                    false,
+                    &key("flow_stress_pa"),
+                    format!("entry {i} must be positive, got {}", flow_stress_pa[i]),
+                );
+            }
+        }
+        Hardening::Linear { .. } | Hardening::Power { .. } => {}
     }
 }

@@ -15,6 +15,7 @@ pub mod xml3;
 
 use rkforge_core::scene::{Kinematics, Motion, Scene};
 use rkforge_core::scene_parameters::{parameters, ParameterKind};
+use rkforge_core::THERMAL_MEASURES;
 
 /// FMI 2.0 causality.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -81,6 +82,8 @@ pub enum Binding {
     ToolWork,
     /// Largest kinetic-to-internal energy ratio after the start-up (-).
     KineticToInternalMax,
+    /// Thermal measure `k` of [`rkforge_core::THERMAL_MEASURES`] (a scene with `[thermal]`).
+    Thermal(usize),
     /// Parameter `k` of the scene ([`rkforge_core::scene_parameters::parameters`]): a
     /// scene key under its dotted name.
     Parameter(usize),
@@ -274,6 +277,22 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
             d.into(),
             b,
         );
+    }
+    if scene.thermal.is_some() {
+        for (k, (key, unit, d)) in THERMAL_MEASURES.iter().enumerate() {
+            // `temperature_min_c` is `thermal.temperature_min` in degC, as `workpiece.height`
+            // carries its unit in the declaration rather than the name.
+            let name = key.rsplit_once('_').map_or(*key, |(n, _)| n);
+            push(
+                format!("thermal.{name}"),
+                Output,
+                Continuous,
+                Kind::Real(None),
+                Some(unit),
+                d.to_string(),
+                Binding::Thermal(k),
+            );
+        }
     }
     for (k, p) in parameters(scene).into_iter().enumerate() {
         if writes_files_only(&p.key) {

@@ -254,7 +254,8 @@ impl Simulation {
     }
 
     /// Particle fields as numpy arrays: `positions`, `displacement`, `velocity` (n, 2) in m
-    /// and m/s; `plastic_strain` and `von_mises` (Pa) (n,), smoothed from the points.
+    /// and m/s; `plastic_strain`, `von_mises` (Pa) and, in a scene with `[thermal]`,
+    /// `temperature` (degrees C) (n,), smoothed from the points.
     fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let f = self.with(py, |s| Ok(s.sim.fields()))?;
         let d = PyDict::new(py);
@@ -263,6 +264,9 @@ impl Simulation {
         d.set_item("velocity", pairs(py, &f.velocity)?)?;
         d.set_item("plastic_strain", PyArray1::from_vec(py, f.plastic_strain))?;
         d.set_item("von_mises", PyArray1::from_vec(py, f.von_mises))?;
+        if let Some(t) = f.temperature {
+            d.set_item("temperature", PyArray1::from_vec(py, t))?;
+        }
         Ok(d)
     }
 

@@ -1,6 +1,6 @@
 //! The time history of a run: one row per sample, written as history.csv.
 
-use rkforge_core::{Extents, Simulation};
+use rkforge_core::{Extents, Simulation, THERMAL_MEASURES};
 use std::path::Path;
 
 /// Time history: one row per sample.
@@ -75,6 +75,9 @@ impl History {
         ] {
             columns.push(format!("energy.{c}"));
         }
+        for (k, _) in thermal_measures(sim) {
+            columns.push(format!("thermal.{k}"));
+        }
         History {
             columns,
             rows: Vec::new(),
@@ -135,6 +138,7 @@ impl History {
             e.balance_error_rel(),
             e.kinetic_to_internal(),
         ]);
+        row.extend(thermal_measures(sim).into_iter().map(|(_, v)| v));
         self.rows.push(row);
         measured.map(|_| ())
     }
@@ -172,6 +176,15 @@ impl History {
     pub fn column(&self, name: &str) -> Option<Vec<f64>> {
         let k = self.columns.iter().position(|c| c == name)?;
         Some(self.rows.iter().map(|r| r[k]).collect())
+    }
+}
+
+/// The temperatures and heat of a scene with `[thermal]`, as (key, value) for the history's
+/// `thermal.*` columns and the summary's `thermal` entry; none for an isothermal scene.
+pub(crate) fn thermal_measures(sim: &Simulation) -> Vec<(&'static str, f64)> {
+    match sim.thermal_values() {
+        Some(v) => THERMAL_MEASURES.iter().map(|m| m.0).zip(v).collect(),
+        None => Vec::new(),
     }
 }
 

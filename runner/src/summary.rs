@@ -1,7 +1,7 @@
 //! The summary of a run (summary.json) and the table of our figures beside the scene's
 //! references.
 
-use crate::history::{face_values, measures, min_spacing, FACE_KEYS};
+use crate::history::{face_values, measures, min_spacing, thermal_measures, FACE_KEYS};
 use crate::Ending;
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
@@ -90,6 +90,14 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "output": output_s,
         },
     });
+    // Only a scene with temperature has the entry.
+    let thermal = thermal_measures(sim);
+    if !thermal.is_empty() {
+        summary["thermal"] = thermal
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), json!(v)))
+            .collect();
+    }
     // Only a scene that re-references the kernel has the entry.
     if let Some(stretch) = scene.discretization.rereference_stretch {
         summary["rereference"] = json!({

@@ -1,7 +1,9 @@
 //! Materials: isotropic elasticity and J2 plasticity at finite strain.
 
 pub mod hardening;
+pub mod rate_temperature;
 pub mod simo1992_hencky_j2;
 
 pub use hardening::Hardening;
+pub use rate_temperature::Flow;
 pub use simo1992_hencky_j2::{HenckyJ2, PointLanes, PointState, StressLanes, StressUpdate};

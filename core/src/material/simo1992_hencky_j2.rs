@@ -48,7 +48,7 @@ pub fn elastic_left_cauchy_green(f: [Real; 4], f33: Real, cp_inv: [Real; 4]) -> 
 const SQRT_6: Real = 2.449_489_742_783_178;
 
 /// Elastic constants and hardening law of a Hencky J2 material.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct HenckyJ2 {
     /// Bulk modulus `K = E / (3 (1 - 2 nu))` (Pa).
     pub bulk: Real,
@@ -102,8 +102,18 @@ pub struct PointLanes {
     pub cp_inv: [Lanes; 4],
     /// Equivalent plastic strain (-).
     pub eps_p: Lanes,
-    /// Flow stress `sigma_y(eps_p)` (Pa).
+    /// Flow stress `sigma_y(eps_p)` (Pa): the yield test's, at the law's least rate.
     pub flow_stress: Lanes,
+    /// Temperature (degrees C), read by the laws of rate and temperature only.
+    pub temperature: Lanes,
+    /// `1 / dt` (1/s) of the step the strain increment was taken over: the plastic strain
+    /// rate of a return is `dgamma / dt`; 0 before the first step (the least rate).
+    pub inv_dt: Real,
+    /// Plastic work density of the last update (J/m^3), `int sigma_y d eps` over the step's
+    /// strain at its rate and temperature ([`super::hardening::Isotherm::work`]), for the
+    /// laws of rate and temperature (0 where a lane stayed elastic; not set for the
+    /// linear and power laws, whose work has a closed form).
+    pub plastic_work: Lanes,
 }
 
 impl PointLanes {
@@ -117,6 +127,9 @@ impl PointLanes {
             cp_inv: [one, zero, one, one],
             eps_p: zero,
             flow_stress: [Real::INFINITY; LANES],
+            temperature: zero,
+            inv_dt: 0.0,
+            plastic_work: zero,
         }
     }
 
@@ -314,8 +327,16 @@ impl HenckyJ2 {
         for l in 0..LANES {
             yields[l] = t.q_trial[l] > p.flow_stress[l];
         }
+        let thermal = self.hardening.is_thermal();
+        if thermal {
+            p.plastic_work = [0.0; LANES];
+        }
         if yields.iter().any(|&y| y) {
-            let (dgamma, flow) = self.return_map(&t.q_trial, &p.eps_p, &p.flow_stress, &yields)?;
+            let (dgamma, flow) = if thermal {
+                self.return_map_rate(&t.q_trial, p, &yields)?
+            } else {
+                self.return_map(&t.q_trial, &p.eps_p, &p.flow_stress, &yields)?
+            };
             for l in 0..LANES {
                 if yields[l] {
                     scale[l] = 1.0 - 3.0 * g * dgamma[l] / t.q_trial[l];
@@ -422,7 +443,8 @@ impl HenckyJ2 {
                 }
                 Ok((x, flow_at))
             }
-            Hardening::Power { .. } => {
+            _ => {
+                // Power law (the laws of rate and temperature go to `return_map_rate`).
                 // The residual is decreasing and concave in dgamma; Newton from below
                 // converges monotonically. Bracket [0, q_trial / 3G] for safety.
                 let (mut lo, mut hi) = ([0.0; LANES], [0.0; LANES]);
@@ -478,6 +500,72 @@ impl HenckyJ2 {
                 }
             }
         }
+    }
+
+    /// The rate-consistent return map of the laws of rate and temperature: in each lane
+    /// that yields, `dgamma >= 0` with `q_trial - 3 G dgamma - sigma_y(eps_p + dgamma,
+    /// dgamma / dt, T) = 0`, the flow stress at the plastic strain rate of the step itself
+    /// (`dt` the step the strain increment was taken over, `p.inv_dt`; the temperature the
+    /// lane's at the step's start), and that flow stress (Pa). Newton's method with the
+    /// slope `3 G + d sigma_y / d eps + (d sigma_y / d rate) / dt`, safeguarded by bisection
+    /// in `[0, q_trial / 3G]` (the residual is positive at 0 and `-sigma_y <= 0` at the
+    /// top), each lane alone (the laws call `powf`, `ln` and `exp` of the C library), to
+    /// `|r| <= 1e-12 q_trial`. Sets each yielding lane's plastic work of the step,
+    /// `p.plastic_work`, over the step's strain at its rate and temperature.
+    /// An error names a lane that did not converge in 200 iterations.
+    #[allow(clippy::needless_range_loop)] // lane loops index several arrays
+    fn return_map_rate(
+        &self,
+        q_trial: &Lanes,
+        p: &mut PointLanes,
+        yields: &[bool; LANES],
+    ) -> Result<(Lanes, Lanes), (usize, String)> {
+        let g3 = 3.0 * self.shear;
+        let mut x = [0.0; LANES];
+        let mut flow_at = p.flow_stress;
+        for l in 0..LANES {
+            if !yields[l] {
+                continue;
+            }
+            let (q, eps, temp) = (q_trial[l], p.eps_p[l], p.temperature[l]);
+            let law = self.hardening.isotherm(temp);
+            let (mut lo, mut hi) = (0.0, q / g3);
+            // The perfectly plastic estimate: above the root for a hardening material.
+            let mut xl = (q - p.flow_stress[l]) / g3;
+            let mut converged = false;
+            for _ in 0..200 {
+                let f = law.flow(eps + xl, xl * p.inv_dt);
+                let r = q - g3 * xl - f.stress;
+                if r.abs() <= 1e-12 * q || hi - lo <= 1e-15 * hi {
+                    flow_at[l] = f.stress;
+                    converged = true;
+                    break;
+                }
+                if r > 0.0 {
+                    lo = xl;
+                } else {
+                    hi = xl;
+                }
+                let next = xl + r / (g3 + f.d_strain + f.d_rate * p.inv_dt);
+                xl = if next > lo && next < hi {
+                    next
+                } else {
+                    0.5 * (lo + hi)
+                };
+            }
+            if !converged {
+                return Err((
+                    l,
+                    format!(
+                        "rate-consistent return mapping did not converge (q_trial = {q:.6e} Pa, \
+                         eps_p = {eps:.6e}, T = {temp:.1} C)"
+                    ),
+                ));
+            }
+            x[l] = xl;
+            p.plastic_work[l] = law.work(eps, xl, xl * p.inv_dt, flow_at[l]);
+        }
+        Ok((x, flow_at))
     }
 }
 

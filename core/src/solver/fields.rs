@@ -20,6 +20,8 @@ pub struct Fields {
     pub plastic_strain: Vec<Real>,
     /// Von Mises stress smoothed to particles (Pa).
     pub von_mises: Vec<Real>,
+    /// Temperature smoothed to particles (degrees C), in a scene with `[thermal]`.
+    pub temperature: Option<Vec<Real>>,
 }
 
 impl Simulation {
@@ -83,7 +85,8 @@ impl Simulation {
     }
 
     /// Particle fields for output: physical positions, displacements and velocities;
-    /// plastic strain and von Mises stress smoothed from the points with weights `|N_I| w_p`.
+    /// plastic strain, von Mises stress and temperature smoothed from the points with
+    /// weights `|N_I| w_p`.
     pub fn fields(&self) -> Fields {
         let np = self.ref_pos.len();
         let mut f = Fields {
@@ -91,6 +94,8 @@ impl Simulation {
             ..Default::default()
         };
         let (mut wsum, mut ep, mut vm) = (vec![0.0; np], vec![0.0; np], vec![0.0; np]);
+        let temps = self.point_temperature();
+        let mut tp = vec![0.0; if temps.is_some() { np } else { 0 }];
         for p in 0..self.weights.len() {
             let (eps_p, mises) = (self.st.points[p].eps_p, self.out[p].von_mises);
             for (i, [n, _, _]) in self.scatter.point_row(p) {
@@ -98,6 +103,9 @@ impl Simulation {
                 wsum[i] += w;
                 ep[i] += w * eps_p;
                 vm[i] += w * mises;
+                if let Some(t) = temps {
+                    tp[i] += w * t[p];
+                }
             }
         }
         for j in 0..np {
@@ -112,7 +120,11 @@ impl Simulation {
             let w = if wsum[j] > 0.0 { 1.0 / wsum[j] } else { 0.0 };
             f.plastic_strain.push(ep[j] * w);
             f.von_mises.push(vm[j] * w);
+            if temps.is_some() {
+                tp[j] *= w;
+            }
         }
+        f.temperature = temps.map(|_| tp);
         f
     }
 
@@ -134,6 +146,11 @@ impl Simulation {
     /// stress stage.
     pub fn point_von_mises(&self) -> Vec<Real> {
         self.out.iter().map(|o| o.von_mises).collect()
+    }
+    /// `J = det F` of each integration point at the last stress stage (-): the Mises
+    /// Kirchhoff stress the yield condition holds is `J` times [`Simulation::point_von_mises`].
+    pub fn point_jacobian(&self) -> Vec<Real> {
+        self.out.iter().map(|o| o.jacobian).collect()
     }
     /// Equivalent plastic strain at each integration point.
     pub fn point_plastic_strain(&self) -> Vec<Real> {

@@ -38,6 +38,7 @@
 mod energy;
 mod fields;
 mod fill;
+mod heat;
 mod layout;
 mod mass_scaling;
 mod penetration;
@@ -53,6 +54,7 @@ mod update;
 pub use energy::Energy;
 pub use fields::Fields;
 pub use fill::FillPoint;
+pub use heat::{Heat, Temperatures, THERMAL_MEASURES};
 pub use mass_scaling::MassScalingReport;
 pub use penetration::Penetrated;
 pub use rereference::Reference;
@@ -312,11 +314,9 @@ impl Simulation {
         }
         self.v_prev.clone_from(&st.v);
         self.contact.forget();
-        let hardening = &self.material.hardening;
-        let initial = hardening.initial_yield();
-        for (out, point) in self.out.iter_mut().zip(&st.points) {
-            let flow = hardening.flow_stress(point.eps_p);
-            out.set_plastic_strain(&self.material, point.eps_p, flow, initial);
+        for (p, (out, point)) in self.out.iter_mut().zip(&st.points).enumerate() {
+            let temp = st.heat.as_ref().map(|h| h.temperature_c[p]);
+            *out = heat::point_out(&self.material, point.eps_p, temp);
         }
         self.st = st;
         Ok(())
@@ -379,6 +379,7 @@ impl Simulation {
             spacing: self.spacing,
             points: &self.st.points,
             hardening: &self.material.hardening,
+            temperature: self.st.heat.as_ref().map(|h| &h.temperature_c[..]),
             kinematics: self.scene.model.kinematics,
             depth_m: self.scene.model.depth_m,
         };
@@ -583,6 +584,9 @@ impl Simulation {
             axi: self.scene.model.kinematics == Kinematics::Axisymmetric,
             spacing: self.spacing,
             avx2: self.simd && has_avx2(),
+            heating: self.scene.thermal.as_ref().map(|spec| {
+                heat::Heating::new(spec, self.scene.material.density_kg_per_m3, self.st.dt_prev)
+            }),
         };
         let sums = stress::stage(
             &self.team,
@@ -590,6 +594,13 @@ impl Simulation {
             &input,
             &mut self.st.points,
             &mut self.out,
+            self.st.heat.as_mut().map(|h| {
+                (
+                    &mut h.temperature_c[..],
+                    &mut h.plastic_work[..],
+                    &mut h.plastic_rate[..],
+                )
+            }),
         )
         .map_err(|(p, m)| Error::Diverged {
             step: self.st.step,

@@ -4,10 +4,10 @@
 //! contact stage, the critical step and, if the scene asks, mass scaling.
 
 use super::energy::{kinetic_energy, Energy};
+use super::heat::{self, Heat};
 use super::layout::{Scatter, MAX_GROUP};
 use super::mass_scaling::{stiffness_bounds, Plan};
 use super::state::State;
-use super::stress::PointOut;
 use super::{Simulation, StageTimes};
 use crate::constraints::Constraints;
 use crate::contact::Contact;
@@ -63,7 +63,7 @@ impl Simulation {
         let material = HenckyJ2::new(
             scene.material.youngs_modulus_pa,
             scene.material.poisson_ratio,
-            scene.material.hardening,
+            scene.material.hardening.clone(),
         );
         let wave_speed = material.wave_speed(rho);
         let scaling = scene.time.mass_scaling.map(|ms| match ms.factor {
@@ -87,6 +87,11 @@ impl Simulation {
         let (v, initial) = initial_motion(w.initial_velocity_m_per_s, constraints.as_ref(), &mass);
         let npts = points.positions.len();
         let stable_dt = h[0].min(h[1]) / wave_speed;
+        let out = heat::point_out(
+            &material,
+            0.0,
+            scene.thermal.as_ref().map(|t| t.initial_temperature_c),
+        );
         let contact = Contact::new(
             &boundary,
             &nodal,
@@ -141,9 +146,10 @@ impl Simulation {
                     0.0;
                     scene.tools.len() * scene.output.pressure_stations.unwrap_or(0)
                 ],
+                heat: scene.thermal.as_ref().map(|t| Heat::initial(t, npts)),
             },
             tools,
-            out: vec![PointOut::initial(&material); npts],
+            out: vec![out; npts],
             f_int: vec![[0.0; 2]; np],
             v_prev: v,
             critical_dt0: stable_dt,

@@ -1,6 +1,7 @@
 //! The whole changing state of a simulation, saved and restored as one value.
 
 use super::energy::Energy;
+use super::heat::Heat;
 use super::rereference::Reference;
 use crate::contact::Stick;
 use crate::material::PointState;
@@ -66,6 +67,9 @@ pub struct State {
     /// stage, tool by tool (`output.pressure_stations` per tool); empty without stations.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub pressure: Vec<Real>,
+    /// Temperatures and plastic work of the points in a scene with `[thermal]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heat: Option<Heat>,
 }
 
 /// The moment the material first reached a tool's fill point.

@@ -11,6 +11,7 @@
 //! per batch in SIMD lanes; the AVX2+FMA build ([`avx2`]) is chosen at run time and gives
 //! the generic build's bits. Chunks of points run on the team in parallel.
 
+use super::heat::Heating;
 use super::layout::{Scatter, MAX_GROUP};
 use crate::lanes::{Lanes, LANES};
 use crate::material::{HenckyJ2, PointLanes, PointState};
@@ -72,6 +73,9 @@ struct ChunkWork<'a> {
     first: usize,
     states: &'a mut [PointState],
     outs: &'a mut [PointOut],
+    /// The chunk's point temperatures (degrees C), plastic work densities (J/m^3) and
+    /// plastic strain rates (1/s) in a thermal scene.
+    heat: Option<HeatSlices<'a>>,
     lo: usize,
     buf: &'a mut [[Real; 2]],
 }
@@ -96,6 +100,8 @@ struct StressContext<'a> {
     spacing: [Real; 2],
     /// `sigma_y(0)` (Pa), for the plastic work.
     initial_yield: Real,
+    /// Adiabatic heating of a thermal scene.
+    heating: Option<Heating>,
 }
 
 impl StressContext<'_> {
@@ -233,6 +239,7 @@ impl StressContext<'_> {
             first,
             states,
             outs,
+            mut heat,
             lo,
             buf,
         } = work;
@@ -291,6 +298,10 @@ impl StressContext<'_> {
             for (l, (state, out)) in states.iter().zip(outs.iter()).enumerate() {
                 batch.set_history(l, state, out.flow_stress);
             }
+            if let (Some(h), Some((temps, _, _))) = (&self.heating, &heat) {
+                batch.temperature[..used].copy_from_slice(&temps[k0..k0 + used]);
+                batch.inv_dt = h.inv_dt;
+            }
             let u = match self.material.update_lanes(&mut batch) {
                 Ok(u) => u,
                 Err((l, m)) => {
@@ -337,17 +348,46 @@ impl StressContext<'_> {
             for (l, (state, out)) in states.iter_mut().zip(outs.iter_mut()).enumerate() {
                 let eps_p = state.eps_p;
                 *state = batch.state(l);
-                if state.eps_p != eps_p {
-                    let flow = batch.flow_stress[l];
-                    out.set_plastic_strain(self.material, state.eps_p, flow, self.initial_yield);
-                }
+                let heated = match (&self.heating, &mut heat) {
+                    (Some(h), Some((temps, work, rate))) => {
+                        Some((h, &mut temps[k0 + l], &mut work[k0 + l], &mut rate[k0 + l]))
+                    }
+                    _ => None,
+                };
+                let plastic_work = match heated {
+                    None => {
+                        if state.eps_p != eps_p {
+                            let flow = batch.flow_stress[l];
+                            out.set_plastic_strain(
+                                self.material,
+                                state.eps_p,
+                                flow,
+                                self.initial_yield,
+                            );
+                        }
+                        out.plastic_work
+                    }
+                    Some((h, temp, work, rate)) => {
+                        *rate = (state.eps_p - eps_p) * h.inv_dt;
+                        if state.eps_p != eps_p {
+                            // W_p += dW; T_p += beta dW / (rho_0 c); the yield test's flow
+                            // stress at the new strain and temperature.
+                            let dw = batch.plastic_work[l];
+                            *work += dw;
+                            *temp += h.beta_over_rho_c * dw;
+                            out.flow_stress =
+                                self.material.hardening.flow(state.eps_p, 0.0, *temp).stress;
+                        }
+                        *work
+                    }
+                };
                 // F is measured from the last reference: J and the Cauchy stress q / J
                 // take the Jacobian J_ref of that reference (1 without re-referencing).
                 let j_ref = self.reference_jacobian[p0 + l];
                 out.von_mises = u.von_mises[l] / j_ref;
                 out.jacobian = u.jacobian[l] * j_ref;
                 s.elastic += u.elastic_energy[l] * weight[l];
-                s.plastic += out.plastic_work * weight[l];
+                s.plastic += plastic_work * weight[l];
                 s.min_altitude2 = s.min_altitude2.min(altitude2[l]);
             }
             let mut l0 = 0;
@@ -390,6 +430,10 @@ struct Batch {
     px: [Lanes; 2],
 }
 
+/// A thermal scene's per-point temperatures (degrees C), plastic work densities (J/m^3) and
+/// plastic strain rates (1/s), which the stress stage updates ([`super::heat::Heat`]).
+pub(super) type HeatSlices<'a> = (&'a mut [Real], &'a mut [Real], &'a mut [Real]);
+
 /// What the stress stage reads besides the layout.
 pub(super) struct Inputs<'a> {
     /// RK coefficients of the displacement `d_I` (m).
@@ -411,6 +455,8 @@ pub(super) struct Inputs<'a> {
     pub spacing: [Real; 2],
     /// Run the AVX2 build (the CPU must have it, [`has_avx2`]).
     pub avx2: bool,
+    /// Adiabatic heating of a thermal scene.
+    pub heating: Option<Heating>,
 }
 
 /// What the stress stage sums over all points.
@@ -426,14 +472,16 @@ pub(super) struct Sums {
 }
 
 /// Runs the stress stage over all points on `team`: updates each point's history in
-/// `states` and its outputs in `outs`, fills the chunk buffers of `scatter`. A point whose
-/// update fails stops the stage: `Err((point, message))`, the first in point order.
+/// `states` and its outputs in `outs`, and in a thermal scene the points' temperatures and
+/// plastic work in `heat`; fills the chunk buffers of `scatter`. A point whose update fails
+/// stops the stage: `Err((point, message))`, the first in point order.
 pub(super) fn stage(
     team: &Team,
     scatter: &mut Scatter,
     input: &Inputs<'_>,
     states: &mut [PointState],
     outs: &mut [PointOut],
+    heat: Option<HeatSlices<'_>>,
 ) -> Result<Sums, (usize, String)> {
     let Scatter {
         chunk,
@@ -464,6 +512,7 @@ pub(super) fn stage(
         axi: input.axi,
         spacing: input.spacing,
         initial_yield: input.material.hardening.initial_yield(),
+        heating: input.heating,
     };
     let avx2 = input.avx2;
     let (chunk, lo, offsets) = (*chunk, &*lo, &*offsets);
@@ -475,6 +524,7 @@ pub(super) fn stage(
         Parts::new(buf),
         Parts::new(&mut sums),
     );
+    let heat = heat.map(|(t, w, r)| (Parts::new(t), Parts::new(w), Parts::new(r)));
     team.for_each(lo.len(), &|c| {
         let range = part(c, chunk, points);
         // SAFETY: chunk `c` alone takes these points, its buffer slice and its slot.
@@ -483,7 +533,10 @@ pub(super) fn stage(
                 ChunkWork {
                     first: range.start,
                     states: states.get(range.clone()),
-                    outs: outs.get(range),
+                    outs: outs.get(range.clone()),
+                    heat: heat.as_ref().map(|(t, w, r)| {
+                        (t.get(range.clone()), w.get(range.clone()), r.get(range))
+                    }),
                     lo: lo[c] as usize,
                     buf: bufs.get(offsets[c]..offsets[c + 1]),
                 },

@@ -35,6 +35,7 @@ pub fn patch(kin: Kinematics, n: usize, rule: IntegrationRule, support: f64) -> 
                 modulus_pa: 100e6,
             },
         },
+        thermal: None,
         discretization: Discretization {
             integration: rule,
             support: [support, support],

@@ -1,0 +1,190 @@
+//! Temperature and heat of a scene with a `[thermal]` section: the temperature of each
+//! integration point, raised in the stress stage by its share of the plastic work,
+//! `dT_p = beta sigma_y dgamma / (rho_0 c)` (K), with `sigma_y` the flow stress of the
+//! rate-consistent return and `rho_0` the physical density (mass scaling never enters), so
+//! that `rho_0 c (T_p - T_0) = beta W_p` point by point (adiabatic heating, Taylor and
+//! Quinney 1934); the plastic work density `W_p = sum sigma_y dgamma` (J/m^3) is summed step
+//! by step, as a flow stress of rate and temperature has no closed-form work.
+
+use super::stress::PointOut;
+use super::Simulation;
+use crate::material::HenckyJ2;
+use crate::math::Real;
+use crate::scene::ThermalSpec;
+use serde::{Deserialize, Serialize};
+
+/// The changing thermal state of the workpiece (part of [`super::State`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Heat {
+    /// Temperature of each integration point (degrees C).
+    pub temperature_c: Vec<Real>,
+    /// Plastic work density of each point since the start, `sum sigma_y dgamma` (J/m^3,
+    /// per reference volume).
+    pub plastic_work: Vec<Real>,
+    /// Plastic strain rate of each point at the last stress stage, `dgamma / dt` (1/s; 0
+    /// where it stayed elastic): the rate its flow stress was evaluated at.
+    pub plastic_rate: Vec<Real>,
+}
+
+impl Heat {
+    /// Every point at the scene's initial temperature, no plastic work.
+    pub(super) fn initial(spec: &ThermalSpec, points: usize) -> Heat {
+        Heat {
+            temperature_c: vec![spec.initial_temperature_c; points],
+            plastic_work: vec![0.0; points],
+            plastic_rate: vec![0.0; points],
+        }
+    }
+}
+
+/// What the stress stage needs to heat the points: `beta / (rho_0 c)` (K m^3/J) and `1/dt`
+/// (1/s) of the step the strain increment was taken over (0 before the first step).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Heating {
+    pub(super) beta_over_rho_c: Real,
+    pub(super) inv_dt: Real,
+}
+
+impl Heating {
+    /// From the scene's thermal section and physical density `rho_0` (kg/m^3).
+    pub(super) fn new(spec: &ThermalSpec, density: Real, dt_prev: Real) -> Heating {
+        Heating {
+            beta_over_rho_c: spec.taylor_quinney / (density * spec.specific_heat_j_per_kg_k),
+            inv_dt: if dt_prev > 0.0 { 1.0 / dt_prev } else { 0.0 },
+        }
+    }
+}
+
+/// The flow stress the yield test of a point reads (Pa): the law at the point's plastic
+/// strain, its least rate and, for a thermal scene, its temperature `temp_c`.
+pub(super) fn yield_flow(material: &HenckyJ2, eps_p: Real, temp_c: Option<Real>) -> Real {
+    match temp_c {
+        Some(t) if material.hardening.is_thermal() => material.hardening.flow(eps_p, 0.0, t).stress,
+        _ => material.hardening.flow_stress(eps_p),
+    }
+}
+
+/// The cached outputs of a point with plastic strain `eps_p` at temperature `temp_c`: the
+/// yield test's flow stress, and the closed-form plastic work of the linear and power laws.
+pub(super) fn point_out(material: &HenckyJ2, eps_p: Real, temp_c: Option<Real>) -> PointOut {
+    let mut out = PointOut::initial(material);
+    let flow = yield_flow(material, eps_p, temp_c);
+    out.set_plastic_strain(material, eps_p, flow, material.hardening.initial_yield());
+    out
+}
+
+/// The workpiece's temperatures over its integration points: least, largest and the mean
+/// weighted by the points' masses `rho_0 w_p` (degrees C).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Temperatures {
+    /// Least point temperature (degrees C).
+    pub min_c: Real,
+    /// Largest point temperature (degrees C).
+    pub max_c: Real,
+    /// Mass-weighted mean, `sum_p w_p T_p / sum_p w_p` (degrees C).
+    pub mean_c: Real,
+}
+
+/// The thermal measures every front end reports for a scene with `[thermal]` (history
+/// columns `thermal.<key>`, the summary's `thermal`, FMU outputs `thermal.<name>`): key,
+/// unit and description, in the order of [`Simulation::thermal_values`].
+pub const THERMAL_MEASURES: [(&str, &str, &str); 5] = [
+    (
+        "temperature_min_c",
+        "degC",
+        "least temperature of the workpiece's integration points",
+    ),
+    (
+        "temperature_max_c",
+        "degC",
+        "largest temperature of the workpiece's integration points",
+    ),
+    (
+        "temperature_mean_c",
+        "degC",
+        "mean temperature of the workpiece, weighted by the points' volumes",
+    ),
+    (
+        "plastic_heat_J",
+        "J",
+        "heat released by plastic work since the start (Taylor-Quinney share)",
+    ),
+    (
+        "heat_content_J",
+        "J",
+        "heat held in the workpiece above its initial temperature",
+    ),
+];
+
+impl Simulation {
+    /// The values of [`THERMAL_MEASURES`] now, `None` for an isothermal scene.
+    pub fn thermal_values(&self) -> Option<[Real; 5]> {
+        let t = self.temperatures()?;
+        Some([
+            t.min_c,
+            t.max_c,
+            t.mean_c,
+            self.plastic_heat()?,
+            self.heat_content()?,
+        ])
+    }
+
+    /// The points' temperatures (degrees C), `None` for an isothermal scene.
+    pub fn point_temperature(&self) -> Option<&[Real]> {
+        self.st.heat.as_ref().map(|h| &h.temperature_c[..])
+    }
+
+    /// Plastic strain rate of each point at the last stress stage, `dgamma / dt` (1/s), the
+    /// rate its flow stress was evaluated at; `None` for an isothermal scene.
+    pub fn point_plastic_strain_rate(&self) -> Option<&[Real]> {
+        self.st.heat.as_ref().map(|h| &h.plastic_rate[..])
+    }
+
+    /// Least, largest and mean temperature of the workpiece, `None` for an isothermal scene.
+    pub fn temperatures(&self) -> Option<Temperatures> {
+        let t = self.point_temperature()?;
+        let (mut min_c, mut max_c) = (Real::INFINITY, Real::NEG_INFINITY);
+        let (mut sum, mut wsum) = (0.0, 0.0);
+        for (&t, &w) in t.iter().zip(&self.weights) {
+            min_c = min_c.min(t);
+            max_c = max_c.max(t);
+            sum += w * t;
+            wsum += w;
+        }
+        Some(Temperatures {
+            min_c,
+            max_c,
+            mean_c: sum / wsum,
+        })
+    }
+
+    /// Heat the plastic work released into the workpiece so far, `beta sum_p W_p w_p` (J);
+    /// `None` for an isothermal scene.
+    pub fn plastic_heat(&self) -> Option<Real> {
+        let (h, spec) = (self.st.heat.as_ref()?, self.scene.thermal.as_ref()?);
+        Some(
+            spec.taylor_quinney
+                * h.plastic_work
+                    .iter()
+                    .zip(&self.weights)
+                    .map(|(w, v)| w * v)
+                    .sum::<Real>(),
+        )
+    }
+
+    /// Heat held in the workpiece above its initial temperature, `sum_p rho_0 c w_p (T_p -
+    /// T_0)` (J); `None` for an isothermal scene. Equal to [`Simulation::plastic_heat`]
+    /// while no heat crosses the surface.
+    pub fn heat_content(&self) -> Option<Real> {
+        let (h, spec) = (self.st.heat.as_ref()?, self.scene.thermal.as_ref()?);
+        let rho_c = self.scene.material.density_kg_per_m3 * spec.specific_heat_j_per_kg_k;
+        Some(
+            rho_c
+                * h.temperature_c
+                    .iter()
+                    .zip(&self.weights)
+                    .map(|(t, w)| w * (t - spec.initial_temperature_c))
+                    .sum::<Real>(),
+        )
+    }
+}
