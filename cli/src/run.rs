@@ -11,15 +11,16 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// A frame kept for the stage plot: time (s), particle positions (m), plastic strain, tool outlines.
 /// A frame's shape for the plots: time (s), particle positions (m), plastic strain, tool
-/// polylines (m), and the tools' fill points (m) with whether each is filled.
+/// polylines (m), the tools' fill points (m) with whether each is filled, and in a scene
+/// with temperature the particles' temperatures (degrees C).
 type Shape = (
     f64,
     Vec<[f64; 2]>,
     Vec<f64>,
     Vec<Vec<[f64; 2]>>,
     Vec<([f64; 2], bool)>,
+    Option<Vec<f64>>,
 );
 
 /// How to run.
@@ -77,7 +78,9 @@ impl Report {
             get("shape_functions")
         );
         let mut counted = get("setup");
-        for (key, name) in stages {
+        // The heat stage, in a scene whose heat moves.
+        let heat = t.get("heat").map(|_| ("heat", "heat"));
+        for (key, name) in stages.into_iter().chain(heat) {
             counted += get(key);
             line += &format!(", {name} {:.2} s ({:.0} %)", get(key), share(get(key)));
         }
@@ -286,7 +289,14 @@ fn write_frame(
         .iter()
         .map(|p| (p.at_m, p.filled.is_some()))
         .collect();
-    shapes.push((sim.time(), f.positions, f.plastic_strain, tools, marks));
+    shapes.push((
+        sim.time(),
+        f.positions,
+        f.plastic_strain,
+        tools,
+        marks,
+        f.temperature,
+    ));
     Ok(())
 }
 
@@ -309,6 +319,20 @@ fn write_stages(sim: &Simulation, opts: &Options, shapes: &[Shape]) -> Result<()
         axis_labels(sim),
         1e3,
     )?;
+    if let Some(temperature) = &last.5 {
+        plots::shape_plot(
+            &opts.out.join("temperature.png"),
+            &format!("{name}: temperature at t = {:.3e} s", last.0),
+            &last.1,
+            &q,
+            temperature,
+            "temperature (C)",
+            &last.3,
+            &last.4,
+            axis_labels(sim),
+            1e3,
+        )?;
+    }
     let stages: Vec<plots::Stage> = shapes
         .iter()
         .map(|s| plots::Stage {

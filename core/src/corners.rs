@@ -165,6 +165,8 @@ mod tests {
                 friction: Friction::Coulomb { mu: 0.0 },
                 separation: true,
                 fill_points: Vec::new(),
+                temperature_c: None,
+                heat_transfer_w_per_m2_k: 0.0,
             },
             0.3,
         )

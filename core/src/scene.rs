@@ -124,10 +124,55 @@ pub struct ThermalSpec {
     /// heat (Taylor and Quinney 1934); 0.9 by default.
     #[serde(default = "taylor_quinney")]
     pub taylor_quinney: Real,
+    /// Thermal conductivity `k` (W/(m K)); 0 (the default): no conduction in the workpiece.
+    #[serde(default)]
+    pub conductivity_w_per_m_k: Real,
+    /// Temperature of the surroundings, for convection and radiation (degrees C); 20 by
+    /// default.
+    #[serde(default = "ambient")]
+    pub ambient_temperature_c: Real,
+    /// Convection coefficient from the free surface to the surroundings (W/(m^2 K)); 0 by
+    /// default.
+    #[serde(default)]
+    pub convection_w_per_m2_k: Real,
+    /// Emissivity of the free surface for radiation to the surroundings (-), in [0, 1]; 0
+    /// by default.
+    #[serde(default)]
+    pub emissivity: Real,
+    /// Fraction of the heat stage's critical step it takes (-), in (0, 1]; 0.5 by default.
+    /// The heat stage runs when that much time has passed since its last run (sub-cycled:
+    /// the thermal step is far longer than the mechanical one).
+    #[serde(default = "half")]
+    pub dt_safety: Real,
+}
+
+impl Scene {
+    /// Whether heat moves in the workpiece or across its surface: a `[thermal]` section with
+    /// conduction, convection or radiation, or a tool with heat transfer (the heat stage
+    /// runs); otherwise heating is adiabatic.
+    pub fn transfers_heat(&self) -> bool {
+        self.thermal.as_ref().is_some_and(|t| {
+            t.conductivity_w_per_m_k > 0.0
+                || t.convection_w_per_m2_k > 0.0
+                || t.emissivity > 0.0
+                || self
+                    .tools
+                    .iter()
+                    .any(|tool| tool.heat_transfer_w_per_m2_k > 0.0)
+        })
+    }
 }
 
 fn taylor_quinney() -> Real {
     0.9
+}
+
+fn ambient() -> Real {
+    20.0
+}
+
+fn half() -> Real {
+    0.5
 }
 
 /// Background-cell integration rule.
@@ -341,6 +386,15 @@ pub struct ToolSpec {
     /// friction law.
     #[serde(default = "default_separation")]
     pub separation: bool,
+    /// The tool's temperature (degrees C) in a scene with `[thermal]`; it stays at it (a
+    /// rigid die held at its temperature).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temperature_c: Option<Real>,
+    /// Heat transfer coefficient of the contact between the tool and the workpiece
+    /// (W/(m^2 K)), for a surface particle touching the tool; 0 (the default): no heat
+    /// crosses.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub heat_transfer_w_per_m2_k: Real,
     /// Named points of the tool's surface (cavity corners) whose filling is reported: when
     /// the material first reached each, and which stay empty (underfill).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -349,6 +403,10 @@ pub struct ToolSpec {
 
 fn default_separation() -> bool {
     true
+}
+
+fn is_zero(x: &Real) -> bool {
+    *x == 0.0
 }
 
 /// A named point of a tool's surface: the material has reached it once a particle in

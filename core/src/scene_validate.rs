@@ -185,8 +185,76 @@ impl Scene {
                  (initial_temperature_c, specific_heat_j_per_kg_k)"
                     .into(),
             );
+            for tool in &self.tools {
+                out.check(
+                    tool.temperature_c.is_none() && tool.heat_transfer_w_per_m2_k == 0.0,
+                    &format!("tools.{}.temperature_c", tool.name),
+                    "a tool's temperature and heat transfer need the [thermal] section".into(),
+                );
+            }
             return;
         };
+        let above_absolute_zero = |x: Real| x.is_finite() && x > -273.15;
+        out.check(
+            t.conductivity_w_per_m_k.is_finite() && t.conductivity_w_per_m_k >= 0.0,
+            "thermal.conductivity_w_per_m_k",
+            format!("must be zero or positive, got {}", t.conductivity_w_per_m_k),
+        );
+        out.check(
+            above_absolute_zero(t.ambient_temperature_c),
+            "thermal.ambient_temperature_c",
+            format!(
+                "must be above absolute zero (-273.15), got {}",
+                t.ambient_temperature_c
+            ),
+        );
+        out.check(
+            t.convection_w_per_m2_k.is_finite() && t.convection_w_per_m2_k >= 0.0,
+            "thermal.convection_w_per_m2_k",
+            format!("must be zero or positive, got {}", t.convection_w_per_m2_k),
+        );
+        out.check(
+            t.emissivity.is_finite() && (0.0..=1.0).contains(&t.emissivity),
+            "thermal.emissivity",
+            format!("must lie in [0, 1], got {}", t.emissivity),
+        );
+        out.check(
+            pos(t.dt_safety) && t.dt_safety <= 1.0,
+            "thermal.dt_safety",
+            format!("must lie in (0, 1], got {}", t.dt_safety),
+        );
+        for tool in &self.tools {
+            let key = |k: &str| format!("tools.{}.{k}", tool.name);
+            if let Some(temp) = tool.temperature_c {
+                out.check(
+                    above_absolute_zero(temp),
+                    &key("temperature_c"),
+                    format!("must be above absolute zero (-273.15), got {temp}"),
+                );
+            }
+            let h = tool.heat_transfer_w_per_m2_k;
+            out.check(
+                h.is_finite() && h >= 0.0,
+                &key("heat_transfer_w_per_m2_k"),
+                format!("must be zero or positive, got {h}"),
+            );
+            out.check(
+                h == 0.0 || tool.temperature_c.is_some(),
+                &key("heat_transfer_w_per_m2_k"),
+                format!(
+                    "heat transfer to tool {} needs its temperature_c",
+                    tool.name
+                ),
+            );
+        }
+        out.check(
+            self.discretization.rereference_stretch.is_none() || !self.transfers_heat(),
+            "discretization.rereference_stretch",
+            "kernel re-referencing is not built for conduction and surface heat flows yet \
+             (leave it out, or the thermal section's conductivity, convection, emissivity \
+             and the tools' heat transfer)"
+                .into(),
+        );
         out.check(
             t.initial_temperature_c.is_finite() && t.initial_temperature_c > -273.15,
             "thermal.initial_temperature_c",

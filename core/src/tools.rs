@@ -128,6 +128,39 @@ impl Tool {
         }
     }
 
+    /// Whether the point `x` (m) touches the tool in its current position, inside it or
+    /// within `within` (m) of its polyline (the heat stage's contact): the unit tangent of
+    /// the tool's segment nearest to it when it does.
+    pub fn touches(&self, x: [Real; 2], within: Real) -> Option<[Real; 2]> {
+        let s = self.state.stroke;
+        let local = [x[0] - s * self.axis[0], x[1] - s * self.axis[1]];
+        let (distance, tangent) = self
+            .points0
+            .windows(2)
+            .map(|ab| {
+                let (a, b) = (ab[0], ab[1]);
+                let (t, u) = (
+                    [b[0] - a[0], b[1] - a[1]],
+                    [local[0] - a[0], local[1] - a[1]],
+                );
+                let len2 = t[0] * t[0] + t[1] * t[1];
+                let f = ((u[0] * t[0] + u[1] * t[1]) / len2).clamp(0.0, 1.0);
+                let len = len2.sqrt();
+                (
+                    (u[0] - f * t[0]).hypot(u[1] - f * t[1]),
+                    [t[0] / len, t[1] / len],
+                )
+            })
+            .fold((Real::INFINITY, [0.0; 2]), |best, d| {
+                if d.0 < best.0 {
+                    d
+                } else {
+                    best
+                }
+            });
+        (distance <= within || self.depth_inside(x).is_some()).then_some(tangent)
+    }
+
     /// How deep the point `x` (m) lies inside the tool in its current position (m), over
     /// every segment and at any depth: the measure of penetration, where
     /// [`Tool::penetration`] is the contact's search within the search depth.
@@ -779,6 +812,8 @@ mod tests {
             friction: Friction::default(),
             separation: true,
             fill_points: Vec::new(),
+            temperature_c: None,
+            heat_transfer_w_per_m2_k: 0.0,
         };
         let mut t = Tool::new(&spec, 0.1);
         assert_eq!(t.velocity_at(-1.0), 0.0);

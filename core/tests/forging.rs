@@ -30,6 +30,8 @@ fn friction_scene(mu: f64, plate: Motion, hold_x: bool) -> Scene {
             friction: Friction::Coulomb { mu: 0.0 },
             separation: true,
             fill_points: Vec::new(),
+            temperature_c: None,
+            heat_transfer_w_per_m2_k: 0.0,
         },
         ToolSpec {
             name: "plate".into(),
@@ -39,6 +41,8 @@ fn friction_scene(mu: f64, plate: Motion, hold_x: bool) -> Scene {
             friction: Friction::Coulomb { mu },
             separation: true,
             fill_points: Vec::new(),
+            temperature_c: None,
+            heat_transfer_w_per_m2_k: 0.0,
         },
     ];
     if hold_x {

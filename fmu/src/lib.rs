@@ -87,6 +87,7 @@ fn output_value(binding: Binding, sim: &Simulation, commands: &[Option<f64>]) ->
         Binding::ToolWork => sim.energy().tool_work,
         Binding::KineticToInternalMax => sim.kinetic_to_internal_max(),
         Binding::Thermal(k) => sim.thermal_values()?[k],
+        Binding::ToolHeatFlow(k) => sim.tool_heat_flows()?[k],
         Binding::Parameter(_)
         | Binding::ContactPressure(_)
         | Binding::Press(_)

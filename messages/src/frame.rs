@@ -9,8 +9,9 @@
 //!   velocity (m/s) and effort = force along the tool's axis (N), as history.csv's `stroke_m`,
 //!   `velocity_m_per_s` and `force_N`;
 //! - `sensor_msgs/msg/PointCloud2` of the particles: `x`, `y`, `z` (m; the 2D model's plane is
-//!   z = 0, axisymmetric scenes put r on x and z on y), `plastic_strain` and `von_mises` (Pa),
-//!   all `float32`, from [`Simulation::fields`];
+//!   z = 0, axisymmetric scenes put r on x and z on y), `plastic_strain`, `von_mises` (Pa) and,
+//!   in a scene with temperature, `temperature` (degrees C), all `float32`, from
+//!   [`Simulation::fields`];
 //! - `visualization_msgs/msg/MarkerArray`: one line strip per tool through its current vertices;
 //! - `rkforge_msgs/msg/DieFill`: each tool's contact fraction and each fill point's filling
 //!   time and stroke (NaN while empty), history.csv's `contact_fraction` and `filled` columns;
@@ -118,15 +119,18 @@ pub fn sample(sim: &Simulation) -> Sample {
         .iter()
         .zip(&fields.plastic_strain)
         .zip(&fields.von_mises)
-        .map(|((p, &e), &s)| StrainPoint {
+        .enumerate()
+        .map(|(j, ((p, &e), &s))| StrainPoint {
             x: p[0] as f32,
             y: p[1] as f32,
             z: 0.0,
             plastic_strain: e as f32,
             von_mises: s as f32,
+            temperature: fields.temperature.as_ref().map_or(0.0, |t| t[j] as f32),
         })
         .collect();
-    messages.push(point_cloud_xyz_fields(header.clone(), &points).to_cdr());
+    let hot = fields.temperature.is_some();
+    messages.push(point_cloud_xyz_fields(header.clone(), &points, hot).to_cdr());
     messages.push(tool_markers(sim, &header).to_cdr());
     let fill = sim.fill_points();
     messages.push(

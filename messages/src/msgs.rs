@@ -162,25 +162,32 @@ pub struct StrainPoint {
     pub plastic_strain: f32,
     /// von Mises stress.
     pub von_mises: f32,
+    /// Temperature (degrees C), a field of the cloud in a scene with temperature.
+    pub temperature: f32,
 }
-
-/// Bytes per point of the cloud built by [`point_cloud_xyz_fields`]: five `f32`.
-const STRAIN_POINT_STEP: u32 = 20;
 
 /// An unordered cloud (`height` 1, `width` = number of points) of little-endian `FLOAT32`
 /// fields `x`, `y`, `z`, `plastic_strain` and `von_mises` at offsets 0, 4, 8, 12 and 16
-/// (`point_step` 20). `is_dense` is true unless a value is NaN or infinite.
+/// (`point_step` 20), and with `temperature` the field `temperature` at 20 (`point_step`
+/// 24). `is_dense` is true unless a value is NaN or infinite.
 ///
 /// # Panics
 ///
-/// If there are more than `u32::MAX / 20` points (the row would not fit in `row_step`).
+/// If there are more than `u32::MAX / point_step` points (the row would not fit in
+/// `row_step`).
 #[must_use]
-pub fn point_cloud_xyz_fields(header: Header, points: &[StrainPoint]) -> PointCloud2 {
+pub fn point_cloud_xyz_fields(
+    header: Header,
+    points: &[StrainPoint],
+    temperature: bool,
+) -> PointCloud2 {
+    let all = ["x", "y", "z", "plastic_strain", "von_mises", "temperature"];
+    let names = &all[..if temperature { 6 } else { 5 }];
+    let point_step = 4 * names.len() as u32;
     let width = u32::try_from(points.len())
         .ok()
-        .filter(|&w| w <= u32::MAX / STRAIN_POINT_STEP)
-        .expect("a PointCloud2 row holds at most u32::MAX / 20 strain points");
-    let names = ["x", "y", "z", "plastic_strain", "von_mises"];
+        .filter(|&w| w <= u32::MAX / point_step)
+        .expect("a PointCloud2 row holds at most u32::MAX / point_step strain points");
     let fields = names
         .iter()
         .zip((0..).step_by(4))
@@ -191,10 +198,11 @@ pub fn point_cloud_xyz_fields(header: Header, points: &[StrainPoint]) -> PointCl
             count: 1,
         })
         .collect();
-    let mut data = Vec::with_capacity(points.len() * STRAIN_POINT_STEP as usize);
+    let mut data = Vec::with_capacity(points.len() * point_step as usize);
     let mut is_dense = true;
     for p in points {
-        for v in [p.x, p.y, p.z, p.plastic_strain, p.von_mises] {
+        let values = [p.x, p.y, p.z, p.plastic_strain, p.von_mises, p.temperature];
+        for v in &values[..names.len()] {
             is_dense &= v.is_finite();
             data.extend_from_slice(&v.to_le_bytes());
         }
@@ -205,8 +213,8 @@ pub fn point_cloud_xyz_fields(header: Header, points: &[StrainPoint]) -> PointCl
         width,
         fields,
         is_bigendian: false,
-        point_step: STRAIN_POINT_STEP,
-        row_step: STRAIN_POINT_STEP * width,
+        point_step,
+        row_step: point_step * width,
         data,
         is_dense,
     }
@@ -825,10 +833,11 @@ mod tests {
                 z: 3.0,
                 plastic_strain: 0.1,
                 von_mises: 250e6,
+                temperature: 1100.0,
             },
             StrainPoint::default(),
         ];
-        let cloud = point_cloud_xyz_fields(header.clone(), &points);
+        let cloud = point_cloud_xyz_fields(header.clone(), &points, false);
         assert_eq!(cloud.header, header);
         assert_eq!((cloud.height, cloud.width), (1, 2));
         assert_eq!((cloud.point_step, cloud.row_step), (20, 40));
@@ -857,9 +866,19 @@ mod tests {
             von_mises: f32::NAN,
             ..StrainPoint::default()
         };
-        assert!(!point_cloud_xyz_fields(Header::default(), &[nan]).is_dense);
-        let empty = point_cloud_xyz_fields(Header::default(), &[]);
+        assert!(!point_cloud_xyz_fields(Header::default(), &[nan], false).is_dense);
+        let empty = point_cloud_xyz_fields(Header::default(), &[], false);
         assert_eq!((empty.width, empty.row_step, empty.data.len()), (0, 0, 0));
+        // With temperature: a sixth field at 20, 24 bytes a point.
+        let hot = point_cloud_xyz_fields(header, &points, true);
+        assert_eq!((hot.point_step, hot.row_step), (24, 48));
+        let last = &hot.fields[5];
+        assert_eq!(
+            (last.name.as_str(), last.offset, last.datatype),
+            ("temperature", 20, 7)
+        );
+        assert_eq!(&hot.data[20..24], &1100.0f32.to_le_bytes());
+        assert_eq!(&hot.data[24..28], &0.0f32.to_le_bytes());
     }
 
     #[test]

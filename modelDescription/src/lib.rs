@@ -84,6 +84,8 @@ pub enum Binding {
     KineticToInternalMax,
     /// Thermal measure `k` of [`rkforge_core::THERMAL_MEASURES`] (a scene with `[thermal]`).
     Thermal(usize),
+    /// Heat flow from the workpiece into tool `k` (W).
+    ToolHeatFlow(usize),
     /// Parameter `k` of the scene ([`rkforge_core::scene_parameters::parameters`]): a
     /// scene key under its dotted name.
     Parameter(usize),
@@ -288,10 +290,26 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
                 Output,
                 Continuous,
                 Kind::Real(None),
-                Some(unit),
+                (!unit.is_empty()).then_some(*unit),
                 d.to_string(),
                 Binding::Thermal(k),
             );
+        }
+        for (k, tool) in scene.tools.iter().enumerate() {
+            if tool.heat_transfer_w_per_m2_k > 0.0 {
+                push(
+                    format!("{}.heat_flow", tool.name),
+                    Output,
+                    Continuous,
+                    Kind::Real(None),
+                    Some("W"),
+                    format!(
+                        "heat flow from the workpiece into tool {} at the last heat stage",
+                        tool.name
+                    ),
+                    Binding::ToolHeatFlow(k),
+                );
+            }
         }
     }
     for (k, p) in parameters(scene).into_iter().enumerate() {

@@ -78,6 +78,9 @@ impl History {
         for (k, _) in thermal_measures(sim) {
             columns.push(format!("thermal.{k}"));
         }
+        for t in heated_tools(sim) {
+            columns.push(format!("thermal.{}.heat_flow_W", sim.tools()[t].name));
+        }
         History {
             columns,
             rows: Vec::new(),
@@ -139,6 +142,9 @@ impl History {
             e.kinetic_to_internal(),
         ]);
         row.extend(thermal_measures(sim).into_iter().map(|(_, v)| v));
+        if let Some(flows) = sim.tool_heat_flows() {
+            row.extend(heated_tools(sim).map(|t| flows[t]));
+        }
         self.rows.push(row);
         measured.map(|_| ())
     }
@@ -186,6 +192,17 @@ pub(crate) fn thermal_measures(sim: &Simulation) -> Vec<(&'static str, f64)> {
         Some(v) => THERMAL_MEASURES.iter().map(|m| m.0).zip(v).collect(),
         None => Vec::new(),
     }
+}
+
+/// The tools that exchange heat with the workpiece (a heat transfer coefficient above 0).
+pub(crate) fn heated_tools(sim: &Simulation) -> impl Iterator<Item = usize> + '_ {
+    let thermal = sim.scene().thermal.is_some();
+    sim.scene()
+        .tools
+        .iter()
+        .enumerate()
+        .filter(move |(_, t)| thermal && t.heat_transfer_w_per_m2_k > 0.0)
+        .map(|(k, _)| k)
 }
 
 /// The bounds of a followed face (`[output] faces`), as history columns and summary keys.

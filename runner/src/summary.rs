@@ -90,6 +90,9 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "output": output_s,
         },
     });
+    if scene.transfers_heat() {
+        summary["stage_seconds"]["heat"] = json!(times.heat.as_secs_f64());
+    }
     // Only a scene with temperature has the entry.
     let thermal = thermal_measures(sim);
     if !thermal.is_empty() {
@@ -214,7 +217,7 @@ pub fn tool_json(sim: &Simulation, k: usize) -> Value {
             })
         })
         .collect();
-    json!({
+    let mut tool = json!({
         "name": t.name,
         "stroke_m": t.state.stroke,
         "velocity_m_per_s": t.state.velocity,
@@ -224,5 +227,11 @@ pub fn tool_json(sim: &Simulation, k: usize) -> Value {
         "contact_length_m": sim.contact_length(k),
         "contact_fraction": sim.contact_fraction(k),
         "fill_points": fill,
-    })
+    });
+    // A thermal scene: the heat the tool took from the workpiece.
+    if let (Some(heat), Some(flows)) = (sim.tool_heat(k), sim.tool_heat_flows()) {
+        tool["heat_J"] = json!(heat);
+        tool["heat_flow_W"] = json!(flows[k]);
+    }
+    tool
 }

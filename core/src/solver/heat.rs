@@ -24,15 +24,41 @@ pub struct Heat {
     /// Plastic strain rate of each point at the last stress stage, `dgamma / dt` (1/s; 0
     /// where it stayed elastic): the rate its flow stress was evaluated at.
     pub plastic_rate: Vec<Real>,
+    /// Temperature of each particle (degrees C), the field the heat stage conducts, when the
+    /// scene's heat moves (empty otherwise); the points hold `sum_I N_I T_I` after each heat
+    /// stage plus what plastic work added since.
+    pub particle_c: Vec<Real>,
+    /// Time since the heat stage last ran (s).
+    pub since_s: Real,
+    /// The heat step the last heat stage found stable (s); 0 before the first, which runs
+    /// after the first mechanical step.
+    pub step_s: Real,
+    /// Heat that has flowed into each tool since the start (J).
+    pub to_tools_j: Vec<Real>,
+    /// Heat flow into each tool at the last heat stage (W).
+    pub tool_flow_w: Vec<Real>,
+    /// Heat that has flowed into the surroundings since the start (J).
+    pub to_surroundings_j: Real,
 }
 
 impl Heat {
     /// Every point at the scene's initial temperature, no plastic work.
-    pub(super) fn initial(spec: &ThermalSpec, points: usize) -> Heat {
+    pub(super) fn initial(
+        spec: &ThermalSpec,
+        points: usize,
+        tools: usize,
+        particles: usize,
+    ) -> Heat {
         Heat {
             temperature_c: vec![spec.initial_temperature_c; points],
+            particle_c: vec![spec.initial_temperature_c; particles],
             plastic_work: vec![0.0; points],
             plastic_rate: vec![0.0; points],
+            since_s: 0.0,
+            step_s: 0.0,
+            to_tools_j: vec![0.0; tools],
+            tool_flow_w: vec![0.0; tools],
+            to_surroundings_j: 0.0,
         }
     }
 }
@@ -87,8 +113,8 @@ pub struct Temperatures {
 
 /// The thermal measures every front end reports for a scene with `[thermal]` (history
 /// columns `thermal.<key>`, the summary's `thermal`, FMU outputs `thermal.<name>`): key,
-/// unit and description, in the order of [`Simulation::thermal_values`].
-pub const THERMAL_MEASURES: [(&str, &str, &str); 5] = [
+/// unit (empty: none) and description, in the order of [`Simulation::thermal_values`].
+pub const THERMAL_MEASURES: [(&str, &str, &str); 8] = [
     (
         "temperature_min_c",
         "degC",
@@ -114,18 +140,48 @@ pub const THERMAL_MEASURES: [(&str, &str, &str); 5] = [
         "J",
         "heat held in the workpiece above its initial temperature",
     ),
+    (
+        "heat_to_tools_J",
+        "J",
+        "heat that has flowed from the workpiece into the tools since the start",
+    ),
+    (
+        "heat_to_surroundings_J",
+        "J",
+        "heat that has left the free surface by convection and radiation since the start",
+    ),
+    (
+        "heat_balance_rel",
+        "",
+        "heat content less the heat made plus the heat lost, over the heat made and lost",
+    ),
 ];
 
 impl Simulation {
     /// The values of [`THERMAL_MEASURES`] now, `None` for an isothermal scene.
-    pub fn thermal_values(&self) -> Option<[Real; 5]> {
+    pub fn thermal_values(&self) -> Option<[Real; 8]> {
         let t = self.temperatures()?;
+        let heat = self.st.heat.as_ref()?;
+        let (made, content) = (self.plastic_heat()?, self.heat_content()?);
+        let to_tools: Real = heat.to_tools_j.iter().sum();
+        let lost = to_tools + heat.to_surroundings_j;
+        let scale = made.abs()
+            + heat.to_tools_j.iter().map(|q| q.abs()).sum::<Real>()
+            + heat.to_surroundings_j.abs();
+        let balance = if scale > 0.0 {
+            (content - made + lost) / scale
+        } else {
+            0.0
+        };
         Some([
             t.min_c,
             t.max_c,
             t.mean_c,
-            self.plastic_heat()?,
-            self.heat_content()?,
+            made,
+            content,
+            to_tools,
+            heat.to_surroundings_j,
+            balance,
         ])
     }
 
@@ -138,6 +194,22 @@ impl Simulation {
     /// rate its flow stress was evaluated at; `None` for an isothermal scene.
     pub fn point_plastic_strain_rate(&self) -> Option<&[Real]> {
         self.st.heat.as_ref().map(|h| &h.plastic_rate[..])
+    }
+
+    /// Heat that has flowed into tool `k` since the start (J), `None` for an isothermal scene.
+    pub fn tool_heat(&self, k: usize) -> Option<Real> {
+        self.st.heat.as_ref().map(|h| h.to_tools_j[k])
+    }
+
+    /// Heat flow into each tool at the last heat stage (W), `None` for an isothermal scene.
+    pub fn tool_heat_flows(&self) -> Option<&[Real]> {
+        self.st.heat.as_ref().map(|h| &h.tool_flow_w[..])
+    }
+
+    /// Time of the temperatures' conduction and surface flows (s): the last heat stage's,
+    /// up to one heat step before [`Simulation::time`] (plastic heating is up to date).
+    pub fn heat_time(&self) -> Real {
+        self.st.time - self.st.heat.as_ref().map_or(0.0, |h| h.since_s)
     }
 
     /// Least, largest and mean temperature of the workpiece, `None` for an isothermal scene.

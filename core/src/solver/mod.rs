@@ -35,6 +35,7 @@
 //! a [`Team`] over fixed chunks, so the bits do not depend on the number of threads. What
 //! the outputs read is in `fields.rs`; the whole changing state is [`State`].
 
+mod conduction;
 mod energy;
 mod fields;
 mod fill;
@@ -93,6 +94,8 @@ pub struct StageTimes {
     pub contact: Duration,
     /// Time integration, constraints and energy.
     pub integration: Duration,
+    /// The heat stage (conduction and surface flows), when the scene's heat moves.
+    pub heat: Duration,
 }
 
 /// A running simulation of one scene.
@@ -160,6 +163,14 @@ pub struct Simulation {
     /// Use the AVX2 build of the stress stage where the CPU has it (same bits either way;
     /// false only in the test that compares the two).
     simd: bool,
+    /// Whether the scene's heat moves (conduction, surface flows): the heat stage runs.
+    transfers_heat: bool,
+    /// Particles on a constrained edge, adiabatic in the heat stage (empty unless heat
+    /// moves).
+    adiabatic_edge: Vec<bool>,
+    /// Conduction's largest eigenvalue `lambda_max(C^-1 K)` on the undeformed body (1/s), 0
+    /// without conduction (`conduction.rs`).
+    conduction_lambda0: Real,
     /// Wall time per stage since setup.
     pub times: StageTimes,
 }
@@ -492,6 +503,10 @@ impl Simulation {
         )?;
         // 8. The quasi-static watch.
         self.watch_quasi_static(contact)?;
+        // 9. The heat stage, when it is due (`conduction.rs`).
+        let t6 = Instant::now();
+        self.heat_stage_if_due(dt)?;
+        self.times.heat += t6.elapsed();
         let t5 = Instant::now();
         self.times.contact += t4 - t3;
         self.times.integration += (t2 - t1) + (t5 - t4);

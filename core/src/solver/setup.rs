@@ -146,7 +146,10 @@ impl Simulation {
                     0.0;
                     scene.tools.len() * scene.output.pressure_stations.unwrap_or(0)
                 ],
-                heat: scene.thermal.as_ref().map(|t| Heat::initial(t, npts)),
+                heat: scene.thermal.as_ref().map(|t| {
+                    let particles = if scene.transfers_heat() { np } else { 0 };
+                    Heat::initial(t, npts, scene.tools.len(), particles)
+                }),
             },
             tools,
             out: vec![out; npts],
@@ -162,6 +165,9 @@ impl Simulation {
             reference_jacobian: vec![1.0; npts],
             points,
             nodal,
+            transfers_heat: scene.transfers_heat(),
+            adiabatic_edge: adiabatic_edges(scene),
+            conduction_lambda0: 0.0,
             scene: scene.clone(),
             times: StageTimes {
                 setup: t0.elapsed(),
@@ -169,6 +175,7 @@ impl Simulation {
             },
         };
         sim.critical_dt0 = sim.measure_critical_step()?;
+        sim.conduction_lambda0 = sim.conduction_eigenvalue()?;
         if let Some(plan) = scaling {
             sim.scale_masses(plan)?;
         }
@@ -277,6 +284,22 @@ fn essential_rows(scene: &Scene) -> Vec<(u32, usize)> {
         rows.extend(Edge::XMin.particles(nx, ny).into_iter().map(|j| (j, 0)));
     }
     rows
+}
+
+/// Which particles lie on a constrained edge (a symmetry plane), whose boundary segments
+/// exchange no heat; empty unless the scene's heat moves.
+fn adiabatic_edges(scene: &Scene) -> Vec<bool> {
+    if !scene.transfers_heat() {
+        return Vec::new();
+    }
+    let [nx, ny] = scene.workpiece.particles;
+    let mut on = vec![false; nx * ny];
+    for c in &scene.constraints {
+        for j in c.edge.particles(nx, ny) {
+            on[j as usize] = true;
+        }
+    }
+    on
 }
 
 /// The initial coefficient velocities (m/s): the workpiece's initial velocity `v0` projected

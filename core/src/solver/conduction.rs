@@ -1,0 +1,395 @@
+//! The heat stage of a scene whose heat moves ([`crate::scene::Scene::transfers_heat`]):
+//! conduction in the workpiece with the mechanics' own shape functions and integration
+//! points, and the heat that crosses its surface to the tools and the surroundings;
+//! explicit (forward Euler) and sub-cycled: it runs once the time since its last run would
+//! pass its stable step, which is orders of magnitude above the mechanical one (a thermal
+//! diffusion step `~ rho c h^2 / (2 d k)`, 0.1 s for steel at 1 mm, against microseconds),
+//! so it costs a small share of the steps however fine the mechanical step.
+//!
+//! The particles carry the temperature field `T_I` (degrees C) the stage conducts; the
+//! points carry `T_p = sum_I N_I(X_p) T_I` as of the last stage plus what plastic work added
+//! since, point by point at every mechanical step ([`super::heat`]), which their flow
+//! stress reads. A heat stage:
+//! 1. lumped capacities `C_I = sum_p N_I(X_p) rho_0 c w_p` (J/K, physical density: mass
+//!    scaling never enters), and the points' gains since the last stage into the particles,
+//!    `T_I += sum_p N_I(X_p) rho_0 c w_p (T_p - sum_J N_J(X_p) T_J) / C_I` (the heat kept
+//!    exactly: `sum_I C_I dT_I = sum_p rho_0 c w_p dT_p`);
+//! 2. conduction in the reference configuration (total Lagrangian, as the stress stage),
+//!    `R_I = - sum_p w_p grad_X N_I(X_p) . (k J C^-1 grad_X T)(X_p)` (W) with `grad_X T =
+//!    sum_I T_I grad_X N_I`, `C^-1 = F^-1 F^-T` and `J = det F` (`F_33` the hoop stretch in
+//!    axisymmetry, where `w_p` holds `2 pi R`): `sum_I R_I = 0`, conduction moves heat
+//!    without making or losing any;
+//! 3. surface flows at the boundary ring's particles, over each particle's share of the
+//!    ring (half of each segment to its neighbours, times the depth or `2 pi r`): to a tool
+//!    that the particle touches (within [`TOUCH_SPACINGS`]) `h_t (T_tool - T_I) A_I`, else
+//!    to the surroundings `h_c (T_amb - T_I) A_I + eps sigma (T_amb^4 - T_I^4) A_I` (kelvin
+//!    in the radiation); segments on a constrained edge (a symmetry plane) are adiabatic,
+//!    and on the axis of an axisymmetric body their area vanishes;
+//! 4. `T_I += dt R_I / C_I`, and the points take `T_p = sum_I N_I(X_p) T_I`, which holds the
+//!    particles' heat exactly (`sum_p rho_0 c w_p T_p = sum_I C_I T_I`, as
+//!    `sum_p N_I(X_p) rho_0 c w_p = C_I`); steps 2-4 repeat when the elapsed time holds more
+//!    than one stable heat step.
+//!
+//! The stable step: conduction's `2 / lambda_max(C^-1 K)`, the largest eigenvalue from power
+//! iteration on the undeformed body at setup, scaled by `(h_min0 / h_min)^2` as the
+//! smallest deformed cell altitude shrinks (the mechanical critical step scales with
+//! `h_min`); a surface particle's `C_I / (h A_I)` (the radiation linearised,
+//! `4 eps sigma T^3`); times `thermal.dt_safety`.
+
+use super::Simulation;
+use crate::error::{Error, Result};
+use crate::math::Real;
+use crate::scene::Kinematics;
+use std::f64::consts::PI;
+
+/// Stefan-Boltzmann constant (W/(m^2 K^4)).
+const STEFAN_BOLTZMANN: Real = 5.670_374_419e-8;
+
+/// A surface particle within this many smallest spacings of a tool's surface (or inside
+/// it) exchanges heat with the tool.
+pub const TOUCH_SPACINGS: Real = 0.05;
+
+/// Kelvin of a temperature in degrees C.
+fn kelvin(t_c: Real) -> Real {
+    t_c + 273.15
+}
+
+/// Power iterations for conduction's largest eigenvalue at setup.
+const POWER_ITERATIONS: usize = 60;
+
+impl Simulation {
+    /// Lumped heat capacities `C_I = sum_p N_I(X_p) rho_c w_p` (J/K). An error names a
+    /// particle whose capacity is not positive.
+    fn capacities(&self, rho_c: Real) -> Result<Vec<Real>> {
+        let mut cap = vec![0.0; self.ref_pos.len()];
+        for (p, &w) in self.weights.iter().enumerate() {
+            for (i, [n, _, _]) in self.scatter.point_row(p) {
+                cap[i] += n * w * rho_c;
+            }
+        }
+        match cap.iter().position(|&c| c.is_nan() || c <= 0.0) {
+            Some(i) => Err(Error::Diverged {
+                step: self.st.step,
+                time: self.st.time,
+                what: format!(
+                    "heat capacity of particle {i} at {:?} m is {:.3e} J/K, not positive",
+                    self.original[i], cap[i]
+                ),
+            }),
+            None => Ok(cap),
+        }
+    }
+
+    /// The particles' temperatures `t` interpolated at the points, `sum_I N_I(X_p) t_I`.
+    fn at_points(&self, t: &[Real]) -> Vec<Real> {
+        (0..self.weights.len())
+            .map(|p| {
+                self.scatter
+                    .point_row(p)
+                    .map(|(i, [n, _, _])| n * t[i])
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// Conduction heat rates `R_I` (W) of the particles' temperatures `t` (step 2 of the
+    /// module doc), with `F` of the current displacement, or `F = I` when `deformed` is false.
+    fn conduction_rates(&self, t: &[Real], k: Real, deformed: bool) -> Vec<Real> {
+        let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
+        let mut rates = vec![0.0; t.len()];
+        for p in 0..self.weights.len() {
+            let (mut g, mut f, mut ur) = ([0.0; 2], [1.0, 0.0, 0.0, 1.0], 0.0);
+            for (i, [n, nx, ny]) in self.scatter.point_row(p) {
+                g[0] += t[i] * nx;
+                g[1] += t[i] * ny;
+                if deformed {
+                    let d = self.st.d[i];
+                    f[0] += d[0] * nx;
+                    f[1] += d[0] * ny;
+                    f[2] += d[1] * nx;
+                    f[3] += d[1] * ny;
+                    ur += n * d[0];
+                }
+            }
+            let det2 = f[0] * f[3] - f[1] * f[2];
+            let f33 = if axi && deformed {
+                1.0 + ur * self.inv_radius[p]
+            } else {
+                1.0
+            };
+            // F^-1 = [[F22, -F12], [-F21, F11]] / det2; C^-1 = F^-1 F^-T; q = k J C^-1 g.
+            let inv = [f[3] / det2, -f[1] / det2, -f[2] / det2, f[0] / det2];
+            let c11 = inv[0] * inv[0] + inv[1] * inv[1];
+            let c12 = inv[0] * inv[2] + inv[1] * inv[3];
+            let c22 = inv[2] * inv[2] + inv[3] * inv[3];
+            let kj = k * det2 * f33 * self.weights[p];
+            let q = [
+                kj * (c11 * g[0] + c12 * g[1]),
+                kj * (c12 * g[0] + c22 * g[1]),
+            ];
+            for (i, [_, nx, ny]) in self.scatter.point_row(p) {
+                rates[i] -= nx * q[0] + ny * q[1];
+            }
+        }
+        rates
+    }
+
+    /// Conduction's largest eigenvalue `lambda_max(C^-1 K)` (1/s) on the undeformed body, by
+    /// power iteration from the checkerboard of the particle grid (the shortest wave the
+    /// grid carries); 0 without conduction.
+    pub(super) fn conduction_eigenvalue(&self) -> Result<Real> {
+        let Some(spec) = &self.scene.thermal else {
+            return Ok(0.0);
+        };
+        let k = spec.conductivity_w_per_m_k;
+        if k == 0.0 {
+            return Ok(0.0);
+        }
+        let rho_c = self.scene.material.density_kg_per_m3 * spec.specific_heat_j_per_kg_k;
+        let cap = self.capacities(rho_c)?;
+        let mut v: Vec<Real> = (0..cap.len())
+            .map(|j| {
+                if (j % self.nx + j / self.nx) % 2 == 0 {
+                    1.0
+                } else {
+                    -1.0
+                }
+            })
+            .collect();
+        let mut lambda = 0.0;
+        for _ in 0..POWER_ITERATIONS {
+            // A v = -C^-1 R(v); Rayleigh quotient in the C inner product.
+            let r = self.conduction_rates(&v, k, false);
+            let av: Vec<Real> = r.iter().zip(&cap).map(|(r, c)| -r / c).collect();
+            let num: Real = av
+                .iter()
+                .zip(&v)
+                .zip(&cap)
+                .map(|((a, v), c)| a * v * c)
+                .sum();
+            let den: Real = v.iter().zip(&cap).map(|(v, c)| v * v * c).sum();
+            lambda = num / den;
+            let norm = av.iter().map(|a| a * a).sum::<Real>().sqrt();
+            if norm.is_nan() || norm <= 0.0 {
+                break;
+            }
+            v = av.iter().map(|a| a / norm).collect();
+        }
+        Ok(lambda)
+    }
+
+    /// The boundary ring's surface flows (W) into each ring particle (step 3 of the module
+    /// doc) at the particles' temperatures `t`, with the heat flow into each tool (W, the
+    /// negative of what the workpiece gains from it) and into the surroundings (W), and the
+    /// surface's stable step bound `min C_I / (h A_I)` (s).
+    fn surface_flows(&self, t: &[Real], cap: &[Real]) -> SurfaceFlows {
+        let spec = self.scene.thermal.as_ref().expect("a thermal scene");
+        let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
+        let depth = self.scene.model.depth_m;
+        let ring = &self.boundary;
+        let n = ring.len();
+        let x: Vec<[Real; 2]> = ring.iter().map(|&j| self.position(j as usize)).collect();
+        let touch = TOUCH_SPACINGS * self.spacing[0].min(self.spacing[1]);
+        let mut out = SurfaceFlows {
+            into: vec![0.0; n],
+            tools: vec![0.0; self.tools.len()],
+            surroundings: 0.0,
+            step_bound: Real::INFINITY,
+        };
+        let (ambient, ambient_k) = (
+            spec.ambient_temperature_c,
+            kelvin(spec.ambient_temperature_c),
+        );
+        for k in 0..n {
+            let j = ring[k] as usize;
+            // The field's temperature at the particle, `sum_I N_I(X_J) T_I`.
+            let tj: Real = self
+                .nodal
+                .row(j)
+                .map(|e| self.nodal.n[e] * t[self.nodal.index[e] as usize])
+                .sum();
+            // The particle's share of the ring, and of it what lies along a tool it touches
+            // (each half segment projected on the tool's tangent; the rest is free surface).
+            let touched = self
+                .tools
+                .iter()
+                .enumerate()
+                .find_map(|(tt, tool)| tool.touches(x[k], touch).map(|tangent| (tt, tangent)));
+            let (mut area, mut contact) = (0.0, 0.0);
+            for other in [(k + n - 1) % n, (k + 1) % n] {
+                if self.adiabatic_edge[j] && self.adiabatic_edge[ring[other] as usize] {
+                    continue;
+                }
+                let mid = [0.5 * (x[k][0] + x[other][0]), 0.5 * (x[k][1] + x[other][1])];
+                let half = [mid[0] - x[k][0], mid[1] - x[k][1]];
+                let scale = if axi {
+                    PI * (x[k][0] + mid[0]).max(0.0)
+                } else {
+                    depth
+                };
+                area += scale * half[0].hypot(half[1]);
+                if let Some((_, tangent)) = touched {
+                    contact += scale * (half[0] * tangent[0] + half[1] * tangent[1]).abs();
+                }
+            }
+            if area == 0.0 {
+                continue;
+            }
+            let free = (area - contact).max(0.0);
+            let tk = kelvin(tj);
+            let radiation = spec.emissivity * STEFAN_BOLTZMANN;
+            let mut flow = spec.convection_w_per_m2_k * free * (ambient - tj)
+                + radiation * free * (ambient_k.powi(4) - tk.powi(4));
+            out.surroundings -= flow;
+            let linear = 4.0 * radiation * tk.max(ambient_k).powi(3);
+            let mut conductance = (spec.convection_w_per_m2_k + linear) * free;
+            if let Some((tt, _)) = touched {
+                let tool = &self.scene.tools[tt];
+                let h = tool.heat_transfer_w_per_m2_k;
+                let to_tool = h * contact * (tool.temperature_c.unwrap_or(tj) - tj);
+                out.tools[tt] -= to_tool;
+                flow += to_tool;
+                conductance += h * contact;
+            }
+            out.into[k] = flow;
+            if conductance > 0.0 {
+                out.step_bound = out.step_bound.min(cap[j] / conductance);
+            }
+        }
+        out
+    }
+
+    /// After a step of `dt` (s): runs the heat stage when the time since its last run would
+    /// pass the heat step at the next mechanical step, in as many equal sub-steps as that
+    /// step needs. A scene whose heat does not move never runs it.
+    pub(super) fn heat_stage_if_due(&mut self, dt: Real) -> Result<()> {
+        if !self.transfers_heat {
+            return Ok(());
+        }
+        let heat = self.st.heat.as_mut().expect("a thermal scene");
+        heat.since_s += dt;
+        if heat.since_s + dt < heat.step_s {
+            return Ok(());
+        }
+        let elapsed = std::mem::take(&mut heat.since_s);
+        let spec = self.scene.thermal.as_ref().expect("a thermal scene");
+        let rho_c = self.scene.material.density_kg_per_m3 * spec.specific_heat_j_per_kg_k;
+        let cap = self.capacities(rho_c)?;
+        self.gather_point_heat(&cap, rho_c);
+        let mut done = 0.0;
+        while done < elapsed {
+            done += self.heat_step(elapsed - done, &cap)?;
+        }
+        Ok(())
+    }
+
+    /// What the points gained since the last heat stage (plastic work), `dT_p = T_p -
+    /// sum_I N_I T_I`, into the particles: `T_I += sum_p N_I rho_c w_p dT_p / C_I`, the
+    /// heat kept exactly.
+    fn gather_point_heat(&mut self, cap: &[Real], rho_c: Real) {
+        let heat = self.st.heat.as_ref().expect("a thermal scene");
+        let base = self.at_points(&heat.particle_c);
+        let mut gain = vec![0.0; cap.len()];
+        for (p, (&w, (&t, b))) in self
+            .weights
+            .iter()
+            .zip(heat.temperature_c.iter().zip(base))
+            .enumerate()
+        {
+            let dq = rho_c * w * (t - b);
+            for (i, [n, _, _]) in self.scatter.point_row(p) {
+                gain[i] += n * dq;
+            }
+        }
+        let heat = self.st.heat.as_mut().expect("a thermal scene");
+        for ((t, g), c) in heat.particle_c.iter_mut().zip(gain).zip(cap) {
+            *t += g / c;
+        }
+    }
+
+    /// One heat step of at most `at_most` (s), the rest of the elapsed time (steps 1-4 of
+    /// the module doc): returns the step taken, the stable step's share of it when that is
+    /// shorter. Updates the heat step for the next trigger and the yield test's flow
+    /// stresses of the laws of temperature.
+    fn heat_step(&mut self, at_most: Real, cap: &[Real]) -> Result<Real> {
+        let spec = self.scene.thermal.clone().expect("a thermal scene");
+        let t = &self.st.heat.as_ref().expect("a thermal scene").particle_c;
+        let mut rates = if spec.conductivity_w_per_m_k > 0.0 {
+            self.conduction_rates(t, spec.conductivity_w_per_m_k, true)
+        } else {
+            vec![0.0; t.len()]
+        };
+        let surface = self.surface_flows(t, cap);
+        for (k, &j) in self.boundary.iter().enumerate() {
+            rates[j as usize] += surface.into[k];
+        }
+        // Conduction's bound at this deformation: 2 / lambda, lambda ~ 1 / h_min^2.
+        let shrink = self.critical_dt0 / self.st.stable_dt.max(Real::MIN_POSITIVE);
+        let lambda = self.conduction_lambda0 * shrink * shrink;
+        let conduction = if lambda > 0.0 {
+            2.0 / lambda
+        } else {
+            Real::INFINITY
+        };
+        let stable = spec.dt_safety * conduction.min(surface.step_bound);
+        let dt = at_most.min(stable);
+        if dt.is_nan() || dt <= 0.0 {
+            return Err(Error::Diverged {
+                step: self.st.step,
+                time: self.st.time,
+                what: format!("heat step {dt:.3e} s is not positive"),
+            });
+        }
+        let mut particle = t.clone();
+        for ((t, r), c) in particle.iter_mut().zip(&rates).zip(cap) {
+            *t += dt * r / c;
+        }
+        let points = self.at_points(&particle);
+        let heat = self.st.heat.as_mut().expect("a thermal scene");
+        heat.particle_c = particle;
+        heat.temperature_c = points;
+        for (total, flow) in heat.to_tools_j.iter_mut().zip(&surface.tools) {
+            *total += dt * flow;
+        }
+        heat.tool_flow_w = surface.tools;
+        heat.to_surroundings_j += dt * surface.surroundings;
+        heat.step_s = if stable.is_finite() {
+            stable
+        } else {
+            Real::MAX
+        };
+        if let Some(bad) = heat.temperature_c.iter().position(|t| !t.is_finite()) {
+            return Err(Error::Diverged {
+                step: self.st.step,
+                time: self.st.time,
+                what: format!(
+                    "temperature of integration point {bad} at {:?} m is not finite",
+                    self.points.positions[bad]
+                ),
+            });
+        }
+        if self.material.hardening.is_thermal() {
+            let heat = self.st.heat.as_ref().expect("a thermal scene");
+            for (p, out) in self.out.iter_mut().enumerate() {
+                out.flow_stress = self
+                    .material
+                    .hardening
+                    .flow(self.st.points[p].eps_p, 0.0, heat.temperature_c[p])
+                    .stress;
+            }
+        }
+        Ok(dt)
+    }
+}
+
+/// What [`Simulation::surface_flows`] returns.
+struct SurfaceFlows {
+    /// Heat flow into each boundary ring particle (W), in ring order.
+    into: Vec<Real>,
+    /// Heat flow into each tool (W).
+    tools: Vec<Real>,
+    /// Heat flow into the surroundings (W).
+    surroundings: Real,
+    /// `min C_I / (h A_I)` over the ring (s).
+    step_bound: Real,
+}

@@ -1,0 +1,192 @@
+//! Conduction and the heat that crosses the surface, against closed forms: a steady
+//! one-dimensional profile through a block between two dies at different temperatures, and
+//! a long bar set on a die at another temperature through a finite transfer coefficient
+//! against the semi-infinite solution with surface resistance (Carslaw and Jaeger 1959,
+//! section 2.7, eq. 2.7(1)). The bodies do not move (fixed dies touching them, the mass
+//! scaled so that the mechanical step is not what the run waits on).
+
+use rkforge_core::{Scene, Simulation};
+
+/// Copper-like constants: k 400 W/(m K), rho 8960 kg/m^3, c 385 J/(kg K).
+const K: f64 = 400.0;
+const RHO_C: f64 = 8960.0 * 385.0;
+
+/// A plane-strain block `width` x `height` (m) with `particles`, at `temps.0` (degrees C),
+/// on a bottom die at `temps.1` and, when given, under a top die at `temps.2` (degrees C),
+/// both with transfer coefficient `h` (W/(m^2 K)); the sides insulated; run to `end` (s).
+fn block(
+    size: [f64; 2],
+    particles: [usize; 2],
+    temps: (f64, f64, Option<f64>),
+    h: f64,
+    rule: &str,
+    end: f64,
+) -> Scene {
+    let [w, ht] = size;
+    let (t0, bottom, top) = temps;
+    let top_tool = match top {
+        Some(t) => format!(
+            r#"
+[[tools]]
+name = "top"
+points_m = [[{w2}, {ht}], [{mw}, {ht}]]
+axis = [0.0, -1.0]
+motion = {{ kind = "fixed" }}
+temperature_c = {t}
+heat_transfer_w_per_m2_k = {h}
+"#,
+            w2 = 2.0 * w,
+            mw = -w
+        ),
+        None => String::new(),
+    };
+    let text = format!(
+        r#"
+name = "conduction"
+[model]
+kinematics = "plane_strain"
+[workpiece]
+origin_m = [0.0, 0.0]
+size_m = [{w}, {ht}]
+particles = [{}, {}]
+[material]
+density_kg_per_m3 = 8960.0
+youngs_modulus_pa = 124.0e9
+poisson_ratio = 0.34
+hardening = {{ law = "linear", yield_stress_pa = 100.0e6, modulus_pa = 0.0 }}
+[discretization]
+integration = "{rule}"
+[thermal]
+initial_temperature_c = {t0}
+specific_heat_j_per_kg_k = 385.0
+conductivity_w_per_m_k = {K}
+[time]
+end_s = {end}
+mass_scaling = {{ factor = 1.0e10 }}
+[[tools]]
+name = "bottom"
+points_m = [[{mw}, 0.0], [{w2}, 0.0]]
+axis = [0.0, 1.0]
+motion = {{ kind = "fixed" }}
+temperature_c = {bottom}
+heat_transfer_w_per_m2_k = {h}
+{top_tool}
+"#,
+        particles[0],
+        particles[1],
+        w2 = 2.0 * w,
+        mw = -w
+    );
+    Scene::from_str_named(&text, "conduction.toml").unwrap()
+}
+
+/// Steady conduction through a 10 mm block (9 x 21 particles, 0.5 mm) between a die at 100 C
+/// and one at 0 C, through
+/// 2e5 W/(m^2 K) each: the flux `q = dT / (2 / h + L / k)` and the profile `T(y) = 100 - q
+/// / h - q y / k`, the points' temperatures within 0.5 % of the 100 K across, with q2, q4
+/// and SCNI; the heat into the cold die equals the heat out of the hot one at steady state.
+#[test]
+fn steady_profile_between_two_dies() {
+    let (l, h) = (0.01, 2e5);
+    let q = 100.0 / (2.0 / h + l / K);
+    let tau = l * l * RHO_C / K;
+    for rule in ["q2", "q4", "scni"] {
+        let scene = block(
+            [0.004, l],
+            [9, 21],
+            (50.0, 100.0, Some(0.0)),
+            h,
+            rule,
+            6.0 * tau,
+        );
+        let mut sim = Simulation::new(&scene).unwrap();
+        sim.run_to(scene.time.end_s, |_| {}).unwrap();
+        let temps = sim.point_temperature().unwrap();
+        let mut worst: f64 = 0.0;
+        for (p, x) in sim.point_positions().iter().enumerate() {
+            let exact = 100.0 - q / h - q * x[1] / K;
+            worst = worst.max((temps[p] - exact).abs() / 100.0);
+        }
+        assert!(
+            worst < 0.005,
+            "{rule}: a point {:.3} % of the 100 K off the profile",
+            100.0 * worst
+        );
+        // The heat account closes: content = made - lost (here nothing is made).
+        let balance = sim.thermal_values().unwrap()[7];
+        assert!(balance.abs() < 1e-9, "{rule}: heat balance {balance:e}");
+        let flows = sim.tool_heat_flows().unwrap();
+        let depth_flux = q * 0.004;
+        assert!(
+            (flows[1] / depth_flux - 1.0).abs() < 0.01
+                && (flows[0] / -depth_flux - 1.0).abs() < 0.01,
+            "{rule}: heat flows {flows:?} W against {depth_flux:.3} W"
+        );
+    }
+}
+
+/// `erfc(x)` to 1.2e-7 relative (Numerical Recipes, 2nd ed., section 6.2, `erfcc`).
+fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let poly = -z * z - 1.265_512_23
+        + t * (1.000_023_68
+            + t * (0.374_091_96
+                + t * (0.096_784_18
+                    + t * (-0.186_288_06
+                        + t * (0.278_868_07
+                            + t * (-1.135_203_98
+                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
+    let r = t * poly.exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
+/// A 40 mm bar at 20 C set on a die at 520 C through h = 5e4 W/(m^2 K), with q2, q4 and SCNI
+/// on 0.5 mm spacing: the temperature at depth x after time t (0.05 to 0.4 s) against the
+/// semi-infinite solution with surface resistance,
+/// `(T - T_i) / (T_d - T_i) = erfc(x / (2 sqrt(a t))) - exp(h x / k + h^2 a t / k^2)
+/// erfc(x / (2 sqrt(a t)) + h sqrt(a t) / k)` (Carslaw and Jaeger 1959, 2.7(1)), within 2 % of
+/// the 500 K step at the surface (the points within 1 mm) and inside, while the heat has not
+/// reached the far end.
+#[test]
+fn a_bar_on_a_hot_die_against_the_semi_infinite_solution() {
+    let (l, h) = (0.04, 5e4);
+    let a = K / RHO_C;
+    for rule in ["q2", "q4", "scni"] {
+        let scene = block([0.004, l], [9, 81], (20.0, 520.0, None), h, rule, 0.4);
+        let mut sim = Simulation::new(&scene).unwrap();
+        for t in [0.05, 0.1, 0.2, 0.4] {
+            sim.run_to(t, |_| {}).unwrap();
+            let time = sim.heat_time();
+            let exact = |x: f64| {
+                let s = (a * time).sqrt();
+                let e = x / (2.0 * s);
+                let resistance =
+                    (h * x / K + h * h * a * time / (K * K)).exp() * erfc(e + h * s / K);
+                20.0 + 500.0 * (erfc(e) - resistance)
+            };
+            let temps = sim.point_temperature().unwrap();
+            let (mut surface, mut inside): (f64, f64) = (0.0, 0.0);
+            for (p, x) in sim.point_positions().iter().enumerate() {
+                let off = (temps[p] - exact(x[1])).abs() / 500.0;
+                if x[1] < 0.001 {
+                    surface = surface.max(off);
+                } else {
+                    inside = inside.max(off);
+                }
+            }
+            assert!(
+                surface < 0.02 && inside < 0.02,
+                "{rule}, t = {time}: {:.2} % of the 500 K step off at the surface, {:.2} % inside",
+                100.0 * surface,
+                100.0 * inside
+            );
+            // The far end is still cold: the semi-infinite solution holds.
+            assert!(exact(l) - 20.0 < 0.5);
+        }
+    }
+}
