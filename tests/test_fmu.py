@@ -15,7 +15,7 @@ from fmpy.validation import validate_fmu
 from conftest import ROOT
 from driver import Slave
 
-SCENES = ["taylor_bar", "block_forging", "wheel_forging", "closed_die_hub"]
+SCENES = ["taylor_bar", "block_forging", "wheel_forging", "closed_die_hub", "hot_upsetting"]
 
 
 @pytest.fixture(scope="module")
@@ -61,7 +61,7 @@ def test_every_shipped_scene_validates(fmus):
         md = read_model_description(p)
         names = {v.name for v in md.modelVariables}
         tools = {"taylor_bar": ["wall"], "block_forging": ["top", "bottom"], "wheel_forging": ["die", "punch"],
-                 "closed_die_hub": ["die", "punch"]}[s]
+                 "closed_die_hub": ["die", "punch"], "hot_upsetting": ["anvil", "ram"]}[s]
         for t in tools:
             assert f"{t}.force" in names and f"{t}.stroke" in names and f"{t}.contact_fraction" in names
         if s == "closed_die_hub":
@@ -367,3 +367,33 @@ def test_a_shear_factor_set_through_the_fmu_gives_the_bits_of_the_scene_file(rkf
     assert set_through_fmu.tobytes() == written.tobytes()
     # And it is a different run from the shipped m = 0.1 once the punch presses.
     assert set_through_fmu.tobytes() != shipped.tobytes()
+
+
+def test_a_hot_forging_fmu_reports_temperatures_and_heat(fmus):
+    """The hot upsetting's FMU: temperatures and heat flows are outputs (degC, J, W), the
+    initial billet temperature and the dies' temperatures and transfer coefficients are
+    parameters; set through fmpy, they start the billet where set and chill it at the dies."""
+    path = fmus["hot_upsetting"]
+    md = read_model_description(path)
+    variables = {v.name: v for v in md.modelVariables}
+    for name, unit in [("thermal.temperature_min", "degC"), ("thermal.temperature_max", "degC"),
+                       ("thermal.plastic_heat", "J"), ("thermal.heat_to_tools", "J"),
+                       ("ram.heat_flow", "W"), ("anvil.heat_flow", "W")]:
+        assert variables[name].causality == "output" and variables[name].unit == unit, name
+    for name, unit in [("thermal.initial_temperature_c", "degC"),
+                       ("tools.ram.temperature_c", "degC"),
+                       ("tools.ram.heat_transfer_w_per_m2_k", "W/(m2.K)"),
+                       ("thermal.conductivity_w_per_m_k", "W/(m.K)"),
+                       ("thermal.specific_heat_j_per_kg_k", "J/(kg.K)")]:
+        assert variables[name].causality == "parameter" and variables[name].unit == unit, name
+    res = simulate_fmu(path, stop_time=0.05, output_interval=0.01,
+                       start_values={"workpiece.particles[0]": 5, "workpiece.particles[1]": 13,
+                                     "thermal.initial_temperature_c": 1100.0,
+                                     "tools.ram.temperature_c": 300.0,
+                                     "tools.anvil.temperature_c": 300.0},
+                       output=["thermal.temperature_min", "thermal.temperature_max",
+                               "thermal.heat_to_tools", "ram.heat_flow", "anvil.heat_flow"])
+    assert res["thermal.temperature_max"][0] == 1100.0
+    # The anvil chills the billet's foot from the start; the ram's face once it arrives.
+    assert res["thermal.temperature_min"][-1] < 1090.0
+    assert res["anvil.heat_flow"][-1] > 0.0 and res["thermal.heat_to_tools"][-1] > 0.0

@@ -16,7 +16,7 @@ import rkforge
 from conftest import ROOT
 
 SCENES = ["taylor_bar", "block_forging", "wheel_forging", "closed_die_hub", "ring_compression",
-          "press_upsetting", "block_forging_press", "wheel_forging_press"]
+          "press_upsetting", "block_forging_press", "wheel_forging_press", "hot_upsetting"]
 COARSE = {"workpiece.particles[0]": 9, "workpiece.particles[1]": 9}
 
 

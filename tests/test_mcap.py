@@ -349,6 +349,30 @@ def test_the_die_fill_topic_follows_the_wheels_cavity_corners(rkforge_bin, tmp_p
     assert max(r["punch.contact_fraction"] for r in rows) > 0.2
 
 
+def test_a_hot_scene_records_the_temperature_as_a_point_cloud_field(rkforge_bin, tmp_path):
+    """The hot upsetting's recording, read by rosbags: the workpiece's PointCloud2 has a
+    sixth float32 field `temperature` (degrees C, 24 bytes a point); at each sample the
+    particles' temperatures (smoothed from the points) lie between the dies' 250 C and
+    history.csv's largest point temperature, and the die chill shows by the end."""
+    scene = tmp_path / "hot.toml"
+    scene.write_text((ROOT / "scenes" / "hot_upsetting.toml").read_text())
+    out, path = tmp_path / "out", tmp_path / "hot.mcap"
+    rows = run_history(rkforge_bin, scene, out, "--mcap", str(path), "--set", "workpiece.particles=[5,13]",
+                       "--set", "time.end_s=0.1")
+    with AnyReader([path]) as reader:
+        conns = [c for c in reader.connections if c.topic == "/rkforge/workpiece"]
+        clouds = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=conns)]
+    assert len(clouds) == len(rows) > 5
+    for cloud, row in zip(clouds, rows):
+        assert [f.name for f in cloud.fields] == ["x", "y", "z", "plastic_strain", "von_mises", "temperature"]
+        assert cloud.point_step == 24 and cloud.fields[5].offset == 20
+        data = bytes(cloud.data)
+        temps = [struct.unpack_from("<f", data, k * 24 + 20)[0] for k in range(cloud.width)]
+        assert cloud.width == 65
+        assert 250.0 < min(temps) and max(temps) <= row["thermal.temperature_max_c"] + 1e-3
+    assert min(temps) < 1150.0
+
+
 def test_the_energy_topic_closes_the_account_of_an_impact(rkforge_bin, tmp_path):
     """The energy account of a coarse Taylor bar (a copper bar at 227 m/s on a rigid wall),
     read from its recording: it starts with the bar's kinetic energy (240 J), which the

@@ -23,6 +23,8 @@ SCENES = {
                                       "end_s = 0.015": "end_s = 0.002"}),
     "taylor": ("taylor_bar.toml", {"particles = [21, 51]": "particles = [11, 26]",
                                    "end_s = 80.0e-6": "end_s = 20.0e-6"}),
+    "hot": ("hot_upsetting.toml", {"particles = [11, 31]": "particles = [5, 13]",
+                                   "end_s = 1.5 ": "end_s = 0.05 "}),
 }
 
 
@@ -157,6 +159,23 @@ def test_fields_tools_and_commands():
     assert [t["name"] for t in tools] == ["top", "bottom"] and tools[0]["axial_force_N"] == forces["top"]
     steps = sim.steps
     assert sim.step() > 1e-3 and sim.steps == steps + 1
+
+
+def test_a_hot_scene_gives_its_temperature_as_a_numpy_field():
+    """A scene with `[thermal]`: `fields()["temperature"]` (degrees C, one per particle),
+    between the dies' 250 C and the billet's 1150 C plus its plastic heating; the history's
+    thermal columns; an isothermal scene has no temperature field."""
+    src, changes = SCENES["hot"]
+    sim = rkforge.Simulation(rkforge.Scene.from_toml(scene_variant(src, changes), "hot.toml"))
+    sim.run_to(0.05)
+    f = sim.fields()
+    t = f["temperature"]
+    assert t.shape == f["plastic_strain"].shape == (65,)
+    assert 250.0 < t.min() < 1150.0 < t.max() < 1200.0
+    summary = sim.summary()
+    assert summary["thermal"]["temperature_min_c"] < 1150.0
+    assert abs(summary["thermal"]["heat_balance_rel"]) < 1e-9
+    assert "temperature" not in rkforge.Simulation(block_scene()).fields()
 
 
 def test_scenes_pickle_with_their_overrides():

@@ -112,6 +112,14 @@ pub struct Pairs<'a> {
     pub stations: usize,
 }
 
+/// What [`Contact::carry`] needs to book the friction work of a thermal scene.
+pub struct Slip<'a> {
+    /// Each tool's velocity over the step (m/s).
+    pub tool_velocity: &'a [[Real; 2]],
+    /// Friction work of each particle since the heat stage last took it (J).
+    pub work: &'a mut [Real],
+}
+
 /// A particle's friction on a tool, kept from one step to the next.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Stick {
@@ -531,6 +539,7 @@ impl Contact {
         v: &[[Real; 2]],
         stick: &mut [Option<Stick>],
         dt_avg: Real,
+        mut slip: Option<Slip<'_>>,
     ) {
         let tools = stick.len() / self.candidates.len().max(1);
         for touched in &self.touched {
@@ -554,6 +563,15 @@ impl Contact {
                     f[1] + c * (dv[1] - dn * n[1]),
                 ],
             });
+            if let Some(slip) = slip.as_mut() {
+                // The friction force's work against the realised slip, `-f_T . P_T (v_J -
+                // v_tool) dt_avg`: none while the particle sticks.
+                let vt = slip.tool_velocity[touched.pair as usize % tools];
+                let rel = [vj[0] - vt[0], vj[1] - vt[1]];
+                let rn = rel[0] * n[0] + rel[1] * n[1];
+                let slide = [rel[0] - rn * n[0], rel[1] - rn * n[1]];
+                slip.work[j] += (-(f[0] * slide[0] + f[1] * slide[1])).max(0.0) * dt_avg;
+            }
         }
     }
 

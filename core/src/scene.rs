@@ -144,12 +144,25 @@ pub struct ThermalSpec {
     /// the thermal step is far longer than the mechanical one).
     #[serde(default = "half")]
     pub dt_safety: Real,
+    /// The largest temperature change of a particle in one heat step (K), the heat stage's
+    /// accuracy: the step grows (at most doubling) while the changes stay below it and
+    /// shrinks (at most halving) when they pass it, within the stable step. 5 K by default.
+    #[serde(default = "five")]
+    pub max_change_per_step_k: Real,
+    /// The share of the friction work at a tool that heats the workpiece (-), in [0, 1]; the
+    /// tool takes the rest. 0.5 by default (equal shares).
+    #[serde(default = "half")]
+    pub friction_heat_to_workpiece: Real,
+}
+
+fn five() -> Real {
+    5.0
 }
 
 impl Scene {
-    /// Whether heat moves in the workpiece or across its surface: a `[thermal]` section with
-    /// conduction, convection or radiation, or a tool with heat transfer (the heat stage
-    /// runs); otherwise heating is adiabatic.
+    /// Whether heat moves in the workpiece or across its surface, or is made at it: a
+    /// `[thermal]` section with conduction, convection or radiation, a tool with heat
+    /// transfer or with friction (the heat stage runs); otherwise heating is adiabatic.
     pub fn transfers_heat(&self) -> bool {
         self.thermal.as_ref().is_some_and(|t| {
             t.conductivity_w_per_m_k > 0.0
@@ -159,7 +172,13 @@ impl Scene {
                     .tools
                     .iter()
                     .any(|tool| tool.heat_transfer_w_per_m2_k > 0.0)
-        })
+        }) || self.heats_by_friction()
+    }
+
+    /// Whether friction at a tool makes heat: a `[thermal]` section and a tool with
+    /// friction. The heat stage then takes it into the particles it was made at.
+    pub fn heats_by_friction(&self) -> bool {
+        self.thermal.is_some() && self.tools.iter().any(|t| !t.friction.is_frictionless())
     }
 }
 

@@ -223,6 +223,16 @@ impl Scene {
             "thermal.dt_safety",
             format!("must lie in (0, 1], got {}", t.dt_safety),
         );
+        out.check(
+            (0.0..=1.0).contains(&t.friction_heat_to_workpiece),
+            "thermal.friction_heat_to_workpiece",
+            format!("must lie in [0, 1], got {}", t.friction_heat_to_workpiece),
+        );
+        out.check(
+            pos(t.max_change_per_step_k),
+            "thermal.max_change_per_step_k",
+            format!("must be positive, got {}", t.max_change_per_step_k),
+        );
         for tool in &self.tools {
             let key = |k: &str| format!("tools.{}.{k}", tool.name);
             if let Some(temp) = tool.temperature_c {

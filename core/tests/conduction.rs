@@ -5,7 +5,7 @@
 //! section 2.7, eq. 2.7(1)). The bodies do not move (fixed dies touching them, the mass
 //! scaled so that the mechanical step is not what the run waits on).
 
-use rkforge_core::{Scene, Simulation};
+use rkforge_core::{Scene, Simulation, THERMAL_MEASURES};
 
 /// Copper-like constants: k 400 W/(m K), rho 8960 kg/m^3, c 385 J/(kg K).
 const K: f64 = 400.0;
@@ -113,7 +113,10 @@ fn steady_profile_between_two_dies() {
             100.0 * worst
         );
         // The heat account closes: content = made - lost (here nothing is made).
-        let balance = sim.thermal_values().unwrap()[7];
+        let k = THERMAL_MEASURES
+            .iter()
+            .position(|m| m.0 == "heat_balance_rel");
+        let balance = sim.thermal_values().unwrap()[k.unwrap()];
         assert!(balance.abs() < 1e-9, "{rule}: heat balance {balance:e}");
         let flows = sim.tool_heat_flows().unwrap();
         let depth_flux = q * 0.004;

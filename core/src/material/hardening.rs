@@ -2,7 +2,7 @@
 //! strain (linear, power), or of plastic strain, plastic strain rate and temperature
 //! (Johnson-Cook, Hensel-Spittel, a table: [`super::rate_temperature`]).
 
-use super::rate_temperature::{self, Flow, Softening};
+use super::rate_temperature::{self, Flow, HenselSpittelAt, Softening};
 use crate::lanes;
 use crate::math::Real;
 use schemars::JsonSchema;
@@ -155,36 +155,6 @@ impl Hardening {
                     temp_c,
                 ),
             },
-            _ => Isotherm::Any { law: self, temp_c },
-        }
-    }
-
-    /// [`Hardening::flow`] for the laws that [`Isotherm`] does not specialise.
-    fn flow_any(&self, eps_p: Real, rate: Real, temp_c: Real) -> Flow {
-        match self {
-            Hardening::Linear { .. } | Hardening::Power { .. } => {
-                let stress = self.flow_stress(eps_p);
-                Flow {
-                    stress,
-                    d_strain: self.slope_at(eps_p, stress),
-                    d_rate: 0.0,
-                }
-            }
-            Hardening::JohnsonCook {
-                a_pa,
-                b_pa,
-                n,
-                c,
-                reference_strain_rate_per_s,
-                m,
-                reference_temperature_c,
-                melting_temperature_c,
-            } => rate_temperature::johnson_cook(
-                [*a_pa, *b_pa, *n, *c, *m],
-                *reference_strain_rate_per_s,
-                [*reference_temperature_c, *melting_temperature_c],
-                [eps_p, rate, temp_c],
-            ),
             Hardening::HenselSpittel {
                 a_pa,
                 m1,
@@ -198,16 +168,32 @@ impl Hardening {
                 strain_range,
                 strain_rate_range_per_s,
                 temperature_range_c,
-            } => rate_temperature::hensel_spittel(
-                *a_pa,
-                [*m1, *m2, *m3, *m4, *m5, *m7, *m8, *m9],
-                [
-                    *strain_range,
-                    *strain_rate_range_per_s,
-                    *temperature_range_c,
-                ],
-                [eps_p, rate, temp_c],
-            ),
+            } => Isotherm::HenselSpittel(HenselSpittelAt::new(
+                a_pa,
+                [m1, m2, m3, m4, m5, m7, m8, m9],
+                [strain_range, strain_rate_range_per_s, temperature_range_c],
+                temp_c,
+            )),
+            _ => Isotherm::Any { law: self, temp_c },
+        }
+    }
+
+    /// [`Hardening::flow`] for the laws that [`Isotherm`] does not specialise (linear, power,
+    /// table).
+    fn flow_any(&self, eps_p: Real, rate: Real, temp_c: Real) -> Flow {
+        match self {
+            Hardening::Linear { .. } | Hardening::Power { .. } => {
+                let stress = self.flow_stress(eps_p);
+                Flow {
+                    stress,
+                    d_strain: self.slope_at(eps_p, stress),
+                    d_rate: 0.0,
+                }
+            }
+            // Specialised in `isotherm`, which never hands them here.
+            Hardening::JohnsonCook { .. } | Hardening::HenselSpittel { .. } => {
+                self.isotherm(temp_c).flow(eps_p, rate)
+            }
             Hardening::Table {
                 strains,
                 strain_rates_per_s,
@@ -275,6 +261,8 @@ pub enum Isotherm<'a> {
         /// `1 - T*^m` at the temperature.
         softening: Softening,
     },
+    /// Hensel-Spittel with its temperature terms evaluated.
+    HenselSpittel(HenselSpittelAt),
     /// Any other law, evaluated whole at `temp_c` (degrees C).
     Any {
         /// The law.
@@ -294,6 +282,7 @@ impl Isotherm<'_> {
                 rate0,
                 softening,
             } => softening.flow(law, rate0, eps_p, rate),
+            Isotherm::HenselSpittel(at) => at.flow(eps_p, rate),
             Isotherm::Any { law, temp_c } => law.flow_any(eps_p, rate, temp_c),
         }
     }
@@ -310,7 +299,7 @@ impl Isotherm<'_> {
                 rate0,
                 softening,
             } => softening.work(law, rate0, eps_p, dgamma, rate),
-            Isotherm::Any { .. } => {
+            Isotherm::HenselSpittel(_) | Isotherm::Any { .. } => {
                 let start = self.flow(eps_p, rate).stress;
                 let mid = self.flow(eps_p + 0.5 * dgamma, rate).stress;
                 (start + 4.0 * mid + end) * dgamma / 6.0

@@ -3,6 +3,7 @@
 //! stress with its partial derivatives in strain and rate, which the rate-consistent return
 //! map ([`super::HenckyJ2::update_lanes`]) needs for its Newton iteration.
 
+use crate::lanes;
 use crate::math::Real;
 
 /// The flow stress `sigma_y` (Pa) at a plastic strain, strain rate and temperature, with
@@ -44,7 +45,11 @@ impl Softening {
     pub fn flow(self, law: [Real; 5], rate0: Real, eps: Real, rate: Real) -> Flow {
         let [a, b, n, c, _] = law;
         let eps = eps.max(0.0);
-        let power = eps.powf(n);
+        let power = if eps > 0.0 {
+            lanes::exp(n * lanes::ln(eps))
+        } else {
+            0.0
+        };
         let hard = a + b * power;
         let d_hard = if eps > 0.0 {
             b * n * power / eps
@@ -56,7 +61,7 @@ impl Softening {
             0.0
         };
         let (rate_term, d_rate_term) = if rate > rate0 {
-            (1.0 + c * (rate / rate0).ln(), c / rate)
+            (1.0 + c * lanes::ln(rate / rate0), c / rate)
         } else {
             (1.0, 0.0)
         };
@@ -94,34 +99,65 @@ impl Softening {
 /// `ranges = [strain, rate (1/s), T (degrees C)]`; a held input has no derivative.
 /// `m = [m1, m2, m3, m4, m5, m7, m8, m9]`, `at = [eps_p, rate (1/s), T (degrees C)]`.
 pub fn hensel_spittel(a: Real, m: [Real; 8], ranges: [[Real; 2]; 3], at: [Real; 3]) -> Flow {
-    let [m1, m2, m3, m4, m5, m7, m8, m9] = m;
-    let [strains, rates, temps] = ranges;
-    let eps = at[0].clamp(strains[0], strains[1]);
-    let rate = at[1].clamp(rates[0], rates[1]);
-    let temp = at[2].clamp(temps[0], temps[1]);
-    let t_power = if m9 == 0.0 { 0.0 } else { m9 * temp.ln() };
-    let ln_stress = a.ln()
-        + m1 * temp
-        + t_power
-        + m2 * eps.ln()
-        + m4 / eps
-        + m5 * temp * eps.ln_1p()
-        + m7 * eps
-        + (m3 + m8 * temp) * rate.ln();
-    let stress = ln_stress.exp();
-    let inside = |x: Real, r: [Real; 2]| x > r[0] && x < r[1];
-    Flow {
-        stress,
-        d_strain: if inside(at[0], strains) {
-            stress * (m2 / eps - m4 / (eps * eps) + m5 * temp / (1.0 + eps) + m7)
-        } else {
-            0.0
-        },
-        d_rate: if inside(at[1], rates) {
-            stress * (m3 + m8 * temp) / rate
-        } else {
-            0.0
-        },
+    HenselSpittelAt::new(a, m, ranges, at[2]).flow(at[0], at[1])
+}
+
+/// Hensel-Spittel at one temperature: what depends on the temperature alone evaluated once
+/// (per return map).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HenselSpittelAt {
+    /// `ln A + m1 T + m9 ln T`.
+    ln_base: Real,
+    /// `m2`, `m4`, `m5 T`, `m7`.
+    strain: [Real; 4],
+    /// The rate exponent `m3 + m8 T`.
+    rate_exponent: Real,
+    /// The strain and rate ranges.
+    ranges: [[Real; 2]; 2],
+}
+
+impl HenselSpittelAt {
+    /// The law `(a, m, ranges)` of [`hensel_spittel`] at `temp` (degrees C, held in range).
+    pub fn new(a: Real, m: [Real; 8], ranges: [[Real; 2]; 3], temp: Real) -> HenselSpittelAt {
+        let [m1, m2, m3, m4, m5, m7, m8, m9] = m;
+        let temp = temp.clamp(ranges[2][0], ranges[2][1]);
+        let t_power = if m9 == 0.0 { 0.0 } else { m9 * temp.ln() };
+        HenselSpittelAt {
+            ln_base: a.ln() + m1 * temp + t_power,
+            strain: [m2, m4, m5 * temp, m7],
+            rate_exponent: m3 + m8 * temp,
+            ranges: [ranges[0], ranges[1]],
+        }
+    }
+
+    /// The flow stress and its derivatives at strain `eps` and rate `rate` (1/s).
+    pub fn flow(&self, eps_in: Real, rate_in: Real) -> Flow {
+        let [strains, rates] = self.ranges;
+        let [m2, m4, m5t, m7] = self.strain;
+        let eps = eps_in.clamp(strains[0], strains[1]);
+        let rate = rate_in.clamp(rates[0], rates[1]);
+        let ln_eps = lanes::ln(eps);
+        let ln_stress = self.ln_base
+            + m2 * ln_eps
+            + m4 / eps
+            + m5t * lanes::ln(1.0 + eps)
+            + m7 * eps
+            + self.rate_exponent * lanes::ln(rate);
+        let stress = lanes::exp(ln_stress);
+        let inside = |x: Real, r: [Real; 2]| x > r[0] && x < r[1];
+        Flow {
+            stress,
+            d_strain: if inside(eps_in, strains) {
+                stress * (m2 / eps - m4 / (eps * eps) + m5t / (1.0 + eps) + m7)
+            } else {
+                0.0
+            },
+            d_rate: if inside(rate_in, rates) {
+                stress * self.rate_exponent / rate
+            } else {
+                0.0
+            },
+        }
     }
 }
 

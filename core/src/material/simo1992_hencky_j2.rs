@@ -109,6 +109,9 @@ pub struct PointLanes {
     /// `1 / dt` (1/s) of the step the strain increment was taken over: the plastic strain
     /// rate of a return is `dgamma / dt`; 0 before the first step (the least rate).
     pub inv_dt: Real,
+    /// A first guess of each lane's `dgamma` for the laws of rate and temperature (the last
+    /// step's plastic strain rate times this step's length; 0: none).
+    pub guess: Lanes,
     /// Plastic work density of the last update (J/m^3), `int sigma_y d eps` over the step's
     /// strain at its rate and temperature ([`super::hardening::Isotherm::work`]), for the
     /// laws of rate and temperature (0 where a lane stayed elastic; not set for the
@@ -129,6 +132,7 @@ impl PointLanes {
             flow_stress: [Real::INFINITY; LANES],
             temperature: zero,
             inv_dt: 0.0,
+            guess: zero,
             plastic_work: zero,
         }
     }
@@ -434,23 +438,29 @@ impl HenckyJ2 {
         let mut x = [0.0; LANES];
         let mut flow_at = *sy;
         match self.hardening {
-            Hardening::Linear { modulus_pa, .. } => {
+            Hardening::Linear {
+                yield_stress_pa,
+                modulus_pa,
+            } => {
                 for l in 0..LANES {
                     if yields[l] {
                         x[l] = (q_trial[l] - sy[l]) / (g3 + modulus_pa);
-                        flow_at[l] = self.hardening.flow_stress(eps_p[l] + x[l]);
+                        flow_at[l] = yield_stress_pa + modulus_pa * (eps_p[l] + x[l]);
                     }
                 }
                 Ok((x, flow_at))
             }
-            _ => {
-                // Power law (the laws of rate and temperature go to `return_map_rate`).
+            Hardening::Power { k_pa, eps0, n } => {
                 // The residual is decreasing and concave in dgamma; Newton from below
-                // converges monotonically. Bracket [0, q_trial / 3G] for safety.
+                // converges monotonically. Bracket [0, q_trial / 3G] for safety. The law and
+                // its slope written out as `Hardening::flow_stress` and `slope_at` write them
+                // (the same bits), so the lane loop holds no call into the other laws.
+                let flow_stress = |e: Real| k_pa * lanes::exp(n * lanes::ln(eps0 + e));
+                let slope_at = |e: Real, flow: Real| n * flow / (eps0 + e);
                 let (mut lo, mut hi) = ([0.0; LANES], [0.0; LANES]);
                 let mut done = [true; LANES];
                 for l in 0..LANES {
-                    let slope = self.hardening.slope_at(eps_p[l], sy[l]);
+                    let slope = slope_at(eps_p[l], sy[l]);
                     hi[l] = q_trial[l] / g3;
                     // Lanes that do not yield keep x = 0 and never iterate.
                     if yields[l] {
@@ -464,8 +474,8 @@ impl HenckyJ2 {
                     }
                     for l in 0..LANES {
                         let eps = eps_p[l] + x[l];
-                        let flow = self.hardening.flow_stress(eps);
-                        let slope = self.hardening.slope_at(eps, flow);
+                        let flow = flow_stress(eps);
+                        let slope = slope_at(eps, flow);
                         let r = q_trial[l] - g3 * x[l] - flow;
                         let (lo_new, hi_new) = if r > 0.0 {
                             (x[l], hi[l])
@@ -499,6 +509,10 @@ impl HenckyJ2 {
                     )),
                 }
             }
+            _ => Err((
+                0,
+                "a flow stress of rate and temperature takes the rate-consistent return map".into(),
+            )),
         }
     }
 
@@ -530,8 +544,14 @@ impl HenckyJ2 {
             let (q, eps, temp) = (q_trial[l], p.eps_p[l], p.temperature[l]);
             let law = self.hardening.isotherm(temp);
             let (mut lo, mut hi) = (0.0, q / g3);
-            // The perfectly plastic estimate: above the root for a hardening material.
-            let mut xl = (q - p.flow_stress[l]) / g3;
+            // The last step's plastic strain over this step (the rate changes little from
+            // step to step), else the perfectly plastic estimate, above the root for a
+            // hardening material.
+            let mut xl = if p.guess[l] > 0.0 && p.guess[l] < hi {
+                p.guess[l]
+            } else {
+                (q - p.flow_stress[l]) / g3
+            };
             let mut converged = false;
             for _ in 0..200 {
                 let f = law.flow(eps + xl, xl * p.inv_dt);
@@ -546,9 +566,22 @@ impl HenckyJ2 {
                 } else {
                     hi = xl;
                 }
-                let next = xl + r / (g3 + f.d_strain + f.d_rate * p.inv_dt);
+                // Newton on ln(dgamma): ln sigma_y - ln(q - 3 G dgamma) = 0, nearly linear in
+                // ln(dgamma) where the flow stress goes as a power of the rate (a plain
+                // Newton step from a rate of almost nothing overshoots by orders of magnitude).
+                let slope = f.d_strain + f.d_rate * p.inv_dt;
+                let room = q - g3 * xl;
+                let next = if f.stress > 0.0 && room > 0.0 && xl > 0.0 {
+                    let g = lanes::ln(f.stress / room);
+                    let dg = xl * (slope / f.stress + g3 / room);
+                    xl * lanes::exp(-g / dg)
+                } else {
+                    xl + r / (g3 + slope)
+                };
                 xl = if next > lo && next < hi {
                     next
+                } else if lo > 0.0 {
+                    (lo * hi).sqrt()
                 } else {
                     0.5 * (lo + hi)
                 };

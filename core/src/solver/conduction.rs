@@ -13,7 +13,9 @@
 //! 1. lumped capacities `C_I = sum_p N_I(X_p) rho_0 c w_p` (J/K, physical density: mass
 //!    scaling never enters), and the points' gains since the last stage into the particles,
 //!    `T_I += sum_p N_I(X_p) rho_0 c w_p (T_p - sum_J N_J(X_p) T_J) / C_I` (the heat kept
-//!    exactly: `sum_I C_I dT_I = sum_p rho_0 c w_p dT_p`);
+//!    exactly: `sum_I C_I dT_I = sum_p rho_0 c w_p dT_p`), with the friction work the
+//!    contact stage booked at each particle, its share `thermal.friction_heat_to_workpiece`
+//!    (the tool takes the rest);
 //! 2. conduction in the reference configuration (total Lagrangian, as the stress stage),
 //!    `R_I = - sum_p w_p grad_X N_I(X_p) . (k J C^-1 grad_X T)(X_p)` (W) with `grad_X T =
 //!    sum_I T_I grad_X N_I`, `C^-1 = F^-1 F^-T` and `J = det F` (`F_33` the hoop stretch in
@@ -34,7 +36,11 @@
 //! iteration on the undeformed body at setup, scaled by `(h_min0 / h_min)^2` as the
 //! smallest deformed cell altitude shrinks (the mechanical critical step scales with
 //! `h_min`); a surface particle's `C_I / (h A_I)` (the radiation linearised,
-//! `4 eps sigma T^3`); times `thermal.dt_safety`.
+//! `4 eps sigma T^3`); times `thermal.dt_safety`. Within it, the step is the accuracy's:
+//! the first heat stage runs after the first mechanical step, and each next step is the
+//! last one scaled by `thermal.max_change_per_step_k` over the largest change of a particle's
+//! temperature in it, at most doubled or halved, so a die touching the hot billet is met
+//! with short steps that lengthen as the chill spreads.
 
 use super::Simulation;
 use crate::error::{Error, Result};
@@ -285,7 +291,8 @@ impl Simulation {
 
     /// What the points gained since the last heat stage (plastic work), `dT_p = T_p -
     /// sum_I N_I T_I`, into the particles: `T_I += sum_p N_I rho_c w_p dT_p / C_I`, the
-    /// heat kept exactly.
+    /// heat kept exactly; and the workpiece's share of the friction work done at each
+    /// particle since then, `T_J += phi W_J / C_J`.
     fn gather_point_heat(&mut self, cap: &[Real], rho_c: Real) {
         let heat = self.st.heat.as_ref().expect("a thermal scene");
         let base = self.at_points(&heat.particle_c);
@@ -301,7 +308,18 @@ impl Simulation {
                 gain[i] += n * dq;
             }
         }
+        let share = self
+            .scene
+            .thermal
+            .as_ref()
+            .map_or(0.0, |t| t.friction_heat_to_workpiece);
         let heat = self.st.heat.as_mut().expect("a thermal scene");
+        // Friction work at the tools since the last stage, the workpiece's share at the
+        // particles where it was done.
+        for (g, w) in gain.iter_mut().zip(&mut heat.friction_work) {
+            heat.friction_heat_j += *w;
+            *g += share * std::mem::take(w);
+        }
         for ((t, g), c) in heat.particle_c.iter_mut().zip(gain).zip(cap) {
             *t += g / c;
         }
@@ -341,9 +359,19 @@ impl Simulation {
             });
         }
         let mut particle = t.clone();
+        let mut largest: Real = 0.0;
         for ((t, r), c) in particle.iter_mut().zip(&rates).zip(cap) {
-            *t += dt * r / c;
+            let change = dt * r / c;
+            largest = largest.max(change.abs());
+            *t += change;
         }
+        // The next step: this one scaled by how far the largest change stayed below the
+        // accuracy limit, at most doubled or halved, within the stable step.
+        let growth = if largest > 0.0 {
+            (spec.max_change_per_step_k / largest).clamp(0.5, 2.0)
+        } else {
+            2.0
+        };
         let points = self.at_points(&particle);
         let heat = self.st.heat.as_mut().expect("a thermal scene");
         heat.particle_c = particle;
@@ -353,11 +381,7 @@ impl Simulation {
         }
         heat.tool_flow_w = surface.tools;
         heat.to_surroundings_j += dt * surface.surroundings;
-        heat.step_s = if stable.is_finite() {
-            stable
-        } else {
-            Real::MAX
-        };
+        heat.step_s = (growth * dt).min(stable);
         if let Some(bad) = heat.temperature_c.iter().position(|t| !t.is_finite()) {
             return Err(Error::Diverged {
                 step: self.st.step,

@@ -39,6 +39,12 @@ pub struct Heat {
     pub tool_flow_w: Vec<Real>,
     /// Heat that has flowed into the surroundings since the start (J).
     pub to_surroundings_j: Real,
+    /// Friction work at the tool interfaces of each particle since the last heat stage (J;
+    /// empty when no tool has friction).
+    pub friction_work: Vec<Real>,
+    /// Heat friction made at the tool interfaces since the start (J), all of it: the
+    /// workpiece takes `thermal.friction_heat_to_workpiece` of it, the tools the rest.
+    pub friction_heat_j: Real,
 }
 
 impl Heat {
@@ -48,6 +54,7 @@ impl Heat {
         points: usize,
         tools: usize,
         particles: usize,
+        friction: bool,
     ) -> Heat {
         Heat {
             temperature_c: vec![spec.initial_temperature_c; points],
@@ -59,6 +66,8 @@ impl Heat {
             to_tools_j: vec![0.0; tools],
             tool_flow_w: vec![0.0; tools],
             to_surroundings_j: 0.0,
+            friction_work: vec![0.0; if friction { particles } else { 0 }],
+            friction_heat_j: 0.0,
         }
     }
 }
@@ -114,7 +123,7 @@ pub struct Temperatures {
 /// The thermal measures every front end reports for a scene with `[thermal]` (history
 /// columns `thermal.<key>`, the summary's `thermal`, FMU outputs `thermal.<name>`): key,
 /// unit (empty: none) and description, in the order of [`Simulation::thermal_values`].
-pub const THERMAL_MEASURES: [(&str, &str, &str); 8] = [
+pub const THERMAL_MEASURES: [(&str, &str, &str); 9] = [
     (
         "temperature_min_c",
         "degC",
@@ -134,6 +143,11 @@ pub const THERMAL_MEASURES: [(&str, &str, &str); 8] = [
         "plastic_heat_J",
         "J",
         "heat released by plastic work since the start (Taylor-Quinney share)",
+    ),
+    (
+        "friction_heat_J",
+        "J",
+        "heat made by friction at the tools since the start (the workpiece takes its share)",
     ),
     (
         "heat_content_J",
@@ -159,10 +173,12 @@ pub const THERMAL_MEASURES: [(&str, &str, &str); 8] = [
 
 impl Simulation {
     /// The values of [`THERMAL_MEASURES`] now, `None` for an isothermal scene.
-    pub fn thermal_values(&self) -> Option<[Real; 8]> {
+    pub fn thermal_values(&self) -> Option<[Real; 9]> {
         let t = self.temperatures()?;
         let heat = self.st.heat.as_ref()?;
-        let (made, content) = (self.plastic_heat()?, self.heat_content()?);
+        let share = self.scene.thermal.as_ref()?.friction_heat_to_workpiece;
+        let plastic = self.plastic_heat()?;
+        let (made, content) = (plastic + share * heat.friction_heat_j, self.heat_content()?);
         let to_tools: Real = heat.to_tools_j.iter().sum();
         let lost = to_tools + heat.to_surroundings_j;
         let scale = made.abs()
@@ -177,7 +193,8 @@ impl Simulation {
             t.min_c,
             t.max_c,
             t.mean_c,
-            made,
+            plastic,
+            heat.friction_heat_j,
             content,
             to_tools,
             heat.to_surroundings_j,

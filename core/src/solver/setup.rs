@@ -148,7 +148,8 @@ impl Simulation {
                 ],
                 heat: scene.thermal.as_ref().map(|t| {
                     let particles = if scene.transfers_heat() { np } else { 0 };
-                    Heat::initial(t, npts, scene.tools.len(), particles)
+                    let friction = scene.heats_by_friction();
+                    Heat::initial(t, npts, scene.tools.len(), particles, friction)
                 }),
             },
             tools,

@@ -298,9 +298,16 @@ impl StressContext<'_> {
             for (l, (state, out)) in states.iter().zip(outs.iter()).enumerate() {
                 batch.set_history(l, state, out.flow_stress);
             }
-            if let (Some(h), Some((temps, _, _))) = (&self.heating, &heat) {
+            if let (Some(h), Some((temps, _, rates))) = (&self.heating, &heat) {
                 batch.temperature[..used].copy_from_slice(&temps[k0..k0 + used]);
                 batch.inv_dt = h.inv_dt;
+                for l in 0..used {
+                    batch.guess[l] = if h.inv_dt > 0.0 {
+                        rates[k0 + l] / h.inv_dt
+                    } else {
+                        0.0
+                    };
+                }
             }
             let u = match self.material.update_lanes(&mut batch) {
                 Ok(u) => u,
