@@ -37,7 +37,8 @@ pub struct Parameter {
     /// The scene's value.
     pub start: toml::Value,
     /// SI unit read from the key's suffix (`_s`, `_m`, `_m_per_s`, `_pa`, `_kg_per_m3`,
-    /// `_per_s`, `_c` for degrees Celsius, `_j_per_kg_k`, `_w_per_m_k`, `_w_per_m2_k`).
+    /// `_per_s`, `_c` for degrees Celsius, `_k` for a temperature difference, `_j_per_kg_k`,
+    /// `_w_per_m_k`, `_w_per_m2_k`).
     pub unit: Option<&'static str>,
     /// The schema's description (the doc comment of the field).
     pub description: String,
@@ -78,6 +79,7 @@ fn unit(key: &str) -> Option<&'static str> {
         ("_s", "s"),
         ("_m", "m"),
         ("_c", "degC"),
+        ("_k", "K"),
     ]
     .into_iter()
     .find(|(suffix, _)| last.ends_with(suffix))
