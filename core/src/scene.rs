@@ -104,7 +104,8 @@ pub struct MaterialSpec {
     pub youngs_modulus_pa: Real,
     /// Poisson's ratio (-), in (-1, 0.5).
     pub poisson_ratio: Real,
-    /// Isotropic hardening law (`law = "linear"` or `"power"`).
+    /// Isotropic hardening law (`law = "linear"`, `"power"`; with `[thermal]` also
+    /// `"johnson_cook"`, `"hensel_spittel"`, `"sellars_tegart"`, `"table"`).
     pub hardening: Hardening,
 }
 

@@ -154,6 +154,7 @@ impl Scene {
             }
             Hardening::JohnsonCook { .. }
             | Hardening::HenselSpittel { .. }
+            | Hardening::SellarsTegart { .. }
             | Hardening::Table { .. } => check_rate_temperature_law(&m.hardening, out),
             Hardening::Power { k_pa, eps0, n } => {
                 out.check(
@@ -611,6 +612,37 @@ fn check_rate_temperature_law(law: &Hardening, out: &mut Checks) {
                 &key("temperature_range_c"),
                 format!(
                     "must be [least, largest] with least < largest (and least > 0 with m9 set), got {temperature_range_c:?}"
+                ),
+            );
+        }
+        Hardening::SellarsTegart {
+            alpha_per_pa,
+            n,
+            activation_energy_j_per_mol,
+            a_per_s,
+            strain_rate_range_per_s,
+            temperature_range_c,
+        } => {
+            for (name, v) in [
+                ("alpha_per_pa", alpha_per_pa),
+                ("n", n),
+                ("activation_energy_j_per_mol", activation_energy_j_per_mol),
+                ("a_per_s", a_per_s),
+            ] {
+                out.check(pos(*v), &key(name), format!("must be positive, got {v}"));
+            }
+            out.check(
+                pos(strain_rate_range_per_s[0]) && increasing(strain_rate_range_per_s),
+                &key("strain_rate_range_per_s"),
+                format!(
+                    "must be [least, largest] with 0 < least < largest, got {strain_rate_range_per_s:?}"
+                ),
+            );
+            out.check(
+                increasing(temperature_range_c) && temperature_range_c[0] > -273.15,
+                &key("temperature_range_c"),
+                format!(
+                    "must be [least, largest] above absolute zero with least < largest, got {temperature_range_c:?}"
                 ),
             );
         }

@@ -2,7 +2,7 @@
 //! strain (linear, power), or of plastic strain, plastic strain rate and temperature
 //! (Johnson-Cook, Hensel-Spittel, a table: [`super::rate_temperature`]).
 
-use super::rate_temperature::{self, Flow, HenselSpittelAt, Softening};
+use super::rate_temperature::{self, Flow, HenselSpittelAt, SellarsTegartAt, Softening};
 use crate::lanes;
 use crate::math::Real;
 use schemars::JsonSchema;
@@ -84,6 +84,25 @@ pub enum Hardening {
         /// Strain rates the parameters were fitted on, `[least, largest]` (1/s).
         strain_rate_range_per_s: [Real; 2],
         /// Temperatures the parameters were fitted on, `[least, largest]` (degrees C).
+        temperature_range_c: [Real; 2],
+    },
+    /// Sellars and McG. Tegart (1966), the hyperbolic-sine law of hot working, strain
+    /// independent (the steady flow of aluminium alloys at extrusion and forging heat):
+    /// `sigma_y = asinh((Z / A)^(1/n)) / alpha` with the Zener-Hollomon parameter
+    /// `Z = rate exp(Q / (R T))`, T in kelvin; rate and temperature held inside the fitted
+    /// ranges.
+    SellarsTegart {
+        /// `alpha` (1/Pa).
+        alpha_per_pa: Real,
+        /// The stress exponent `n` (-).
+        n: Real,
+        /// The activation energy `Q` (J/mol).
+        activation_energy_j_per_mol: Real,
+        /// `A` (1/s).
+        a_per_s: Real,
+        /// Strain rates the constants were fitted on, `[least, largest]` (1/s).
+        strain_rate_range_per_s: [Real; 2],
+        /// Temperatures the constants were fitted on, `[least, largest]` (degrees C).
         temperature_range_c: [Real; 2],
     },
     /// A table over strain, strain rate and temperature (as DEFORM reads flow curves):
@@ -174,6 +193,18 @@ impl Hardening {
                 [strain_range, strain_rate_range_per_s, temperature_range_c],
                 temp_c,
             )),
+            Hardening::SellarsTegart {
+                alpha_per_pa,
+                n,
+                activation_energy_j_per_mol,
+                a_per_s,
+                strain_rate_range_per_s,
+                temperature_range_c,
+            } => Isotherm::SellarsTegart(SellarsTegartAt::new(
+                [alpha_per_pa, n, activation_energy_j_per_mol, a_per_s],
+                [strain_rate_range_per_s, temperature_range_c],
+                temp_c,
+            )),
             _ => Isotherm::Any { law: self, temp_c },
         }
     }
@@ -191,9 +222,9 @@ impl Hardening {
                 }
             }
             // Specialised in `isotherm`, which never hands them here.
-            Hardening::JohnsonCook { .. } | Hardening::HenselSpittel { .. } => {
-                self.isotherm(temp_c).flow(eps_p, rate)
-            }
+            Hardening::JohnsonCook { .. }
+            | Hardening::HenselSpittel { .. }
+            | Hardening::SellarsTegart { .. } => self.isotherm(temp_c).flow(eps_p, rate),
             Hardening::Table {
                 strains,
                 strain_rates_per_s,
@@ -263,6 +294,8 @@ pub enum Isotherm<'a> {
     },
     /// Hensel-Spittel with its temperature terms evaluated.
     HenselSpittel(HenselSpittelAt),
+    /// Sellars-Tegart with its temperature term evaluated.
+    SellarsTegart(SellarsTegartAt),
     /// Any other law, evaluated whole at `temp_c` (degrees C).
     Any {
         /// The law.
@@ -283,14 +316,15 @@ impl Isotherm<'_> {
                 softening,
             } => softening.flow(law, rate0, eps_p, rate),
             Isotherm::HenselSpittel(at) => at.flow(eps_p, rate),
+            Isotherm::SellarsTegart(at) => at.flow(rate),
             Isotherm::Any { law, temp_c } => law.flow_any(eps_p, rate, temp_c),
         }
     }
 
     /// Plastic work density `int sigma_y d eps` (J/m^3) over a step from `eps_p` to
     /// `eps_p + dgamma` at the constant rate `rate` (1/s), `end` the flow stress at its end
-    /// (Pa): exact for Johnson-Cook, Simpson's rule for the other laws (whose strain terms
-    /// have no closed-form integral worth its cost).
+    /// (Pa): exact for Johnson-Cook and Sellars-Tegart, Simpson's rule for the other laws
+    /// (whose strain terms have no closed-form integral worth its cost).
     #[inline]
     pub fn work(&self, eps_p: Real, dgamma: Real, rate: Real, end: Real) -> Real {
         match *self {
@@ -299,6 +333,8 @@ impl Isotherm<'_> {
                 rate0,
                 softening,
             } => softening.work(law, rate0, eps_p, dgamma, rate),
+            // Strain independent: the flow stress is constant over the step.
+            Isotherm::SellarsTegart(_) => end * dgamma,
             Isotherm::HenselSpittel(_) | Isotherm::Any { .. } => {
                 let start = self.flow(eps_p, rate).stress;
                 let mid = self.flow(eps_p + 0.5 * dgamma, rate).stress;

@@ -161,6 +161,60 @@ impl HenselSpittelAt {
     }
 }
 
+/// The gas constant `R` (J/(mol K)).
+const GAS_CONSTANT: Real = 8.314_462_618;
+
+/// Sellars and McG. Tegart (1966), Mem. Sci. Rev. Met. 63, 731: `sigma_y = asinh((Z /
+/// A)^(1/n)) / alpha` (Pa) with `Z = rate exp(Q / (R T))`, T in kelvin; strain
+/// independent. `law = [alpha (1/Pa), n, Q (J/mol), A (1/s)]`, `ranges = [rate (1/s), T
+/// (degrees C)]` (held inside), `at = [rate (1/s), T (degrees C)]`.
+pub fn sellars_tegart(law: [Real; 4], ranges: [[Real; 2]; 2], at: [Real; 2]) -> Flow {
+    SellarsTegartAt::new(law, ranges, at[1]).flow(at[0])
+}
+
+/// Sellars-Tegart at one temperature: `Q / (R T) - ln A` evaluated once (per return map).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SellarsTegartAt {
+    /// `Q / (R T) - ln A`.
+    shift: Real,
+    /// `alpha` (1/Pa) and `n`.
+    alpha_n: [Real; 2],
+    /// The rate range (1/s).
+    rates: [Real; 2],
+}
+
+impl SellarsTegartAt {
+    /// The law `(law, ranges)` of [`sellars_tegart`] at `temp` (degrees C, held in range).
+    pub fn new(law: [Real; 4], ranges: [[Real; 2]; 2], temp: Real) -> SellarsTegartAt {
+        let [alpha, n, q, a] = law;
+        let temp_k = temp.clamp(ranges[1][0], ranges[1][1]) + 273.15;
+        SellarsTegartAt {
+            shift: q / (GAS_CONSTANT * temp_k) - a.ln(),
+            alpha_n: [alpha, n],
+            rates: ranges[0],
+        }
+    }
+
+    /// The flow stress and its rate derivative at `rate_in` (1/s); no strain derivative.
+    pub fn flow(&self, rate_in: Real) -> Flow {
+        let [alpha, n] = self.alpha_n;
+        let rate = rate_in.clamp(self.rates[0], self.rates[1]);
+        // (Z / A)^(1/n) = exp((ln rate + Q / (R T) - ln A) / n); asinh u = ln(u + sqrt(1 + u^2)).
+        let u = lanes::exp((lanes::ln(rate) + self.shift) / n);
+        let root = (1.0 + u * u).sqrt();
+        let inside = rate_in > self.rates[0] && rate_in < self.rates[1];
+        Flow {
+            stress: lanes::ln(u + root) / alpha,
+            d_strain: 0.0,
+            d_rate: if inside {
+                u / (n * rate * alpha * root)
+            } else {
+                0.0
+            },
+        }
+    }
+}
+
 /// Where `x` falls among the increasing `values`: the lower index of its interval and the
 /// fraction along it, held at the ends (fraction 0 or 1, and `inside` false there).
 fn locate(values: &[Real], x: Real) -> (usize, Real, bool) {
@@ -321,6 +375,35 @@ mod tests {
         let low = hs([0.0, 0.0, 800.0]);
         assert_eq!(low.stress, hs([0.03, 0.1, 900.0]).stress);
         assert_eq!((low.d_strain, low.d_rate), (0.0, 0.0));
+    }
+
+    /// Sellars-Tegart against its formula written with `powf` and `asinh`, its rate derivative
+    /// against central differences, and the hold outside the ranges.
+    #[test]
+    fn sellars_tegart_values_derivative_and_ranges() {
+        // AA6082-like constants: alpha 0.045/MPa, n 3.976, Q 153 kJ/mol, A 2.39e8 /s.
+        let law = [0.045e-6, 3.976, 153e3, 2.39e8];
+        let ranges = [[0.01, 100.0], [350.0, 550.0]];
+        let st = |at: [Real; 2]| sellars_tegart(law, ranges, at);
+        let (r, t): (Real, Real) = (2.0, 450.0);
+        let z: Real = r * (153e3 / (8.314_462_618 * (t + 273.15))).exp();
+        let expect = (z / 2.39e8).powf(1.0 / 3.976).asinh() / 0.045e-6;
+        let f = st([r, t]);
+        assert!(
+            (f.stress - expect).abs() < 1e-10 * expect,
+            "{} {expect}",
+            f.stress
+        );
+        let fr = (st([r + 1e-6, t]).stress - st([r - 1e-6, t]).stress) / 2e-6;
+        assert!(
+            (fr - f.d_rate).abs() < 1e-6 * f.d_rate.abs(),
+            "{fr} {}",
+            f.d_rate
+        );
+        assert_eq!(f.d_strain, 0.0);
+        let held = st([1e-5, 300.0]);
+        assert_eq!(held.stress, st([0.01, 350.0]).stress);
+        assert_eq!(held.d_rate, 0.0);
     }
 
     /// A table sampled from a smooth law is that law at its nodes, linear between them in
