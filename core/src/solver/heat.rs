@@ -6,9 +6,7 @@
 //! Quinney 1934); the plastic work density `W_p = sum sigma_y dgamma` (J/m^3) is summed step
 //! by step, as a flow stress of rate and temperature has no closed-form work.
 
-use super::stress::PointOut;
 use super::Simulation;
-use crate::material::HenckyJ2;
 use crate::math::Real;
 use crate::scene::ThermalSpec;
 use serde::{Deserialize, Serialize};
@@ -88,24 +86,6 @@ impl Heating {
             inv_dt: if dt_prev > 0.0 { 1.0 / dt_prev } else { 0.0 },
         }
     }
-}
-
-/// The flow stress the yield test of a point reads (Pa): the law at the point's plastic
-/// strain, its least rate and, for a thermal scene, its temperature `temp_c`.
-pub(super) fn yield_flow(material: &HenckyJ2, eps_p: Real, temp_c: Option<Real>) -> Real {
-    match temp_c {
-        Some(t) if material.hardening.is_thermal() => material.hardening.flow(eps_p, 0.0, t).stress,
-        _ => material.hardening.flow_stress(eps_p),
-    }
-}
-
-/// The cached outputs of a point with plastic strain `eps_p` at temperature `temp_c`: the
-/// yield test's flow stress, and the closed-form plastic work of the linear and power laws.
-pub(super) fn point_out(material: &HenckyJ2, eps_p: Real, temp_c: Option<Real>) -> PointOut {
-    let mut out = PointOut::initial(material);
-    let flow = yield_flow(material, eps_p, temp_c);
-    out.set_plastic_strain(material, eps_p, flow, material.hardening.initial_yield());
-    out
 }
 
 /// The workpiece's temperatures over its integration points: least, largest and the mean

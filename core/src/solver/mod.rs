@@ -327,7 +327,7 @@ impl Simulation {
         self.contact.forget();
         for (p, (out, point)) in self.out.iter_mut().zip(&st.points).enumerate() {
             let temp = st.heat.as_ref().map(|h| h.temperature_c[p]);
-            *out = heat::point_out(&self.material, point.eps_p, temp);
+            *out = PointOut::at(&self.material, point.eps_p, temp);
         }
         self.st = st;
         Ok(())

@@ -4,10 +4,11 @@
 //! contact stage, the critical step and, if the scene asks, mass scaling.
 
 use super::energy::{kinetic_energy, Energy};
-use super::heat::{self, Heat};
+use super::heat::Heat;
 use super::layout::{Scatter, MAX_GROUP};
 use super::mass_scaling::{stiffness_bounds, Plan};
 use super::state::State;
+use super::stress::PointOut;
 use super::{Simulation, StageTimes};
 use crate::constraints::Constraints;
 use crate::contact::Contact;
@@ -87,7 +88,7 @@ impl Simulation {
         let (v, initial) = initial_motion(w.initial_velocity_m_per_s, constraints.as_ref(), &mass);
         let npts = points.positions.len();
         let stable_dt = h[0].min(h[1]) / wave_speed;
-        let out = heat::point_out(
+        let out = PointOut::at(
             &material,
             0.0,
             scene.thermal.as_ref().map(|t| t.initial_temperature_c),

@@ -41,6 +41,22 @@ impl PointOut {
         }
     }
 
+    /// The cached outputs of a point with plastic strain `eps_p` at temperature `temp_c`
+    /// (degrees C; `None` in an isothermal scene): the yield test's flow stress (the law at
+    /// the point's plastic strain, its least rate and temperature), and the closed-form
+    /// plastic work of the linear and power laws.
+    pub(super) fn at(material: &HenckyJ2, eps_p: Real, temp_c: Option<Real>) -> PointOut {
+        let mut out = PointOut::initial(material);
+        let flow = match temp_c {
+            Some(t) if material.hardening.is_thermal() => {
+                material.hardening.flow(eps_p, 0.0, t).stress
+            }
+            _ => material.hardening.flow_stress(eps_p),
+        };
+        out.set_plastic_strain(material, eps_p, flow, material.hardening.initial_yield());
+        out
+    }
+
     /// Caches the hardening law at `eps_p`, where the flow stress is `flow` and the
     /// initial yield stress `initial` (Pa).
     pub(super) fn set_plastic_strain(
