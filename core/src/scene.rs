@@ -128,6 +128,11 @@ pub struct ThermalSpec {
     /// Thermal conductivity `k` (W/(m K)); 0 (the default): no conduction in the workpiece.
     #[serde(default)]
     pub conductivity_w_per_m_k: Real,
+    /// Conductivity over temperature instead of the constant: `[[T (degrees C), k
+    /// (W/(m K))], ...]`, T increasing, linear between the points and held beyond them; each
+    /// integration point conducts at its own temperature.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub conductivity_by_temperature: Vec<[Real; 2]>,
     /// Temperature of the surroundings, for convection and radiation (degrees C); 20 by
     /// default.
     #[serde(default = "ambient")]
@@ -167,6 +172,7 @@ impl Scene {
     pub fn transfers_heat(&self) -> bool {
         self.thermal.as_ref().is_some_and(|t| {
             t.conductivity_w_per_m_k > 0.0
+                || !t.conductivity_by_temperature.is_empty()
                 || t.convection_w_per_m2_k > 0.0
                 || t.emissivity > 0.0
                 || self
@@ -180,6 +186,30 @@ impl Scene {
     /// friction. The heat stage then takes it into the particles it was made at.
     pub fn heats_by_friction(&self) -> bool {
         self.thermal.is_some() && self.tools.iter().any(|t| !t.friction.is_frictionless())
+    }
+}
+
+impl ThermalSpec {
+    /// The conductivity at `temp_c` (degrees C): the table's, linear between its points and
+    /// held beyond them, or the constant (W/(m K)).
+    pub fn conductivity_at(&self, temp_c: Real) -> Real {
+        let table = &self.conductivity_by_temperature;
+        match table.iter().position(|p| p[0] > temp_c) {
+            None => table.last().map_or(self.conductivity_w_per_m_k, |p| p[1]),
+            Some(0) => table[0][1],
+            Some(k) => {
+                let ([t0, k0], [t1, k1]) = (table[k - 1], table[k]);
+                k0 + (k1 - k0) * (temp_c - t0) / (t1 - t0)
+            }
+        }
+    }
+
+    /// The largest conductivity the scene can take (W/(m K)), for the stable heat step.
+    pub fn conductivity_max(&self) -> Real {
+        self.conductivity_by_temperature
+            .iter()
+            .map(|p| p[1])
+            .fold(self.conductivity_w_per_m_k, Real::max)
     }
 }
 

@@ -201,6 +201,22 @@ impl Scene {
             "thermal.conductivity_w_per_m_k",
             format!("must be zero or positive, got {}", t.conductivity_w_per_m_k),
         );
+        let table = &t.conductivity_by_temperature;
+        out.check(
+            table.is_empty() || t.conductivity_w_per_m_k == 0.0,
+            "thermal.conductivity_by_temperature",
+            "give the conductivity as a constant or as a table over temperature, not both".into(),
+        );
+        out.check(
+            table
+                .iter()
+                .all(|p| p[0].is_finite() && p[1].is_finite() && p[1] >= 0.0)
+                && table.windows(2).all(|w| w[0][0] < w[1][0]),
+            "thermal.conductivity_by_temperature",
+            format!(
+                "must be [[T, k], ...] with T increasing and k zero or positive, got {table:?}"
+            ),
+        );
         out.check(
             above_absolute_zero(t.ambient_temperature_c),
             "thermal.ambient_temperature_c",

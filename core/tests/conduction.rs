@@ -193,3 +193,56 @@ fn a_bar_on_a_hot_die_against_the_semi_infinite_solution() {
         }
     }
 }
+
+/// Steady conduction with a conductivity rising with temperature, `k = 200 (1 + 0.02 T)`
+/// W/(m K) as the table `[[0, 200], [100, 600]]`, between dies at 100 C and 0 C through
+/// 2e5 W/(m^2 K): with `Phi(T) = int_0^T k = 200 T + 2 T^2` the flux `q` is constant,
+/// `Phi(T_s0) - Phi(T_sL) = q L` with the surface temperatures `100 - q / h` and `q / h`, and
+/// the profile `Phi(T(y)) = Phi(T_s0) - q y` (the Kirchhoff transform); every point within
+/// 0.5 % of the 100 K (q4).
+#[test]
+fn steady_profile_with_a_conductivity_of_temperature() {
+    let (l, h) = (0.01, 2e5);
+    let phi = |t: f64| 200.0 * t + 2.0 * t * t;
+    let inverse = |p: f64| (-200.0 + (200.0f64 * 200.0 + 8.0 * p).sqrt()) / 4.0;
+    // q by bisection on Phi(100 - q/h) - Phi(q/h) - q L = 0.
+    let (mut lo, mut hi) = (0.0, 1e8);
+    for _ in 0..200 {
+        let q = 0.5 * (lo + hi);
+        if phi(100.0 - q / h) - phi(q / h) - q * l > 0.0 {
+            lo = q;
+        } else {
+            hi = q;
+        }
+    }
+    let q = 0.5 * (lo + hi);
+    let top = phi(100.0 - q / h);
+    let tau = l * l * RHO_C / 200.0;
+    let mut scene = block(
+        [0.004, l],
+        [9, 21],
+        (50.0, 100.0, Some(0.0)),
+        h,
+        "q4",
+        6.0 * tau,
+    );
+    let thermal = scene.thermal.as_mut().unwrap();
+    thermal.conductivity_w_per_m_k = 0.0;
+    thermal.conductivity_by_temperature = vec![[0.0, 200.0], [100.0, 600.0]];
+    let mut sim = Simulation::new(&scene).unwrap();
+    sim.run_to(scene.time.end_s, |_| {}).unwrap();
+    let temps = sim.point_temperature().unwrap();
+    let mut worst: f64 = 0.0;
+    for (p, x) in sim.point_positions().iter().enumerate() {
+        let exact = inverse(top - q * x[1]);
+        worst = worst.max((temps[p] - exact).abs() / 100.0);
+    }
+    assert!(
+        worst < 0.005,
+        "a point {:.3} % of the 100 K off the profile",
+        100.0 * worst
+    );
+    // Not the constant-conductivity line: the profile bows (T at mid-height above 50 C).
+    let mid = inverse(top - q * 0.005);
+    assert!(mid > 55.0, "{mid}");
+}

@@ -99,8 +99,9 @@ impl Simulation {
     }
 
     /// Conduction heat rates `R_I` (W) of the particles' temperatures `t` (step 2 of the
-    /// module doc), with `F` of the current displacement, or `F = I` when `deformed` is false.
-    fn conduction_rates(&self, t: &[Real], k: Real, deformed: bool) -> Vec<Real> {
+    /// module doc), each point conducting at `k(p)` (W/(m K)), with `F` of the current
+    /// displacement, or `F = I` when `deformed` is false.
+    fn conduction_rates(&self, t: &[Real], k: impl Fn(usize) -> Real, deformed: bool) -> Vec<Real> {
         let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
         let mut rates = vec![0.0; t.len()];
         for p in 0..self.weights.len() {
@@ -128,7 +129,7 @@ impl Simulation {
             let c11 = inv[0] * inv[0] + inv[1] * inv[1];
             let c12 = inv[0] * inv[2] + inv[1] * inv[3];
             let c22 = inv[2] * inv[2] + inv[3] * inv[3];
-            let kj = k * det2 * f33 * self.weights[p];
+            let kj = k(p) * det2 * f33 * self.weights[p];
             let q = [
                 kj * (c11 * g[0] + c12 * g[1]),
                 kj * (c12 * g[0] + c22 * g[1]),
@@ -147,7 +148,9 @@ impl Simulation {
         let Some(spec) = &self.scene.thermal else {
             return Ok(0.0);
         };
-        let k = spec.conductivity_w_per_m_k;
+        // The largest conductivity the table holds: the stable step's bound for any
+        // temperature.
+        let k = spec.conductivity_max();
         if k == 0.0 {
             return Ok(0.0);
         }
@@ -165,7 +168,7 @@ impl Simulation {
         let mut lambda = 0.0;
         for _ in 0..POWER_ITERATIONS {
             // A v = -C^-1 R(v); Rayleigh quotient in the C inner product.
-            let r = self.conduction_rates(&v, k, false);
+            let r = self.conduction_rates(&v, |_| k, false);
             let av: Vec<Real> = r.iter().zip(&cap).map(|(r, c)| -r / c).collect();
             let num: Real = av
                 .iter()
@@ -332,8 +335,14 @@ impl Simulation {
     fn heat_step(&mut self, at_most: Real, cap: &[Real]) -> Result<Real> {
         let spec = self.scene.thermal.clone().expect("a thermal scene");
         let t = &self.st.heat.as_ref().expect("a thermal scene").particle_c;
-        let mut rates = if spec.conductivity_w_per_m_k > 0.0 {
-            self.conduction_rates(t, spec.conductivity_w_per_m_k, true)
+        let mut rates = if spec.conductivity_max() > 0.0 {
+            let temps = &self
+                .st
+                .heat
+                .as_ref()
+                .expect("a thermal scene")
+                .temperature_c;
+            self.conduction_rates(t, |p| spec.conductivity_at(temps[p]), true)
         } else {
             vec![0.0; t.len()]
         };
