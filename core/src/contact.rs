@@ -114,8 +114,8 @@ pub struct Pairs<'a> {
 
 /// What [`Contact::carry`] needs to book the friction work of a thermal scene.
 pub struct Slip<'a> {
-    /// Each tool's velocity over the step (m/s).
-    pub tool_velocity: &'a [[Real; 2]],
+    /// The tools, at their velocity over the step.
+    pub tools: &'a [Tool],
     /// Friction work of each particle since the heat stage last took it (J).
     pub work: &'a mut [Real],
 }
@@ -566,7 +566,11 @@ impl Contact {
             if let Some(slip) = slip.as_mut() {
                 // The friction force's work against the realised slip, `-f_T . P_T (v_J -
                 // v_tool) dt_avg`: none while the particle sticks.
-                let vt = slip.tool_velocity[touched.pair as usize % tools];
+                let tool = &slip.tools[touched.pair as usize % tools];
+                let vt = [
+                    tool.axis[0] * tool.state.velocity,
+                    tool.axis[1] * tool.state.velocity,
+                ];
                 let rel = [vj[0] - vt[0], vj[1] - vt[1]];
                 let rn = rel[0] * n[0] + rel[1] * n[1];
                 let slide = [rel[0] - rn * n[0], rel[1] - rn * n[1]];

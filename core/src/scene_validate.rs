@@ -24,6 +24,11 @@ fn pos(x: Real) -> bool {
     x.is_finite() && x > 0.0
 }
 
+/// A finite temperature above absolute zero (degrees C).
+fn above_absolute_zero(t: Real) -> bool {
+    t.is_finite() && t > -273.15
+}
+
 /// A name usable in outputs and interfaces: non-empty, letters, digits and `_`.
 fn is_name(name: &str) -> bool {
     !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
@@ -195,7 +200,6 @@ impl Scene {
             }
             return;
         };
-        let above_absolute_zero = |x: Real| x.is_finite() && x > -273.15;
         out.check(
             t.conductivity_w_per_m_k.is_finite() && t.conductivity_w_per_m_k >= 0.0,
             "thermal.conductivity_w_per_m_k",
@@ -283,7 +287,7 @@ impl Scene {
                 .into(),
         );
         out.check(
-            t.initial_temperature_c.is_finite() && t.initial_temperature_c > -273.15,
+            above_absolute_zero(t.initial_temperature_c),
             "thermal.initial_temperature_c",
             format!(
                 "must be above absolute zero (-273.15), got {}",
@@ -537,6 +541,14 @@ fn check_rate_temperature_law(law: &Hardening, out: &mut Checks) {
     let key = |k: &str| format!("material.hardening.{k}");
     let increasing =
         |v: &[Real]| v.windows(2).all(|w| w[0] < w[1]) && v.iter().all(|x| x.is_finite());
+    // A fitted range of a positive quantity (strain, strain rate).
+    let positive_range = |out: &mut Checks, name: &str, range: &[Real; 2]| {
+        out.check(
+            pos(range[0]) && increasing(range),
+            &key(name),
+            format!("must be [least, largest] with 0 < least < largest, got {range:?}"),
+        );
+    };
     match law {
         Hardening::JohnsonCook {
             a_pa,
@@ -611,18 +623,8 @@ fn check_rate_temperature_law(law: &Hardening, out: &mut Checks) {
                     format!("must be finite, got {v}"),
                 );
             }
-            out.check(
-                pos(strain_range[0]) && increasing(strain_range),
-                &key("strain_range"),
-                format!("must be [least, largest] with 0 < least < largest, got {strain_range:?}"),
-            );
-            out.check(
-                pos(strain_rate_range_per_s[0]) && increasing(strain_rate_range_per_s),
-                &key("strain_rate_range_per_s"),
-                format!(
-                    "must be [least, largest] with 0 < least < largest, got {strain_rate_range_per_s:?}"
-                ),
-            );
+            positive_range(out, "strain_range", strain_range);
+            positive_range(out, "strain_rate_range_per_s", strain_rate_range_per_s);
             out.check(
                 increasing(temperature_range_c) && (*m9 == 0.0 || temperature_range_c[0] > 0.0),
                 &key("temperature_range_c"),
@@ -647,15 +649,9 @@ fn check_rate_temperature_law(law: &Hardening, out: &mut Checks) {
             ] {
                 out.check(pos(*v), &key(name), format!("must be positive, got {v}"));
             }
+            positive_range(out, "strain_rate_range_per_s", strain_rate_range_per_s);
             out.check(
-                pos(strain_rate_range_per_s[0]) && increasing(strain_rate_range_per_s),
-                &key("strain_rate_range_per_s"),
-                format!(
-                    "must be [least, largest] with 0 < least < largest, got {strain_rate_range_per_s:?}"
-                ),
-            );
-            out.check(
-                increasing(temperature_range_c) && temperature_range_c[0] > -273.15,
+                increasing(temperature_range_c) && above_absolute_zero(temperature_range_c[0]),
                 &key("temperature_range_c"),
                 format!(
                     "must be [least, largest] above absolute zero with least < largest, got {temperature_range_c:?}"

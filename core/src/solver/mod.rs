@@ -421,24 +421,9 @@ impl Simulation {
             c.project(&mut self.st.v, &self.mass);
         }
         if contact {
-            // The tools' velocities, for the friction work of a thermal scene (no allocation
-            // otherwise).
-            let books_friction = self
-                .st
-                .heat
-                .as_ref()
-                .is_some_and(|h| !h.friction_work.is_empty());
-            let tool_velocity: Vec<[Real; 2]> = match books_friction {
-                true => self
-                    .tools
-                    .iter()
-                    .map(|t| [t.axis[0] * t.state.velocity, t.axis[1] * t.state.velocity])
-                    .collect(),
-                false => Vec::new(),
-            };
             let slip = match &mut self.st.heat {
                 Some(h) if !h.friction_work.is_empty() => Some(Slip {
-                    tool_velocity: &tool_velocity,
+                    tools: &self.tools,
                     work: &mut h.friction_work,
                 }),
                 _ => None,
