@@ -8,7 +8,8 @@
 
 use crate::error::{Error, Result};
 pub use crate::friction::Friction;
-use crate::material::Hardening;
+use crate::material::thermal_properties::interpolate;
+use crate::material::{Hardening, HeatCapacity};
 use crate::math::Real;
 use crate::scene_keys::{key_line, syntax_message};
 use schemars::JsonSchema;
@@ -119,8 +120,15 @@ pub struct ThermalSpec {
     /// Initial temperature of the workpiece (degrees C).
     pub initial_temperature_c: Real,
     /// Specific heat capacity `c` (J/(kg K)), of the physical density: mass scaling adds
-    /// inertia, never heat capacity.
+    /// inertia, never heat capacity. 0 (the default) when `specific_heat_by_temperature`
+    /// gives it.
+    #[serde(default)]
     pub specific_heat_j_per_kg_k: Real,
+    /// Specific heat capacity over temperature instead of the constant: `[[T (degrees C), c
+    /// (J/(kg K))], ...]`, T increasing, linear between the points and held beyond them.
+    /// The heat held is the enthalpy `int c dT`, kept exactly as the capacity changes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub specific_heat_by_temperature: Vec<[Real; 2]>,
     /// Taylor-Quinney coefficient `beta` (-): the fraction of the plastic work that becomes
     /// heat (Taylor and Quinney 1934); 0.9 by default.
     #[serde(default = "taylor_quinney")]
@@ -193,15 +201,19 @@ impl ThermalSpec {
     /// The conductivity at `temp_c` (degrees C): the table's, linear between its points and
     /// held beyond them, or the constant (W/(m K)).
     pub fn conductivity_at(&self, temp_c: Real) -> Real {
-        let table = &self.conductivity_by_temperature;
-        match table.iter().position(|p| p[0] > temp_c) {
-            None => table.last().map_or(self.conductivity_w_per_m_k, |p| p[1]),
-            Some(0) => table[0][1],
-            Some(k) => {
-                let ([t0, k0], [t1, k1]) = (table[k - 1], table[k]);
-                k0 + (k1 - k0) * (temp_c - t0) / (t1 - t0)
-            }
+        if self.conductivity_by_temperature.is_empty() {
+            self.conductivity_w_per_m_k
+        } else {
+            interpolate(&self.conductivity_by_temperature, temp_c)
         }
+    }
+
+    /// The specific heat capacity, the constant or the table (J/(kg K)).
+    pub fn heat_capacity(&self) -> HeatCapacity {
+        HeatCapacity::new(
+            self.specific_heat_j_per_kg_k,
+            &self.specific_heat_by_temperature,
+        )
     }
 
     /// The largest conductivity the scene can take (W/(m K)), for the stable heat step.

@@ -29,6 +29,15 @@ fn above_absolute_zero(t: Real) -> bool {
     t.is_finite() && t > -273.15
 }
 
+/// A table over temperature `[[T (degrees C), value], ...]`: temperatures finite and
+/// increasing, each value finite and accepted by `value_ok`.
+fn over_temperature(table: &[[Real; 2]], value_ok: impl Fn(Real) -> bool) -> bool {
+    table
+        .iter()
+        .all(|p| p[0].is_finite() && p[1].is_finite() && value_ok(p[1]))
+        && table.windows(2).all(|w| w[0][0] < w[1][0])
+}
+
 /// A name usable in outputs and interfaces: non-empty, letters, digits and `_`.
 fn is_name(name: &str) -> bool {
     !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
@@ -212,10 +221,7 @@ impl Scene {
             "give the conductivity as a constant or as a table over temperature, not both".into(),
         );
         out.check(
-            table
-                .iter()
-                .all(|p| p[0].is_finite() && p[1].is_finite() && p[1] >= 0.0)
-                && table.windows(2).all(|w| w[0][0] < w[1][0]),
+            over_temperature(table, |k| k >= 0.0),
             "thermal.conductivity_by_temperature",
             format!(
                 "must be [[T, k], ...] with T increasing and k zero or positive, got {table:?}"
@@ -294,11 +300,29 @@ impl Scene {
                 t.initial_temperature_c
             ),
         );
-        out.check(
-            pos(t.specific_heat_j_per_kg_k),
-            "thermal.specific_heat_j_per_kg_k",
-            format!("must be positive, got {}", t.specific_heat_j_per_kg_k),
-        );
+        let table = &t.specific_heat_by_temperature;
+        if table.is_empty() {
+            out.check(
+                pos(t.specific_heat_j_per_kg_k),
+                "thermal.specific_heat_j_per_kg_k",
+                format!(
+                    "must be positive (or give specific_heat_by_temperature), got {}",
+                    t.specific_heat_j_per_kg_k
+                ),
+            );
+        } else {
+            out.check(
+                t.specific_heat_j_per_kg_k == 0.0,
+                "thermal.specific_heat_by_temperature",
+                "give the specific heat as a constant or as a table over temperature, not both"
+                    .into(),
+            );
+            out.check(
+                over_temperature(table, pos),
+                "thermal.specific_heat_by_temperature",
+                format!("must be [[T, c], ...] with T increasing and c positive, got {table:?}"),
+            );
+        }
         out.check(
             t.taylor_quinney.is_finite() && (0.0..=1.0).contains(&t.taylor_quinney),
             "thermal.taylor_quinney",

@@ -10,12 +10,14 @@
 //! points carry `T_p = sum_I N_I(X_p) T_I` as of the last stage plus what plastic work added
 //! since, point by point at every mechanical step ([`super::heat`]), which their flow
 //! stress reads. A heat stage:
-//! 1. lumped capacities `C_I = sum_p N_I(X_p) rho_0 c w_p` (J/K, physical density: mass
-//!    scaling never enters), and the points' gains since the last stage into the particles,
-//!    `T_I += sum_p N_I(X_p) rho_0 c w_p (T_p - sum_J N_J(X_p) T_J) / C_I` (the heat kept
-//!    exactly: `sum_I C_I dT_I = sum_p rho_0 c w_p dT_p`), with the friction work the
-//!    contact stage booked at each particle, its share `thermal.friction_heat_to_workpiece`
-//!    (the tool takes the rest);
+//! 1. lumped thermal masses `M_I = sum_p N_I(X_p) rho_0 w_p` (kg, physical density: mass
+//!    scaling never enters), a particle's capacity `M_I c(T_I)`; the points' gains since
+//!    the last stage into the particles, the heat `Q_I = sum_p N_I(X_p) rho_0 w_p (h(T_p) -
+//!    h(sum_J N_J(X_p) T_J))` with `h(T) = int c dT` the specific enthalpy (`c dT` for a
+//!    constant capacity), and `T_I = h^-1(h(T_I) + Q_I / M_I)` (the heat kept exactly:
+//!    `sum_I M_I dh_I = sum_p rho_0 w_p dh_p`), with the friction work the contact stage
+//!    booked at each particle, its share `thermal.friction_heat_to_workpiece` (the tool
+//!    takes the rest);
 //! 2. conduction in the reference configuration (total Lagrangian, as the stress stage),
 //!    `R_I = - sum_p w_p grad_X N_I(X_p) . (k J C^-1 grad_X T)(X_p)` (W) with `grad_X T =
 //!    sum_I T_I grad_X N_I`, `C^-1 = F^-1 F^-T` and `J = det F` (`F_33` the hoop stretch in
@@ -27,15 +29,17 @@
 //!    to the surroundings `h_c (T_amb - T_I) A_I + eps sigma (T_amb^4 - T_I^4) A_I` (kelvin
 //!    in the radiation); segments on a constrained edge (a symmetry plane) are adiabatic,
 //!    and on the axis of an axisymmetric body their area vanishes;
-//! 4. `T_I += dt R_I / C_I`, and the points take `T_p = sum_I N_I(X_p) T_I`, which holds the
-//!    particles' heat exactly (`sum_p rho_0 c w_p T_p = sum_I C_I T_I`, as
-//!    `sum_p N_I(X_p) rho_0 c w_p = C_I`); steps 2-4 repeat when the elapsed time holds more
-//!    than one stable heat step.
+//! 4. `T_I = h^-1(h(T_I) + dt R_I / M_I)` (`T_I += dt R_I / (M_I c)` for a constant
+//!    capacity), and the points take `T_p = h^-1(sum_I N_I(X_p) h(T_I))` (`sum_I N_I T_I`),
+//!    which holds the particles' heat exactly (`sum_p rho_0 w_p h(T_p) = sum_I M_I h(T_I)`,
+//!    as `sum_p N_I(X_p) rho_0 w_p = M_I`); steps 2-4 repeat when the elapsed time holds
+//!    more than one stable heat step.
 //!
 //! The stable step: conduction's `2 / lambda_max(C^-1 K)`, the largest eigenvalue from power
-//! iteration on the undeformed body at setup, scaled by `(h_min0 / h_min)^2` as the
+//! iteration on the undeformed body at setup (the largest conductivity and least capacity
+//! the scene's tables hold), scaled by `(h_min0 / h_min)^2` as the
 //! smallest deformed cell altitude shrinks (the mechanical critical step scales with
-//! `h_min`); a surface particle's `C_I / (h A_I)` (the radiation linearised,
+//! `h_min`); a surface particle's `M_I c(T_I) / (h A_I)` (the radiation linearised,
 //! `4 eps sigma T^3`); times `thermal.dt_safety`. Within it, the step is the accuracy's:
 //! the first heat stage runs after the first mechanical step, and each next step is the
 //! last one scaled by `thermal.max_change_per_step_k` over the largest change of a particle's
@@ -44,6 +48,7 @@
 
 use super::Simulation;
 use crate::error::{Error, Result};
+use crate::material::HeatCapacity;
 use crate::math::Real;
 use crate::scene::Kinematics;
 use std::f64::consts::PI;
@@ -64,36 +69,42 @@ fn kelvin(t_c: Real) -> Real {
 const POWER_ITERATIONS: usize = 60;
 
 impl Simulation {
-    /// Lumped heat capacities `C_I = sum_p N_I(X_p) rho_c w_p` (J/K). An error names a
-    /// particle whose capacity is not positive.
-    fn capacities(&self, rho_c: Real) -> Result<Vec<Real>> {
-        let mut cap = vec![0.0; self.ref_pos.len()];
+    /// Lumped thermal masses `M_I = sum_p N_I(X_p) rho_0 w_p` (kg, the physical density):
+    /// a particle's heat capacity is `M_I c(T_I)`. An error names a particle whose mass is
+    /// not positive.
+    fn thermal_masses(&self) -> Result<Vec<Real>> {
+        let rho = self.scene.material.density_kg_per_m3;
+        let mut mass = vec![0.0; self.ref_pos.len()];
         for (p, &w) in self.weights.iter().enumerate() {
             for (i, [n, _, _]) in self.scatter.point_row(p) {
-                cap[i] += n * w * rho_c;
+                mass[i] += n * w * rho;
             }
         }
-        match cap.iter().position(|&c| c.is_nan() || c <= 0.0) {
+        match mass.iter().position(|&m| m.is_nan() || m <= 0.0) {
             Some(i) => Err(Error::Diverged {
                 step: self.st.step,
                 time: self.st.time,
                 what: format!(
-                    "heat capacity of particle {i} at {:?} m is {:.3e} J/K, not positive",
-                    self.original[i], cap[i]
+                    "thermal mass of particle {i} at {:?} m is {:.3e} kg, not positive",
+                    self.original[i], mass[i]
                 ),
             }),
-            None => Ok(cap),
+            None => Ok(mass),
         }
     }
 
-    /// The particles' temperatures `t` interpolated at the points, `sum_I N_I(X_p) t_I`.
+    /// The workpiece's heat capacity.
+    fn capacity(&self) -> &HeatCapacity {
+        self.heat_capacity.as_ref().expect("a thermal scene")
+    }
+
+    /// The particles' temperatures `t` interpolated at the points, `sum_I N_I(X_p) t_I`
+    /// (in enthalpy with a capacity over temperature, [`HeatCapacity::interpolate`]).
     fn at_points(&self, t: &[Real]) -> Vec<Real> {
+        let capacity = self.capacity();
         (0..self.weights.len())
             .map(|p| {
-                self.scatter
-                    .point_row(p)
-                    .map(|(i, [n, _, _])| n * t[i])
-                    .sum()
+                capacity.interpolate(self.scatter.point_row(p).map(|(i, [n, _, _])| (n, t[i])))
             })
             .collect()
     }
@@ -154,8 +165,9 @@ impl Simulation {
         if k == 0.0 {
             return Ok(0.0);
         }
-        let rho_c = self.scene.material.density_kg_per_m3 * spec.specific_heat_j_per_kg_k;
-        let cap = self.capacities(rho_c)?;
+        // The least capacity: the stable step's bound for any temperature.
+        let least = self.capacity().least();
+        let cap: Vec<Real> = self.thermal_masses()?.iter().map(|m| m * least).collect();
         let mut v: Vec<Real> = (0..cap.len())
             .map(|j| {
                 if (j % self.nx + j / self.nx) % 2 == 0 {
@@ -190,8 +202,9 @@ impl Simulation {
     /// The boundary ring's surface flows (W) into each ring particle (step 3 of the module
     /// doc) at the particles' temperatures `t`, with the heat flow into each tool (W, the
     /// negative of what the workpiece gains from it) and into the surroundings (W), and the
-    /// surface's stable step bound `min C_I / (h A_I)` (s).
-    fn surface_flows(&self, t: &[Real], cap: &[Real]) -> SurfaceFlows {
+    /// surface's stable step bound `min M_I c(T_I) / (h A_I)` (s).
+    fn surface_flows(&self, t: &[Real], mass: &[Real]) -> SurfaceFlows {
+        let capacity = self.capacity();
         let spec = self.scene.thermal.as_ref().expect("a thermal scene");
         let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
         let depth = self.scene.model.depth_m;
@@ -212,11 +225,11 @@ impl Simulation {
         for k in 0..n {
             let j = ring[k] as usize;
             // The field's temperature at the particle, `sum_I N_I(X_J) T_I`.
-            let tj: Real = self
-                .nodal
-                .row(j)
-                .map(|e| self.nodal.n[e] * t[self.nodal.index[e] as usize])
-                .sum();
+            let tj = capacity.interpolate(
+                self.nodal
+                    .row(j)
+                    .map(|e| (self.nodal.n[e], t[self.nodal.index[e] as usize])),
+            );
             // The particle's share of the ring, and of it what lies along a tool it touches
             // (each half segment projected on the tool's tangent; the rest is free surface).
             let touched = self
@@ -262,7 +275,9 @@ impl Simulation {
             }
             out.into[k] = flow;
             if conductance > 0.0 {
-                out.step_bound = out.step_bound.min(cap[j] / conductance);
+                out.step_bound = out
+                    .step_bound
+                    .min(mass[j] * capacity.at(t[j]) / conductance);
             }
         }
         out
@@ -281,32 +296,33 @@ impl Simulation {
             return Ok(());
         }
         let elapsed = std::mem::take(&mut heat.since_s);
-        let spec = self.scene.thermal.as_ref().expect("a thermal scene");
-        let rho_c = self.scene.material.density_kg_per_m3 * spec.specific_heat_j_per_kg_k;
-        let cap = self.capacities(rho_c)?;
-        self.gather_point_heat(&cap, rho_c);
+        let mass = self.thermal_masses()?;
+        self.gather_point_heat(&mass);
         let mut done = 0.0;
         while done < elapsed {
-            done += self.heat_step(elapsed - done, &cap)?;
+            done += self.heat_step(elapsed - done, &mass)?;
         }
         Ok(())
     }
 
-    /// What the points gained since the last heat stage (plastic work), `dT_p = T_p -
-    /// sum_I N_I T_I`, into the particles: `T_I += sum_p N_I rho_c w_p dT_p / C_I`, the
-    /// heat kept exactly; and the workpiece's share of the friction work done at each
-    /// particle since then, `T_J += phi W_J / C_J`.
-    fn gather_point_heat(&mut self, cap: &[Real], rho_c: Real) {
+    /// What the points gained since the last heat stage (plastic work), the heat `dQ_p =
+    /// rho_0 w_p (h(T_p) - h(sum_I N_I T_I))` (J; `rho_0 c w_p dT_p` for a constant
+    /// capacity), into the particles: `Q_I = sum_p N_I dQ_p`, the heat kept exactly; with
+    /// the workpiece's share of the friction work done at each particle since then, `Q_J +=
+    /// phi W_J`; each particle heated by `Q_I / M_I` (J/kg).
+    fn gather_point_heat(&mut self, mass: &[Real]) {
         let heat = self.st.heat.as_ref().expect("a thermal scene");
         let base = self.at_points(&heat.particle_c);
-        let mut gain = vec![0.0; cap.len()];
+        let rho = self.scene.material.density_kg_per_m3;
+        let capacity = self.heat_capacity.clone().expect("a thermal scene");
+        let mut gain = vec![0.0; mass.len()];
         for (p, (&w, (&t, b))) in self
             .weights
             .iter()
             .zip(heat.temperature_c.iter().zip(base))
             .enumerate()
         {
-            let dq = rho_c * w * (t - b);
+            let dq = rho * w * capacity.heat_between(b, t);
             for (i, [n, _, _]) in self.scatter.point_row(p) {
                 gain[i] += n * dq;
             }
@@ -323,8 +339,8 @@ impl Simulation {
             heat.friction_heat_j += *w;
             *g += share * std::mem::take(w);
         }
-        for ((t, g), c) in heat.particle_c.iter_mut().zip(gain).zip(cap) {
-            *t += g / c;
+        for ((t, g), m) in heat.particle_c.iter_mut().zip(gain).zip(mass) {
+            *t = capacity.heat(*t, g / m);
         }
     }
 
@@ -332,7 +348,7 @@ impl Simulation {
     /// the module doc): returns the step taken, the stable step's share of it when that is
     /// shorter. Updates the heat step for the next trigger and the yield test's flow
     /// stresses of the laws of temperature.
-    fn heat_step(&mut self, at_most: Real, cap: &[Real]) -> Result<Real> {
+    fn heat_step(&mut self, at_most: Real, mass: &[Real]) -> Result<Real> {
         let spec = self.scene.thermal.clone().expect("a thermal scene");
         let t = &self.st.heat.as_ref().expect("a thermal scene").particle_c;
         let mut rates = if spec.conductivity_max() > 0.0 {
@@ -346,7 +362,7 @@ impl Simulation {
         } else {
             vec![0.0; t.len()]
         };
-        let surface = self.surface_flows(t, cap);
+        let surface = self.surface_flows(t, mass);
         for (k, &j) in self.boundary.iter().enumerate() {
             rates[j as usize] += surface.into[k];
         }
@@ -369,10 +385,11 @@ impl Simulation {
         }
         let mut particle = t.clone();
         let mut largest: Real = 0.0;
-        for ((t, r), c) in particle.iter_mut().zip(&rates).zip(cap) {
-            let change = dt * r / c;
-            largest = largest.max(change.abs());
-            *t += change;
+        let capacity = self.capacity();
+        for ((t, r), m) in particle.iter_mut().zip(&rates).zip(mass) {
+            let heated = capacity.heat(*t, dt * r / m);
+            largest = largest.max((heated - *t).abs());
+            *t = heated;
         }
         // The next step: this one scaled by how far the largest change stayed below the
         // accuracy limit, at most doubled or halved, within the stable step.

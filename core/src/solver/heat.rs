@@ -3,10 +3,13 @@
 //! `dT_p = beta sigma_y dgamma / (rho_0 c)` (K), with `sigma_y` the flow stress of the
 //! rate-consistent return and `rho_0` the physical density (mass scaling never enters), so
 //! that `rho_0 c (T_p - T_0) = beta W_p` point by point (adiabatic heating, Taylor and
-//! Quinney 1934); the plastic work density `W_p = sum sigma_y dgamma` (J/m^3) is summed step
-//! by step, as a flow stress of rate and temperature has no closed-form work.
+//! Quinney 1934); with a capacity over temperature the enthalpy takes it, `rho_0 (h(T_p) -
+//! h(T_0)) = beta W_p`, `h = int c dT`. The plastic work density `W_p = sum sigma_y dgamma`
+//! (J/m^3) is summed step by step, as a flow stress of rate and temperature has no
+//! closed-form work (the linear and power laws add the difference of theirs).
 
 use super::Simulation;
+use crate::material::HeatCapacity;
 use crate::math::Real;
 use crate::scene::ThermalSpec;
 use serde::{Deserialize, Serialize};
@@ -70,21 +73,38 @@ impl Heat {
     }
 }
 
-/// What the stress stage needs to heat the points: `beta / (rho_0 c)` (K m^3/J) and `1/dt`
-/// (1/s) of the step the strain increment was taken over (0 before the first step).
+/// What the stress stage needs to heat the points: `beta / rho_0` (m^3/kg), the heat
+/// capacity, and `1/dt` (1/s) of the step the strain increment was taken over (0 before the
+/// first step). A point's plastic work `dW` (J/m^3) takes it from `T` to
+/// `T + beta dW / (rho_0 c)`, or `h^-1(h(T) + beta dW / rho_0)` with a capacity over
+/// temperature.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Heating {
-    pub(super) beta_over_rho_c: Real,
+pub(super) struct Heating<'a> {
+    pub(super) beta_over_rho: Real,
+    pub(super) capacity: &'a HeatCapacity,
     pub(super) inv_dt: Real,
 }
 
-impl Heating {
-    /// From the scene's thermal section and physical density `rho_0` (kg/m^3).
-    pub(super) fn new(spec: &ThermalSpec, density: Real, dt_prev: Real) -> Heating {
+impl<'a> Heating<'a> {
+    /// From the scene's thermal section, heat capacity and physical density `rho_0`
+    /// (kg/m^3).
+    pub(super) fn new(
+        spec: &ThermalSpec,
+        capacity: &'a HeatCapacity,
+        density: Real,
+        dt_prev: Real,
+    ) -> Heating<'a> {
         Heating {
-            beta_over_rho_c: spec.taylor_quinney / (density * spec.specific_heat_j_per_kg_k),
+            beta_over_rho: spec.taylor_quinney / density,
+            capacity,
             inv_dt: if dt_prev > 0.0 { 1.0 / dt_prev } else { 0.0 },
         }
+    }
+
+    /// The temperature (degrees C) of a point at `t` after plastic work `dw` (J/m^3).
+    #[inline]
+    pub(super) fn heated(&self, t: Real, dw: Real) -> Real {
+        self.capacity.heat(t, self.beta_over_rho * dw)
     }
 }
 
@@ -241,18 +261,20 @@ impl Simulation {
         )
     }
 
-    /// Heat held in the workpiece above its initial temperature, `sum_p rho_0 c w_p (T_p -
-    /// T_0)` (J); `None` for an isothermal scene. Equal to [`Simulation::plastic_heat`]
-    /// while no heat crosses the surface.
+    /// Heat held in the workpiece above its initial temperature, `sum_p rho_0 w_p (h(T_p) -
+    /// h(T_0))` (J, `h` the specific enthalpy, `c (T_p - T_0)` for a constant capacity);
+    /// `None` for an isothermal scene. Equal to [`Simulation::plastic_heat`] while no heat
+    /// crosses the surface.
     pub fn heat_content(&self) -> Option<Real> {
         let (h, spec) = (self.st.heat.as_ref()?, self.scene.thermal.as_ref()?);
-        let rho_c = self.scene.material.density_kg_per_m3 * spec.specific_heat_j_per_kg_k;
+        let capacity = self.heat_capacity.as_ref()?;
+        let t0 = spec.initial_temperature_c;
         Some(
-            rho_c
+            self.scene.material.density_kg_per_m3
                 * h.temperature_c
                     .iter()
                     .zip(&self.weights)
-                    .map(|(t, w)| w * (t - spec.initial_temperature_c))
+                    .map(|(&t, w)| w * capacity.heat_between(t0, t))
                     .sum::<Real>(),
         )
     }

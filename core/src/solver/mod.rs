@@ -65,7 +65,7 @@ use crate::constraints::Constraints;
 use crate::contact::{Body, Contact, Pairs, Slip};
 use crate::error::{Error, Result};
 use crate::integration::PointSet;
-use crate::material::{HenckyJ2, PointState};
+use crate::material::{HeatCapacity, HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::{Kinematics, Scene};
@@ -171,6 +171,8 @@ pub struct Simulation {
     /// Conduction's largest eigenvalue `lambda_max(C^-1 K)` on the undeformed body (1/s), 0
     /// without conduction (`conduction.rs`).
     conduction_lambda0: Real,
+    /// The workpiece's specific heat capacity in a thermal scene.
+    heat_capacity: Option<HeatCapacity>,
     /// Wall time per stage since setup.
     pub times: StageTimes,
 }
@@ -607,9 +609,19 @@ impl Simulation {
             axi: self.scene.model.kinematics == Kinematics::Axisymmetric,
             spacing: self.spacing,
             avx2: self.simd && has_avx2(),
-            heating: self.scene.thermal.as_ref().map(|spec| {
-                heat::Heating::new(spec, self.scene.material.density_kg_per_m3, self.st.dt_prev)
-            }),
+            heating: self
+                .scene
+                .thermal
+                .as_ref()
+                .zip(self.heat_capacity.as_ref())
+                .map(|(spec, capacity)| {
+                    heat::Heating::new(
+                        spec,
+                        capacity,
+                        self.scene.material.density_kg_per_m3,
+                        self.st.dt_prev,
+                    )
+                }),
         };
         let sums = stress::stage(
             &self.team,

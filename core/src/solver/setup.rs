@@ -170,6 +170,7 @@ impl Simulation {
             transfers_heat: scene.transfers_heat(),
             adiabatic_edge: adiabatic_edges(scene),
             conduction_lambda0: 0.0,
+            heat_capacity: scene.thermal.as_ref().map(|t| t.heat_capacity()),
             scene: scene.clone(),
             times: StageTimes {
                 setup: t0.elapsed(),

@@ -117,7 +117,7 @@ struct StressContext<'a> {
     /// `sigma_y(0)` (Pa), for the plastic work.
     initial_yield: Real,
     /// Adiabatic heating of a thermal scene.
-    heating: Option<Heating>,
+    heating: Option<Heating<'a>>,
 }
 
 impl StressContext<'_> {
@@ -393,13 +393,28 @@ impl StressContext<'_> {
                     Some((h, temp, work, rate)) => {
                         *rate = (state.eps_p - eps_p) * h.inv_dt;
                         if state.eps_p != eps_p {
-                            // W_p += dW; T_p += beta dW / (rho_0 c); the yield test's flow
-                            // stress at the new strain and temperature.
-                            let dw = batch.plastic_work[l];
+                            // W_p += dW; T_p += beta dW / (rho_0 c) (in enthalpy); the yield test's flow
+                            // stress at the new strain and temperature. The linear and
+                            // power laws' step work is the difference of their closed form.
+                            let thermal = self.material.hardening.is_thermal();
+                            let dw = if thermal {
+                                batch.plastic_work[l]
+                            } else {
+                                let before = out.plastic_work;
+                                out.set_plastic_strain(
+                                    self.material,
+                                    state.eps_p,
+                                    batch.flow_stress[l],
+                                    self.initial_yield,
+                                );
+                                out.plastic_work - before
+                            };
                             *work += dw;
-                            *temp += h.beta_over_rho_c * dw;
-                            out.flow_stress =
-                                self.material.hardening.flow(state.eps_p, 0.0, *temp).stress;
+                            *temp = h.heated(*temp, dw);
+                            if thermal {
+                                out.flow_stress =
+                                    self.material.hardening.flow(state.eps_p, 0.0, *temp).stress;
+                            }
                         }
                         *work
                     }
@@ -479,7 +494,7 @@ pub(super) struct Inputs<'a> {
     /// Run the AVX2 build (the CPU must have it, [`has_avx2`]).
     pub avx2: bool,
     /// Adiabatic heating of a thermal scene.
-    pub heating: Option<Heating>,
+    pub heating: Option<Heating<'a>>,
 }
 
 /// What the stress stage sums over all points.
