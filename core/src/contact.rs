@@ -110,6 +110,10 @@ pub struct Pairs<'a> {
     pub pressure: &'a mut [Real],
     /// Pressure stations per tool (0: none).
     pub stations: usize,
+    /// Normal impulse of the contact forces on each particle, `sum |f_n| dt_avg` (N s),
+    /// added to by the stage (empty: not booked); the heat stage takes it for the contact
+    /// pressure of a heat transfer coefficient over pressure.
+    pub impulse: &'a mut [Real],
 }
 
 /// What [`Contact::carry`] needs to book the friction work of a thermal scene.
@@ -397,6 +401,7 @@ impl Contact {
             stick,
             pressure,
             stations,
+            impulse,
         } = pairs;
         pressure.fill(0.0);
         self.touched.clear();
@@ -466,12 +471,15 @@ impl Contact {
                 }
                 tool.state.force[0] -= f[0];
                 tool.state.force[1] -= f[1];
+                let normal = f[0] * pen.normal[0] + f[1] * pen.normal[1];
                 if stations > 0 {
                     // The normal part of the penalty force, at the station of the closest
                     // point of the tool's polyline.
-                    let normal = f[0] * pen.normal[0] + f[1] * pen.normal[1];
                     let s = tool.station(x, stations);
                     pressure[t * stations + s] += normal;
+                }
+                if let Some(i) = impulse.get_mut(j) {
+                    *i += normal.abs() * dt_avg;
                 }
                 tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
                 spread(&mut self.force, nodal, j, f);
@@ -505,7 +513,11 @@ impl Contact {
                     ((corner.segment + 1) % ring, corner.along),
                 ] {
                     let fk = [w * f[0], w * f[1]];
-                    spread(&mut self.force, nodal, self.candidates[k] as usize, fk);
+                    let j = self.candidates[k] as usize;
+                    spread(&mut self.force, nodal, j, fk);
+                    if let Some(i) = impulse.get_mut(j) {
+                        *i += w * f[0].hypot(f[1]) * dt_avg;
+                    }
                     tool_work += dt_avg * (fk[0] * vt[0] + fk[1] * vt[1]);
                 }
                 tool.state.force[0] -= f[0];

@@ -167,6 +167,7 @@ mod tests {
                 fill_points: Vec::new(),
                 temperature_c: None,
                 heat_transfer_w_per_m2_k: 0.0,
+                heat_transfer_by_pressure: Vec::new(),
             },
             0.3,
         )

@@ -183,10 +183,7 @@ impl Scene {
                 || !t.conductivity_by_temperature.is_empty()
                 || t.convection_w_per_m2_k > 0.0
                 || t.emissivity > 0.0
-                || self
-                    .tools
-                    .iter()
-                    .any(|tool| tool.heat_transfer_w_per_m2_k > 0.0)
+                || self.tools.iter().any(ToolSpec::transfers_heat)
         }) || self.heats_by_friction()
     }
 
@@ -194,6 +191,16 @@ impl Scene {
     /// friction. The heat stage then takes it into the particles it was made at.
     pub fn heats_by_friction(&self) -> bool {
         self.thermal.is_some() && self.tools.iter().any(|t| !t.friction.is_frictionless())
+    }
+
+    /// Whether a tool's heat transfer depends on the contact pressure: the contact stage
+    /// then books each particle's normal impulse for the heat stage.
+    pub fn transfers_heat_by_pressure(&self) -> bool {
+        self.thermal.is_some()
+            && self
+                .tools
+                .iter()
+                .any(|t| !t.heat_transfer_by_pressure.is_empty())
     }
 }
 
@@ -457,6 +464,12 @@ pub struct ToolSpec {
     /// crosses.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub heat_transfer_w_per_m2_k: Real,
+    /// Heat transfer coefficient rising with the contact pressure instead of the constant:
+    /// `[[p (Pa), h (W/(m^2 K))], ...]`, p increasing, linear between the points and held
+    /// beyond them. A particle's pressure is its normal contact force on the tool, averaged
+    /// over the time since the last heat stage, over its share of the contact.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub heat_transfer_by_pressure: Vec<[Real; 2]>,
     /// Named points of the tool's surface (cavity corners) whose filling is reported: when
     /// the material first reached each, and which stay empty (underfill).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -465,6 +478,23 @@ pub struct ToolSpec {
 
 fn default_separation() -> bool {
     true
+}
+
+impl ToolSpec {
+    /// Whether heat crosses the contact with this tool: a transfer coefficient, constant or
+    /// over pressure.
+    pub fn transfers_heat(&self) -> bool {
+        self.heat_transfer_w_per_m2_k > 0.0 || !self.heat_transfer_by_pressure.is_empty()
+    }
+
+    /// The transfer coefficient (W/(m^2 K)) at contact pressure `p` (Pa).
+    pub fn heat_transfer_at(&self, p: Real) -> Real {
+        if self.heat_transfer_by_pressure.is_empty() {
+            self.heat_transfer_w_per_m2_k
+        } else {
+            interpolate(&self.heat_transfer_by_pressure, p)
+        }
+    }
 }
 
 fn is_zero(x: &Real) -> bool {

@@ -29,9 +29,9 @@ fn above_absolute_zero(t: Real) -> bool {
     t.is_finite() && t > -273.15
 }
 
-/// A table over temperature `[[T (degrees C), value], ...]`: temperatures finite and
-/// increasing, each value finite and accepted by `value_ok`.
-fn over_temperature(table: &[[Real; 2]], value_ok: impl Fn(Real) -> bool) -> bool {
+/// A table `[[x, value], ...]` (over temperature, pressure): its `x` finite and increasing,
+/// each value finite and accepted by `value_ok`.
+fn increasing_table(table: &[[Real; 2]], value_ok: impl Fn(Real) -> bool) -> bool {
     table
         .iter()
         .all(|p| p[0].is_finite() && p[1].is_finite() && value_ok(p[1]))
@@ -221,7 +221,7 @@ impl Scene {
             "give the conductivity as a constant or as a table over temperature, not both".into(),
         );
         out.check(
-            over_temperature(table, |k| k >= 0.0),
+            increasing_table(table, |k| k >= 0.0),
             "thermal.conductivity_by_temperature",
             format!(
                 "must be [[T, k], ...] with T increasing and k zero or positive, got {table:?}"
@@ -275,8 +275,24 @@ impl Scene {
                 &key("heat_transfer_w_per_m2_k"),
                 format!("must be zero or positive, got {h}"),
             );
+            let table = &tool.heat_transfer_by_pressure;
             out.check(
-                h == 0.0 || tool.temperature_c.is_some(),
+                table.is_empty() || h == 0.0,
+                &key("heat_transfer_by_pressure"),
+                "give the heat transfer coefficient as a constant or as a table over pressure, \
+                 not both"
+                    .into(),
+            );
+            out.check(
+                increasing_table(table, |h| h >= 0.0),
+                &key("heat_transfer_by_pressure"),
+                format!(
+                    "must be [[p (Pa), h (W/(m^2 K))], ...] with p increasing and h zero or \
+                     positive, got {table:?}"
+                ),
+            );
+            out.check(
+                !tool.transfers_heat() || tool.temperature_c.is_some(),
                 &key("heat_transfer_w_per_m2_k"),
                 format!(
                     "heat transfer to tool {} needs its temperature_c",
@@ -318,7 +334,7 @@ impl Scene {
                     .into(),
             );
             out.check(
-                over_temperature(table, pos),
+                increasing_table(table, pos),
                 "thermal.specific_heat_by_temperature",
                 format!("must be [[T, c], ...] with T increasing and c positive, got {table:?}"),
             );

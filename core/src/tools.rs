@@ -814,6 +814,7 @@ mod tests {
             fill_points: Vec::new(),
             temperature_c: None,
             heat_transfer_w_per_m2_k: 0.0,
+            heat_transfer_by_pressure: Vec::new(),
         };
         let mut t = Tool::new(&spec, 0.1);
         assert_eq!(t.velocity_at(-1.0), 0.0);

@@ -340,3 +340,73 @@ fn a_bar_on_a_hot_die_with_a_capacity_of_temperature() {
         );
     }
 }
+
+/// A transfer coefficient over contact pressure, `h = 5e3 W/(m^2 K)` at 0 rising to 9.5e4 at
+/// 200 MPa (the table `[[0, 5e3], [2e8, 9.5e4]]`): the 40 mm bar at 20 C (perfectly plastic
+/// at 100 MPa, plane strain) on the bottom die at 520 C, pressed by a cold top die (no heat
+/// across it) at 2 mm/s, 2 % of its height over 0.4 s. The bar yields (frictionless dies)
+/// at a pressure between 100 MPa and `2 / sqrt(3)` of it; at 0.2 and 0.4 s, with `p` the
+/// bottom die's force over the bar's width, every point lies within 2 % of the 500 K step of the
+/// semi-infinite solution with the coefficient at that pressure (q4), and more than 2 % off
+/// the solution at the table's zero-pressure value.
+#[test]
+fn a_transfer_coefficient_of_the_contact_pressure() {
+    let (l, w) = (0.04, 0.004);
+    let mut scene = block([w, l], [9, 81], (20.0, 520.0, Some(20.0)), 1.0, "q4", 0.4);
+    scene.time.mass_scaling = Some(rkforge_core::scene::MassScaling {
+        factor: Some(1e4),
+        target_dt_s: None,
+    });
+    let bottom = &mut scene.tools[0];
+    bottom.heat_transfer_w_per_m2_k = 0.0;
+    bottom.heat_transfer_by_pressure = vec![[0.0, 5e3], [2e8, 9.5e4]];
+    let top = &mut scene.tools[1];
+    top.heat_transfer_w_per_m2_k = 0.0;
+    top.motion = rkforge_core::scene::Motion::Constant {
+        velocity_m_per_s: 0.02 * l / 0.4,
+    };
+    // The bar's left edge a symmetry plane: a half of a bar twice as wide, which cannot
+    // buckle (the free bar, ten times as tall as wide between frictionless dies, does).
+    scene.constraints = vec![rkforge_core::scene::ConstraintSpec {
+        edge: rkforge_core::scene::Edge::XMin,
+        fix: vec![rkforge_core::scene::Component::X],
+    }];
+    assert_eq!(scene.validate(), vec![]);
+    let a = K / RHO_C;
+    let exact = |x: f64, time: f64, h: f64| {
+        let s = (a * time).sqrt();
+        let e = x / (2.0 * s);
+        let resistance = (h * x / K + h * h * a * time / (K * K)).exp() * erfc(e + h * s / K);
+        20.0 + 500.0 * (erfc(e) - resistance)
+    };
+    let mut sim = Simulation::new(&scene).unwrap();
+    for t in [0.2, 0.4] {
+        sim.run_to(t, |_| {}).unwrap();
+        // The die's force over the bar's width (which grows as the bar shortens, the area
+        // kept): between the uniaxial yield stress and the plane-strain one, 2 / sqrt(3) of
+        // it, which the flow approaches as the plastic strain outgrows the elastic.
+        let width = w / (1.0 - 0.02 * t / 0.4);
+        let force = sim.tools()[0].axial_force().abs();
+        let pressure = force / (width * scene.model.depth_m);
+        assert!(
+            pressure > 100e6 && pressure < 2.0 / 3f64.sqrt() * 100e6,
+            "die pressure {pressure:.4e} Pa"
+        );
+        let h = scene.tools[0].heat_transfer_at(pressure);
+        let time = sim.heat_time();
+        let temps = sim.point_temperature().unwrap();
+        let (mut worst, mut at_zero): (f64, f64) = (0.0, 0.0);
+        for (p, x) in sim.point_positions().iter().enumerate() {
+            worst = worst.max((temps[p] - exact(x[1], time, h)).abs() / 500.0);
+            at_zero = at_zero.max((temps[p] - exact(x[1], time, 5e3)).abs() / 500.0);
+        }
+        eprintln!(
+            "t = {time:.3} s: p {pressure:.4e} Pa, h {h:.0}; worst point {:.3} % of the 500 K \
+             ({:.2} % against h(0))",
+            100.0 * worst,
+            100.0 * at_zero
+        );
+        assert!(worst < 0.02, "t = {time}: {:.2} % off", 100.0 * worst);
+        assert!(at_zero > 0.02, "t = {time}: h(0) fits as well");
+    }
+}

@@ -32,6 +32,7 @@ fn friction_scene(mu: f64, plate: Motion, hold_x: bool) -> Scene {
             fill_points: Vec::new(),
             temperature_c: None,
             heat_transfer_w_per_m2_k: 0.0,
+            heat_transfer_by_pressure: Vec::new(),
         },
         ToolSpec {
             name: "plate".into(),
@@ -43,6 +44,7 @@ fn friction_scene(mu: f64, plate: Motion, hold_x: bool) -> Scene {
             fill_points: Vec::new(),
             temperature_c: None,
             heat_transfer_w_per_m2_k: 0.0,
+            heat_transfer_by_pressure: Vec::new(),
         },
     ];
     if hold_x {

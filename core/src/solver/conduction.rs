@@ -25,7 +25,10 @@
 //!    without making or losing any;
 //! 3. surface flows at the boundary ring's particles, over each particle's share of the
 //!    ring (half of each segment to its neighbours, times the depth or `2 pi r`): to a tool
-//!    that the particle touches (within [`TOUCH_SPACINGS`]) `h_t (T_tool - T_I) A_I`, else
+//!    that the particle touches (within [`TOUCH_SPACINGS`]) `h_t (T_tool - T_I) A_I`, with
+//!    `h_t` the tool's constant or read at the particle's contact pressure `p_I = F_I /
+//!    A_I`, `F_I` its normal contact force averaged since the last heat stage (the contact
+//!    stage books its impulse), else
 //!    to the surroundings `h_c (T_amb - T_I) A_I + eps sigma (T_amb^4 - T_I^4) A_I` (kelvin
 //!    in the radiation); segments on a constrained edge (a symmetry plane) are adiabatic,
 //!    and on the axis of an axisymmetric body their area vanishes;
@@ -202,8 +205,11 @@ impl Simulation {
     /// The boundary ring's surface flows (W) into each ring particle (step 3 of the module
     /// doc) at the particles' temperatures `t`, with the heat flow into each tool (W, the
     /// negative of what the workpiece gains from it) and into the surroundings (W), and the
-    /// surface's stable step bound `min M_I c(T_I) / (h A_I)` (s).
-    fn surface_flows(&self, t: &[Real], mass: &[Real]) -> SurfaceFlows {
+    /// surface's stable step bound `min M_I c(T_I) / (h A_I)` (s). `normal_force` (N, by
+    /// particle; empty unless a tool's transfer coefficient depends on pressure) is each
+    /// particle's mean normal contact force since the last heat stage: over the particle's
+    /// contact area it is the pressure the coefficient is read at.
+    fn surface_flows(&self, t: &[Real], mass: &[Real], normal_force: &[Real]) -> SurfaceFlows {
         let capacity = self.capacity();
         let spec = self.scene.thermal.as_ref().expect("a thermal scene");
         let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
@@ -267,7 +273,8 @@ impl Simulation {
             let mut conductance = (spec.convection_w_per_m2_k + linear) * free;
             if let Some((tt, _)) = touched {
                 let tool = &self.scene.tools[tt];
-                let h = tool.heat_transfer_w_per_m2_k;
+                let force = normal_force.get(j).copied().unwrap_or(0.0);
+                let h = tool.heat_transfer_at(if contact > 0.0 { force / contact } else { 0.0 });
                 let to_tool = h * contact * (tool.temperature_c.unwrap_or(tj) - tj);
                 out.tools[tt] -= to_tool;
                 flow += to_tool;
@@ -298,9 +305,15 @@ impl Simulation {
         let elapsed = std::mem::take(&mut heat.since_s);
         let mass = self.thermal_masses()?;
         self.gather_point_heat(&mass);
+        // The mean normal contact force on each particle since the last stage (N).
+        let normal_force: Vec<Real> = (self.st.heat.as_mut().expect("a thermal scene"))
+            .normal_impulse
+            .iter_mut()
+            .map(|i| std::mem::take(i) / elapsed)
+            .collect();
         let mut done = 0.0;
         while done < elapsed {
-            done += self.heat_step(elapsed - done, &mass)?;
+            done += self.heat_step(elapsed - done, &mass, &normal_force)?;
         }
         Ok(())
     }
@@ -348,7 +361,7 @@ impl Simulation {
     /// the module doc): returns the step taken, the stable step's share of it when that is
     /// shorter. Updates the heat step for the next trigger and the yield test's flow
     /// stresses of the laws of temperature.
-    fn heat_step(&mut self, at_most: Real, mass: &[Real]) -> Result<Real> {
+    fn heat_step(&mut self, at_most: Real, mass: &[Real], normal_force: &[Real]) -> Result<Real> {
         let spec = self.scene.thermal.clone().expect("a thermal scene");
         let t = &self.st.heat.as_ref().expect("a thermal scene").particle_c;
         let mut rates = if spec.conductivity_max() > 0.0 {
@@ -362,7 +375,7 @@ impl Simulation {
         } else {
             vec![0.0; t.len()]
         };
-        let surface = self.surface_flows(t, mass);
+        let surface = self.surface_flows(t, mass, normal_force);
         for (k, &j) in self.boundary.iter().enumerate() {
             rates[j as usize] += surface.into[k];
         }

@@ -46,6 +46,10 @@ pub struct Heat {
     /// Heat friction made at the tool interfaces since the start (J), all of it: the
     /// workpiece takes `thermal.friction_heat_to_workpiece` of it, the tools the rest.
     pub friction_heat_j: Real,
+    /// Normal impulse of the contact forces on each particle since the last heat stage (N s;
+    /// empty unless a tool's heat transfer depends on the contact pressure).
+    #[serde(default)]
+    pub normal_impulse: Vec<Real>,
 }
 
 impl Heat {
@@ -56,6 +60,7 @@ impl Heat {
         tools: usize,
         particles: usize,
         friction: bool,
+        pressure: bool,
     ) -> Heat {
         Heat {
             temperature_c: vec![spec.initial_temperature_c; points],
@@ -69,6 +74,7 @@ impl Heat {
             to_surroundings_j: 0.0,
             friction_work: vec![0.0; if friction { particles } else { 0 }],
             friction_heat_j: 0.0,
+            normal_impulse: vec![0.0; if pressure { particles } else { 0 }],
         }
     }
 }

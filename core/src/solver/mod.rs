@@ -382,6 +382,10 @@ impl Simulation {
             }
             at_end
         });
+        let (temperature, impulse) = match &mut self.st.heat {
+            Some(h) => (Some(&h.temperature_c[..]), &mut h.normal_impulse[..]),
+            None => (None, &mut [][..]),
+        };
         let body = Body {
             boundary: &self.boundary,
             nodal: &self.nodal,
@@ -392,7 +396,7 @@ impl Simulation {
             spacing: self.spacing,
             points: &self.st.points,
             hardening: &self.material.hardening,
-            temperature: self.st.heat.as_ref().map(|h| &h.temperature_c[..]),
+            temperature,
             kinematics: self.scene.model.kinematics,
             depth_m: self.scene.model.depth_m,
         };
@@ -405,6 +409,7 @@ impl Simulation {
                 stick: &mut self.st.stick,
                 pressure: &mut self.st.pressure,
                 stations: self.scene.output.pressure_stations.unwrap_or(0),
+                impulse,
             },
             dt_full,
             dt_avg,

@@ -149,8 +149,11 @@ impl Simulation {
                 ],
                 heat: scene.thermal.as_ref().map(|t| {
                     let particles = if scene.transfers_heat() { np } else { 0 };
-                    let friction = scene.heats_by_friction();
-                    Heat::initial(t, npts, scene.tools.len(), particles, friction)
+                    let (friction, pressure) = (
+                        scene.heats_by_friction(),
+                        scene.transfers_heat_by_pressure(),
+                    );
+                    Heat::initial(t, npts, scene.tools.len(), particles, friction, pressure)
                 }),
             },
             tools,
