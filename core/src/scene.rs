@@ -8,7 +8,7 @@
 
 use crate::error::{Error, Result};
 pub use crate::friction::Friction;
-use crate::material::thermal_properties::interpolate;
+use crate::material::thermal_properties::{interpolate, Expansion, Thermoelastic};
 use crate::material::{Hardening, HeatCapacity};
 use crate::math::Real;
 use crate::scene_keys::{key_line, syntax_message};
@@ -167,6 +167,22 @@ pub struct ThermalSpec {
     /// tool takes the rest. 0.5 by default (equal shares).
     #[serde(default = "half")]
     pub friction_heat_to_workpiece: Real,
+    /// Young's modulus over temperature, as a factor on `material.youngs_modulus_pa`:
+    /// `[[T (degrees C), E(T) / E], ...]`, T increasing, linear between the points and held
+    /// beyond them (Poisson's ratio held). Absent: the modulus of every temperature.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub modulus_factor_by_temperature: Vec<[Real; 2]>,
+    /// Thermal expansion, a constant secant coefficient `alpha` (1/K): the thermal stretch
+    /// `1 + alpha (T - T_0)` from the initial temperature, where the body is free of stress.
+    /// 0 (the default): none.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub expansion_per_k: Real,
+    /// Thermal expansion as the linear thermal strain over temperature instead of the
+    /// coefficient: `[[T (degrees C), dl/l], ...]` from any reference, T increasing, linear
+    /// between the points and held beyond them; the thermal stretch is `(1 + s(T)) / (1 +
+    /// s(T_0))`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub thermal_strain_by_temperature: Vec<[Real; 2]>,
 }
 
 fn five() -> Real {
@@ -213,6 +229,29 @@ impl ThermalSpec {
         } else {
             interpolate(&self.conductivity_by_temperature, temp_c)
         }
+    }
+
+    /// The elasticity over temperature the section asks for, `None` when it asks for none
+    /// (the modulus and no thermal strain at every temperature).
+    pub fn thermoelastic(&self) -> Option<Thermoelastic> {
+        let expansion = if !self.thermal_strain_by_temperature.is_empty() {
+            let points = self.thermal_strain_by_temperature.clone();
+            let at_start = 1.0 + interpolate(&points, self.initial_temperature_c);
+            Expansion::Table { points, at_start }
+        } else if self.expansion_per_k != 0.0 {
+            Expansion::Coefficient {
+                per_k: self.expansion_per_k,
+                from_c: self.initial_temperature_c,
+            }
+        } else {
+            Expansion::None
+        };
+        (expansion != Expansion::None || !self.modulus_factor_by_temperature.is_empty()).then(
+            || Thermoelastic {
+                modulus_factor: self.modulus_factor_by_temperature.clone(),
+                expansion,
+            },
+        )
     }
 
     /// The specific heat capacity, the constant or the table (J/(kg K)).

@@ -316,6 +316,35 @@ impl Scene {
                 t.initial_temperature_c
             ),
         );
+        let table = &t.modulus_factor_by_temperature;
+        out.check(
+            increasing_table(table, pos),
+            "thermal.modulus_factor_by_temperature",
+            format!("must be [[T, E(T) / E], ...] with T increasing and factors positive, got {table:?}"),
+        );
+        out.check(
+            t.expansion_per_k.is_finite() && t.expansion_per_k.abs() < 1e-3,
+            "thermal.expansion_per_k",
+            format!(
+                "must be a thermal expansion coefficient (1/K) below 1e-3 in size, got {}",
+                t.expansion_per_k
+            ),
+        );
+        let table = &t.thermal_strain_by_temperature;
+        out.check(
+            table.is_empty() || t.expansion_per_k == 0.0,
+            "thermal.thermal_strain_by_temperature",
+            "give the thermal expansion as a coefficient or as a strain over temperature, not both"
+                .into(),
+        );
+        out.check(
+            increasing_table(table, |s| s.abs() < 0.5),
+            "thermal.thermal_strain_by_temperature",
+            format!(
+                "must be [[T, dl/l], ...] with T increasing and strains below 0.5 in size, got \
+                 {table:?}"
+            ),
+        );
         let table = &t.specific_heat_by_temperature;
         if table.is_empty() {
             out.check(

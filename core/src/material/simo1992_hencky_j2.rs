@@ -21,6 +21,7 @@
 //! Kinematics are 2D with an out-of-plane stretch `F_33`: 1 in plane strain, the hoop
 //! stretch `r / R` in axisymmetry; `b_e` stays block diagonal (in-plane 2x2 and `33`).
 
+use super::thermal_properties::Thermoelastic;
 use super::Hardening;
 use crate::lanes::{self, Lanes, LANES};
 use crate::math::{sym_spectral2, Real};
@@ -56,6 +57,9 @@ pub struct HenckyJ2 {
     pub shear: Real,
     /// Isotropic hardening law.
     pub hardening: Hardening,
+    /// The modulus and thermal stretch over temperature of a thermal scene that asks for
+    /// them (`None`: the constants above at every temperature, no thermal strain).
+    pub thermoelastic: Option<Thermoelastic>,
 }
 
 /// History variables of one integration point.
@@ -104,8 +108,12 @@ pub struct PointLanes {
     pub eps_p: Lanes,
     /// Flow stress `sigma_y(eps_p)` (Pa): the yield test's, at the law's least rate.
     pub flow_stress: Lanes,
-    /// Temperature (degrees C), read by the laws of rate and temperature only.
+    /// Temperature (degrees C), read by the laws of rate and temperature and the
+    /// elasticity over temperature only.
     pub temperature: Lanes,
+    /// Temperature (degrees C) at the last update, read by the elasticity over temperature
+    /// only: the energy the change of temperature put into the elastic state.
+    pub temperature_prev: Lanes,
     /// `1 / dt` (1/s) of the step the strain increment was taken over: the plastic strain
     /// rate of a return is `dgamma / dt`; 0 before the first step (the least rate).
     pub inv_dt: Real,
@@ -131,6 +139,7 @@ impl PointLanes {
             eps_p: zero,
             flow_stress: [Real::INFINITY; LANES],
             temperature: zero,
+            temperature_prev: zero,
             inv_dt: 0.0,
             guess: zero,
             plastic_work: zero,
@@ -187,6 +196,10 @@ pub struct StressLanes {
     pub von_mises: Lanes,
     /// Stored elastic energy per reference volume (J/m^3).
     pub elastic_energy: Lanes,
+    /// Elastic energy per reference volume that the change of temperature since the last
+    /// update put in, at this update's trial strain (J/m^3): `W(eps, T) - W(eps, T_prev)`
+    /// with the thermal strain of each; 0 without elasticity over temperature.
+    pub thermoelastic: Lanes,
 }
 
 /// Trial state of each lane (steps 1-3), kept for the return mapping and the stress.
@@ -216,12 +229,37 @@ impl HenckyJ2 {
             bulk: youngs / (3.0 * (1.0 - 2.0 * poisson)),
             shear: youngs / (2.0 * (1.0 + poisson)),
             hardening,
+            thermoelastic: None,
         }
     }
 
-    /// Dilatational wave speed `c = sqrt((K + 4 G / 3) / rho)` (m/s).
+    /// Dilatational wave speed `c = sqrt((K + 4 G / 3) / rho)` (m/s), at the stiffest
+    /// temperature of a modulus over temperature.
     pub fn wave_speed(&self, density: Real) -> Real {
-        ((self.bulk + 4.0 / 3.0 * self.shear) / density).sqrt()
+        let factor = self
+            .thermoelastic
+            .as_ref()
+            .map_or(1.0, Thermoelastic::modulus_factor_max);
+        (factor * (self.bulk + 4.0 / 3.0 * self.shear) / density).sqrt()
+    }
+
+    /// Bulk and shear moduli (Pa) and thermal log strain (-) of each lane at its
+    /// temperature `temps` (degrees C).
+    #[inline(always)]
+    fn elastic_lanes(&self, temps: &Lanes) -> (Lanes, Lanes, Lanes) {
+        match &self.thermoelastic {
+            None => ([self.bulk; LANES], [self.shear; LANES], [0.0; LANES]),
+            Some(te) => {
+                let (mut k, mut g, mut th) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+                for l in 0..LANES {
+                    let f = te.modulus_factor_at(temps[l]);
+                    k[l] = f * self.bulk;
+                    g[l] = f * self.shear;
+                    th[l] = te.log_strain(temps[l]);
+                }
+                (k, g, th)
+            }
+        }
     }
 
     /// Stress update for the deformation gradient `f = [F_xX, F_xY, F_yX, F_yY]` and the
@@ -258,7 +296,7 @@ impl HenckyJ2 {
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
     pub fn update_lanes(&self, p: &mut PointLanes) -> Result<StressLanes, (usize, String)> {
-        let (k, g) = (self.bulk, self.shear);
+        let (k, g, th) = self.elastic_lanes(&p.temperature);
         let mut t = Trial::default();
         for l in 0..LANES {
             let f = [p.f[0][l], p.f[1][l], p.f[2][l], p.f[3][l]];
@@ -308,8 +346,9 @@ impl HenckyJ2 {
                 t.e[c][l] = e[c];
             }
             t.mean[l] = mean;
-            t.theta[l] = theta;
-            t.q_trial[l] = SQRT_6 * g * e2.sqrt();
+            // The elastic volumetric strain: the thermal stretch taken out.
+            t.theta[l] = theta - 3.0 * th[l];
+            t.q_trial[l] = SQRT_6 * g[l] * e2.sqrt();
             t.b[l] = [l1, l2, b33];
         }
         if let Some(l) = t.ok.iter().position(|ok| !ok) {
@@ -337,13 +376,13 @@ impl HenckyJ2 {
         }
         if yields.iter().any(|&y| y) {
             let (dgamma, flow) = if thermal {
-                self.return_map_rate(&t.q_trial, p, &yields)?
+                self.return_map_rate(&t.q_trial, &g, p, &yields)?
             } else {
-                self.return_map(&t.q_trial, &p.eps_p, &p.flow_stress, &yields)?
+                self.return_map(&t.q_trial, &g, &p.eps_p, &p.flow_stress, &yields)?
             };
             for l in 0..LANES {
                 if yields[l] {
-                    scale[l] = 1.0 - 3.0 * g * dgamma[l] / t.q_trial[l];
+                    scale[l] = 1.0 - 3.0 * g[l] * dgamma[l] / t.q_trial[l];
                 }
             }
             // b_e = sum exp(2 eps_i) n_i n_i^T, then C_p^{-1} = F^{-1} b_e F^{-T}.
@@ -385,6 +424,7 @@ impl HenckyJ2 {
             ];
             let [p11, p12, p22] = [t.proj[0][l], t.proj[1][l], t.proj[2][l]];
             let [i11, i12, i21, i22] = [t.inv[0][l], t.inv[1][l], t.inv[2][l], t.inv[3][l]];
+            let (k, g) = (k[l], g[l]);
             let kt = k * t.theta[l];
             let tau1 = kt + 2.0 * g * e[0];
             let tau2 = kt + 2.0 * g * e[1];
@@ -411,6 +451,19 @@ impl HenckyJ2 {
             out.elastic_energy[l] =
                 0.5 * kt * t.theta[l] + g * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
         }
+        if self.thermoelastic.is_some() {
+            // W(eps, T) - W(eps, T_prev) at the trial strain: the moduli and the thermal
+            // strain of each temperature.
+            let (kp, gp, thp) = self.elastic_lanes(&p.temperature_prev);
+            for l in 0..LANES {
+                let e2 = t.e[0][l] * t.e[0][l] + t.e[1][l] * t.e[1][l] + t.e[2][l] * t.e[2][l];
+                let theta = t.theta[l];
+                let theta_prev = theta + 3.0 * (th[l] - thp[l]);
+                out.thermoelastic[l] = 0.5
+                    * (k[l] * theta * theta - kp[l] * theta_prev * theta_prev)
+                    + (g[l] - gp[l]) * e2;
+            }
+        }
         Ok(out)
     }
 
@@ -430,11 +483,12 @@ impl HenckyJ2 {
     fn return_map(
         &self,
         q_trial: &Lanes,
+        shear: &Lanes,
         eps_p: &Lanes,
         sy: &Lanes,
         yields: &[bool; LANES],
     ) -> Result<(Lanes, Lanes), (usize, String)> {
-        let g3 = 3.0 * self.shear;
+        let g3 = shear.map(|g| 3.0 * g);
         let mut x = [0.0; LANES];
         let mut flow_at = *sy;
         match self.hardening {
@@ -444,7 +498,7 @@ impl HenckyJ2 {
             } => {
                 for l in 0..LANES {
                     if yields[l] {
-                        x[l] = (q_trial[l] - sy[l]) / (g3 + modulus_pa);
+                        x[l] = (q_trial[l] - sy[l]) / (g3[l] + modulus_pa);
                         flow_at[l] = yield_stress_pa + modulus_pa * (eps_p[l] + x[l]);
                     }
                 }
@@ -461,10 +515,10 @@ impl HenckyJ2 {
                 let mut done = [true; LANES];
                 for l in 0..LANES {
                     let slope = slope_at(eps_p[l], sy[l]);
-                    hi[l] = q_trial[l] / g3;
+                    hi[l] = q_trial[l] / g3[l];
                     // Lanes that do not yield keep x = 0 and never iterate.
                     if yields[l] {
-                        x[l] = (q_trial[l] - sy[l]) / (g3 + slope);
+                        x[l] = (q_trial[l] - sy[l]) / (g3[l] + slope);
                     }
                     done[l] = !yields[l];
                 }
@@ -476,13 +530,13 @@ impl HenckyJ2 {
                         let eps = eps_p[l] + x[l];
                         let flow = flow_stress(eps);
                         let slope = slope_at(eps, flow);
-                        let r = q_trial[l] - g3 * x[l] - flow;
+                        let r = q_trial[l] - g3[l] * x[l] - flow;
                         let (lo_new, hi_new) = if r > 0.0 {
                             (x[l], hi[l])
                         } else {
                             (lo[l], x[l])
                         };
-                        let next = x[l] - r / (-g3 - slope);
+                        let next = x[l] - r / (-g3[l] - slope);
                         let x_new = if next > lo_new && next < hi_new {
                             next
                         } else {
@@ -531,16 +585,17 @@ impl HenckyJ2 {
     fn return_map_rate(
         &self,
         q_trial: &Lanes,
+        shear: &Lanes,
         p: &mut PointLanes,
         yields: &[bool; LANES],
     ) -> Result<(Lanes, Lanes), (usize, String)> {
-        let g3 = 3.0 * self.shear;
         let mut x = [0.0; LANES];
         let mut flow_at = p.flow_stress;
         for l in 0..LANES {
             if !yields[l] {
                 continue;
             }
+            let g3 = 3.0 * shear[l];
             let (q, eps, temp) = (q_trial[l], p.eps_p[l], p.temperature[l]);
             let law = self.hardening.isotherm(temp);
             let (mut lo, mut hi) = (0.0, q / g3);

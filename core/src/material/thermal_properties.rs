@@ -1,7 +1,8 @@
 //! Properties over temperature: a table `[[T (degrees C), value], ...]` read linearly between
 //! its points and held beyond them (the form of the scene's `*_by_temperature` keys), and
 //! the heat capacity built on one, with its enthalpy `h(T) = int c dT` (J/kg) so that heat
-//! is kept exactly however the capacity changes with temperature.
+//! is kept exactly however the capacity changes with temperature; and the elasticity over
+//! temperature (modulus and thermal stretch).
 
 use crate::math::Real;
 
@@ -149,6 +150,79 @@ impl HeatCapacity {
             HeatCapacity::Constant(_) => row.map(|(n, t)| n * t).sum(),
             HeatCapacity::Table { .. } => {
                 self.temperature(row.map(|(n, t)| n * self.enthalpy(t)).sum())
+            }
+        }
+    }
+}
+
+/// The elasticity of a thermal scene's material over temperature: Young's modulus scaled by
+/// a factor over temperature (Poisson's ratio held, so the bulk and shear moduli scale
+/// alike), and the isotropic thermal stretch `lambda_th(T)` that the multiplicative split
+/// `F = F_e F_th F_p`, `F_th = lambda_th I`, takes out of the elastic strain: the elastic
+/// volumetric log strain is `ln J - ln J_p - 3 ln lambda_th(T)` (`J_p = 1`), the deviatoric
+/// part untouched. Both are relative to the initial temperature, where the body is free of
+/// stress.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Thermoelastic {
+    /// `E(T) / E` as `[[T (degrees C), factor], ...]` (empty: 1).
+    pub modulus_factor: Vec<[Real; 2]>,
+    /// The thermal stretch.
+    pub expansion: Expansion,
+}
+
+/// The isotropic thermal stretch of a material, relative to its initial temperature `T_0`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Expansion {
+    /// No thermal strain.
+    #[default]
+    None,
+    /// A constant secant coefficient `alpha` (1/K): `lambda_th = 1 + alpha (T - T_0)`.
+    Coefficient {
+        /// `alpha` (1/K).
+        per_k: Real,
+        /// `T_0` (degrees C).
+        from_c: Real,
+    },
+    /// The linear thermal strain `s(T)` (-) over temperature, from any reference, read as
+    /// [`interpolate`] reads a table: `lambda_th = (1 + s(T)) / (1 + s(T_0))`.
+    Table {
+        /// `[[T (degrees C), s], ...]`.
+        points: Vec<[Real; 2]>,
+        /// `1 + s(T_0)`.
+        at_start: Real,
+    },
+}
+
+impl Thermoelastic {
+    /// `E(T) / E` (-).
+    pub fn modulus_factor_at(&self, t: Real) -> Real {
+        if self.modulus_factor.is_empty() {
+            1.0
+        } else {
+            interpolate(&self.modulus_factor, t)
+        }
+    }
+
+    /// The largest `E(T) / E` (-), for the stable step.
+    pub fn modulus_factor_max(&self) -> Real {
+        self.modulus_factor
+            .iter()
+            .map(|p| p[1])
+            .fold(Real::NEG_INFINITY, Real::max)
+            .max(if self.modulus_factor.is_empty() {
+                1.0
+            } else {
+                0.0
+            })
+    }
+
+    /// The thermal log strain `ln lambda_th(T)` (-).
+    pub fn log_strain(&self, t: Real) -> Real {
+        match &self.expansion {
+            Expansion::None => 0.0,
+            Expansion::Coefficient { per_k, from_c } => (per_k * (t - from_c)).ln_1p(),
+            Expansion::Table { points, at_start } => {
+                ((1.0 + interpolate(points, t)) / at_start).ln()
             }
         }
     }

@@ -311,9 +311,24 @@ impl Simulation {
             .iter_mut()
             .map(|i| std::mem::take(i) / elapsed)
             .collect();
+        let before = (self.st.heat.as_ref())
+            .filter(|h| !h.stage_change_k.is_empty())
+            .map(|h| h.temperature_c.clone());
         let mut done = 0.0;
         while done < elapsed {
             done += self.heat_step(elapsed - done, &mass, &normal_force)?;
+        }
+        // The stage's change at each point, for the elasticity over temperature to ramp in.
+        let heat = self.st.heat.as_mut().expect("a thermal scene");
+        if let Some(before) = before {
+            for ((c, t), b) in heat
+                .stage_change_k
+                .iter_mut()
+                .zip(&heat.temperature_c)
+                .zip(before)
+            {
+                *c = t - b;
+            }
         }
         Ok(())
     }

@@ -33,6 +33,11 @@ pub struct Energy {
     /// (`rereference.rs`; J), 0 without re-referencing.
     #[serde(default)]
     pub remap: Real,
+    /// Elastic energy that changes of temperature put into the elastic state, through the
+    /// modulus and the thermal strain over temperature (J; `stress.rs`), 0 without them: no
+    /// force did that work.
+    #[serde(default)]
+    pub thermoelastic: Real,
 }
 
 /// Kinetic energy `sum m_I |v_I|^2 / 2` (J) of coefficient velocities `v` (m/s) with the
@@ -60,6 +65,7 @@ impl Energy {
             - self.contact_work
             - self.initial
             - self.remap
+            - self.thermoelastic
     }
     /// The energy against which the balance error is measured: the larger of the initial
     /// energy and the total contact work exchanged.

@@ -50,6 +50,16 @@ pub struct Heat {
     /// empty unless a tool's heat transfer depends on the contact pressure).
     #[serde(default)]
     pub normal_impulse: Vec<Real>,
+    /// Temperature of each point at its last stress update (degrees C; empty without
+    /// elasticity over temperature): the energy account books the elastic energy a change
+    /// of temperature puts in.
+    #[serde(default)]
+    pub elastic_temperature_c: Vec<Real>,
+    /// The change of each point's temperature in the last heat stage (K; empty without
+    /// elasticity over temperature), which the elasticity takes in over the heat step that
+    /// follows ([`Heating::ramp`]).
+    #[serde(default)]
+    pub stage_change_k: Vec<Real>,
 }
 
 impl Heat {
@@ -61,6 +71,7 @@ impl Heat {
         particles: usize,
         friction: bool,
         pressure: bool,
+        thermoelastic: bool,
     ) -> Heat {
         Heat {
             temperature_c: vec![spec.initial_temperature_c; points],
@@ -75,6 +86,11 @@ impl Heat {
             friction_work: vec![0.0; if friction { particles } else { 0 }],
             friction_heat_j: 0.0,
             normal_impulse: vec![0.0; if pressure { particles } else { 0 }],
+            elastic_temperature_c: match thermoelastic {
+                true => vec![spec.initial_temperature_c; points],
+                false => Vec::new(),
+            },
+            stage_change_k: vec![0.0; if thermoelastic { points } else { 0 }],
         }
     }
 }
@@ -89,6 +105,12 @@ pub(super) struct Heating<'a> {
     pub(super) beta_over_rho: Real,
     pub(super) capacity: &'a HeatCapacity,
     pub(super) inv_dt: Real,
+    /// The share of the last heat stage's change (`Heat::stage_change_k`) that the
+    /// elasticity over temperature does not see yet, `1 - t_since / dt_heat` in [0, 1]: the
+    /// stage's change ramps in over the heat step that follows it, so that the thermal
+    /// strain and modulus change smoothly (a sub-cycled stage's jump of a few kelvin in the
+    /// thermal strain would set the elastic body ringing).
+    pub(super) ramp: Real,
 }
 
 impl<'a> Heating<'a> {
@@ -104,6 +126,7 @@ impl<'a> Heating<'a> {
             beta_over_rho: spec.taylor_quinney / density,
             capacity,
             inv_dt: if dt_prev > 0.0 { 1.0 / dt_prev } else { 0.0 },
+            ramp: 0.0,
         }
     }
 

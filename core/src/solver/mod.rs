@@ -620,12 +620,20 @@ impl Simulation {
                 .as_ref()
                 .zip(self.heat_capacity.as_ref())
                 .map(|(spec, capacity)| {
-                    heat::Heating::new(
+                    let mut h = heat::Heating::new(
                         spec,
                         capacity,
                         self.scene.material.density_kg_per_m3,
                         self.st.dt_prev,
-                    )
+                    );
+                    if let Some(heat) = &self.st.heat {
+                        h.ramp = if heat.step_s > 0.0 {
+                            (1.0 - heat.since_s / heat.step_s).clamp(0.0, 1.0)
+                        } else {
+                            0.0
+                        };
+                    }
+                    h
                 }),
         };
         let sums = stress::stage(
@@ -639,6 +647,8 @@ impl Simulation {
                     &mut h.temperature_c[..],
                     &mut h.plastic_work[..],
                     &mut h.plastic_rate[..],
+                    (!h.elastic_temperature_c.is_empty())
+                        .then_some((&mut h.elastic_temperature_c[..], &h.stage_change_k[..])),
                 )
             }),
         )
@@ -655,6 +665,7 @@ impl Simulation {
         if self.scene.discretization.rereference_stretch.is_some() {
             self.st.max_stretch = sums.max_stretch;
         }
+        self.st.energy.thermoelastic += sums.thermoelastic;
         self.times.stress += t0.elapsed();
         Ok((sums.elastic, sums.plastic))
     }

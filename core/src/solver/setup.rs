@@ -61,11 +61,12 @@ impl Simulation {
         // the threads, few enough that the buffers overlap little.
         let chunk = (2 * pt.rows() / (ny - 1)).max(64);
         let scatter = Scatter::new(&pt, np, chunk, MAX_GROUP);
-        let material = HenckyJ2::new(
+        let mut material = HenckyJ2::new(
             scene.material.youngs_modulus_pa,
             scene.material.poisson_ratio,
             scene.material.hardening.clone(),
         );
+        material.thermoelastic = scene.thermal.as_ref().and_then(|t| t.thermoelastic());
         let wave_speed = material.wave_speed(rho);
         let scaling = scene.time.mass_scaling.map(|ms| match ms.factor {
             Some(f) => Plan::Uniform(f),
@@ -153,7 +154,16 @@ impl Simulation {
                         scene.heats_by_friction(),
                         scene.transfers_heat_by_pressure(),
                     );
-                    Heat::initial(t, npts, scene.tools.len(), particles, friction, pressure)
+                    let thermoelastic = t.thermoelastic().is_some();
+                    Heat::initial(
+                        t,
+                        npts,
+                        scene.tools.len(),
+                        particles,
+                        friction,
+                        pressure,
+                        thermoelastic,
+                    )
                 }),
             },
             tools,

@@ -76,6 +76,8 @@ impl PointOut {
 struct ChunkSums {
     elastic: Real,
     plastic: Real,
+    /// Elastic energy the changes of temperature put in (J).
+    thermoelastic: Real,
     /// Smallest squared altitude of a deformed cell (m^2).
     min_altitude2: Real,
     /// Largest squared principal in-plane stretch of `F` (-), when tracked.
@@ -264,6 +266,7 @@ impl StressContext<'_> {
         let mut s = ChunkSums {
             elastic: 0.0,
             plastic: 0.0,
+            thermoelastic: 0.0,
             min_altitude2: Real::INFINITY,
             max_stretch2: 0.0,
             failure: None,
@@ -314,8 +317,18 @@ impl StressContext<'_> {
             for (l, (state, out)) in states.iter().zip(outs.iter()).enumerate() {
                 batch.set_history(l, state, out.flow_stress);
             }
-            if let (Some(h), Some((temps, _, rates))) = (&self.heating, &heat) {
+            if let (Some(h), Some((temps, _, rates, elastic))) = (&self.heating, &mut heat) {
                 batch.temperature[..used].copy_from_slice(&temps[k0..k0 + used]);
+                if let Some((prev, change)) = elastic {
+                    // The last heat stage's change ramped in over the heat step that
+                    // follows it (a jump would ring through the elastic body); the
+                    // temperatures of the last update, and this update's for the next.
+                    for l in 0..used {
+                        batch.temperature[l] -= h.ramp * change[k0 + l];
+                    }
+                    batch.temperature_prev[..used].copy_from_slice(&prev[k0..k0 + used]);
+                    prev[k0..k0 + used].copy_from_slice(&batch.temperature[..used]);
+                }
                 batch.inv_dt = h.inv_dt;
                 for l in 0..used {
                     batch.guess[l] = if h.inv_dt > 0.0 {
@@ -372,7 +385,7 @@ impl StressContext<'_> {
                 let eps_p = state.eps_p;
                 *state = batch.state(l);
                 let heated = match (&self.heating, &mut heat) {
-                    (Some(h), Some((temps, work, rate))) => {
+                    (Some(h), Some((temps, work, rate, _))) => {
                         Some((h, &mut temps[k0 + l], &mut work[k0 + l], &mut rate[k0 + l]))
                     }
                     _ => None,
@@ -425,6 +438,7 @@ impl StressContext<'_> {
                 out.von_mises = u.von_mises[l] / j_ref;
                 out.jacobian = u.jacobian[l] * j_ref;
                 s.elastic += u.elastic_energy[l] * weight[l];
+                s.thermoelastic += u.thermoelastic[l] * weight[l];
                 s.plastic += plastic_work * weight[l];
                 s.min_altitude2 = s.min_altitude2.min(altitude2[l]);
             }
@@ -469,8 +483,15 @@ struct Batch {
 }
 
 /// A thermal scene's per-point temperatures (degrees C), plastic work densities (J/m^3) and
-/// plastic strain rates (1/s), which the stress stage updates ([`super::heat::Heat`]).
-pub(super) type HeatSlices<'a> = (&'a mut [Real], &'a mut [Real], &'a mut [Real]);
+/// plastic strain rates (1/s), which the stress stage updates ([`super::heat::Heat`]), and
+/// with elasticity over temperature the temperatures of the last update and the changes of
+/// the last heat stage (degrees C, K).
+pub(super) type HeatSlices<'a> = (
+    &'a mut [Real],
+    &'a mut [Real],
+    &'a mut [Real],
+    Option<(&'a mut [Real], &'a [Real])>,
+);
 
 /// What the stress stage reads besides the layout.
 pub(super) struct Inputs<'a> {
@@ -503,6 +524,9 @@ pub(super) struct Sums {
     pub elastic: Real,
     /// Plastic dissipation `sum_p w_p int sigma_y d eps_p` (J).
     pub plastic: Real,
+    /// Elastic energy the changes of temperature since the last stage put in, `sum_p w_p
+    /// (W(eps_p, T_p) - W(eps_p, T_p,prev))` (J; 0 without elasticity over temperature).
+    pub thermoelastic: Real,
     /// Smallest altitude of a deformed cell `det F hx hy / max(|F hx e_x|, |F hy e_y|)` (m).
     pub min_altitude: Real,
     /// Largest principal in-plane stretch of `F` over the points (-), 0 when not tracked.
@@ -562,7 +586,14 @@ pub(super) fn stage(
         Parts::new(buf),
         Parts::new(&mut sums),
     );
-    let heat = heat.map(|(t, w, r)| (Parts::new(t), Parts::new(w), Parts::new(r)));
+    let heat = heat.map(|(t, w, r, e)| {
+        (
+            Parts::new(t),
+            Parts::new(w),
+            Parts::new(r),
+            e.map(|(p, c)| (Parts::new(p), c)),
+        )
+    });
     team.for_each(lo.len(), &|c| {
         let range = part(c, chunk, points);
         // SAFETY: chunk `c` alone takes these points, its buffer slice and its slot.
@@ -572,8 +603,13 @@ pub(super) fn stage(
                     first: range.start,
                     states: states.get(range.clone()),
                     outs: outs.get(range.clone()),
-                    heat: heat.as_ref().map(|(t, w, r)| {
-                        (t.get(range.clone()), w.get(range.clone()), r.get(range))
+                    heat: heat.as_ref().map(|(t, w, r, e)| {
+                        (
+                            t.get(range.clone()),
+                            w.get(range.clone()),
+                            r.get(range.clone()),
+                            e.as_ref().map(|(p, c)| (p.get(range.clone()), &c[range])),
+                        )
                     }),
                     lo: lo[c] as usize,
                     buf: bufs.get(offsets[c]..offsets[c + 1]),
@@ -594,6 +630,7 @@ pub(super) fn stage(
         };
     });
     let (mut elastic, mut plastic, mut min_altitude2) = (0.0, 0.0, Real::INFINITY);
+    let mut thermoelastic = 0.0;
     let mut max_stretch2: Real = 0.0;
     for s in sums {
         if let Some(failure) = s.failure {
@@ -601,12 +638,14 @@ pub(super) fn stage(
         }
         elastic += s.elastic;
         plastic += s.plastic;
+        thermoelastic += s.thermoelastic;
         min_altitude2 = min_altitude2.min(s.min_altitude2);
         max_stretch2 = max_stretch2.max(s.max_stretch2);
     }
     Ok(Sums {
         elastic,
         plastic,
+        thermoelastic,
         min_altitude: min_altitude2.max(0.0).sqrt(),
         max_stretch: max_stretch2.sqrt(),
     })
