@@ -37,7 +37,7 @@ pub struct Parameter {
     /// The scene's value.
     pub start: toml::Value,
     /// SI unit read from the key's suffix (`_s`, `_m`, `_m_per_s`, `_pa`, `_kg_per_m3`,
-    /// `_per_s`, `_c` for degrees Celsius, `_k` for a temperature difference, `_j_per_kg_k`,
+    /// `_per_s`, `_per_k`, `_c` for degrees Celsius, `_k` for a temperature difference, `_j_per_kg_k`,
     /// `_w_per_m_k`, `_w_per_m2_k`).
     pub unit: Option<&'static str>,
     /// The schema's description (the doc comment of the field).
@@ -75,6 +75,7 @@ fn unit(key: &str) -> Option<&'static str> {
         ("_w_per_m_k", "W/(m.K)"),
         ("_w_per_m2_k", "W/(m2.K)"),
         ("_per_s", "1/s"),
+        ("_per_k", "1/K"),
         ("_pa", "Pa"),
         ("_s", "s"),
         ("_m", "m"),

@@ -301,14 +301,6 @@ impl Scene {
             );
         }
         out.check(
-            self.discretization.rereference_stretch.is_none() || !self.transfers_heat(),
-            "discretization.rereference_stretch",
-            "kernel re-referencing is not built for conduction and surface heat flows yet \
-             (leave it out, or the thermal section's conductivity, convection, emissivity \
-             and the tools' heat transfer)"
-                .into(),
-        );
-        out.check(
             above_absolute_zero(t.initial_temperature_c),
             "thermal.initial_temperature_c",
             format!(

@@ -19,7 +19,9 @@
 //!    booked at each particle, its share `thermal.friction_heat_to_workpiece` (the tool
 //!    takes the rest);
 //! 2. conduction in the reference configuration (total Lagrangian, as the stress stage),
-//!    `R_I = - sum_p w_p grad_X N_I(X_p) . (k J C^-1 grad_X T)(X_p)` (W) with `grad_X T =
+//!    `R_I = - sum_p w_p J_ref grad_X N_I(X_p) . (k J C^-1 grad_X T)(X_p)` (W; `J_ref` the
+//!    Jacobian at the last kernel re-reference, whose configuration `X` then is, 1 without
+//!    one) with `grad_X T =
 //!    sum_I T_I grad_X N_I`, `C^-1 = F^-1 F^-T` and `J = det F` (`F_33` the hoop stretch in
 //!    axisymmetry, where `w_p` holds `2 pi R`): `sum_I R_I = 0`, conduction moves heat
 //!    without making or losing any;
@@ -143,7 +145,9 @@ impl Simulation {
             let c11 = inv[0] * inv[0] + inv[1] * inv[1];
             let c12 = inv[0] * inv[2] + inv[1] * inv[3];
             let c22 = inv[2] * inv[2] + inv[3] * inv[3];
-            let kj = k(p) * det2 * f33 * self.weights[p];
+            // The volume the point stands for now, `w_p J_ref J` (the weight is per original
+            // volume; `J_ref` the Jacobian at the last re-reference, 1 without one).
+            let kj = k(p) * det2 * f33 * self.weights[p] * self.reference_jacobian[p];
             let q = [
                 kj * (c11 * g[0] + c12 * g[1]),
                 kj * (c12 * g[0] + c22 * g[1]),

@@ -694,6 +694,8 @@ impl Simulation {
     /// left undeformed.
     fn measure_critical_step(&mut self) -> Result<Real> {
         let saved_points = self.st.points.clone();
+        // The stress stage also heats the points and books the energy: neither is the run's.
+        let (saved_heat, saved_energy) = (self.st.heat.clone(), self.st.energy);
         let amplitude = 1e-7 * self.spacing[0].min(self.spacing[1]);
         let inv_sqrt_m: Vec<Real> = self.mass.iter().map(|m| 1.0 / m.sqrt()).collect();
         let dt = stable_step::critical_step(&inv_sqrt_m, amplitude, |d| {
@@ -704,6 +706,8 @@ impl Simulation {
         });
         self.st.d = vec![[0.0; 2]; self.ref_pos.len()];
         self.st.points = saved_points;
+        self.st.heat = saved_heat;
+        self.st.energy = saved_energy;
         dt
     }
 

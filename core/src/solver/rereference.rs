@@ -24,7 +24,11 @@
 //! - displacements `d' = 0`; velocities: the coefficients whose interpolation at the new
 //!   reference reproduces the physical particle velocities, `sum_I N'_I(X'_J) v'_I = v_J`
 //!   (least squares by conjugate gradients on the nodal matrix), projected onto the essential conditions;
-//!   the kinetic energy this changes is booked as `Energy::remap` (J);
+//!   the kinetic energy this changes is booked as `Energy::remap` (J); the temperature
+//!   field of a scene whose heat moves alike: the particle coefficients whose interpolation
+//!   reproduces the particles' temperatures (the points keep theirs, and the next heat
+//!   stage gathers what the fit missed into the particles, the heat kept exactly);
+//!   conduction's largest eigenvalue is measured again on the new shape functions;
 //! - masses, the boundary ring, the tools' state, the contact pairs' held and stick state
 //!   are the particles' own and stay; the contact stage, the essential conditions and the
 //!   critical step are rebuilt (the step is measured again on the new shape functions with
@@ -154,6 +158,22 @@ impl Simulation {
             .map(|j| self.nodal.interpolate(j, &self.v_prev))
             .collect();
         let kinetic_before = kinetic_energy(&self.mass, &self.st.v);
+        // The temperature field at the particles, `sum_I N_I(X_J) T_I`, before the shape
+        // functions change (a scene whose heat moves).
+        let temperature_now: Option<Vec<[Real; 2]>> = match (&self.st.heat, &self.heat_capacity) {
+            (Some(h), Some(c)) if !h.particle_c.is_empty() => Some(
+                (0..np)
+                    .map(|j| {
+                        let row = self.nodal.row(j);
+                        let t = c.interpolate(row.map(|e| {
+                            (self.nodal.n[e], h.particle_c[self.nodal.index[e] as usize])
+                        }));
+                        [t, 0.0]
+                    })
+                    .collect(),
+            ),
+            _ => None,
+        };
         let previous = self.st.reference.as_ref();
         let mut reference = Reference {
             count: previous.map_or(0, |r| r.count) + 1,
@@ -169,6 +189,11 @@ impl Simulation {
         let (v, r1) = fit(&self.nodal, &v_now);
         let (v_prev, r2) = fit(&self.nodal, &v_before);
         reference.fit_residual = r1.max(r2);
+        if let (Some(t), Some(h)) = (temperature_now, self.st.heat.as_mut()) {
+            let (fitted, r3) = fit(&self.nodal, &t);
+            h.particle_c = fitted.iter().map(|t| t[0]).collect();
+            reference.fit_residual = reference.fit_residual.max(r3);
+        }
         self.st.v = v;
         self.v_prev = v_prev;
         if let Some(c) = &self.constraints {
@@ -271,6 +296,10 @@ impl Simulation {
         self.st.points = points;
         self.out = out;
         self.critical_dt0 = measured?;
+        // Conduction's largest eigenvalue on the new shape functions.
+        if self.transfers_heat {
+            self.conduction_lambda0 = self.conduction_eigenvalue()?;
+        }
         Ok(())
     }
 }
