@@ -111,9 +111,9 @@ pub struct PointLanes {
     /// Temperature (degrees C), read by the laws of rate and temperature and the
     /// elasticity over temperature only.
     pub temperature: Lanes,
-    /// Temperature (degrees C) at the last update, read by the elasticity over temperature
-    /// only: the energy the change of temperature put into the elastic state.
-    pub temperature_prev: Lanes,
+    /// `[E(T) / E, ln lambda_th(T)]` (-) at the last update, read by the elasticity over
+    /// temperature only: the energy the change of temperature put into the elastic state.
+    pub elastic_prev: [Lanes; 2],
     /// `1 / dt` (1/s) of the step the strain increment was taken over: the plastic strain
     /// rate of a return is `dgamma / dt`; 0 before the first step (the least rate).
     pub inv_dt: Real,
@@ -139,7 +139,7 @@ impl PointLanes {
             eps_p: zero,
             flow_stress: [Real::INFINITY; LANES],
             temperature: zero,
-            temperature_prev: zero,
+            elastic_prev: [one, zero],
             inv_dt: 0.0,
             guess: zero,
             plastic_work: zero,
@@ -200,6 +200,9 @@ pub struct StressLanes {
     /// update put in, at this update's trial strain (J/m^3): `W(eps, T) - W(eps, T_prev)`
     /// with the thermal strain of each; 0 without elasticity over temperature.
     pub thermoelastic: Lanes,
+    /// `[E(T) / E, ln lambda_th(T)]` (-) of this update, for the next one's
+    /// [`PointLanes::elastic_prev`] (set with elasticity over temperature only).
+    pub elastic_now: [Lanes; 2],
 }
 
 /// Trial state of each lane (steps 1-3), kept for the return mapping and the stress.
@@ -243,22 +246,16 @@ impl HenckyJ2 {
         (factor * (self.bulk + 4.0 / 3.0 * self.shear) / density).sqrt()
     }
 
-    /// Bulk and shear moduli (Pa) and thermal log strain (-) of each lane at its
-    /// temperature `temps` (degrees C).
+    /// `[E(T) / E, ln lambda_th(T)]` (-) of each lane at its temperature `temps` (degrees
+    /// C): 1 and 0 without elasticity over temperature.
     #[inline(always)]
-    fn elastic_lanes(&self, temps: &Lanes) -> (Lanes, Lanes, Lanes) {
+    fn elastic_lanes(&self, temps: &Lanes) -> [Lanes; 2] {
         match &self.thermoelastic {
-            None => ([self.bulk; LANES], [self.shear; LANES], [0.0; LANES]),
-            Some(te) => {
-                let (mut k, mut g, mut th) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
-                for l in 0..LANES {
-                    let f = te.modulus_factor_at(temps[l]);
-                    k[l] = f * self.bulk;
-                    g[l] = f * self.shear;
-                    th[l] = te.log_strain(temps[l]);
-                }
-                (k, g, th)
-            }
+            None => [[1.0; LANES], [0.0; LANES]],
+            Some(te) => [
+                temps.map(|t| te.modulus_factor_at(t)),
+                temps.map(|t| te.log_strain(t)),
+            ],
         }
     }
 
@@ -296,7 +293,11 @@ impl HenckyJ2 {
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
     pub fn update_lanes(&self, p: &mut PointLanes) -> Result<StressLanes, (usize, String)> {
-        let (k, g, th) = self.elastic_lanes(&p.temperature);
+        let [factor, th] = self.elastic_lanes(&p.temperature);
+        let (k, g) = (
+            factor.map(|f| f * self.bulk),
+            factor.map(|f| f * self.shear),
+        );
         let mut t = Trial::default();
         for l in 0..LANES {
             let f = [p.f[0][l], p.f[1][l], p.f[2][l], p.f[3][l]];
@@ -454,15 +455,16 @@ impl HenckyJ2 {
         if self.thermoelastic.is_some() {
             // W(eps, T) - W(eps, T_prev) at the trial strain: the moduli and the thermal
             // strain of each temperature.
-            let (kp, gp, thp) = self.elastic_lanes(&p.temperature_prev);
+            let [fp, thp] = p.elastic_prev;
             for l in 0..LANES {
                 let e2 = t.e[0][l] * t.e[0][l] + t.e[1][l] * t.e[1][l] + t.e[2][l] * t.e[2][l];
                 let theta = t.theta[l];
                 let theta_prev = theta + 3.0 * (th[l] - thp[l]);
                 out.thermoelastic[l] = 0.5
-                    * (k[l] * theta * theta - kp[l] * theta_prev * theta_prev)
-                    + (g[l] - gp[l]) * e2;
+                    * (k[l] * theta * theta - fp[l] * self.bulk * theta_prev * theta_prev)
+                    + (g[l] - fp[l] * self.shear) * e2;
             }
+            out.elastic_now = [factor, th];
         }
         Ok(out)
     }

@@ -9,10 +9,10 @@ use crate::math::Real;
 /// The value of `table` at `t`: linear between its points, the first and last held beyond
 /// them. `table` is non-empty with increasing temperatures.
 pub fn interpolate(table: &[[Real; 2]], t: Real) -> Real {
-    match table.iter().position(|p| p[0] > t) {
-        None => table[table.len() - 1][1],
-        Some(0) => table[0][1],
-        Some(k) => {
+    match table.partition_point(|p| p[0] <= t) {
+        0 => table[0][1],
+        k if k == table.len() => table[k - 1][1],
+        k => {
             let ([t0, v0], [t1, v1]) = (table[k - 1], table[k]);
             v0 + (v1 - v0) * (t - t0) / (t1 - t0)
         }
@@ -81,9 +81,8 @@ impl HeatCapacity {
             HeatCapacity::Constant(c) => c * t,
             HeatCapacity::Table { points, enthalpy } => {
                 let k = points
-                    .iter()
-                    .rposition(|p| p[0] <= t)
-                    .unwrap_or(0)
+                    .partition_point(|p| p[0] <= t)
+                    .saturating_sub(1)
                     .min(points.len().saturating_sub(2));
                 let [tk, ck] = points[k];
                 let s = t - tk;
@@ -115,7 +114,7 @@ impl HeatCapacity {
                 if h >= enthalpy[last] {
                     return points[last][0] + (h - enthalpy[last]) / points[last][1];
                 }
-                let k = enthalpy.iter().rposition(|&e| e <= h).unwrap_or(0);
+                let k = enthalpy.partition_point(|&e| e <= h).saturating_sub(1);
                 let ([tk, ck], [t1, c1]) = (points[k], points[k + 1]);
                 let (dh, a) = (h - enthalpy[k], (c1 - ck) / (t1 - tk));
                 let root = (ck * ck + 2.0 * a * dh).max(0.0).sqrt();
@@ -125,11 +124,29 @@ impl HeatCapacity {
     }
 
     /// The temperature (degrees C) a body at `t` reaches when it takes `q` (J/kg):
-    /// `t + q / c`, or `h^-1(h(t) + q)`.
+    /// `t + q / c`, or `h^-1(h(t) + q)`: within the interval of the table holding `t`,
+    /// `t + 2 q / (c(t) + sqrt(c(t)^2 + 2 a q))` (`a` the interval's slope of `c`) while that
+    /// stays in the interval (a step's heating mostly does), else through the enthalpy.
+    #[inline]
     pub fn heat(&self, t: Real, q: Real) -> Real {
         match self {
             HeatCapacity::Constant(c) => t + q / c,
-            HeatCapacity::Table { .. } => self.temperature(self.enthalpy(t) + q),
+            HeatCapacity::Table { points, .. } => {
+                let k = points.partition_point(|p| p[0] <= t);
+                if k > 0 && k < points.len() {
+                    let ([t0, c0], [t1, c1]) = (points[k - 1], points[k]);
+                    let a = (c1 - c0) / (t1 - t0);
+                    let c = c0 + a * (t - t0);
+                    let root = c * c + 2.0 * a * q;
+                    if root >= 0.0 {
+                        let next = t + 2.0 * q / (c + root.sqrt());
+                        if next >= t0 && next < t1 {
+                            return next;
+                        }
+                    }
+                }
+                self.temperature(self.enthalpy(t) + q)
+            }
         }
     }
 
@@ -273,6 +290,16 @@ mod tests {
         }
         let k = HeatCapacity::new(460.0, &[]);
         assert_eq!(k.heat(100.0, 4600.0), 110.0);
+        // Heating within an interval and across intervals agrees with the enthalpy's.
+        for (t, q) in [
+            (100.0, 50.0),
+            (700.0, 5.0e4),
+            (719.0, 3.0e3),
+            (880.0, -2.0e4),
+        ] {
+            let exact = c.temperature(c.enthalpy(t) + q);
+            assert!((c.heat(t, q) - exact).abs() < 1e-9, "{t} + {q}");
+        }
     }
 
     #[test]

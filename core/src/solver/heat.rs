@@ -50,11 +50,11 @@ pub struct Heat {
     /// empty unless a tool's heat transfer depends on the contact pressure).
     #[serde(default)]
     pub normal_impulse: Vec<Real>,
-    /// Temperature of each point at its last stress update (degrees C; empty without
-    /// elasticity over temperature): the energy account books the elastic energy a change
-    /// of temperature puts in.
+    /// `[E(T) / E, ln lambda_th(T)]` of each point at its last stress update (-; empty
+    /// without elasticity over temperature): the energy account books the elastic energy a
+    /// change of temperature puts in.
     #[serde(default)]
-    pub elastic_temperature_c: Vec<Real>,
+    pub elastic_state: Vec<[Real; 2]>,
     /// The change of each point's temperature in the last heat stage (K; empty without
     /// elasticity over temperature), which the elasticity takes in over the heat step that
     /// follows ([`Heating::ramp`]).
@@ -71,7 +71,7 @@ impl Heat {
         particles: usize,
         friction: bool,
         pressure: bool,
-        thermoelastic: bool,
+        thermoelastic: Option<[Real; 2]>,
     ) -> Heat {
         Heat {
             temperature_c: vec![spec.initial_temperature_c; points],
@@ -86,11 +86,8 @@ impl Heat {
             friction_work: vec![0.0; if friction { particles } else { 0 }],
             friction_heat_j: 0.0,
             normal_impulse: vec![0.0; if pressure { particles } else { 0 }],
-            elastic_temperature_c: match thermoelastic {
-                true => vec![spec.initial_temperature_c; points],
-                false => Vec::new(),
-            },
-            stage_change_k: vec![0.0; if thermoelastic { points } else { 0 }],
+            elastic_state: thermoelastic.map_or(Vec::new(), |s| vec![s; points]),
+            stage_change_k: vec![0.0; if thermoelastic.is_some() { points } else { 0 }],
         }
     }
 }

@@ -647,8 +647,8 @@ impl Simulation {
                     &mut h.temperature_c[..],
                     &mut h.plastic_work[..],
                     &mut h.plastic_rate[..],
-                    (!h.elastic_temperature_c.is_empty())
-                        .then_some((&mut h.elastic_temperature_c[..], &h.stage_change_k[..])),
+                    (!h.elastic_state.is_empty())
+                        .then_some((&mut h.elastic_state[..], &h.stage_change_k[..])),
                 )
             }),
         )

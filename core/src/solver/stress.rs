@@ -325,9 +325,9 @@ impl StressContext<'_> {
                     // temperatures of the last update, and this update's for the next.
                     for l in 0..used {
                         batch.temperature[l] -= h.ramp * change[k0 + l];
+                        batch.elastic_prev[0][l] = prev[k0 + l][0];
+                        batch.elastic_prev[1][l] = prev[k0 + l][1];
                     }
-                    batch.temperature_prev[..used].copy_from_slice(&prev[k0..k0 + used]);
-                    prev[k0..k0 + used].copy_from_slice(&batch.temperature[..used]);
                 }
                 batch.inv_dt = h.inv_dt;
                 for l in 0..used {
@@ -345,6 +345,11 @@ impl StressContext<'_> {
                     return s;
                 }
             };
+            if let Some((_, _, _, Some((prev, _)))) = &mut heat {
+                for l in 0..used {
+                    prev[k0 + l] = [u.elastic_now[0][l], u.elastic_now[1][l]];
+                }
+            }
             // Smallest altitude of the deformed cell spanned by F (hx e_x), F (hy e_y):
             // det F hx hy / max(|F hx e_x|, |F hy e_y|), compared squared (all lanes at
             // once; unused lanes hold F = I and are not read).
@@ -484,13 +489,13 @@ struct Batch {
 
 /// A thermal scene's per-point temperatures (degrees C), plastic work densities (J/m^3) and
 /// plastic strain rates (1/s), which the stress stage updates ([`super::heat::Heat`]), and
-/// with elasticity over temperature the temperatures of the last update and the changes of
-/// the last heat stage (degrees C, K).
+/// with elasticity over temperature `[E(T) / E, ln lambda_th]` of the last update and the
+/// changes of the last heat stage (K).
 pub(super) type HeatSlices<'a> = (
     &'a mut [Real],
     &'a mut [Real],
     &'a mut [Real],
-    Option<(&'a mut [Real], &'a [Real])>,
+    Option<(&'a mut [[Real; 2]], &'a [Real])>,
 );
 
 /// What the stress stage reads besides the layout.
