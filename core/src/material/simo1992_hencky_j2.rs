@@ -111,9 +111,11 @@ pub struct PointLanes {
     /// Temperature (degrees C), read by the laws of rate and temperature and the
     /// elasticity over temperature only.
     pub temperature: Lanes,
-    /// `[E(T) / E, ln lambda_th(T)]` (-) at the last update, read by the elasticity over
-    /// temperature only: the energy the change of temperature put into the elastic state.
-    pub elastic_prev: [Lanes; 2],
+    /// The last update's `[E(T) / E, ln lambda_th(T), ln J, |e|^2]` (-: the modulus factor
+    /// and thermal log strain of its temperature, its volumetric log strain and its elastic
+    /// deviator's square after the return), read by the elasticity over temperature only:
+    /// the energy the change of temperature put into the elastic state.
+    pub elastic_prev: [Lanes; 4],
     /// `1 / dt` (1/s) of the step the strain increment was taken over: the plastic strain
     /// rate of a return is `dgamma / dt`; 0 before the first step (the least rate).
     pub inv_dt: Real,
@@ -139,7 +141,7 @@ impl PointLanes {
             eps_p: zero,
             flow_stress: [Real::INFINITY; LANES],
             temperature: zero,
-            elastic_prev: [one, zero],
+            elastic_prev: [one, zero, zero, zero],
             inv_dt: 0.0,
             guess: zero,
             plastic_work: zero,
@@ -202,7 +204,7 @@ pub struct StressLanes {
     pub thermoelastic: Lanes,
     /// `[E(T) / E, ln lambda_th(T)]` (-) of this update, for the next one's
     /// [`PointLanes::elastic_prev`] (set with elasticity over temperature only).
-    pub elastic_now: [Lanes; 2],
+    pub elastic_now: [Lanes; 4],
 }
 
 /// Trial state of each lane (steps 1-3), kept for the return mapping and the stress.
@@ -453,18 +455,29 @@ impl HenckyJ2 {
                 0.5 * kt * t.theta[l] + g * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
         }
         if self.thermoelastic.is_some() {
-            // W(eps, T) - W(eps, T_prev) at the trial strain: the moduli and the thermal
-            // strain of each temperature.
-            let [fp, thp] = p.elastic_prev;
+            // int dW/dT dT over the step by the trapezoid rule in the strain: `W(eps, T) -
+            // W(eps, T_prev)` at the last update's strain and at this one's trial strain,
+            // averaged (second order: a first-order booking at the trial strain alone missed
+            // a fifth of the energy of a die's first chill), with the modulus and the
+            // thermal strain of each temperature.
+            let [fp, thp, jp, e2p] = p.elastic_prev;
+            let w = |f: Real, th: Real, ln_j: Real, e2: Real| {
+                let theta = ln_j - 3.0 * th;
+                f * (0.5 * self.bulk * theta * theta + self.shear * e2)
+            };
+            let mut now = [[0.0; LANES]; 4];
             for l in 0..LANES {
                 let e2 = t.e[0][l] * t.e[0][l] + t.e[1][l] * t.e[1][l] + t.e[2][l] * t.e[2][l];
-                let theta = t.theta[l];
-                let theta_prev = theta + 3.0 * (th[l] - thp[l]);
-                out.thermoelastic[l] = 0.5
-                    * (k[l] * theta * theta - fp[l] * self.bulk * theta_prev * theta_prev)
-                    + (g[l] - fp[l] * self.shear) * e2;
+                let ln_j = t.theta[l] + 3.0 * th[l];
+                let at_trial = w(factor[l], th[l], ln_j, e2) - w(fp[l], thp[l], ln_j, e2);
+                let at_last = w(factor[l], th[l], jp[l], e2p[l]) - w(fp[l], thp[l], jp[l], e2p[l]);
+                out.thermoelastic[l] = 0.5 * (at_trial + at_last);
+                now[0][l] = factor[l];
+                now[1][l] = th[l];
+                now[2][l] = ln_j;
+                now[3][l] = e2 * scale[l] * scale[l];
             }
-            out.elastic_now = [factor, th];
+            out.elastic_now = now;
         }
         Ok(out)
     }

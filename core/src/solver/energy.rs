@@ -38,6 +38,10 @@ pub struct Energy {
     /// force did that work.
     #[serde(default)]
     pub thermoelastic: Real,
+    /// Sum of the magnitudes of the thermoelastic increments (J), part of the balance's
+    /// reference: a body that the dies chill at rest exchanges no work but that.
+    #[serde(default)]
+    pub thermoelastic_abs: Real,
 }
 
 /// Kinetic energy `sum m_I |v_I|^2 / 2` (J) of coefficient velocities `v` (m/s) with the
@@ -67,12 +71,14 @@ impl Energy {
             - self.remap
             - self.thermoelastic
     }
-    /// The energy against which the balance error is measured: the larger of the initial
-    /// energy and the total contact work exchanged.
+    /// The energy against which the balance error is measured: the largest of the initial
+    /// energy, the total contact work and tool work exchanged, and the elastic energy
+    /// changes of temperature moved in and out.
     pub fn reference(&self) -> Real {
         self.initial
             .max(self.contact_work_abs)
             .max(self.tool_work_abs)
+            .max(self.thermoelastic_abs)
     }
     /// Energy gained by the penalty interface, `contact_work - tool_work` (J): negative or
     /// near zero (the paper's penalty stops particles at a tool, which dissipates); a clear
@@ -165,11 +171,16 @@ impl Energy {
                 error_rel: rel,
                 bound: tol,
                 detail: format!(
-                    "kinetic {:.4e} J + elastic {:.4e} J + plastic {:.4e} J - contact work {:.4e} J vs initial {:.4e} J; step {:.3e} s, stable estimate {:.3e} s{}",
+                    "kinetic {:.4e} J + elastic {:.4e} J + plastic {:.4e} J - contact work {:.4e} J{} vs initial {:.4e} J; step {:.3e} s, stable estimate {:.3e} s{}",
                     e.kinetic,
                     e.elastic,
                     e.plastic,
                     e.contact_work,
+                    if e.thermoelastic_abs > 0.0 {
+                        format!(" - put in by temperature {:.4e} J", e.thermoelastic)
+                    } else {
+                        String::new()
+                    },
                     e.initial,
                     dt,
                     stable_dt,

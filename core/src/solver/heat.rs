@@ -50,11 +50,11 @@ pub struct Heat {
     /// empty unless a tool's heat transfer depends on the contact pressure).
     #[serde(default)]
     pub normal_impulse: Vec<Real>,
-    /// `[E(T) / E, ln lambda_th(T)]` of each point at its last stress update (-; empty
-    /// without elasticity over temperature): the energy account books the elastic energy a
-    /// change of temperature puts in.
+    /// Each point's elastic state at its last stress update (-; empty without elasticity
+    /// over temperature; [`crate::material::PointLanes::elastic_prev`]): the energy account
+    /// books the elastic energy a change of temperature puts in.
     #[serde(default)]
-    pub elastic_state: Vec<[Real; 2]>,
+    pub elastic_state: Vec<[Real; 4]>,
     /// The change of each point's temperature in the last heat stage (K; empty without
     /// elasticity over temperature), which the elasticity takes in over the heat step that
     /// follows ([`Heating::ramp`]).
@@ -71,7 +71,7 @@ impl Heat {
         particles: usize,
         friction: bool,
         pressure: bool,
-        thermoelastic: Option<[Real; 2]>,
+        thermoelastic: Option<[Real; 4]>,
     ) -> Heat {
         Heat {
             temperature_c: vec![spec.initial_temperature_c; points],

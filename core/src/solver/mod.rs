@@ -666,6 +666,7 @@ impl Simulation {
             self.st.max_stretch = sums.max_stretch;
         }
         self.st.energy.thermoelastic += sums.thermoelastic;
+        self.st.energy.thermoelastic_abs += sums.thermoelastic.abs();
         self.times.stress += t0.elapsed();
         Ok((sums.elastic, sums.plastic))
     }

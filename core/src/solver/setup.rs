@@ -154,10 +154,10 @@ impl Simulation {
                         scene.heats_by_friction(),
                         scene.transfers_heat_by_pressure(),
                     );
-                    // E(T) / E and the thermal log strain (0) at the initial temperature.
+                    // E(T) / E at the initial temperature, unstrained.
                     let thermoelastic = t
                         .thermoelastic()
-                        .map(|te| [te.modulus_factor_at(t.initial_temperature_c), 0.0]);
+                        .map(|te| [te.modulus_factor_at(t.initial_temperature_c), 0.0, 0.0, 0.0]);
                     Heat::initial(
                         t,
                         npts,

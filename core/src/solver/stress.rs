@@ -325,8 +325,9 @@ impl StressContext<'_> {
                     // temperatures of the last update, and this update's for the next.
                     for l in 0..used {
                         batch.temperature[l] -= h.ramp * change[k0 + l];
-                        batch.elastic_prev[0][l] = prev[k0 + l][0];
-                        batch.elastic_prev[1][l] = prev[k0 + l][1];
+                        for c in 0..4 {
+                            batch.elastic_prev[c][l] = prev[k0 + l][c];
+                        }
                     }
                 }
                 batch.inv_dt = h.inv_dt;
@@ -347,7 +348,7 @@ impl StressContext<'_> {
             };
             if let Some((_, _, _, Some((prev, _)))) = &mut heat {
                 for l in 0..used {
-                    prev[k0 + l] = [u.elastic_now[0][l], u.elastic_now[1][l]];
+                    prev[k0 + l] = std::array::from_fn(|c| u.elastic_now[c][l]);
                 }
             }
             // Smallest altitude of the deformed cell spanned by F (hx e_x), F (hy e_y):
@@ -489,13 +490,14 @@ struct Batch {
 
 /// A thermal scene's per-point temperatures (degrees C), plastic work densities (J/m^3) and
 /// plastic strain rates (1/s), which the stress stage updates ([`super::heat::Heat`]), and
-/// with elasticity over temperature `[E(T) / E, ln lambda_th]` of the last update and the
-/// changes of the last heat stage (K).
+/// with elasticity over temperature the last update's elastic state
+/// ([`crate::material::PointLanes::elastic_prev`]) and the changes of the last heat stage
+/// (K).
 pub(super) type HeatSlices<'a> = (
     &'a mut [Real],
     &'a mut [Real],
     &'a mut [Real],
-    Option<(&'a mut [[Real; 2]], &'a [Real])>,
+    Option<(&'a mut [[Real; 4]], &'a [Real])>,
 );
 
 /// What the stress stage reads besides the layout.
