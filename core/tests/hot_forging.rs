@@ -24,6 +24,15 @@ fn end_of(scene: &Scene) -> (f64, f64, f64, f64, u64) {
     )
 }
 
+/// The shipped hot upsetting on a coarse grid (6 x 16 particles).
+fn coarse() -> Scene {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/hot_upsetting.toml");
+    let mut scene = Scene::from_file(&path).unwrap();
+    scene.workpiece.particles = [6, 16];
+    scene
+}
+
 /// The shipped scene on a coarse grid (6 x 16) at 0.2 m/s for 15 mm (a screw press's speed,
 /// so that the unscaled run is short): with the scene's selective mass scaling (a 20 us
 /// step) and without (the wave speed's step): the ram force at the end within 2 %, the least
@@ -32,10 +41,7 @@ fn end_of(scene: &Scene) -> (f64, f64, f64, f64, u64) {
 /// temperature: 0.03 %, 0.97 %, 0.10 %, 0.80 %).
 #[test]
 fn mass_scaled_hot_upsetting_follows_the_unscaled_run() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/hot_upsetting.toml");
-    let mut scene = Scene::from_file(&path).unwrap();
-    scene.workpiece.particles = [6, 16];
+    let mut scene = coarse();
     let speed = 0.2;
     for tool in &mut scene.tools {
         if let Motion::Constant { velocity_m_per_s } = &mut tool.motion {
@@ -100,10 +106,7 @@ fn mass_scaled_hot_upsetting_follows_the_unscaled_run() {
 /// was five times larger without mass scaling than with it, the elastic ringing's.)
 #[test]
 fn friction_heats_the_workpiece_by_its_share_of_the_interface_work() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/hot_upsetting.toml");
-    let mut scene = Scene::from_file(&path).unwrap();
-    scene.workpiece.particles = [6, 16];
+    let mut scene = coarse();
     let thermal = scene.thermal.as_mut().unwrap();
     thermal.conductivity_w_per_m_k = 0.0;
     thermal.convection_w_per_m2_k = 0.0;
@@ -144,10 +147,7 @@ fn friction_heats_the_workpiece_by_its_share_of_the_interface_work() {
 /// more than 0.1 J.
 #[test]
 fn a_billet_chilled_at_rest_keeps_its_energy_account() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/hot_upsetting.toml");
-    let mut scene = Scene::from_file(&path).unwrap();
-    scene.workpiece.particles = [6, 16];
+    let mut scene = coarse();
     for tool in &mut scene.tools {
         if let Motion::Constant { velocity_m_per_s } = &mut tool.motion {
             *velocity_m_per_s = 0.0;

@@ -204,17 +204,7 @@ fn adiabatic(scene: &Scene, c: &dyn Fn(f64) -> f64) -> f64 {
         thermal.initial_temperature_c,
         thermal.taylor_quinney,
     );
-    let mut sim = Simulation::new(scene).unwrap();
-    let end = scene.time.end_s;
-    sim.run_to(end, |_| {}).unwrap();
-    let e = sim.energy();
-    let plastic = e.contact_work + e.initial - e.kinetic - e.elastic - e.internal_half_step;
-    let heat = sim.heat_content().unwrap();
-    assert!(
-        (heat / (beta * plastic) - 1.0).abs() < 0.005,
-        "heat {heat:.4} J against beta W_p {:.4} J",
-        beta * plastic
-    );
+    let (sim, heat, plastic) = heated_by_its_plastic_work(scene);
     // The homogeneous adiabatic path: eps_p(t) = ln(h0 / h) - sigma / E (elastic part of the
     // axial log strain), at the applied rate v / h.
     let speed = scene_speed(scene);
@@ -279,6 +269,25 @@ fn adiabatic(scene: &Scene, c: &dyn Fn(f64) -> f64) -> f64 {
     temp - t0
 }
 
+/// Runs `scene` to its end and checks that the heat its points hold equals beta times the
+/// plastic work the platens' work went into (contact work less kinetic and stored elastic
+/// energy, from the energy account) within 0.5 %; returns the simulation, the heat and that
+/// plastic work (J).
+fn heated_by_its_plastic_work(scene: &Scene) -> (Simulation, f64, f64) {
+    let beta = scene.thermal.as_ref().unwrap().taylor_quinney;
+    let mut sim = Simulation::new(scene).unwrap();
+    sim.run_to(scene.time.end_s, |_| {}).unwrap();
+    let e = sim.energy();
+    let plastic = e.contact_work + e.initial - e.kinetic - e.elastic - e.internal_half_step;
+    let heat = sim.heat_content().unwrap();
+    assert!(
+        (heat / (beta * plastic) - 1.0).abs() < 0.005,
+        "heat {heat:.4} J against beta W_p {:.4} J",
+        beta * plastic
+    );
+    (sim, heat, plastic)
+}
+
 /// A rate-independent power law in a scene with `[thermal]` heats too: the cylinder of a
 /// power-law steel (K 530 MPa, eps0 0.01, n 0.26) compressed adiabatically, beta 0.9, holds
 /// beta times the plastic work of the energy account within 0.5 %, and each point rose by
@@ -294,16 +303,7 @@ fn a_power_law_heats_by_its_plastic_work() {
     };
     let (t0, beta) = (20.0, 0.9);
     let scene = compress(&steel, 1000.0, t0, beta, 0.8);
-    let mut sim = Simulation::new(&scene).unwrap();
-    sim.run_to(scene.time.end_s, |_| {}).unwrap();
-    let e = sim.energy();
-    let plastic = e.contact_work + e.initial - e.kinetic - e.elastic - e.internal_half_step;
-    let heat = sim.heat_content().unwrap();
-    assert!(
-        (heat / (beta * plastic) - 1.0).abs() < 0.005,
-        "heat {heat:.4} J against beta W_p {:.4} J",
-        beta * plastic
-    );
+    let (sim, ..) = heated_by_its_plastic_work(&scene);
     let work = |e: f64| 530.0e6 * ((0.01 + e).powf(1.26) - 0.01f64.powf(1.26)) / 1.26;
     let temps = sim.point_temperature().unwrap();
     for (p, &eps) in sim.point_plastic_strain().iter().enumerate() {
