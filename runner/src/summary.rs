@@ -93,6 +93,15 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
     if scene.transfers_heat() {
         summary["stage_seconds"]["heat"] = json!(times.heat.as_secs_f64());
     }
+    // Only a scene with elasticity over temperature: the elastic energy changes of
+    // temperature put in, a term of its energy account.
+    if scene
+        .thermal
+        .as_ref()
+        .is_some_and(|t| t.thermoelastic().is_some())
+    {
+        summary["energy"]["thermoelastic_J"] = json!(e.thermoelastic);
+    }
     // Only a scene with temperature has the entry.
     let thermal = thermal_measures(sim);
     if !thermal.is_empty() {
