@@ -163,3 +163,61 @@ fn a_held_block_takes_the_thermal_stress_at_its_modulus() {
         assert!((a / b - 1.0).abs() < 1e-9, "{a} against {b}");
     }
 }
+
+/// A modulus that rises as the body cools (six times stiffer at 20 C than at 500 C, the
+/// table `[[20, 6], [500, 1]]`): the block at 500 C on a die at 20 C (1e5 W/(m^2 K)) cools
+/// to below 100 C in 0.5 s, and the explicit step, measured at 500 C, is scaled by
+/// `sqrt(f(500) / f_max)` so that it holds for the stiffest temperature: the run ends with its
+/// energy account closed (at the measured step alone the cold body is unstable at the
+/// default `dt_safety` 0.5, as `1 / sqrt(6)` is below it).
+#[test]
+fn a_body_that_stiffens_as_it_cools_stays_stable() {
+    let text = r#"
+name = "stiffening"
+[model]
+kinematics = "plane_strain"
+[workpiece]
+origin_m = [0.0, 0.0]
+size_m = [0.004, 0.004]
+particles = [9, 9]
+[material]
+density_kg_per_m3 = 8960.0
+youngs_modulus_pa = 124.0e9
+poisson_ratio = 0.34
+hardening = { law = "linear", yield_stress_pa = 1.0e9, modulus_pa = 0.0 }
+[discretization]
+integration = "q4"
+[thermal]
+initial_temperature_c = 500.0
+specific_heat_j_per_kg_k = 385.0
+conductivity_w_per_m_k = 400.0
+modulus_factor_by_temperature = [[20.0, 6.0], [500.0, 1.0]]
+expansion_per_k = 1.7e-5
+[time]
+end_s = 0.5
+mass_scaling = { factor = 1.0e6 }
+[[tools]]
+name = "die"
+points_m = [[-0.004, 0.0], [0.008, 0.0]]
+axis = [0.0, 1.0]
+motion = { kind = "fixed" }
+separation = false
+temperature_c = 20.0
+heat_transfer_w_per_m2_k = 1.0e5
+"#;
+    let scene = Scene::from_str_named(text, "stiffening.toml").unwrap();
+    let mut sim = Simulation::new(&scene).unwrap();
+    let measured = sim.critical_dt0();
+    sim.run_to(scene.time.end_s, |_| {}).unwrap();
+    let t = sim.temperatures().unwrap();
+    let e = sim.energy();
+    eprintln!(
+        "stiffening: critical step {measured:.3e} s, {:.1}-{:.1} C at the end, balance {:.2e} of {:.3e} J",
+        t.min_c,
+        t.max_c,
+        e.balance_error(),
+        e.thermoelastic_abs
+    );
+    assert!(t.max_c < 100.0, "{:.1} C", t.max_c);
+    assert!(e.balance_error().abs() < 1e-3 * e.thermoelastic_abs);
+}

@@ -222,15 +222,14 @@ impl Thermoelastic {
 
     /// The largest `E(T) / E` (-), for the stable step.
     pub fn modulus_factor_max(&self) -> Real {
-        self.modulus_factor
-            .iter()
-            .map(|p| p[1])
-            .fold(Real::NEG_INFINITY, Real::max)
-            .max(if self.modulus_factor.is_empty() {
-                1.0
-            } else {
-                0.0
-            })
+        if self.modulus_factor.is_empty() {
+            1.0
+        } else {
+            self.modulus_factor
+                .iter()
+                .map(|p| p[1])
+                .fold(Real::NEG_INFINITY, Real::max)
+        }
     }
 
     /// The thermal log strain `ln lambda_th(T)` (-).

@@ -692,8 +692,28 @@ impl Simulation {
 
     /// The critical step on the undeformed discretisation (`stable_step.rs`),
     /// with `K x` the internal force of a displacement of 1e-7 of the spacing; the state is
-    /// left undeformed.
+    /// left undeformed. With a modulus over temperature the points answer at their
+    /// temperatures now: the step is scaled by `sqrt(f_now / f_max)`, `f_now` the largest
+    /// modulus factor of the points' temperatures and `f_max` the table's largest, so that
+    /// it holds when a die chills the body stiffer.
     fn measure_critical_step(&mut self) -> Result<Real> {
+        let stiffening = match (&self.material.thermoelastic, &self.st.heat) {
+            (Some(te), Some(h)) if !te.modulus_factor.is_empty() => {
+                let now = h
+                    .temperature_c
+                    .iter()
+                    .map(|&t| te.modulus_factor_at(t))
+                    .fold(Real::NEG_INFINITY, Real::max);
+                (now / te.modulus_factor_max()).sqrt()
+            }
+            _ => 1.0,
+        };
+        self.measure_critical_step_now().map(|dt| dt * stiffening)
+    }
+
+    /// The critical step the points answer with at their temperatures now (see
+    /// [`Simulation::measure_critical_step`]).
+    fn measure_critical_step_now(&mut self) -> Result<Real> {
         let saved_points = self.st.points.clone();
         // The stress stage also heats the points and books the energy: neither is the run's.
         let (saved_heat, saved_energy) = (self.st.heat.clone(), self.st.energy);
