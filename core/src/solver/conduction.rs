@@ -346,7 +346,7 @@ impl Simulation {
         let heat = self.st.heat.as_ref().expect("a thermal scene");
         let base = self.at_points(&heat.particle_c);
         let rho = self.scene.material.density_kg_per_m3;
-        let capacity = self.heat_capacity.clone().expect("a thermal scene");
+        let capacity = self.heat_capacity.as_ref().expect("a thermal scene");
         let mut gain = vec![0.0; mass.len()];
         for (p, (&w, (&t, b))) in self
             .weights
