@@ -27,6 +27,7 @@ TOPICS = {
     "/rkforge/workpiece": "sensor_msgs/msg/PointCloud2",
     "/rkforge/tool_markers": "visualization_msgs/msg/MarkerArray",
     "/rkforge/die_fill": "rkforge_msgs/msg/DieFill",
+    "/rkforge/laps": "rkforge_msgs/msg/Laps",
     "/rkforge/energy": "rkforge_msgs/msg/Energy",
     "/clock": "rosgraph_msgs/msg/Clock",
 }

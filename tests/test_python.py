@@ -279,11 +279,14 @@ def test_read_mcap_gives_the_history_columns_and_the_point_clouds(rkforge_bin, t
              for c in ("stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N", "contact_fraction")]
     energy = [f"energy.{c}" for c in ("kinetic_J", "elastic_J", "plastic_J", "internal_J", "contact_J",
                                       "tool_work_J")]
-    assert list(rec.history.columns) == ["time_s", *tools, *energy, "energy.initial_J"]
+    assert list(rec.history.columns) == ["time_s", *tools, "workpiece.laps", *energy,
+                                         "energy.initial_J"]
     assert len(rec.history) == len(history)
+    assert (rec.history["workpiece.laps"] == 0.0).all()
     # Log times are the sample times rounded to the nanosecond.
     assert np.abs(rec.history["time_s"].to_numpy() - history["time_s"].to_numpy()).max() < 1e-9
-    assert_same_history(rec.history[tools + energy], history[tools + energy])
+    same = tools + ["workpiece.laps"] + energy
+    assert_same_history(rec.history[same], history[same])
     # The block starts at rest; the account closes: the tools' work went into the block.
     assert (rec.history["energy.initial_J"] == 0.0).all()
     end = rec.history.iloc[-1]

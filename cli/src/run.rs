@@ -11,17 +11,23 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-/// A frame's shape for the plots: time (s), particle positions (m), plastic strain, tool
-/// polylines (m), the tools' fill points (m) with whether each is filled, and in a scene
-/// with temperature the particles' temperatures (degrees C).
-type Shape = (
-    f64,
-    Vec<[f64; 2]>,
-    Vec<f64>,
-    Vec<Vec<[f64; 2]>>,
-    Vec<([f64; 2], bool)>,
-    Option<Vec<f64>>,
-);
+/// A frame's shape for the plots.
+struct Shape {
+    /// Time (s).
+    time: f64,
+    /// Particle positions (m).
+    positions: Vec<[f64; 2]>,
+    /// Equivalent plastic strain per particle.
+    plastic_strain: Vec<f64>,
+    /// Tool polylines (m).
+    tools: Vec<Vec<[f64; 2]>>,
+    /// The tools' fill points (m) with whether each is filled.
+    marks: Vec<([f64; 2], bool)>,
+    /// The laps: each one's label and its surface particles' positions (m).
+    laps: Vec<plots::Lap>,
+    /// In a scene with temperature, the particles' temperatures (degrees C).
+    temperature: Option<Vec<f64>>,
+}
 
 /// How to run.
 pub struct Options {
@@ -271,6 +277,7 @@ fn write_frame(
     if let Some(t) = &f.temperature {
         scalars.push(("temperature_C", t));
     }
+    scalars.push(("lap", &f.lap));
     vtu::write_vtu(
         &dir.join(&name),
         &f.positions,
@@ -289,14 +296,24 @@ fn write_frame(
         .iter()
         .map(|p| (p.at_m, p.filled.is_some()))
         .collect();
-    shapes.push((
-        sim.time(),
-        f.positions,
-        f.plastic_strain,
+    let laps = sim
+        .laps()
+        .iter()
+        .enumerate()
+        .map(|(k, lap)| plots::Lap {
+            label: format!("lap {}", k + 1),
+            points: lap.particles.iter().map(|&j| f.positions[j]).collect(),
+        })
+        .collect();
+    shapes.push(Shape {
+        time: sim.time(),
+        positions: f.positions,
+        plastic_strain: f.plastic_strain,
         tools,
         marks,
-        f.temperature,
-    ));
+        laps,
+        temperature: f.temperature,
+    });
     Ok(())
 }
 
@@ -307,28 +324,32 @@ fn write_stages(sim: &Simulation, opts: &Options, shapes: &[Shape]) -> Result<()
     };
     let q = quads(sim);
     let name = &sim.scene().name;
+    fn panel<'a>(last: &'a Shape, values: &'a [f64]) -> plots::Stage<'a> {
+        plots::Stage {
+            title: String::new(),
+            positions: &last.positions,
+            values,
+            tools: last.tools.clone(),
+            marks: last.marks.clone(),
+            laps: last.laps.clone(),
+        }
+    }
     plots::shape_plot(
         &opts.out.join("shape.png"),
-        &format!("{name}: plastic strain at t = {:.3e} s", last.0),
-        &last.1,
+        &format!("{name}: plastic strain at t = {:.3e} s", last.time),
         &q,
-        &last.2,
+        panel(last, &last.plastic_strain),
         "equivalent plastic strain",
-        &last.3,
-        &last.4,
         axis_labels(sim),
         1e3,
     )?;
-    if let Some(temperature) = &last.5 {
+    if let Some(temperature) = &last.temperature {
         plots::shape_plot(
             &opts.out.join("temperature.png"),
-            &format!("{name}: temperature at t = {:.3e} s", last.0),
-            &last.1,
+            &format!("{name}: temperature at t = {:.3e} s", last.time),
             &q,
-            temperature,
+            panel(last, temperature),
             "temperature (C)",
-            &last.3,
-            &last.4,
             axis_labels(sim),
             1e3,
         )?;
@@ -336,11 +357,12 @@ fn write_stages(sim: &Simulation, opts: &Options, shapes: &[Shape]) -> Result<()
     let stages: Vec<plots::Stage> = shapes
         .iter()
         .map(|s| plots::Stage {
-            title: format!("t = {:.3e} s", s.0),
-            positions: &s.1,
-            values: &s.2,
-            tools: s.3.clone(),
-            marks: s.4.clone(),
+            title: format!("t = {:.3e} s", s.time),
+            positions: &s.positions,
+            values: &s.plastic_strain,
+            tools: s.tools.clone(),
+            marks: s.marks.clone(),
+            laps: s.laps.clone(),
         })
         .collect();
     plots::stages_plot(

@@ -1,7 +1,9 @@
 //! The contact stage of a step: the paper's penalty contact (Sidibe et al. 2009, section
 //! II-3, eqs. 4-7; the force laws are in [`crate::tools`]) applied to every particle of the
-//! workpiece that can reach a tool, then the tools' convex corners against the workpiece's
-//! surface ([`crate::corners`], the second pass of a two-pass node-to-segment method).
+//! workpiece that can reach a tool or a symmetry plane ([`crate::symmetry`]), then the
+//! tools' convex corners against the workpiece's surface ([`crate::corners`], the second
+//! pass of a two-pass node-to-segment method), then the workpiece's surface against itself
+//! ([`crate::self_contact`]).
 //!
 //! Every particle is a contact candidate, not only those that started on the boundary:
 //! material that flows around a die corner brings particles from the inside to the surface
@@ -14,9 +16,9 @@
 //! force of eqs. 4-6 (N), spread to the coefficients with eq. 7, `f_I += N_I(X_J) f_J`, and
 //! the tool takes the reaction. The boundary ring is interpolated at every step when a tool
 //! has convex corners or fill points (the corner pass and the die fill need the whole
-//! surface); any other particle only while it may reach a tool: its clearance ([`Contact`])
-//! bounds its distance to every tool's polyline, so skipping it gives the bits of evaluating
-//! it.
+//! surface) and when the self-contact search is due; any other particle only while it may
+//! reach a tool or a symmetry plane: its clearance ([`Contact`]) bounds its distance to
+//! every tool's polyline and every plane, so skipping it gives the bits of evaluating it.
 //!
 //! A tool without separation holds every particle that has penetrated it: from then on the
 //! particle's signed gap is taken on either side of the surface, so the normal force pulls a
@@ -35,13 +37,18 @@
 //! axis has the disc `pi (l / 2)^2`).
 
 use crate::corners;
+use crate::friction::Friction;
 use crate::geometry::{bounds_of, Extents};
 use crate::material::{Hardening, PointState};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::Kinematics;
+use crate::self_contact::{pair_force, Due, Pair, Ring, SelfContact};
+use crate::symmetry::SymmetryPlane;
 use crate::team::{part, particle_phase, Parts, Team};
-use crate::tools::{penalty_force, Interface, Slave, SlaveForce, Tool};
+use crate::tools::{
+    penalty_force, Interface, Penetration, Slave, SlaveForce, Tool, SEARCH_DEPTH_SPACINGS,
+};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -102,6 +109,12 @@ pub struct Pairs<'a> {
     /// Whether the particle is held on the tool (a tool without separation; empty when
     /// every tool separates): a particle that penetrates such a tool is held from then on.
     pub held: &'a mut [bool],
+    /// Whether the particle is held on each symmetry plane, at `k * planes + p` (empty
+    /// without planes): a particle that reached a plane stays on it.
+    pub plane_held: &'a mut [bool],
+    /// Whether each boundary ring particle (the first candidates) is in contact with the
+    /// workpiece's own surface (empty without self-contact; [`crate::self_contact`]).
+    pub self_touching: &'a mut [bool],
     /// The particle's friction state while it stays in contact with a tool that has
     /// friction.
     pub stick: &'a mut [Option<Stick>],
@@ -145,9 +158,9 @@ struct Touched {
 }
 
 /// The contact forces of the last step, and what the stage keeps from step to step to skip
-/// inside particles that cannot reach a tool. None of the latter is state: dropping it
-/// ([`Contact::forget`], as a restore does) only makes the next step evaluate every
-/// particle.
+/// particles that cannot reach a tool or a symmetry plane and self-contact searches that
+/// cannot find anything. None of the latter is state: dropping it ([`Contact::forget`], as
+/// a restore does) only makes the next step evaluate every particle and search.
 #[derive(Debug, Clone, Default)]
 pub struct Contact {
     /// Contact force on each RK coefficient (N), eq. 7; zero where no particle touches.
@@ -168,9 +181,10 @@ pub struct Contact {
     /// so `x_J = X_J + sum_I N_I(X_J) u_I` moves at most `S_J du` per component (and
     /// `sqrt 2 S_J du` in distance).
     sum_abs: Vec<Real>,
-    /// Lower bound on how far each inside candidate must move before a tool's contact
-    /// search can find it ([`Tool::clearance`], m): positive means no contact force can act
-    /// on it (unused for the ring, which is evaluated at every step).
+    /// Lower bound on how far each candidate must move before a tool's contact search can
+    /// find it ([`Tool::clearance`]) or a symmetry plane can act on it (m): positive means
+    /// no contact force can act on it. A ring particle evaluated with the whole ring has
+    /// none (minus infinity), so it is evaluated again when the ring is not.
     pub(crate) clearance: Vec<Real>,
     /// Predicted position (m) and velocity (m/s) of each candidate evaluated this step.
     motion: Vec<[[Real; 2]; 2]>,
@@ -186,30 +200,66 @@ pub struct Contact {
     touched: Vec<Touched>,
     /// The pairs with a contact force this step ([`Contact::near`]).
     near: Vec<Near>,
+    /// The workpiece's surface against itself, unless the scene turns it off.
+    self_contact: Option<SelfContact>,
+    /// Whether the last stage searched for self-contact.
+    searched: bool,
+    /// The largest `S_J` of the ring's particles: between two stages two points of the
+    /// ring's segments move at most `2 S du` relative to each other.
+    ring_sum_abs: Real,
+    /// The ring's predicted positions (m) and velocities (m/s) the last self-contact search
+    /// read: all of them after a full search, those it needed after a local one.
+    ring_positions: Vec<[Real; 2]>,
+    ring_velocities: Vec<[Real; 2]>,
 }
 
-/// A candidate that took a contact force from a tool in the last stage.
+/// What a particle touched.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Surface {
+    /// The tool with this index.
+    Tool(usize),
+    /// The symmetry plane with this index.
+    Plane(usize),
+}
+
+/// A candidate that took a contact force from a tool or a symmetry plane in the last stage.
 #[derive(Debug, Clone, Copy)]
 struct Near {
     /// The candidate.
     k: u32,
-    /// The tool.
-    tool: u32,
+    /// What it touched.
+    surface: Surface,
     /// Its predicted gap (m).
     gap: Real,
 }
 
+/// What a contact stage did.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Touch {
+    /// Some contact force acts (tools, symmetry planes or the surface on itself).
+    pub any: bool,
+    /// A tool touches the workpiece.
+    pub tools: bool,
+    /// The work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
+    pub tool_work: Real,
+}
+
+/// The frictionless law of the symmetry planes.
+const FRICTIONLESS: Friction = Friction::Coulomb { mu: 0.0 };
+
 impl Contact {
     /// The stage for a workpiece whose particles have the rows of `nodal`, with the
     /// counter-clockwise `boundary` ring, reference particle positions `reference` (m) and
-    /// integration points at `points` (m); `flow_stress` when a tool's friction law needs it.
-    /// Every particle is evaluated at the first step.
+    /// integration points at `points` (m); `flow_stress` when a friction law needs it; the
+    /// self-contact search unless the scene turns it off. Every particle is evaluated and
+    /// the self-contact searched at the first step.
     pub fn new(
         boundary: &[u32],
         nodal: &ShapeTable,
         reference: &[[Real; 2]],
         points: &[[Real; 2]],
         flow_stress: bool,
+        self_contact: Option<SelfContact>,
     ) -> Contact {
         let particles = reference.len();
         let mut on_ring = vec![false; particles];
@@ -226,13 +276,19 @@ impl Contact {
         } else {
             Vec::new()
         };
+        let sum_abs: Vec<Real> = candidates
+            .iter()
+            .map(|&j| nodal.row(j as usize).map(|e| nodal.n[e].abs()).sum())
+            .collect();
         Contact {
             nearest_point,
             force: vec![[0.0; 2]; particles],
-            sum_abs: candidates
+            ring_sum_abs: sum_abs[..boundary.len()]
                 .iter()
-                .map(|&j| nodal.row(j as usize).map(|e| nodal.n[e].abs()).sum())
-                .collect(),
+                .copied()
+                .fold(0.0, Real::max),
+            sum_abs,
+            self_contact,
             clearance: vec![0.0; candidates.len()],
             motion: vec![[[0.0; 2]; 2]; candidates.len()],
             ring: boundary.len(),
@@ -248,14 +304,29 @@ impl Contact {
         self.candidates.len()
     }
 
-    /// Every particle that took a contact force in the last stage, with the tool, its
-    /// predicted position (m) and its predicted gap in the tool (m).
-    pub fn near(&self) -> impl Iterator<Item = (usize, usize, [Real; 2], Real)> + '_ {
+    /// Every particle that took a contact force from a tool or a symmetry plane in the last
+    /// stage, with what it touched, its predicted position (m) and its predicted gap (m).
+    pub fn near(&self) -> impl Iterator<Item = (usize, Surface, [Real; 2], Real)> + '_ {
         self.near.iter().map(|n| {
             let k = n.k as usize;
             let x = self.motion[k][0];
-            (self.candidates[k] as usize, n.tool as usize, x, n.gap)
+            (self.candidates[k] as usize, n.surface, x, n.gap)
         })
+    }
+
+    /// The self-contacts of the last stage (empty when it did not search), and the ring's
+    /// predicted positions they refer to (m, by ring index; those of the pairs' particles are
+    /// this stage's).
+    pub fn self_pairs(&self) -> (&[Pair], &[[Real; 2]]) {
+        match (&self.self_contact, self.searched) {
+            (Some(s), true) => (s.pairs(), &self.ring_positions),
+            _ => (&[], &[]),
+        }
+    }
+
+    /// The workpiece's surface against itself, unless the scene turns it off.
+    pub fn self_contact(&self) -> Option<&SelfContact> {
+        self.self_contact.as_ref()
     }
 
     /// The boundary ring's particles with their positions as the last stage predicted them
@@ -274,6 +345,9 @@ impl Contact {
         self.clearance.fill(0.0);
         self.strokes.clear();
         self.update_move = Real::INFINITY;
+        if let Some(s) = &mut self.self_contact {
+            s.forget();
+        }
     }
 
     /// Records the predictor's move bound `dt V*` (m): `dt` the natural step, `V*` the
@@ -288,36 +362,43 @@ impl Contact {
         self.update_move = bound;
     }
 
-    /// Contact of the predicted particle positions with `tools` at `t_{n+1}` (paper eqs.
-    /// 4-7), then of the tools' convex corners with the predicted surface
-    /// ([`crate::corners`]). The positions are predicted over the solver's natural step
-    /// `dt` (s; equal to the actual step except when a step is shortened to land on a
+    /// Contact of the predicted particle positions with `tools` and the symmetry `planes` at
+    /// `t_{n+1}` (paper eqs. 4-7), then of the tools' convex corners with the predicted
+    /// surface ([`crate::corners`]), then of the surface with itself
+    /// ([`crate::self_contact`]). The positions are predicted over the solver's natural
+    /// step `dt` (s; equal to the actual step except when a step is shortened to land on a
     /// requested time), where the tools must be too, and the penalty stiffness `m_s / dt^2`
     /// uses it, so a short step never turns a residual penetration into a huge impulse;
     /// `dt_avg` (s) is the corrector's step. The boundary ring is interpolated at every step
-    /// when a tool has convex corners or fill points; any other particle only when it may
-    /// reach a tool: its clearance, measured when last interpolated, shrinks each step by
-    /// `sqrt 2 S_J du + tool_move` and while it stays positive the particle is skipped.
-    /// `pairs` holds what each candidate keeps on each tool from step to step. Fills
-    /// [`Contact::force`] and each tool's force (N); returns whether any force acts and the
-    /// work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
+    /// when a tool has convex corners or fill points, and when the self-contact search is
+    /// due; any other particle only when it may reach a tool or a plane: its clearance,
+    /// measured when last interpolated, shrinks each step by `sqrt 2 S_J du + tool_move`
+    /// and while it stays positive the particle is skipped. `pairs` holds what each
+    /// candidate keeps on each tool and plane from step to step. Fills [`Contact::force`]
+    /// and each tool's force (N).
+    #[allow(clippy::too_many_arguments)]
     pub fn stage(
         &mut self,
         team: &Team,
         tools: &mut [Tool],
+        planes: &[SymmetryPlane],
         body: &Body<'_>,
         pairs: Pairs<'_>,
         dt: Real,
         dt_avg: Real,
-    ) -> (bool, Real) {
+    ) -> Touch {
         for t in tools.iter_mut() {
             t.state.force = [0.0; 2];
         }
         self.near.clear();
-        if tools.is_empty() {
-            return (false, 0.0);
+        self.searched = false;
+        if let Some(s) = &mut self.self_contact {
+            s.clear();
         }
-        let mut tool_work = 0.0;
+        if tools.is_empty() && planes.is_empty() && self.self_contact.is_none() {
+            return Touch::default();
+        }
+        let mut touch = Touch::default();
         self.force.iter_mut().for_each(|f| *f = [0.0; 2]);
         let bounds: Vec<Extents> = tools
             .iter()
@@ -334,10 +415,10 @@ impl Contact {
         };
         // Predicted positions x_J = X_J + sum_I N_I(X_J) u_I, u_I = d_I + dt v*_I, and
         // velocities v_J = sum_I N_I(X_J) v*_I of the ring and of the inside particles that
-        // may be within the search depth of a tool: a particle's clearance shrinks each
-        // step by at most sqrt 2 S_J du + tool_move, and while it stays positive the
-        // particle is skipped (it could not have touched a tool: the bits are those of
-        // evaluating every particle).
+        // may be within the search depth of a tool or reach a plane: a particle's clearance
+        // shrinks each step by at most sqrt 2 S_J du + tool_move, and while it stays
+        // positive the particle is skipped (it could not have touched anything: the bits
+        // are those of evaluating every particle).
         let Body {
             nodal,
             reference,
@@ -346,20 +427,31 @@ impl Contact {
             ..
         } = *body;
         let (np, nc, ring) = (reference.len(), self.candidates.len(), self.ring);
-        // The whole ring is needed at every step when a tool has convex corners (the corner
-        // pass) or fill points ([`Contact::ring_predicted`]); otherwise it is skipped like
-        // the inside particles.
-        let whole_ring = tools
-            .iter()
-            .any(|t| !t.convex.is_empty() || t.fill_points > 0);
-        let always = if whole_ring { ring } else { 0 };
         let du = std::f64::consts::SQRT_2
             * (self.update_move + self.predicted_moves[0] + self.predicted_moves[1]);
+        // What the self-contact has to do: two points of the surface move at most 2 S du
+        // relative to each other between stages.
+        let moved = 2.0 * self.ring_sum_abs * du;
+        let due = match &mut self.self_contact {
+            Some(s) => s.due(moved),
+            None => Due::Nothing,
+        };
+        let search = due == Due::Full;
+        // The whole ring is needed at every step when a tool has convex corners (the corner
+        // pass) or fill points ([`Contact::ring_predicted`]), and for a self-contact
+        // search; otherwise it is skipped like the inside particles.
+        let whole_ring = search
+            || tools
+                .iter()
+                .any(|t| !t.convex.is_empty() || t.fill_points > 0);
+        let always = if whole_ring { ring } else { 0 };
         let (skip, sum_abs, candidates) = (self.skip, &self.sum_abs, &self.candidates);
         let margin = 1e-9 * spacing[0].min(spacing[1]);
+        let plane_depth = SEARCH_DEPTH_SPACINGS * spacing[0].max(spacing[1]);
         let tools_now: &[Tool] = tools;
-        let ntools = tools.len();
+        let (ntools, nplanes) = (tools.len(), planes.len());
         let held_now: &[bool] = pairs.held;
+        let plane_held_now: &[bool] = pairs.plane_held;
         let (motion_parts, clearance_parts) = (
             Parts::new(&mut self.motion),
             Parts::new(&mut self.clearance),
@@ -381,23 +473,36 @@ impl Contact {
                     }
                 }
                 *m = body.predicted(candidates[k] as usize, dt);
-                if k >= always {
-                    let x = m[0];
-                    *c = tools_now
-                        .iter()
-                        .enumerate()
-                        .map(|(t, tool)| {
-                            let held = held_now.get(k * ntools + t).copied().unwrap_or(false);
-                            tool.clearance(x, held)
-                        })
-                        .fold(Real::INFINITY, Real::min)
-                        - margin;
+                if k < always {
+                    *c = Real::NEG_INFINITY;
+                    continue;
                 }
+                let x = m[0];
+                let j = candidates[k] as usize;
+                let to_tools = tools_now
+                    .iter()
+                    .enumerate()
+                    .map(|(t, tool)| {
+                        let held = held_now.get(k * ntools + t).copied().unwrap_or(false);
+                        tool.clearance(x, held)
+                    })
+                    .fold(Real::INFINITY, Real::min);
+                let to_planes = planes
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, plane)| !plane.exact[j])
+                    .map(|(p, plane)| match plane_held_now[k * nplanes + p] {
+                        true => -plane.beyond(x) - plane_depth,
+                        false => -plane.beyond(x),
+                    })
+                    .fold(Real::INFINITY, Real::min);
+                *c = to_tools.min(to_planes) - margin;
             }
         });
-        let mut any = false;
         let Pairs {
             held,
+            plane_held,
+            self_touching,
             stick,
             pressure,
             stations,
@@ -481,16 +586,49 @@ impl Contact {
                 if let Some(i) = impulse.get_mut(j) {
                     *i += normal.abs() * dt_avg;
                 }
-                tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
+                touch.tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
                 spread(&mut self.force, nodal, j, f);
                 self.near.push(Near {
                     k: k as u32,
-                    tool: t as u32,
+                    surface: Surface::Tool(t),
                     gap: pen.gap,
                 });
-                any = true;
+                touch.tools = true;
+            }
+            // The symmetry planes: frictionless, holding a particle once it reached one
+            // (`crate::symmetry`); the particles the essential conditions hold are theirs.
+            for (p, plane) in planes.iter().enumerate() {
+                if plane.exact[j] {
+                    continue;
+                }
+                let hold = &mut plane_held[k * nplanes + p];
+                let gap = plane.beyond(x);
+                let below = if *hold { -plane_depth } else { 0.0 };
+                if gap <= below || gap == 0.0 {
+                    continue;
+                }
+                *hold = true;
+                let slave = Slave {
+                    m: mass[j],
+                    v_rel: vj,
+                    carried: [0.0; 2],
+                };
+                let pen = Penetration {
+                    gap,
+                    normal: plane.normal(),
+                };
+                let f = penalty_force(slave, pen, &FRICTIONLESS, Interface::default(), dt, dt_avg)
+                    .force;
+                spread(&mut self.force, nodal, j, f);
+                self.near.push(Near {
+                    k: k as u32,
+                    surface: Surface::Plane(p),
+                    gap,
+                });
+                touch.any = true;
             }
         }
+        touch.any |= touch.tools;
         let corners = tools.iter().any(|t| !t.convex.is_empty());
         let positions: Vec<[Real; 2]> = match corners {
             true => self.motion[..ring].iter().map(|m| m[0]).collect(),
@@ -518,11 +656,23 @@ impl Contact {
                     if let Some(i) = impulse.get_mut(j) {
                         *i += w * f[0].hypot(f[1]) * dt_avg;
                     }
-                    tool_work += dt_avg * (fk[0] * vt[0] + fk[1] * vt[1]);
+                    touch.tool_work += dt_avg * (fk[0] * vt[0] + fk[1] * vt[1]);
                 }
                 tool.state.force[0] -= f[0];
                 tool.state.force[1] -= f[1];
-                any = true;
+                touch.tools = true;
+                touch.any = true;
+            }
+        }
+        match due {
+            Due::Full | Due::Local => {
+                touch.any |= self.self_stage(due, body, self_touching, dt, dt_avg);
+            }
+            Due::Nothing => {
+                if self_touching.contains(&true) {
+                    // No slave within the search depth of a candidate: no contact goes on.
+                    self_touching.fill(false);
+                }
             }
         }
         for t in tools.iter_mut() {
@@ -531,7 +681,100 @@ impl Contact {
         }
         self.strokes.clear();
         self.strokes.extend(tools.iter().map(|t| t.state.stroke));
-        (any, tool_work)
+        touch
+    }
+
+    /// The self-contact search on the predicted ring, `due` full or local, and its forces
+    /// ([`crate::self_contact`]), `touching` the ring particles in contact at the last stage,
+    /// updated: each pair's force on its slave, its reaction on the master point shared by
+    /// the segment's two particles, each spread with eq. 7; whether any acts. A full search
+    /// reads the ring the stage interpolated whole; a local one interpolates the particles it
+    /// reads.
+    fn self_stage(
+        &mut self,
+        due: Due,
+        body: &Body<'_>,
+        touching: &mut [bool],
+        dt: Real,
+        dt_avg: Real,
+    ) -> bool {
+        let ring = self.ring;
+        let Some(mut search) = self.self_contact.take() else {
+            return false;
+        };
+        self.searched = true;
+        self.ring_positions.resize(ring, [0.0; 2]);
+        self.ring_velocities.resize(ring, [0.0; 2]);
+        if due == Due::Full {
+            for (k, m) in self.motion[..ring].iter().enumerate() {
+                [self.ring_positions[k], self.ring_velocities[k]] = *m;
+            }
+            search.full_search(&self.ring_positions, &self.ring_velocities, dt, touching);
+        } else {
+            let particles = &self.candidates[..ring];
+            search.local_search(
+                |k| body.predicted(particles[k] as usize, dt),
+                &mut self.ring_positions,
+                &mut self.ring_velocities,
+                dt,
+                touching,
+            );
+        }
+        let velocities = std::mem::take(&mut self.ring_velocities);
+        let any = self.self_forces(&search, &velocities, body, dt, dt_avg);
+        self.ring_velocities = velocities;
+        self.self_contact = Some(search);
+        any
+    }
+
+    /// The forces of the self-contact pairs `search` found, at the ring's predicted
+    /// velocities `velocities` (m/s); whether any acts.
+    fn self_forces(
+        &mut self,
+        search: &SelfContact,
+        velocities: &[[Real; 2]],
+        body: &Body<'_>,
+        dt: Real,
+        dt_avg: Real,
+    ) -> bool {
+        let ring = self.ring;
+        let (pairs, law) = (search.pairs(), search.friction);
+        if pairs.is_empty() {
+            return false;
+        }
+        let particles = &self.candidates[..ring];
+        let surface = Ring {
+            x: &self.ring_positions,
+            v: velocities,
+            particles,
+            mass: body.mass,
+        };
+        let forces: Vec<(usize, [Real; 2])> = pairs
+            .iter()
+            .map(|pair| {
+                let k = pair.slave as usize;
+                let at = if law.needs_flow_stress() {
+                    self.interface(body, k, self.ring_positions[k], pair.normal, dt)
+                } else {
+                    Interface::default()
+                };
+                (k, pair_force(pair, &surface, &law, at, dt, dt_avg))
+            })
+            .collect();
+        for (pair, (k, f)) in pairs.iter().zip(forces) {
+            let (a, t) = (pair.segment as usize, pair.along);
+            let b = (a + 1) % ring;
+            spread(&mut self.force, body.nodal, particles[k] as usize, f);
+            for (i, w) in [(a, 1.0 - t), (b, t)] {
+                spread(
+                    &mut self.force,
+                    body.nodal,
+                    particles[i] as usize,
+                    [-w * f[0], -w * f[1]],
+                );
+            }
+        }
+        true
     }
 
     /// After the corrector: what the friction force `f_T` of each pair in contact did not

@@ -44,15 +44,16 @@ pub enum Error {
         bound: f64,
         detail: String,
     },
-    /// A particle went deeper into a tool than the scene's bound: the contact lets material
-    /// through.
-    #[error("step {step} (t = {time:.6e} s): particle {particle} (reference position {reference:?} m) lies {depth:.3e} m ({depth_rel:.3e} spacings) inside tool `{tool}`, deeper than checks.max_penetration_rel = {bound}")]
+    /// A particle went deeper into a tool, beyond a symmetry plane or into the workpiece's
+    /// own other part than the scene's bound: the contact lets material through. `into`
+    /// names where ("inside tool `die`", "beyond the symmetry plane `y_min` (y = 0 m)").
+    #[error("step {step} (t = {time:.6e} s): particle {particle} (reference position {reference:?} m) lies {depth:.3e} m ({depth_rel:.3e} spacings) {into}, deeper than checks.max_penetration_rel = {bound}")]
     Penetration {
         step: u64,
         time: f64,
         particle: usize,
         reference: [f64; 2],
-        tool: String,
+        into: String,
         depth: f64,
         depth_rel: f64,
         bound: f64,

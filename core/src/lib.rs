@@ -19,6 +19,7 @@ pub mod geometry;
 pub mod integration;
 pub mod kernel;
 pub mod lanes;
+pub mod laps;
 pub mod material;
 pub mod math;
 pub mod rk_shape;
@@ -28,7 +29,9 @@ pub mod scene_keys;
 pub mod scene_overrides;
 pub mod scene_parameters;
 mod scene_validate;
+pub mod self_contact;
 pub mod solver;
+pub mod symmetry;
 pub mod team;
 pub mod tools;
 

@@ -44,6 +44,9 @@ pub struct Scene {
     /// Rigid tools (polylines).
     #[serde(default)]
     pub tools: Vec<ToolSpec>,
+    /// Contact of the workpiece's surface with itself (on unless the scene turns it off).
+    #[serde(default)]
+    pub self_contact: SelfContactSpec,
     /// What to record.
     #[serde(default)]
     pub output: OutputSpec,
@@ -445,6 +448,35 @@ pub struct ConstraintSpec {
     pub edge: Edge,
     /// Which components are held.
     pub fix: Vec<Component>,
+}
+
+/// Contact of the workpiece's surface with itself: where the surface folds, its parts press
+/// on each other instead of passing through, and a fold between surface points that were
+/// apart along the surface is reported as a lap ([`crate::self_contact`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SelfContactSpec {
+    /// Whether the surface holds against itself (the default). `false` saves the search
+    /// where a scene cannot fold, and lets a fold pass through itself unreported.
+    #[serde(default = "default_true")]
+    pub enabled: bool,
+    /// Friction law between the surface's parts, as a tool's ([`Friction`]): a number is a
+    /// Coulomb coefficient, a table names the model; default frictionless.
+    #[serde(default)]
+    pub friction: Friction,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+impl Default for SelfContactSpec {
+    fn default() -> Self {
+        SelfContactSpec {
+            enabled: true,
+            friction: Friction::default(),
+        }
+    }
 }
 
 /// How a tool moves along its axis.

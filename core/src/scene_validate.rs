@@ -55,6 +55,7 @@ impl Scene {
         self.check_discretization(&mut out);
         self.check_time(&mut out);
         self.check_constraints(&mut out);
+        self.check_self_contact(&mut out);
         self.check_tools(&mut out);
         self.check_output_and_limits(&mut out);
         self.check_mass_scaling(&mut out);
@@ -422,6 +423,13 @@ impl Scene {
                 &format!("constraints[{i}].fix"),
                 "names no component".into(),
             );
+        }
+    }
+
+    /// The self-contact's friction law.
+    fn check_self_contact(&self, out: &mut Checks) {
+        for (suffix, message) in self.self_contact.friction.validate() {
+            out.check(false, &format!("self_contact.friction{suffix}"), message);
         }
     }
 

@@ -318,9 +318,10 @@ pub struct Penetration {
     pub normal: [Real; 2],
 }
 
-/// Uniform bins over a polyline's segments, in the tool's own (initial) coordinates; a tool
-/// only translates, so the bins are built once. Each segment is listed in every bin that its
-/// bounding box, grown by the search depth, overlaps.
+/// Uniform bins over segments: a tool's polyline in the tool's own (initial) coordinates,
+/// built once as a tool only translates, or the workpiece's boundary ring, built again at
+/// each self-contact search ([`crate::self_contact`]). Each segment is listed in every bin
+/// that its bounding box, grown by the search depth, overlaps.
 #[derive(Debug, Clone, Default)]
 pub struct SegmentBins {
     origin: [Real; 2],
@@ -328,6 +329,8 @@ pub struct SegmentBins {
     dims: [usize; 2],
     offsets: Vec<u32>,
     items: Vec<u32>,
+    /// Where the next item of each bin goes while filling.
+    cursor: Vec<u32>,
 }
 
 impl SegmentBins {
@@ -343,34 +346,64 @@ impl SegmentBins {
         }
         // At most about 4096 bins per direction.
         let size = depth.max((hi[0] - lo[0]).max(hi[1] - lo[1]) / 4096.0);
-        let dims = [0, 1].map(|k| ((hi[k] - lo[k]) / size).ceil().max(1.0) as usize);
-        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1]];
-        for (k, s) in verts.windows(2).enumerate() {
-            let range = |c: usize| {
-                let a = ((s[0][c].min(s[1][c]) - depth - lo[c]) / size)
-                    .floor()
-                    .max(0.0) as usize;
-                let b = ((s[0][c].max(s[1][c]) + depth - lo[c]) / size).floor() as usize;
-                a..=b.min(dims[c] - 1)
-            };
-            for j in range(1) {
-                for i in range(0) {
-                    lists[j * dims[0] + i].push(k as u32);
+        let mut bins = SegmentBins::default();
+        bins.fill(
+            verts.windows(2).map(|s| [s[0], s[1]]),
+            [lo, hi],
+            depth,
+            size,
+        );
+        bins
+    }
+
+    /// Bins of `size` (m) over `bounds` (`[lo, hi]`, m) listing each of `segments` in every
+    /// bin its bounding box grown by `depth` (m) overlaps, in segment order, reusing the
+    /// buffers (a counting sort: no list per bin).
+    pub fn fill(
+        &mut self,
+        segments: impl Iterator<Item = [[Real; 2]; 2]> + Clone,
+        bounds: [[Real; 2]; 2],
+        depth: Real,
+        size: Real,
+    ) {
+        let [lo, hi] = bounds;
+        self.origin = lo;
+        self.size = size;
+        self.dims = [0, 1].map(|k| ((hi[k] - lo[k]) / size).ceil().max(1.0) as usize);
+        let dims = self.dims;
+        let range = |s: &[[Real; 2]; 2], c: usize| {
+            let a = ((s[0][c].min(s[1][c]) - depth - lo[c]) / size)
+                .floor()
+                .max(0.0) as usize;
+            let b = ((s[0][c].max(s[1][c]) + depth - lo[c]) / size).floor() as usize;
+            a..=b.min(dims[c] - 1)
+        };
+        self.offsets.clear();
+        self.offsets.resize(dims[0] * dims[1] + 1, 0);
+        for s in segments.clone() {
+            for j in range(&s, 1) {
+                for i in range(&s, 0) {
+                    self.offsets[j * dims[0] + i + 1] += 1;
                 }
             }
         }
-        let mut offsets = vec![0u32];
-        let mut items = Vec::new();
-        for l in lists {
-            items.extend(l);
-            offsets.push(items.len() as u32);
+        for b in 0..dims[0] * dims[1] {
+            self.offsets[b + 1] += self.offsets[b];
         }
-        SegmentBins {
-            origin: lo,
-            size,
-            dims,
-            offsets,
-            items,
+        self.items.clear();
+        self.items
+            .resize(self.offsets[dims[0] * dims[1]] as usize, 0);
+        self.cursor.clear();
+        self.cursor
+            .extend_from_slice(&self.offsets[..dims[0] * dims[1]]);
+        for (k, s) in segments.enumerate() {
+            for j in range(&s, 1) {
+                for i in range(&s, 0) {
+                    let b = j * dims[0] + i;
+                    self.items[self.cursor[b] as usize] = k as u32;
+                    self.cursor[b] += 1;
+                }
+            }
         }
     }
 

@@ -121,7 +121,7 @@ fn block_forging_friction_0_05_and_1() {
         let mut sim = run(&s);
         sane(&sim, 0.01, 0.01);
         let h = sim.spacing()[0];
-        assert!(sim.measure_penetration().unwrap().depth < 0.1 * h);
+        assert!(sim.measure_penetration().unwrap().tools.depth < 0.1 * h);
         peaks.push(sim.tools()[0].axial_force().abs());
     }
     println!("final forces at mu 0, 0.5, 1: {peaks:?}");

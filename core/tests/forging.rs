@@ -336,7 +336,7 @@ fn block_forging_paper_settings() {
         let t = k as f64 * scene.time.end_s / 100.0;
         sim.run_to(t, |s| assert!(s.energy().kinetic.is_finite()))
             .unwrap();
-        let pen = sim.measure_penetration().unwrap().depth;
+        let pen = sim.measure_penetration().unwrap().tools.depth;
         assert!(pen < 0.1 * h, "t = {t}: penetration {pen} m");
         let e = sim.extents();
         let width = e.x[1] - e.x[0];

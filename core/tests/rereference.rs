@@ -185,7 +185,7 @@ fn the_impression_die_runs_through_its_stroke_re_referenced() {
     let end = scene.time.end_s;
     for k in 1..=24 {
         sim.run_to(end * k as f64 / 24.0, |_| {}).unwrap();
-        let deepest = sim.measure_penetration().unwrap();
+        let deepest = sim.measure_penetration().unwrap().tools;
         assert!(deepest.depth < 0.05 * h, "t = {}: {deepest:?}", sim.time());
     }
     let r = sim.reference().expect("the flash re-references the kernel");

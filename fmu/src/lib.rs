@@ -86,6 +86,7 @@ fn output_value(binding: Binding, sim: &Simulation, commands: &[Option<f64>]) ->
         Binding::PlasticEnergy => sim.energy().plastic,
         Binding::ToolWork => sim.energy().tool_work,
         Binding::KineticToInternalMax => sim.kinetic_to_internal_max(),
+        Binding::Laps => sim.lap_count() as f64,
         Binding::Thermal(k) => sim.thermal_values()?[k],
         Binding::ToolHeatFlow(k) => sim.tool_heat_flows()?[k],
         Binding::Parameter(_)

@@ -15,6 +15,9 @@
 //! - `visualization_msgs/msg/MarkerArray`: one line strip per tool through its current vertices;
 //! - `rkforge_msgs/msg/DieFill`: each tool's contact fraction and each fill point's filling
 //!   time and stroke (NaN while empty), history.csv's `contact_fraction` and `filled` columns;
+//! - `rkforge_msgs/msg/Laps`: the laps so far, when and at which strokes each formed, where it
+//!   formed and is now, and its length (summary.json's `laps`, history.csv's
+//!   `workpiece.laps`);
 //! - `rkforge_msgs/msg/Energy`: the energy account (J), history.csv's energy columns;
 //! - `rosgraph_msgs/msg/Clock`: the simulation time.
 //!
@@ -23,7 +26,7 @@
 //! axisymmetry, as in history.csv.
 
 use crate::msgs::{
-    point_cloud_xyz_fields, Clock, ColorRGBA, DieFill, Energy, Header, JointState, Marker,
+    point_cloud_xyz_fields, Clock, ColorRGBA, DieFill, Energy, Header, JointState, Laps, Marker,
     MarkerArray, Point, RosMessage, StrainPoint, Time, Vector3, Wrench, WrenchStamped,
 };
 use rkforge_core::Simulation;
@@ -150,6 +153,24 @@ pub fn sample(sim: &Simulation) -> Sample {
                 .iter()
                 .map(|p| p.filled.map_or(f64::NAN, |f| f.stroke_m))
                 .collect(),
+        }
+        .to_cdr(),
+    );
+    let laps = sim.laps();
+    messages.push(
+        Laps {
+            header: header.clone(),
+            tools: tools.iter().map(|t| t.name.clone()).collect(),
+            formed_time: laps.iter().map(|l| l.formed_s).collect(),
+            formed_stroke: laps
+                .iter()
+                .flat_map(|l| l.formed_strokes_m.iter().copied())
+                .collect(),
+            start_x: laps.iter().map(|l| l.start_m[0]).collect(),
+            start_y: laps.iter().map(|l| l.start_m[1]).collect(),
+            end_x: laps.iter().map(|l| l.end_m[0]).collect(),
+            end_y: laps.iter().map(|l| l.end_m[1]).collect(),
+            length: laps.iter().map(|l| l.length_m).collect(),
         }
         .to_cdr(),
     );

@@ -66,7 +66,7 @@ pub fn validate_namespace(ns: &str) -> Result<(), String> {
 
 /// The topics of a scene under namespace `ns`: first the published ones in the order of the
 /// messages of a [`frame::Sample`] (one wrench per tool in scene order, `tools`, `workpiece`,
-/// `tool_markers`, `die_fill`, `energy`, `/clock`), then one `velocity_cmd` subscription per movable tool.
+/// `tool_markers`, `die_fill`, `laps`, `energy`, `/clock`), then one `velocity_cmd` subscription per movable tool.
 ///
 /// # Errors
 ///
@@ -117,6 +117,14 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
         name: format!("{base}/die_fill"),
         message: msgs::DieFill::TYPE_NAME,
         schema: msgs::DieFill::SCHEMA,
+        publish: true,
+        reliable: true,
+        latched: true,
+    });
+    t.push(Topic {
+        name: format!("{base}/laps"),
+        message: msgs::Laps::TYPE_NAME,
+        schema: msgs::Laps::SCHEMA,
         publish: true,
         reliable: true,
         latched: true,

@@ -272,7 +272,7 @@ mod tests {
     }
 
     /// The types of the topics.
-    fn topic_types() -> [(&'static str, &'static str, &'static str, &'static str); 8] {
+    fn topic_types() -> [(&'static str, &'static str, &'static str, &'static str); 9] {
         [
             names::<WrenchStamped>(),
             names::<JointState>(),
@@ -282,6 +282,7 @@ mod tests {
             names::<MarkerArray>(),
             names::<Energy>(),
             names::<DieFill>(),
+            names::<Laps>(),
         ]
     }
 
@@ -291,7 +292,7 @@ mod tests {
     #[test]
     fn schemas_are_the_msg_files_of_the_type_and_its_dependencies() {
         let files = msg_files("msg");
-        assert_eq!(files.len(), 25);
+        assert_eq!(files.len(), 26);
         for (type_name, dds, definition, schema) in topic_types() {
             let (pkg, ty) = type_name.split_once("/msg/").unwrap();
             let short = format!("{pkg}/{ty}");
@@ -450,6 +451,10 @@ mod tests {
         );
         assert_eq!(
             deps(DieFill::SCHEMA),
+            ["std_msgs/Header", "builtin_interfaces/Time"]
+        );
+        assert_eq!(
+            deps(Laps::SCHEMA),
             ["std_msgs/Header", "builtin_interfaces/Time"]
         );
         assert!(deps(Float64::SCHEMA).is_empty());

@@ -82,6 +82,8 @@ pub enum Binding {
     ToolWork,
     /// Largest kinetic-to-internal energy ratio after the start-up (-).
     KineticToInternalMax,
+    /// How many laps (folds of the surface onto itself) formed so far (-).
+    Laps,
     /// Thermal measure `k` of [`rkforge_core::THERMAL_MEASURES`] (a scene with `[thermal]`).
     Thermal(usize),
     /// Heat flow from the workpiece into tool `k` (W).
@@ -267,6 +269,12 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
             None,
             "largest ratio of kinetic to internal energy after the start-up (quasi-static check)",
             Binding::KineticToInternalMax,
+        ),
+        (
+            "workpiece.laps",
+            None,
+            "how many laps (folds of the surface onto itself between points apart along it) formed so far",
+            Binding::Laps,
         ),
     ];
     for (name, unit, d, b) in outputs {

@@ -85,9 +85,12 @@ class Simulation:
         """Record a history row now, as ``rkforge run`` does at its samples."""
     def tools(self) -> List[Dict[str, Any]]:
         """Every tool as in summary.json."""
+    def laps(self) -> List[Dict[str, Any]]:
+        """The laps so far, as in summary.json: ``formed_s``, ``formed_stroke_m`` (by tool),
+        ``start_m``, ``end_m``, ``length_m``, ``reference_m``, ``particles``."""
     def fields(self) -> Dict[str, npt.NDArray[np.float64]]:
         """Particle fields: ``positions``, ``displacement``, ``velocity`` (n, 2);
-        ``plastic_strain``, ``von_mises`` (n,)."""
+        ``plastic_strain``, ``von_mises``, ``lap`` (n,), and ``temperature`` with heat."""
     def save_state(self) -> bytes:
         """The whole changing state with its scene, as bytes."""
     def restore_state(self, state: bytes) -> None:

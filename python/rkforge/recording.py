@@ -24,7 +24,8 @@ class Recording:
     ``history``: one row per sample, ``time_s`` and per tool the history's columns
     ``<tool>.stroke_m``, ``<tool>.velocity_m_per_s``, ``<tool>.force_N`` (along its axis),
     ``<tool>.force_x_N``, ``<tool>.force_y_N``, ``<tool>.contact_fraction``, then per fill point
-    ``<tool>.<point>.filled`` (0 or 1) where the recording has the die-fill topic, then the energy
+    ``<tool>.<point>.filled`` (0 or 1) where the recording has the die-fill topic,
+    ``workpiece.laps`` (the laps formed so far) where it has the laps topic, then the energy
     account as history.csv names it
     (``energy.kinetic_J``, ``energy.elastic_J``, ``energy.plastic_J``, ``energy.internal_J``,
     ``energy.contact_J``, ``energy.tool_work_J``; J) where the recording has the energy
@@ -84,6 +85,8 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
                     row[f"{name}.contact_fraction"] = fraction
                 for name, filled in zip(msg.points, msg.filled_time):
                     row[f"{name}.filled"] = 0.0 if math.isnan(filled) else 1.0
+            elif topic == f"{ns}/laps":
+                rows.setdefault(message.log_time, {})["workpiece.laps"] = float(len(msg.formed_time))
             elif topic == f"{ns}/energy":
                 row = rows.setdefault(message.log_time, {})
                 for name, column in _ENERGY.items():
@@ -98,11 +101,12 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
         filled = [c for c in history.columns if c.endswith(".filled")]
         for c in history.columns[1:]:
             name = c.rsplit(".", 1)[0]
-            if name not in tools and name != "energy" and c not in filled:
+            if name not in tools and name not in ("energy", "workpiece") and c not in filled:
                 tools.append(name)
         suffixes = ["stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N", "contact_fraction"]
         order = ["time_s"] + [f"{t}.{s}" for t in tools for s in suffixes if f"{t}.{s}" in history.columns]
         order += filled
+        order += [c for c in ["workpiece.laps"] if c in history.columns]
         order += [f"energy.{c}" for c in _ENERGY.values() if f"energy.{c}" in history.columns]
         history = history[order]
     return Recording(history=history, clouds=clouds, cloud_times_s=np.array(cloud_times))

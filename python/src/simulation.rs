@@ -253,9 +253,20 @@ impl Simulation {
         to_dict(py, &tools)
     }
 
+    /// The laps so far (folds of the surface onto itself between points apart along it), as
+    /// in summary.json: each with `formed_s`, `formed_stroke_m` (by tool), `start_m`,
+    /// `end_m`, `length_m`, `reference_m` and its surface `particles`.
+    fn laps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let laps = self.with(py, |s| {
+            Ok(serde_json::Value::Array(rkforge_runner::laps_json(&s.sim)))
+        })?;
+        to_dict(py, &laps)
+    }
+
     /// Particle fields as numpy arrays: `positions`, `displacement`, `velocity` (n, 2) in m
     /// and m/s; `plastic_strain`, `von_mises` (Pa) and, in a scene with `[thermal]`,
-    /// `temperature` (degrees C) (n,), smoothed from the points.
+    /// `temperature` (degrees C) (n,), smoothed from the points; `lap` (n,), the lap each
+    /// particle took part in numbered from 1 (0: none).
     fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let f = self.with(py, |s| Ok(s.sim.fields()))?;
         let d = PyDict::new(py);
@@ -267,6 +278,7 @@ impl Simulation {
         if let Some(t) = f.temperature {
             d.set_item("temperature", PyArray1::from_vec(py, t))?;
         }
+        d.set_item("lap", PyArray1::from_vec(py, f.lap))?;
         Ok(d)
     }
 

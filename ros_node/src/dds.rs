@@ -357,7 +357,8 @@ fn create_topic(node: &RosNode, t: &Topic) -> Result<DdsTopic, String> {
 mod tests {
     use super::*;
     use crate::msgs::{
-        Clock, DieFill, Energy, JointState, MarkerArray, PointCloud2, RosMessage, WrenchStamped,
+        Clock, DieFill, Energy, JointState, Laps, MarkerArray, PointCloud2, RosMessage,
+        WrenchStamped,
     };
 
     #[test]
@@ -386,6 +387,7 @@ mod tests {
             (Float64::TYPE_NAME, Float64::DDS_TYPE_NAME),
             (Energy::TYPE_NAME, Energy::DDS_TYPE_NAME),
             (DieFill::TYPE_NAME, DieFill::DDS_TYPE_NAME),
+            (Laps::TYPE_NAME, Laps::DDS_TYPE_NAME),
         ] {
             assert_eq!(type_name(name).unwrap().dds_msg_type(), dds);
         }

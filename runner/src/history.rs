@@ -55,6 +55,10 @@ impl History {
             "integrated_volume_change_rel",
             "max_plastic_strain",
             "max_penetration_rel",
+            "beyond_symmetry_rel",
+            "inside_itself_rel",
+            "boundary_crossings",
+            "laps",
         ] {
             columns.push(format!("workpiece.{c}"));
         }
@@ -88,13 +92,24 @@ impl History {
     }
 
     /// Record the current state. The penetration is measured over every particle against
-    /// every tool (and kept as the run's largest); a particle deeper than the scene's bound
-    /// is returned as an error, after the row is recorded.
+    /// every tool and symmetry plane, and the boundary against itself (and kept as the run's
+    /// largest); a particle deeper than the scene's bound is returned as an error, after the
+    /// row is recorded.
     pub fn record(&mut self, sim: &mut Simulation) -> Result<(), rkforge_core::Error> {
         let measured = sim.measure_penetration();
-        let pen = match &measured {
-            Ok(p) => p.depth,
-            Err(_) => sim.max_penetration(),
+        let depths = match &measured {
+            Ok(d) => [
+                d.tools.depth,
+                d.planes.depth,
+                d.itself.depth,
+                d.crossings as f64,
+            ],
+            Err(_) => [
+                sim.max_penetration(),
+                sim.max_beyond_symmetry(),
+                sim.max_inside_itself(),
+                sim.max_boundary_crossings() as f64,
+            ],
         };
         let m = measures(sim);
         let e = sim.energy();
@@ -126,7 +141,11 @@ impl History {
             m.volume_change_rel,
             m.integrated_volume_change_rel,
             sim.max_plastic_strain(),
-            pen / h,
+            depths[0] / h,
+            depths[1] / h,
+            depths[2] / h,
+            depths[3],
+            sim.lap_count() as f64,
         ]);
         for &f in &sim.scene().output.faces {
             row.extend(face_values(sim, f));

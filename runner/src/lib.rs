@@ -13,7 +13,7 @@ pub mod history;
 pub mod summary;
 
 pub use history::History;
-pub use summary::{reference_table, summary, tool_json};
+pub use summary::{laps_json, reference_table, summary, tool_json};
 
 impl Outcome {
     /// How the run ended, for [`summary`].

@@ -74,12 +74,19 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "kinetic_to_internal_max": sim.kinetic_to_internal_max(),
         },
         "mass_scaling": sim.mass_scaling(),
-        "warnings": sim.quasi_static_warning().into_iter().collect::<Vec<_>>(),
+        "warnings": sim.quasi_static_warning().into_iter().chain(sim.surface_warning()).collect::<Vec<_>>(),
         "tools": (0..sim.tools().len()).map(|k| tool_json(sim, k)).collect::<Vec<_>>(),
         "contact": {
             "max_penetration_m": sim.max_penetration(),
             "max_penetration_rel": sim.max_penetration() / min_spacing(sim),
+            "max_beyond_symmetry_m": sim.max_beyond_symmetry(),
+            "max_beyond_symmetry_rel": sim.max_beyond_symmetry() / min_spacing(sim),
+            "max_inside_itself_m": sim.max_inside_itself(),
+            "max_inside_itself_rel": sim.max_inside_itself() / min_spacing(sim),
+            "max_boundary_crossings": sim.max_boundary_crossings(),
+            "self_contact": scene.self_contact.enabled,
         },
+        "laps": laps_json(sim),
         "stage_seconds": {
             "setup": times.setup.as_secs_f64(),
             "shape_functions": times.shape_functions.as_secs_f64(),
@@ -121,6 +128,32 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
         });
     }
     summary
+}
+
+/// The laps ([`rkforge_core::laps`]): each with when and at which stroke of each tool it
+/// formed, where it formed and where its material is now, its length now, where on the
+/// undeformed workpiece its first contact came from, and its surface particles.
+pub fn laps_json(sim: &Simulation) -> Vec<Value> {
+    sim.laps()
+        .into_iter()
+        .map(|lap| {
+            let strokes: serde_json::Map<String, Value> = sim
+                .tools()
+                .iter()
+                .zip(&lap.formed_strokes_m)
+                .map(|(t, s)| (t.name.clone(), json!(s)))
+                .collect();
+            json!({
+                "formed_s": lap.formed_s,
+                "formed_stroke_m": strokes,
+                "start_m": lap.start_m,
+                "end_m": lap.end_m,
+                "length_m": lap.length_m,
+                "reference_m": lap.reference_m,
+                "particles": lap.particles,
+            })
+        })
+        .collect()
 }
 
 /// Look up a dotted key such as `workpiece.radius_m` in the summary.

@@ -22,6 +22,9 @@ pub struct Fields {
     pub von_mises: Vec<Real>,
     /// Temperature smoothed to particles (degrees C), in a scene with `[thermal]`.
     pub temperature: Option<Vec<Real>>,
+    /// The lap each particle took part in, numbered from 1 in the order they formed, 0 for
+    /// none ([`crate::laps`]).
+    pub lap: Vec<Real>,
 }
 
 impl Simulation {
@@ -35,9 +38,18 @@ impl Simulation {
         bounds(&self.positions())
     }
 
-    /// Volume enclosed by the physical boundary particles now (m^3).
+    /// Volume of the workpiece now (m^3): enclosed by its outline (`outline.rs`), the
+    /// image of the reference boundary sampled between the boundary particles.
     pub fn volume(&self) -> Real {
-        self.volume_of(&self.positions())
+        let model = &self.scene.model;
+        enclosed_volume(&self.outline(), model.kinematics, model.depth_m)
+    }
+
+    /// The workpiece's outline now (m): the image of the reference boundary, sampled at
+    /// `outline::POINTS_PER_SEGMENT` points along each boundary segment from its first
+    /// particle on, counter-clockwise.
+    pub fn outline(&self) -> Vec<[Real; 2]> {
+        self.outline.positions(&self.st.d)
     }
 
     /// Current volume as the integration rule sees it, `sum_p J_p w_p` (m^3), at the last
@@ -59,15 +71,14 @@ impl Simulation {
         self.integrated_volume() / self.weights.iter().sum::<Real>() - 1.0
     }
 
-    /// Volume of the undeformed workpiece (m^3).
+    /// Volume of the undeformed workpiece (m^3): its rectangle, by Pappus' theorem
+    /// `2 pi r_c A` in axisymmetry, `A depth` in plane strain.
     pub fn reference_volume(&self) -> Real {
-        self.volume_of(&self.original)
-    }
-
-    /// Volume enclosed by the boundary particles of the particle positions `x` (m^3):
-    /// Pappus' theorem `2 pi r_c A` in axisymmetry, `A depth` in plane strain.
-    pub fn volume_of(&self, x: &[[Real; 2]]) -> Real {
-        let ring: Vec<[Real; 2]> = self.boundary.iter().map(|&j| x[j as usize]).collect();
+        let ring: Vec<[Real; 2]> = self
+            .boundary
+            .iter()
+            .map(|&j| self.original[j as usize])
+            .collect();
         let model = &self.scene.model;
         enclosed_volume(&ring, model.kinematics, model.depth_m)
     }
@@ -125,6 +136,12 @@ impl Simulation {
             }
         }
         f.temperature = temps.map(|_| tp);
+        f.lap = vec![0.0; np];
+        for (l, lap) in self.st.laps.iter().enumerate() {
+            for &k in &lap.ring {
+                f.lap[self.boundary[k as usize] as usize] = (l + 1) as Real;
+            }
+        }
         f
     }
 

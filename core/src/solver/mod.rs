@@ -42,6 +42,7 @@ mod fill;
 mod heat;
 mod layout;
 mod mass_scaling;
+mod outline;
 mod penetration;
 mod rereference;
 mod setup;
@@ -57,7 +58,7 @@ pub use fields::Fields;
 pub use fill::FillPoint;
 pub use heat::{Heat, Temperatures, THERMAL_MEASURES};
 pub use mass_scaling::MassScalingReport;
-pub use penetration::Penetrated;
+pub use penetration::{Depths, Penetrated, Within};
 pub use rereference::Reference;
 pub use state::{Filled, State};
 
@@ -65,10 +66,13 @@ use crate::constraints::Constraints;
 use crate::contact::{Body, Contact, Pairs, Slip};
 use crate::error::{Error, Result};
 use crate::integration::PointSet;
+use crate::laps;
 use crate::material::{HeatCapacity, HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::{Kinematics, Scene};
+use crate::self_contact::neighbours;
+use crate::symmetry::SymmetryPlane;
 use crate::team::Team;
 use crate::tools::Tool;
 use energy::StepEnergy;
@@ -140,10 +144,15 @@ pub struct Simulation {
     nodal: ShapeTable,
     /// Boundary particles, counter-clockwise (the contact slaves).
     boundary: Vec<u32>,
+    /// The workpiece's outline: the boundary of the body the RK approximation describes
+    /// (`outline.rs`), whose enclosed volume is the workpiece's.
+    outline: outline::Outline,
     /// Essential conditions, if the scene has any.
     constraints: Option<Constraints>,
     /// The rigid tools.
     tools: Vec<Tool>,
+    /// The symmetry planes and the axis, holding every particle that reaches them.
+    planes: Vec<SymmetryPlane>,
     /// The whole changing state.
     st: State,
     /// Per-point outputs of the last stress stage.
@@ -294,9 +303,51 @@ impl Simulation {
     pub fn max_plastic_strain(&self) -> Real {
         self.st.points.iter().map(|s| s.eps_p).fold(0.0, Real::max)
     }
-    /// Largest penetration seen at an output time (m).
+    /// Deepest a particle's physical position lay inside a tool (m), over the steps'
+    /// checks and the samples.
     pub fn max_penetration(&self) -> Real {
         self.st.max_penetration
+    }
+    /// Deepest a particle's physical position lay beyond a symmetry plane or the axis (m).
+    pub fn max_beyond_symmetry(&self) -> Real {
+        self.st.max_beyond_plane
+    }
+    /// Deepest a surface particle lay inside another part of the workpiece (m).
+    pub fn max_inside_itself(&self) -> Real {
+        self.st.max_inside_itself
+    }
+    /// Most crossings of the boundary ring's segments at a sample (0: the surface never
+    /// passed through itself).
+    pub fn max_boundary_crossings(&self) -> u32 {
+        self.st.max_crossings
+    }
+    /// The symmetry planes (and the axis) that hold the workpiece.
+    pub fn symmetry_planes(&self) -> &[SymmetryPlane] {
+        &self.planes
+    }
+    /// The laps found so far ([`crate::laps`]), in the order they formed, with their
+    /// positions and lengths now.
+    pub fn laps(&self) -> Vec<laps::LapReport> {
+        if self.st.laps.is_empty() {
+            return Vec::new();
+        }
+        let x: Vec<[Real; 2]> = self
+            .boundary
+            .iter()
+            .map(|&j| self.position(j as usize))
+            .collect();
+        self.st
+            .laps
+            .iter()
+            .map(|lap| {
+                let s = neighbours(self.scene.discretization.support);
+                laps::report(lap, &self.boundary, &x, &self.original, s)
+            })
+            .collect()
+    }
+    /// How many laps formed so far.
+    pub fn lap_count(&self) -> usize {
+        self.st.laps.len()
     }
     /// The whole changing state.
     pub fn state(&self) -> &State {
@@ -309,6 +360,8 @@ impl Simulation {
             || st.points.len() != self.st.points.len()
             || st.tools.len() != self.st.tools.len()
             || st.held.len() != self.st.held.len()
+            || st.plane_held.len() != self.st.plane_held.len()
+            || st.self_touching.len() != self.st.self_touching.len()
             || st.stick.len() != self.st.stick.len()
             || st.fill.len() != self.st.fill.len()
         {
@@ -400,12 +453,15 @@ impl Simulation {
             kinematics: self.scene.model.kinematics,
             depth_m: self.scene.model.depth_m,
         };
-        let (contact, tool_work) = self.contact.stage(
+        let touch = self.contact.stage(
             &self.team,
             &mut self.tools,
+            &self.planes,
             &body,
             Pairs {
                 held: &mut self.st.held,
+                plane_held: &mut self.st.plane_held,
+                self_touching: &mut self.st.self_touching,
                 stick: &mut self.st.stick,
                 pressure: &mut self.st.pressure,
                 stations: self.scene.output.pressure_stations.unwrap_or(0),
@@ -419,6 +475,8 @@ impl Simulation {
                 t.state.stroke = stroke;
             }
         }
+        let (contact, tool_work) = (touch.any, touch.tool_work);
+        self.grow_laps(self.st.time + dt);
         let t4 = Instant::now();
         // 5. Corrector and essential conditions.
         if contact {
@@ -452,7 +510,7 @@ impl Simulation {
             f_int: &self.f_int,
             f_con: &self.contact.force,
         };
-        let track = !self.tools.is_empty();
+        let track = self.contacts_anything();
         let u = update::update(
             &self.team,
             &mut self.st.d,
@@ -516,8 +574,8 @@ impl Simulation {
             dt,
             self.st.stable_dt,
         )?;
-        // 8. The quasi-static watch.
-        self.watch_quasi_static(contact)?;
+        // 8. The quasi-static watch, from the first touch of a tool.
+        self.watch_quasi_static(touch.tools)?;
         // 9. The heat stage, when it is due (`conduction.rs`).
         let t6 = Instant::now();
         self.heat_stage_if_due(dt)?;
@@ -599,6 +657,28 @@ impl Simulation {
         }
     }
 
+    /// Whether the contact stage has anything to do: tools, symmetry planes or the surface
+    /// against itself (the update then bounds how far the particles move, for its skips).
+    fn contacts_anything(&self) -> bool {
+        !self.tools.is_empty() || !self.planes.is_empty() || self.contact.self_contact().is_some()
+    }
+
+    /// Grows the laps by the last contact stage's self-contacts, predicted for `time` (s)
+    /// ([`crate::laps`]).
+    fn grow_laps(&mut self, time: Real) {
+        let (pairs, x) = self.contact.self_pairs();
+        if pairs.is_empty() {
+            return;
+        }
+        let stage = laps::Stage {
+            neighbours: neighbours(self.scene.discretization.support),
+            x,
+            time,
+            strokes: self.tools.iter().map(|t| t.state.stroke).collect(),
+        };
+        laps::grow(&mut self.st.laps, pairs, &stage);
+    }
+
     /// The stress stage (`stress.rs`) on this simulation's points, timed; a point whose
     /// update fails stops the run with a diagnosis naming it. Sets the stable step estimate
     /// from the smallest deformed altitude. Returns (elastic, plastic) energy (J).
@@ -676,12 +756,13 @@ impl Simulation {
     /// `dt V*` for the contact stage.
     fn force_stage(&mut self, predict: Option<(Real, Real)>) {
         let t0 = Instant::now();
+        let track = self.contacts_anything();
         let predictor = predict.map(|(dt_avg, _)| Predictor {
             dt_avg,
             v: &mut self.st.v,
             v_prev: &mut self.v_prev,
             inv_mass: &self.inv_mass,
-            track: !self.tools.is_empty(),
+            track,
         });
         let speed = update::gather_forces(&self.team, &self.scatter, &mut self.f_int, predictor);
         if let Some((_, dt)) = predict {
@@ -746,6 +827,7 @@ impl Simulation {
             + npts
                 * (r2 + 3 * 8 + std::mem::size_of::<PointState>() + std::mem::size_of::<PointOut>())
             + self.boundary.len() * 4
+            + self.outline.memory_bytes()
     }
 
     /// Critical step measured on the undeformed discretisation (s).
@@ -805,6 +887,24 @@ impl Simulation {
                 "the kinetic energy reached {:.1} % of the internal energy (above {:.0} %): the added mass is not negligible; scale less or set checks.kinetic_to_internal_max to stop such runs",
                 100.0 * ratio,
                 100.0 * QUASI_STATIC_WARNING
+            )
+        })
+    }
+
+    /// A warning when the boundary ring crossed itself at a sample: the surface passed
+    /// through itself (the self-contact is off, or the fold was shorter than the kernel's
+    /// support, which contact cannot hold), so the boundary's volume and the pictures are
+    /// not to be trusted there.
+    pub fn surface_warning(&self) -> Option<String> {
+        let n = self.st.max_crossings;
+        (n > 0).then(|| {
+            let why = match self.scene.self_contact.enabled {
+                true => "a fold shorter than the kernel's support passed through itself; a finer grid resolves it",
+                false => "[self_contact] enabled = false lets it pass through itself",
+            };
+            format!(
+                "the boundary crossed itself ({n} crossings of its segments at a sample; deepest particle {:.3} spacings inside the workpiece's own surface): {why}",
+                self.st.max_inside_itself / self.spacing[0].min(self.spacing[1])
             )
         })
     }

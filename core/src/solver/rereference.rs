@@ -40,7 +40,6 @@
 use super::energy::kinetic_energy;
 use super::Simulation;
 use crate::constraints::Constraints;
-use crate::contact::Contact;
 use crate::error::{Error, Result};
 use crate::material::simo1992_hencky_j2::elastic_left_cauchy_green;
 use crate::material::PointState;
@@ -273,12 +272,15 @@ impl Simulation {
         if let Some(c) = &self.constraints {
             self.constraints = Constraints::new(c.rows.clone(), &nodal, &self.mass)?;
         }
-        self.contact = Contact::new(
+        self.outline =
+            super::outline::Outline::on_cloud(&cloud, &reference.particles, &self.boundary)?;
+        self.contact = super::setup::contact_stage(
+            &self.scene,
             &self.boundary,
             &nodal,
             &reference.particles,
             &reference.points,
-            self.tools.iter().any(|t| t.friction.needs_flow_stress()),
+            &self.tools,
         );
         self.nodal = nodal;
         self.ref_pos.clone_from(&reference.particles);
@@ -312,6 +314,7 @@ impl Simulation {
         self.scatter = fresh.scatter;
         self.constraints = fresh.constraints;
         self.contact = fresh.contact;
+        self.outline = fresh.outline;
         self.ref_pos = fresh.ref_pos;
         self.points = fresh.points;
         self.inv_radius = fresh.inv_radius;

@@ -7,6 +7,7 @@ use super::energy::{kinetic_energy, Energy};
 use super::heat::Heat;
 use super::layout::{Scatter, MAX_GROUP};
 use super::mass_scaling::{stiffness_bounds, Plan};
+use super::outline::Outline;
 use super::state::State;
 use super::stress::PointOut;
 use super::{Simulation, StageTimes};
@@ -18,6 +19,8 @@ use crate::material::{HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::{Lattice, ShapeTable, Site};
 use crate::scene::{Component, Edge, Kinematics, Scene};
+use crate::self_contact::SelfContact;
+use crate::symmetry;
 use crate::team::Team;
 use crate::tools::{Tool, SEARCH_DEPTH_SPACINGS};
 use std::f64::consts::PI;
@@ -83,6 +86,7 @@ impl Simulation {
             },
         });
         let boundary = boundary_ring(nx, ny);
+        let outline = Outline::on_lattice(&lattice, nx, &boundary)?;
         let constraints = Constraints::new(essential_rows(scene), &nodal, &mass)?;
         let depth = SEARCH_DEPTH_SPACINGS * h[0].max(h[1]);
         let tools: Vec<Tool> = scene.tools.iter().map(|t| Tool::new(t, depth)).collect();
@@ -94,13 +98,20 @@ impl Simulation {
             0.0,
             scene.thermal.as_ref().map(|t| t.initial_temperature_c),
         );
-        let contact = Contact::new(
+        let contact = contact_stage(
+            scene,
             &boundary,
             &nodal,
             &ref_pos,
             &points.positions,
-            tools.iter().any(|t| t.friction.needs_flow_stress()),
+            &tools,
         );
+        let planes = symmetry::planes(scene, &ref_pos);
+        let self_touching = match scene.self_contact.enabled {
+            true => vec![false; boundary.len()],
+            false => Vec::new(),
+        };
+        let plane_held = vec![false; contact.candidate_count() * planes.len()];
         let pairs = contact.candidate_count() * tools.len();
         let held = match tools.iter().all(|t| t.separation) {
             true => Vec::new(),
@@ -119,6 +130,7 @@ impl Simulation {
             scatter,
             contact,
             boundary,
+            outline,
             constraints,
             st: State {
                 step: 0,
@@ -140,6 +152,12 @@ impl Simulation {
                 kinetic_to_internal_max: 0.0,
                 first_contact_s: None,
                 held,
+                plane_held,
+                self_touching,
+                max_beyond_plane: 0.0,
+                max_inside_itself: 0.0,
+                max_crossings: 0,
+                laps: Vec::new(),
                 stick,
                 fill: vec![None; scene.tools.iter().map(|t| t.fill_points.len()).sum()],
                 reference: None,
@@ -170,6 +188,7 @@ impl Simulation {
                 }),
             },
             tools,
+            planes,
             out: vec![out; npts],
             f_int: vec![[0.0; 2]; np],
             v_prev: v,
@@ -271,6 +290,36 @@ fn lumped_masses(
         ))),
         None => Ok(mass),
     }
+}
+
+/// The contact stage of `scene` ([`Contact::new`]) for particles with the rows of `nodal`,
+/// the counter-clockwise `boundary` ring, reference positions `reference` and integration
+/// points at `points` (m), with `tools`: the flow stress where a friction law needs it, the
+/// self-contact unless the scene turns it off.
+pub(super) fn contact_stage(
+    scene: &Scene,
+    boundary: &[u32],
+    nodal: &ShapeTable,
+    reference: &[[Real; 2]],
+    points: &[[Real; 2]],
+    tools: &[Tool],
+) -> Contact {
+    let [nx, ny] = scene.workpiece.particles;
+    let size = scene.workpiece.size_m;
+    let h = [size[0] / (nx - 1) as Real, size[1] / (ny - 1) as Real];
+    let self_contact = SelfContact::new(&scene.self_contact, h, scene.discretization.support);
+    let flow_stress = tools.iter().any(|t| t.friction.needs_flow_stress())
+        || self_contact
+            .as_ref()
+            .is_some_and(|s| s.friction.needs_flow_stress());
+    Contact::new(
+        boundary,
+        nodal,
+        reference,
+        points,
+        flow_stress,
+        self_contact,
+    )
 }
 
 /// The boundary particles of an `nx x ny` lattice, counter-clockwise from the lower-left.

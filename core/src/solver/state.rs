@@ -4,6 +4,7 @@ use super::energy::Energy;
 use super::heat::Heat;
 use super::rereference::Reference;
 use crate::contact::Stick;
+use crate::laps::Lap;
 use crate::material::PointState;
 use crate::math::Real;
 use crate::tools::ToolState;
@@ -28,7 +29,8 @@ pub struct State {
     pub tools: Vec<ToolState>,
     /// Energy account.
     pub energy: Energy,
-    /// Largest penetration seen at an output time (m).
+    /// Deepest a particle's physical position lay inside a tool (m), over the steps'
+    /// checks and the samples.
     pub max_penetration: Real,
     /// Stable step estimate on the deformation at `time` (s).
     pub stable_dt: Real,
@@ -44,12 +46,35 @@ pub struct State {
     /// Time of the first step with a contact force (s), where the watch's start-up begins.
     #[serde(default)]
     pub first_contact_s: Option<Real>,
-    /// Which boundary particles are held on which tool without separation
-    /// (`[boundary index * tools + tool]`; empty when every tool separates).
+    /// Which particles are held on which tool without separation
+    /// (`[candidate * tools + tool]`; empty when every tool separates).
     #[serde(default)]
     pub held: Vec<bool>,
-    /// The friction state of each boundary particle in contact with each tool that has
-    /// friction (`[boundary index * tools + tool]`, `None` out of contact).
+    /// Which particles are held on which symmetry plane (`[candidate * planes + plane]`;
+    /// empty without planes).
+    #[serde(default)]
+    pub plane_held: Vec<bool>,
+    /// Which boundary ring particles are in contact with the workpiece's own surface (by
+    /// ring index; empty without self-contact): a self-contact begins shallow and goes on
+    /// deeper ([`crate::self_contact`]).
+    #[serde(default)]
+    pub self_touching: Vec<bool>,
+    /// Deepest a particle's physical position lay beyond a symmetry plane or the axis (m),
+    /// over the steps' checks and the samples.
+    #[serde(default)]
+    pub max_beyond_plane: Real,
+    /// Deepest a surface particle lay inside another part of the workpiece (m).
+    #[serde(default)]
+    pub max_inside_itself: Real,
+    /// Most crossings of the boundary ring's segments at a sample (0: it never crossed
+    /// itself).
+    #[serde(default)]
+    pub max_crossings: u32,
+    /// The laps (folds of the surface onto itself) found so far, in the order they formed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub laps: Vec<Lap>,
+    /// The friction state of each particle in contact with each tool that has friction
+    /// (`[candidate * tools + tool]`, `None` out of contact).
     #[serde(default)]
     pub stick: Vec<Option<Stick>>,
     /// When the material first reached each tool's fill points, in scene order (tool by

@@ -48,6 +48,7 @@ pub fn patch(kin: Kinematics, n: usize, rule: IntegrationRule, support: f64) -> 
             mass_scaling: None,
         },
         constraints: vec![],
+        self_contact: SelfContactSpec::default(),
         tools: vec![],
         output: OutputSpec::default(),
         checks: Checks::default(),

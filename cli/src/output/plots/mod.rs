@@ -13,7 +13,7 @@ mod line;
 mod shape;
 
 pub use line::{line_plot, Colour, Marker, Series};
-pub use shape::{shape_plot, stages_plot, Stage};
+pub use shape::{shape_plot, stages_plot, Lap, Stage};
 
 use std::path::Path;
 use std::sync::OnceLock;

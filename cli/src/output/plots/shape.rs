@@ -26,6 +26,17 @@ pub struct Stage<'a> {
     /// Marked points of the tools (m) and whether each is filled: the tools' fill points,
     /// drawn as a filled green dot when the material reached them, a hollow red ring when not.
     pub marks: Vec<([f64; 2], bool)>,
+    /// Laps of the workpiece's surface, drawn as magenta dots on their particles, labelled.
+    pub laps: Vec<Lap>,
+}
+
+/// A lap (the surface folded onto itself) as a shape plot marks it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lap {
+    /// Its label, e.g. "lap 1".
+    pub label: String,
+    /// The positions of its surface particles (m).
+    pub points: Vec<[f64; 2]>,
 }
 
 /// Height of the strip holding a panel title in [`stages_plot`].
@@ -57,11 +68,15 @@ const TOOL: RGBColor = RGBColor(25, 25, 25);
 const FILLED: RGBColor = RGBColor(0, 150, 60);
 const EMPTY: RGBColor = RGBColor(210, 30, 30);
 const MARK_RADIUS: i32 = 6;
+/// Colour and radius (pixels) of the laps' particles.
+const LAP: RGBColor = RGBColor(200, 0, 200);
+const LAP_RADIUS: i32 = 4;
 
-/// Deformed shape: quads filled with a colour map of the mean of their corner values, a colour
-/// bar labelled `value_label`, equal aspect ratio (1 m in x = 1 m in y on screen), tool polylines
-/// drawn as thick dark lines, coordinates multiplied by `scale` for the axes (e.g. 1e3 with
-/// axis labels in mm). PNG about 1000 px wide, height following the aspect ratio (clamped to a sane range).
+/// Deformed shape, one [`Stage`] without its title: quads filled with a colour map of the mean
+/// of their corner values, a colour bar labelled `value_label`, equal aspect ratio (1 m in x =
+/// 1 m in y on screen), tool polylines drawn as thick dark lines, fill points and laps marked,
+/// coordinates multiplied by `scale` for the axes (e.g. 1e3 with axis labels in mm). PNG
+/// about 1000 px wide, height following the aspect ratio (clamped to a sane range).
 ///
 /// Non-finite corner values are left out of the mean; quads without any finite value are grey,
 /// quads with a non-finite corner position are skipped. Without quads, nodes are drawn as
@@ -71,26 +86,15 @@ const MARK_RADIUS: i32 = 6;
 ///
 /// `values` not matching `positions`, a quad index out of range, a non-finite or zero `scale`,
 /// nothing finite to draw, a path not ending in `.png`, or a failure to render or write.
-#[allow(clippy::too_many_arguments)]
 pub fn shape_plot(
     path: &Path,
     title: &str,
-    positions: &[[f64; 2]],
     quads: &[[u32; 4]],
-    values: &[f64],
+    stage: Stage<'_>,
     value_label: &str,
-    tools: &[Vec<[f64; 2]>],
-    marks: &[([f64; 2], bool)],
     axis_labels: (&str, &str),
     scale: f64,
 ) -> Result<(), String> {
-    let stage = Stage {
-        title: String::new(),
-        positions,
-        values,
-        tools: tools.to_vec(),
-        marks: marks.to_vec(),
-    };
     stages_plot(
         path,
         title,
@@ -173,6 +177,8 @@ struct PanelGeometry {
     tools: Vec<Vec<(f64, f64)>>,
     /// Fill points and whether each is filled.
     marks: Vec<((f64, f64), bool)>,
+    /// Laps: label and particle positions.
+    laps: Vec<(String, Vec<(f64, f64)>)>,
 }
 
 impl PanelGeometry {
@@ -222,11 +228,22 @@ impl PanelGeometry {
             .iter()
             .filter_map(|(p, filled)| point(p).map(|q| (q, *filled)))
             .collect();
+        let laps = stage
+            .laps
+            .iter()
+            .map(|lap| {
+                (
+                    lap.label.clone(),
+                    lap.points.iter().filter_map(point).collect(),
+                )
+            })
+            .collect();
         PanelGeometry {
             quads,
             nodes,
             tools,
             marks,
+            laps,
         }
     }
 }
@@ -532,6 +549,17 @@ impl<'a> ShapePlan<'a> {
                 Circle::new(p, MARK_RADIUS, style)
             });
         chart.draw_series(marks).map_err(draw_err)?;
+        for (label, points) in &geometry.laps {
+            let dots = points
+                .iter()
+                .filter(|p| inside(p))
+                .map(|&p| Circle::new(p, LAP_RADIUS, LAP.filled()));
+            chart.draw_series(dots).map_err(draw_err)?;
+            if let Some(&p) = points.iter().find(|p| inside(p)) {
+                let text = Text::new(label.clone(), p, ("sans-serif", 16).into_font().color(&LAP));
+                chart.draw_series(std::iter::once(text)).map_err(draw_err)?;
+            }
+        }
         Ok(chart.plotting_area().dim_in_pixel())
     }
 }
@@ -630,6 +658,7 @@ mod tests {
             values,
             tools: tools.to_vec(),
             marks: vec![([0.01, 0.01], true), ([0.02, 0.0], false)],
+            laps: Vec::new(),
         }
     }
 
@@ -644,15 +673,21 @@ mod tests {
         let dir = temp_dir("shape");
         let (positions, quads, values) = billet(10, 15, 0.25);
         let path = dir.join("shape.png");
+        let marked = Stage {
+            title: String::new(),
+            marks: vec![([0.01, 0.0], true), ([0.03, 0.0], false)],
+            laps: vec![Lap {
+                label: "lap 1".into(),
+                points: vec![[0.02, 0.001], [0.021, 0.001]],
+            }],
+            ..stage(&positions, &values, &dies())
+        };
         shape_plot(
             &path,
             "Upset billet",
-            &positions,
             &quads,
-            &values,
+            marked,
             "Effective plastic strain [-]",
-            &dies(),
-            &[([0.01, 0.0], true), ([0.03, 0.0], false)],
             ("r [mm]", "z [mm]"),
             1e3,
         )
@@ -731,12 +766,9 @@ mod tests {
             match shape_plot(
                 &path,
                 case,
-                positions,
                 quads,
-                values,
+                stage(positions, values, tools),
                 "v",
-                tools,
-                &[],
                 labels,
                 1e3,
             ) {
@@ -750,12 +782,9 @@ mod tests {
             shape_plot(
                 &path,
                 "t",
-                positions,
                 quads,
-                values,
+                stage(positions, values, &tools),
                 "v",
-                &tools,
-                &[],
                 labels,
                 scale,
             )
@@ -776,7 +805,7 @@ mod tests {
             "zero scale"
         );
         assert!(plot(&positions, &quads, &values, nan).is_err(), "nan scale");
-        let nothing = shape_plot(&path, "t", &[], &[], &[], "v", &[], &[], ("x", "y"), 1.0);
+        let nothing = shape_plot(&path, "t", &[], stage(&[], &[], &[]), "v", ("x", "y"), 1.0);
         assert!(nothing.is_err(), "nothing to draw");
     }
 

@@ -1,0 +1,83 @@
+//! Symmetry planes hold every particle that reaches them, and the boundary does not pass
+//! through itself, measured on the particles' physical positions.
+//!
+//! The bug: a symmetry constraint held only the particles that started on its edge. In the
+//! plane-strain closed-die quarter model `scenes/flash_quarter.toml` the flash's tip, made of
+//! particles that started on the block's side face, curled down through the mid-plane: 0.25
+//! spacings deep on the 21 x 13 grid and 7 spacings on the 41 x 25 grid at the end of the
+//! stroke (the rounded land entry on 41 x 25: 7.5), while the run said "ok".
+
+use rkforge_core::{IntegrationRule, Scene, Simulation};
+
+/// The shipped flash scene on the coarse grid, with the die's sharp land entry or a 2 mm
+/// radius there (six segments), with `rule`.
+fn flash(rounded: bool, rule: IntegrationRule) -> Scene {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/flash_quarter.toml");
+    let mut scene = Scene::from_file(&path).unwrap().with_integration(rule);
+    scene.workpiece.particles = [21, 13];
+    if rounded {
+        let (w, r, land) = (0.016, 0.002, 0.012);
+        let mut points = vec![[0.090, land]];
+        points.extend((0..=6).map(|i| {
+            let t = std::f64::consts::FRAC_PI_2 * i as f64 / 6.0;
+            [w + r - r * t.sin(), land + r - r * t.cos()]
+        }));
+        points.extend([[w, 0.023], [-0.002, 0.023]]);
+        scene.tools[0].points_m = points;
+    }
+    scene
+}
+
+/// Runs `scene` to its end, measuring at every history sample every particle against the
+/// plane, the axis and the die, and the boundary against itself; returns the deepest beyond
+/// a plane and in a tool (in smallest spacings), the most crossings of the boundary, and the
+/// largest difference between the boundary's volume change and the material's own.
+fn worst(scene: &Scene) -> (f64, f64, usize, f64) {
+    let mut sim = Simulation::new(scene).unwrap();
+    let h = sim.spacing()[0].min(sim.spacing()[1]);
+    let interval = scene.history_interval();
+    let samples = (scene.time.end_s / interval).round() as usize;
+    let (mut plane, mut tool, mut crossings, mut volume) = (0.0f64, 0.0f64, 0, 0.0f64);
+    for k in 1..=samples {
+        sim.run_to(k as f64 * interval, |_| {}).unwrap();
+        let d = sim.measure_penetration().unwrap();
+        plane = plane.max(d.planes.depth / h);
+        tool = tool.max(d.tools.depth / h);
+        crossings = crossings.max(d.crossings);
+        let boundary = sim.volume() / sim.reference_volume() - 1.0;
+        volume = volume.max((boundary - sim.integrated_volume_change()).abs());
+    }
+    (plane, tool, crossings, volume)
+}
+
+/// With every rule the flash stays above the mid-plane and out of the die. With the Gauss
+/// rules the boundary never crosses itself and encloses the material's own volume within
+/// 1 %. With SCNI it does not: the top face under the die's ceiling takes a saw-tooth (a
+/// boundary oscillation of nodal integration), and the particles of that face are scattered
+/// where the metal is dragged down the cavity wall into the 1 mm flash, so the ring crosses
+/// itself once in the last tenth of the stroke (sharp corner; 0.24 spacings deep with the
+/// rounded one) and the outline's volume runs 5 % from the points' own; that is measured and
+/// reported (summary warnings), not asserted here.
+#[test]
+fn the_flash_stays_on_its_side_of_the_mid_plane_with_any_rule() {
+    for rounded in [false, true] {
+        for rule in [
+            IntegrationRule::Q2,
+            IntegrationRule::Q4,
+            IntegrationRule::Scni,
+        ] {
+            let (plane, tool, crossings, volume) = worst(&flash(rounded, rule));
+            let case = format!("rounded {rounded}, {rule:?}");
+            assert!(
+                plane < 0.05,
+                "{case}: {plane:.4} spacings beyond the mid-plane"
+            );
+            assert!(tool < 0.05, "{case}: {tool:.4} spacings inside the die");
+            if rule != IntegrationRule::Scni {
+                assert_eq!(crossings, 0, "{case}: the boundary crossed itself");
+                assert!(volume < 0.01, "{case}: volumes {volume:.4} apart");
+            }
+        }
+    }
+}
