@@ -666,7 +666,7 @@ impl Contact {
         }
         match due {
             Due::Full | Due::Local => {
-                touch.any |= self.self_stage(due, body, self_touching, dt, dt_avg);
+                touch.any |= self.self_stage(due, whole_ring, body, self_touching, dt, dt_avg);
             }
             Due::Nothing => {
                 if self_touching.contains(&true) {
@@ -688,11 +688,12 @@ impl Contact {
     /// ([`crate::self_contact`]), `touching` the ring particles in contact at the last stage,
     /// updated: each pair's force on its slave, its reaction on the master point shared by
     /// the segment's two particles, each spread with eq. 7; whether any acts. A full search
-    /// reads the ring the stage interpolated whole; a local one interpolates the particles it
-    /// reads.
+    /// reads the ring the stage interpolated whole; a local one reads it too when the stage
+    /// interpolated it (`whole_ring`), else interpolates the particles it reads.
     fn self_stage(
         &mut self,
         due: Due,
+        whole_ring: bool,
         body: &Body<'_>,
         touching: &mut [bool],
         dt: Real,
@@ -711,9 +712,12 @@ impl Contact {
             }
             search.full_search(&self.ring_positions, &self.ring_velocities, dt, touching);
         } else {
-            let particles = &self.candidates[..ring];
+            let (particles, motion) = (&self.candidates[..ring], &self.motion[..ring]);
             search.local_search(
-                |k| body.predicted(particles[k] as usize, dt),
+                |k| match whole_ring {
+                    true => motion[k],
+                    false => body.predicted(particles[k] as usize, dt),
+                },
                 &mut self.ring_positions,
                 &mut self.ring_velocities,
                 dt,

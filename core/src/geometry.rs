@@ -105,7 +105,7 @@ pub fn vertex_normal(ring: &[[Real; 2]], k: usize) -> Option<[Real; 2]> {
 }
 
 /// The closest point of segment `(a, b)` to `x`: its parameter `t` in [0, 1] from `a`, the
-/// point and its distance (m).
+/// point and its squared distance (m^2; the searches compare squares and take one root).
 pub fn closest_on_segment(a: [Real; 2], b: [Real; 2], x: [Real; 2]) -> (Real, [Real; 2], Real) {
     let t = [b[0] - a[0], b[1] - a[1]];
     let len2 = t[0] * t[0] + t[1] * t[1];
@@ -115,7 +115,8 @@ pub fn closest_on_segment(a: [Real; 2], b: [Real; 2], x: [Real; 2]) -> (Real, [R
         0.0
     };
     let c = [a[0] + s * t[0], a[1] + s * t[1]];
-    (s, c, (x[0] - c[0]).hypot(x[1] - c[1]))
+    let e = [x[0] - c[0], x[1] - c[1]];
+    (s, c, e[0] * e[0] + e[1] * e[1])
 }
 
 /// How many pairs of segments of the closed polygon `ring` that share no vertex cross each
@@ -147,7 +148,7 @@ pub fn crossings(ring: &[[Real; 2]], tolerance: Real) -> usize {
             let (d3, d4) = (side(p1, p2, q1), side(p1, p2, q2));
             if (d1 > 0.0) != (d2 > 0.0) && (d3 > 0.0) != (d4 > 0.0) {
                 let clear = |p: [Real; 2], a: [Real; 2], b: [Real; 2]| {
-                    closest_on_segment(a, b, p).2 > tolerance
+                    closest_on_segment(a, b, p).2 > tolerance * tolerance
                 };
                 if clear(p1, q1, q2) && clear(p2, q1, q2) && clear(q1, p1, p2) && clear(q2, p1, p2)
                 {

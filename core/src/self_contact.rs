@@ -137,6 +137,8 @@ pub struct SelfContact {
     bins: SegmentBins,
     /// The contacts of the last search.
     pairs: Vec<Pair>,
+    /// Which ring particles a local search has interpolated at this stage.
+    fresh: Vec<bool>,
 }
 
 impl SelfContact {
@@ -159,6 +161,7 @@ impl SelfContact {
             least_clear: Real::NEG_INFINITY,
             bins: SegmentBins::default(),
             pairs: Vec::new(),
+            fresh: Vec::new(),
         })
     }
 
@@ -237,7 +240,7 @@ impl SelfContact {
             for &a in self.bins.candidates(x[k]) {
                 let a = a as usize;
                 if !is_neighbour_segment(a, k, n, self.neighbours)
-                    && closest_on_segment(x[a], x[(a + 1) % n], x[k]).2 <= reach
+                    && closest_on_segment(x[a], x[(a + 1) % n], x[k]).2 <= reach * reach
                 {
                     self.list.push(a as u32);
                 }
@@ -258,8 +261,9 @@ impl SelfContact {
 
     /// The search between full ones (type doc): each slave whose nearest listed segment may
     /// now lie within the search depth, against its lists, at the ring's predicted positions
-    /// and velocities `at(k)` (m, m/s) over the natural step `dt` (s); `touching` as for
-    /// [`SelfContact::full_search`]. Finds what a full search would.
+    /// and velocities `at(k)` (m, m/s; read once per particle into `x`, `v`) over the
+    /// natural step `dt` (s); `touching` as for [`SelfContact::full_search`]. Finds what a
+    /// full search would.
     pub fn local_search(
         &mut self,
         mut at: impl FnMut(usize) -> [[Real; 2]; 2],
@@ -270,6 +274,8 @@ impl SelfContact {
     ) {
         self.pairs.clear();
         let n = x.len();
+        self.fresh.clear();
+        self.fresh.resize(n, false);
         for (k, touch) in touching.iter_mut().enumerate() {
             if self.clear[k] - self.moved > 0.0 {
                 *touch = false;
@@ -282,7 +288,10 @@ impl SelfContact {
                 let a = a as usize;
                 [(a + n - 1) % n, a, (a + 1) % n, (a + 2) % n]
             })) {
-                [x[i], v[i]] = at(i);
+                if !self.fresh[i] {
+                    [x[i], v[i]] = at(i);
+                    self.fresh[i] = true;
+                }
             }
             let pair = slave_contact(k, listed, x, v, dt, self.depth, *touch);
             *touch = pair.contact.is_some();
@@ -313,21 +322,21 @@ fn slave_contact(
 ) -> SlaveContact {
     let n = x.len();
     let xk = x[k];
-    // The closest candidate: (distance, segment, parameter, point).
+    // The closest candidate: (squared distance, segment, parameter, point).
     let mut best: Option<(Real, usize, Real, [Real; 2])> = None;
     for &a in listed {
         let a = a as usize;
-        let (t, c, d) = closest_on_segment(x[a], x[(a + 1) % n], xk);
-        if best.is_none_or(|b| d < b.0) {
-            best = Some((d, a, t, c));
+        let (t, c, d2) = closest_on_segment(x[a], x[(a + 1) % n], xk);
+        if best.is_none_or(|b| d2 < b.0) {
+            best = Some((d2, a, t, c));
         }
     }
-    let near = best.map(|b| b.0);
+    let near = best.map(|b| b.0.sqrt());
     let none = SlaveContact {
         near,
         contact: None,
     };
-    let Some((d, a, t, c)) = best else {
+    let (Some(d), Some((_, a, t, c))) = (near, best) else {
         return none;
     };
     if d > depth || d <= 0.0 {
@@ -339,7 +348,7 @@ fn slave_contact(
             v[k][0] - (1.0 - t) * v[a][0] - t * v[b][0],
             v[k][1] - (1.0 - t) * v[a][1] - t * v[b][1],
         ];
-        if d > 2.0 * dt * rel[0].hypot(rel[1]) {
+        if d * d > 4.0 * dt * dt * (rel[0] * rel[0] + rel[1] * rel[1]) {
             return none;
         }
     }

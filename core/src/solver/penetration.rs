@@ -129,7 +129,8 @@ impl Simulation {
             let (k, a) = (pair.slave as usize, pair.segment as usize);
             let b = (a + 1) % n;
             let [xk, xa, xb] = [k, a, b].map(|i| self.position(self.boundary[i] as usize));
-            let (_, c, d) = closest_on_segment(xa, xb, xk);
+            let (_, c, d2) = closest_on_segment(xa, xb, xk);
+            let d = d2.sqrt();
             let n_ab = left_normal(xa, xb);
             let behind = (xk[0] - c[0]) * n_ab[0] + (xk[1] - c[1]) * n_ab[1] > 0.0;
             if behind && d > worst.depth {
@@ -203,7 +204,12 @@ impl Simulation {
             }
             let (d, a) = (0..n)
                 .filter(|&a| !is_neighbour_segment(a, k, n, 0))
-                .map(|a| (closest_on_segment(ring[a], ring[(a + 1) % n], xk).2, a))
+                .map(|a| {
+                    (
+                        closest_on_segment(ring[a], ring[(a + 1) % n], xk).2.sqrt(),
+                        a,
+                    )
+                })
                 .fold((Real::INFINITY, 0), |b, c| if c.0 < b.0 { c } else { b });
             if d > worst.depth && d.is_finite() {
                 worst = Penetrated {
