@@ -6,7 +6,7 @@
 //! In the penalty contact of [`crate::tools`] a slave particle carries a normal force
 //! `f_n` (N) over its contact area `A` (m^2), so the tangential bound is `mu f_n`, `m k A`
 //! or `min(mu f_n, m k A)`; the stick force still caps it, so a sticking particle stays stuck
-//! and a sliding one carries the bound ([`crate::tools::penalty_force`]).
+//! and a sliding one carries the bound ([`crate::contact::sidibe2009::penalty_force`]).
 //!
 //! Scene syntax: a plain number is a Coulomb coefficient (`friction = 0.2`); a table names
 //! the model, `friction = { model = "shear", m = 0.3 }` or

@@ -1,9 +1,9 @@
 //! Laps (folds) as results: where and when the free surface folded onto itself.
 //!
-//! A lap is a self-contact ([`crate::self_contact`]) between surface points that were
+//! A lap is a self-contact ([`crate::contact::self_contact`]) between surface points that were
 //! apart along the surface: the slave and the nearer particle of its master segment more
 //! than twice `s` particles apart along the boundary ring, `s` the ring particles that
-//! share a particle's RK coefficients ([`crate::self_contact::neighbours`], two for the
+//! share a particle's RK coefficients ([`crate::contact::self_contact::neighbours`], two for the
 //! usual support of two spacings): a fold whose two faces are each longer than the kernel's
 //! support (closer contacts are a fold's own root, or a kink at the scale of the
 //! particles). The lap pairs of a stage are joined into laps: pairs whose particles lie
@@ -16,8 +16,8 @@
 //! contact was (the midpoint of the slave and its master point) and that contact's material
 //! point, followed to its position now, and every surface particle that took part in it.
 
+use crate::contact::self_contact::Pair;
 use crate::math::Real;
-use crate::self_contact::Pair;
 use serde::{Deserialize, Serialize};
 
 /// A lap as the state keeps it.
@@ -41,7 +41,7 @@ pub struct Lap {
 /// share a particle's coefficients.
 pub struct Stage<'a> {
     /// Ring particles on either side of a particle that share its coefficients
-    /// ([`crate::self_contact::neighbours`]).
+    /// ([`crate::contact::self_contact::neighbours`]).
     pub neighbours: usize,
     /// Predicted positions of the ring's particles, by ring index (m).
     pub x: &'a [[Real; 2]],

@@ -12,7 +12,6 @@
 
 pub mod constraints;
 pub mod contact;
-pub mod corners;
 pub mod error;
 pub mod friction;
 pub mod geometry;
@@ -29,9 +28,8 @@ pub mod scene_keys;
 pub mod scene_overrides;
 pub mod scene_parameters;
 mod scene_validate;
-pub mod self_contact;
+pub mod segment_bins;
 pub mod solver;
-pub mod symmetry;
 pub mod team;
 pub mod tools;
 

@@ -452,7 +452,7 @@ pub struct ConstraintSpec {
 
 /// Contact of the workpiece's surface with itself: where the surface folds, its parts press
 /// on each other instead of passing through, and a fold between surface points that were
-/// apart along the surface is reported as a lap ([`crate::self_contact`]).
+/// apart along the surface is reported as a lap ([`crate::contact::self_contact`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SelfContactSpec {

@@ -1,21 +1,14 @@
-//! Rigid tools and the paper's penalty particle-to-segment contact (Sidibe et al. 2009,
-//! section II-3, eqs. 4-7).
-//!
-//! Slaves are the workpiece boundary particles, masters the tool segments. For a slave `J`
-//! whose predicted physical position lies behind a segment by the gap `g_J > 0`:
-//! - normal force (eq. 4): `f_n = m_s g / dt^2` along the segment normal `n` (N);
-//! - stick force (eq. 6): `f_st = -m_s v_TR / dt`, `v_TR` the tangential relative velocity,
-//!   plus what the last step's friction left unrealised (see [`penalty_force`]);
-//! - friction (eq. 5): `f_f = min(b, |f_st|) f_st / |f_st|` with the bound `b` of the
-//!   tool's law ([`Friction`]): `mu f_n` (Coulomb, the paper's), `m k A` (shear friction
-//!   factor) or `min(mu f_n, m k A)`;
-//! - the particle force is spread to the RK coefficients (eq. 7): `f_I += f_J N_I(X_J)`.
-//!
-//! The force on the tool is the reaction: minus the sum of the slave forces.
+//! Rigid tools: a polyline translating along its axis (fixed, at constant speed, by a
+//! velocity table or commanded from outside), with its friction law, fill points and heat
+//! transfer, and its geometry as the contact stage reads it: the signed distance of a point
+//! to the polyline ([`penetration`], [`gap_within`]) over the candidate segments its bins
+//! list. The force law is the paper's ([`crate::contact::sidibe2009`]); the stage that
+//! applies it is [`crate::contact`].
 
 use crate::friction::Friction;
 use crate::math::Real;
 use crate::scene::{Motion, ToolSpec};
+use crate::segment_bins::SegmentBins;
 use serde::{Deserialize, Serialize};
 
 /// A rigid polyline tool translating along its axis.
@@ -41,7 +34,7 @@ pub struct Tool {
     pub depth: Real,
     /// Indices of the vertices where the tool is convex towards the workpiece (the
     /// polyline turns right, the workpiece lying on its left): the corners that can cut
-    /// between two surface particles ([`crate::corners`]).
+    /// between two surface particles ([`crate::contact::corners`]).
     pub convex: Vec<u32>,
     /// Number of the tool's named fill points (the die fill needs the whole surface).
     pub fill_points: usize,
@@ -318,107 +311,6 @@ pub struct Penetration {
     pub normal: [Real; 2],
 }
 
-/// Uniform bins over segments: a tool's polyline in the tool's own (initial) coordinates,
-/// built once as a tool only translates, or the workpiece's boundary ring, built again at
-/// each self-contact search ([`crate::self_contact`]). Each segment is listed in every bin
-/// that its bounding box, grown by the search depth, overlaps.
-#[derive(Debug, Clone, Default)]
-pub struct SegmentBins {
-    origin: [Real; 2],
-    size: Real,
-    dims: [usize; 2],
-    offsets: Vec<u32>,
-    items: Vec<u32>,
-    /// Where the next item of each bin goes while filling.
-    cursor: Vec<u32>,
-}
-
-impl SegmentBins {
-    /// Bins of size `depth` (m) over the segments of `verts`.
-    pub fn new(verts: &[[Real; 2]], depth: Real) -> SegmentBins {
-        let mut lo = [Real::INFINITY; 2];
-        let mut hi = [Real::NEG_INFINITY; 2];
-        for v in verts {
-            for k in 0..2 {
-                lo[k] = lo[k].min(v[k] - depth);
-                hi[k] = hi[k].max(v[k] + depth);
-            }
-        }
-        // At most about 4096 bins per direction.
-        let size = depth.max((hi[0] - lo[0]).max(hi[1] - lo[1]) / 4096.0);
-        let mut bins = SegmentBins::default();
-        bins.fill(
-            verts.windows(2).map(|s| [s[0], s[1]]),
-            [lo, hi],
-            depth,
-            size,
-        );
-        bins
-    }
-
-    /// Bins of `size` (m) over `bounds` (`[lo, hi]`, m) listing each of `segments` in every
-    /// bin its bounding box grown by `depth` (m) overlaps, in segment order, reusing the
-    /// buffers (a counting sort: no list per bin).
-    pub fn fill(
-        &mut self,
-        segments: impl Iterator<Item = [[Real; 2]; 2]> + Clone,
-        bounds: [[Real; 2]; 2],
-        depth: Real,
-        size: Real,
-    ) {
-        let [lo, hi] = bounds;
-        self.origin = lo;
-        self.size = size;
-        self.dims = [0, 1].map(|k| ((hi[k] - lo[k]) / size).ceil().max(1.0) as usize);
-        let dims = self.dims;
-        let range = |s: &[[Real; 2]; 2], c: usize| {
-            let a = ((s[0][c].min(s[1][c]) - depth - lo[c]) / size)
-                .floor()
-                .max(0.0) as usize;
-            let b = ((s[0][c].max(s[1][c]) + depth - lo[c]) / size).floor() as usize;
-            a..=b.min(dims[c] - 1)
-        };
-        self.offsets.clear();
-        self.offsets.resize(dims[0] * dims[1] + 1, 0);
-        for s in segments.clone() {
-            for j in range(&s, 1) {
-                for i in range(&s, 0) {
-                    self.offsets[j * dims[0] + i + 1] += 1;
-                }
-            }
-        }
-        for b in 0..dims[0] * dims[1] {
-            self.offsets[b + 1] += self.offsets[b];
-        }
-        self.items.clear();
-        self.items
-            .resize(self.offsets[dims[0] * dims[1]] as usize, 0);
-        self.cursor.clear();
-        self.cursor
-            .extend_from_slice(&self.offsets[..dims[0] * dims[1]]);
-        for (k, s) in segments.enumerate() {
-            for j in range(&s, 1) {
-                for i in range(&s, 0) {
-                    let b = j * dims[0] + i;
-                    self.items[self.cursor[b] as usize] = k as u32;
-                    self.cursor[b] += 1;
-                }
-            }
-        }
-    }
-
-    /// Segments that may lie within the search depth of the point `x` (tool coordinates).
-    pub fn candidates(&self, x: [Real; 2]) -> &[u32] {
-        let i = ((x[0] - self.origin[0]) / self.size).floor();
-        let j = ((x[1] - self.origin[1]) / self.size).floor();
-        if i < 0.0 || j < 0.0 || i >= self.dims[0] as Real || j >= self.dims[1] as Real {
-            return &[];
-        }
-        let b = j as usize * self.dims[0] + i as usize;
-        &self.items[self.offsets[b] as usize..self.offsets[b + 1] as usize]
-    }
-}
-
 /// Signed distance from `x` to the polyline `verts` (workpiece on the left of travel) over
 /// the candidate segments; `Some` when `x` is inside the tool by at most `depth`.
 ///
@@ -497,88 +389,6 @@ pub fn gap_within(
             [(c[0] - x[0]) / gap, (c[1] - x[1]) / gap]
         },
     })
-}
-
-/// What the shear friction factor needs of a slave particle: its flow stress and contact
-/// area.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Interface {
-    /// Current flow stress `sigma_y` of the particle's material (Pa).
-    pub flow_stress: Real,
-    /// Contact area `A` of the particle (m^2): its tributary length along the tool times
-    /// the depth in plane strain, times `2 pi r` in axisymmetry.
-    pub area: Real,
-}
-
-/// The force on one slave particle, with its friction part.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SlaveForce {
-    /// Contact force on the slave (N): normal penalty plus friction.
-    pub force: [Real; 2],
-    /// Its tangential part, the friction force (N): the stick force while sticking, the
-    /// law's bound while sliding.
-    pub friction: [Real; 2],
-}
-
-/// A slave particle as the contact force sees it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Slave {
-    /// Mass `m` (kg).
-    pub m: Real,
-    /// Velocity relative to the tool (m/s).
-    pub v_rel: [Real; 2],
-    /// The friction force the last step left unrealised (N; zero on a new contact).
-    pub carried: [Real; 2],
-}
-
-/// Paper eqs. 4-6: contact force on a `slave` of mass `m` (kg) with gap `g` (m) along the
-/// normal `n`, velocity relative to the tool `v_rel` (m/s), the friction force `carried`
-/// (N) that the last step's friction left unrealised, the tool's `law` with the
-/// particle's flow stress and area `at`, the natural step `dt_step` and the corrector's
-/// step `dt_avg` (s):
-/// - normal (eq. 4): `f_n = m g / (dt_step dt_avg)` (`m g / dt^2` at constant step);
-/// - stick (eq. 6): `f_st = c_T - m v_TR / dt_avg`, the paper's force that stops the
-///   tangential relative velocity `v_TR` in one step plus the tangential part `c_T` of the
-///   carried force. For interpolating shape functions `c` is zero and this is the paper's
-///   law. RK shape functions do not interpolate: eq. 7 spreads the force over coefficients
-///   that move other particles too, so it changes the particle's velocity by less than
-///   `f dt_avg / m`, and what it did not realise is carried to the next step
-///   ([`crate::contact::Contact::carry`]). A sticking particle's force thus builds up until
-///   its slip stops, instead of leaving it slipping at a speed set by the step and the mass
-///   (which made the friction depend on the step, the mass scaling and the tool speed);
-/// - friction (eq. 5): `f_f = min(b, |f_st|) f_st / |f_st|` with the law's bound `b`: the
-///   particle sticks below the bound and slides at it (the return mapping of elasto-plastic
-///   friction, Wriggers 2006, *Computational Contact Mechanics*, section 5.2), so the
-///   tangential force never exceeds `b`.
-pub fn penalty_force(
-    slave: Slave,
-    pen: Penetration,
-    law: &Friction,
-    at: Interface,
-    dt_step: Real,
-    dt_avg: Real,
-) -> SlaveForce {
-    let Slave { m, v_rel, carried } = slave;
-    let n = pen.normal;
-    let fn_ = m * pen.gap / (dt_step * dt_avg);
-    let mut force = [fn_ * n[0], fn_ * n[1]];
-    let mut friction = [0.0; 2];
-    if !law.is_frictionless() {
-        let tangential = |a: [Real; 2]| {
-            let an = a[0] * n[0] + a[1] * n[1];
-            [a[0] - an * n[0], a[1] - an * n[1]]
-        };
-        let (vt, ct) = (tangential(v_rel), tangential(carried));
-        let st = [ct[0] - m * vt[0] / dt_avg, ct[1] - m * vt[1] / dt_avg];
-        let stick = (st[0] * st[0] + st[1] * st[1]).sqrt();
-        if stick > 0.0 {
-            let ff = law.bound(fn_, at.flow_stress, at.area).min(stick);
-            friction = [ff * st[0] / stick, ff * st[1] / stick];
-            force[0] += friction[0];
-            force[1] += friction[1];
-        }
-    }
-    SlaveForce { force, friction }
 }
 
 #[cfg(test)]
@@ -695,130 +505,6 @@ mod tests {
                 bins.candidates(x).len()
             );
         }
-    }
-
-    /// A slave of mass `m` moving at `v` relative to the tool with `carried` force.
-    fn slave(m: Real, v: [Real; 2], carried: [Real; 2]) -> Slave {
-        Slave {
-            m,
-            v_rel: v,
-            carried,
-        }
-    }
-
-    #[test]
-    fn friction_is_bounded_by_coulomb_and_by_the_stick_force() {
-        let pen = Penetration {
-            gap: 1e-3,
-            normal: [0.0, 1.0],
-        };
-        let (m, dt) = (2.0, 1e-3);
-        let fn_ = m * 1e-3 / (dt * dt);
-        // Fast sliding: Coulomb bound.
-        let c = Friction::Coulomb { mu: 0.3 };
-        let at = Interface::default();
-        let f = penalty_force(slave(m, [5.0, 0.0], [0.0; 2]), pen, &c, at, dt, dt).force;
-        assert!(
-            (f[1] - fn_).abs() < 1e-9 && (f[0] + 0.3 * fn_).abs() < 1e-9,
-            "{f:?}"
-        );
-        // Slow sliding: the stick force m v / dt is smaller and wins.
-        let slow = penalty_force(slave(m, [1e-4, 0.0], [0.0; 2]), pen, &c, at, dt, dt);
-        assert!((slow.force[0] + m * 1e-4 / dt).abs() < 1e-12, "{slow:?}");
-        assert_eq!(slow.friction, [slow.force[0], 0.0]);
-        // A carried force adds to the stick force (its normal part is dropped); the sum is
-        // still capped at the bound.
-        let carried = [-50.0, 1e9];
-        let held = penalty_force(slave(m, [1e-4, 0.0], carried), pen, &c, at, dt, dt);
-        assert!(
-            (held.friction[0] + 50.0 + m * 1e-4 / dt).abs() < 1e-9,
-            "{held:?}"
-        );
-        assert_eq!(held.friction[1], 0.0);
-        let capped = penalty_force(slave(m, [1e-4, 0.0], [-1e9, 0.0]), pen, &c, at, dt, dt);
-        assert!((capped.friction[0] + 0.3 * fn_).abs() < 1e-9, "{capped:?}");
-        // Frictionless: no tangential force, whatever is carried.
-        let none = Friction::Coulomb { mu: 0.0 };
-        let free = penalty_force(slave(m, [5.0, 0.0], carried), pen, &none, at, dt, dt);
-        assert_eq!((free.force[0], free.friction), (0.0, [0.0; 2]));
-    }
-
-    #[test]
-    fn shear_and_capped_friction_slide_at_their_bound_and_stick_below_it() {
-        // A 1 mm^2 contact area on a material flowing at 300 MPa: k A = 173.2 N.
-        let pen = Penetration {
-            gap: 1e-6,
-            normal: [0.0, 1.0],
-        };
-        let (m, dt): (Real, Real) = (1e-3, 1e-6);
-        let fn_ = m * 1e-6 / (dt * dt);
-        let at = Interface {
-            flow_stress: 300e6,
-            area: 1e-6,
-        };
-        let ka: Real = 300e6 / 3.0_f64.sqrt() * 1e-6;
-        let laws = [
-            (Friction::Shear { m: 0.4 }, 0.4 * ka),
-            (
-                Friction::Capped { mu: 0.1, m: 0.4 },
-                (0.1 * fn_).min(0.4 * ka),
-            ),
-            (
-                Friction::Capped { mu: 0.5, m: 0.4 },
-                (0.5 * fn_).min(0.4 * ka),
-            ),
-        ];
-        for (law, bound) in laws {
-            for v in [
-                [5.0, 0.0],
-                [-3.0, 2.0],
-                [0.0, -1e3],
-                [1e-6, 0.0],
-                [-2e-7, 7.0],
-            ] {
-                let SlaveForce { force: f, friction } =
-                    penalty_force(slave(m, v, [0.0; 2]), pen, &law, at, dt, dt);
-                assert_eq!(friction, [f[0], 0.0], "{law:?}: the tangential part");
-                let vt = v[0];
-                // Never above the bound nor the stick force; never along the sliding (no
-                // energy created: f_t v_t <= 0).
-                let stick = m * vt.abs() / dt;
-                assert!(
-                    f[0].abs() <= bound.min(stick) * (1.0 + 1e-15),
-                    "{law:?} {v:?} {f:?}"
-                );
-                assert!(f[0] * vt <= 0.0, "{law:?} {v:?} {f:?}");
-                // The normal force is untouched by friction.
-                assert_eq!(f[1], fn_);
-                if stick > bound {
-                    assert!(
-                        (f[0].abs() - bound).abs() <= 1e-12 * bound,
-                        "{law:?} slides at its bound"
-                    );
-                } else {
-                    // Sticking: the force stops the sliding in this step, m v + f dt = 0.
-                    assert!(
-                        (m * vt + f[0] * dt).abs() <= 1e-15 * m * vt.abs().max(1.0),
-                        "{law:?} sticks"
-                    );
-                }
-            }
-        }
-        // m = 0 and a bonded particle under tension (negative gap) carry no Coulomb friction.
-        let fast = slave(m, [5.0, 0.0], [0.0; 2]);
-        let none = penalty_force(fast, pen, &Friction::Shear { m: 0.0 }, at, dt, dt);
-        assert_eq!(none.force[0], 0.0);
-        let pull = Penetration {
-            gap: -1e-7,
-            normal: [0.0, 1.0],
-        };
-        let f = penalty_force(fast, pull, &Friction::Coulomb { mu: 0.3 }, at, dt, dt).force;
-        assert!(f[1] < 0.0 && f[0] == 0.0, "{f:?}");
-        let f = penalty_force(fast, pull, &Friction::Shear { m: 0.3 }, at, dt, dt).force;
-        assert!(
-            (f[0] + 0.3 * ka).abs() < 1e-12 * ka,
-            "shear friction needs no pressure: {f:?}"
-        );
     }
 
     #[test]

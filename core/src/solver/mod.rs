@@ -63,6 +63,8 @@ pub use rereference::Reference;
 pub use state::{Filled, State};
 
 use crate::constraints::Constraints;
+use crate::contact::self_contact::neighbours;
+use crate::contact::symmetry::SymmetryPlane;
 use crate::contact::{Body, Contact, Pairs, Slip};
 use crate::error::{Error, Result};
 use crate::integration::PointSet;
@@ -71,8 +73,6 @@ use crate::material::{HeatCapacity, HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::{Kinematics, Scene};
-use crate::self_contact::neighbours;
-use crate::symmetry::SymmetryPlane;
 use crate::team::Team;
 use crate::tools::Tool;
 use energy::StepEnergy;

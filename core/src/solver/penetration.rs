@@ -18,11 +18,11 @@
 //!   [`crate::geometry::winding`]) and how many pairs of the ring's segments cross.
 
 use super::Simulation;
+use crate::contact::self_contact::is_neighbour_segment;
 use crate::contact::Surface;
 use crate::error::{Error, Result};
 use crate::geometry::{closest_on_segment, crossings, left_normal, vertex_normal, winding};
 use crate::math::Real;
-use crate::self_contact::is_neighbour_segment;
 
 /// Crossings of the boundary ring within this many smallest spacings of a segment's end are
 /// a penalty contact's own gap (about a thousandth of a spacing), not the surface passing
@@ -65,7 +65,7 @@ pub struct Depths {
     /// The deepest surface particle inside another part of the workpiece.
     pub itself: Penetrated,
     /// How many pairs of the boundary ring's segments cross by more than
-    /// [`CROSSING_TOLERANCE_SPACINGS`] (0: the ring is simple up to contact gaps).
+    /// `CROSSING_TOLERANCE_SPACINGS` (0: the ring is simple up to contact gaps).
     pub crossings: usize,
 }
 
@@ -246,7 +246,7 @@ impl Simulation {
     /// particle lies deeper in a tool or beyond a plane than the bound. The workpiece inside
     /// itself is measured and reported ([`Simulation::surface_warning`]) but does not stop
     /// the run: a fold shorter than the kernel's support (two surface particles swapping
-    /// places on a coarse grid) cannot be held by contact (`crate::self_contact`), only
+    /// places on a coarse grid) cannot be held by contact (`crate::contact::self_contact`), only
     /// resolved by a finer grid.
     fn record_penetration(&mut self, d: Depths) -> Result<()> {
         let st = &mut self.st;

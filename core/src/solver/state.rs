@@ -56,7 +56,7 @@ pub struct State {
     pub plane_held: Vec<bool>,
     /// Which boundary ring particles are in contact with the workpiece's own surface (by
     /// ring index; empty without self-contact): a self-contact begins shallow and goes on
-    /// deeper ([`crate::self_contact`]).
+    /// deeper ([`crate::contact::self_contact`]).
     #[serde(default)]
     pub self_touching: Vec<bool>,
     /// Deepest a particle's physical position lay beyond a symmetry plane or the axis (m),

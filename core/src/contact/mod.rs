@@ -1,9 +1,9 @@
 //! The contact stage of a step: the paper's penalty contact (Sidibe et al. 2009, section
-//! II-3, eqs. 4-7; the force laws are in [`crate::tools`]) applied to every particle of the
-//! workpiece that can reach a tool or a symmetry plane ([`crate::symmetry`]), then the
-//! tools' convex corners against the workpiece's surface ([`crate::corners`], the second
+//! II-3, eqs. 4-7; the force law is [`sidibe2009`]) applied to every particle of the
+//! workpiece that can reach a tool or a symmetry plane ([`crate::contact::symmetry`]), then the
+//! tools' convex corners against the workpiece's surface ([`crate::contact::corners`], the second
 //! pass of a two-pass node-to-segment method), then the workpiece's surface against itself
-//! ([`crate::self_contact`]).
+//! ([`crate::contact::self_contact`]).
 //!
 //! Every particle is a contact candidate, not only those that started on the boundary:
 //! material that flows around a die corner brings particles from the inside to the surface
@@ -36,98 +36,28 @@
 //! axisymmetry (at each half segment's middle for a ring particle, so a particle on the
 //! axis has the disc `pi (l / 2)^2`).
 
-use crate::corners;
+pub mod corners;
+pub mod self_contact;
+pub mod sidibe2009;
+pub mod symmetry;
+pub mod workpiece;
+
+pub use workpiece::{Body, Pairs, Stick};
+
+use crate::contact::self_contact::{pair_force, Due, Pair, Ring, SelfContact};
+use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
+use crate::contact::symmetry::SymmetryPlane;
 use crate::friction::Friction;
 use crate::geometry::{bounds_of, Extents};
-use crate::material::{Hardening, PointState};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::Kinematics;
-use crate::self_contact::{pair_force, Due, Pair, Ring, SelfContact};
-use crate::symmetry::SymmetryPlane;
 use crate::team::{part, particle_phase, Parts, Team};
-use crate::tools::{
-    penalty_force, Interface, Penetration, Slave, SlaveForce, Tool, SEARCH_DEPTH_SPACINGS,
-};
-use serde::{Deserialize, Serialize};
+use crate::tools::{Penetration, Tool, SEARCH_DEPTH_SPACINGS};
 use std::f64::consts::PI;
 
 /// Candidates handled by one task of the contact stage's interpolation.
 const CANDIDATE_BLOCK: usize = 32;
-
-/// The workpiece as the contact stage reads it.
-pub struct Body<'a> {
-    /// Boundary particles, counter-clockwise.
-    pub boundary: &'a [u32],
-    /// `N_I(X_J)` in row `J` (no gradients needed).
-    pub nodal: &'a ShapeTable,
-    /// Reference particle positions `X_J` (m).
-    pub reference: &'a [[Real; 2]],
-    /// Lumped masses `m_J` (kg), the slave masses of eqs. 4 and 6.
-    pub mass: &'a [Real],
-    /// RK coefficients of the displacement at `t_n` (m).
-    pub d: &'a [[Real; 2]],
-    /// Predicted coefficient velocities `v*` (m/s).
-    pub v: &'a [[Real; 2]],
-    /// Particle spacings (m).
-    pub spacing: [Real; 2],
-    /// Integration point histories (the flow stress of the shear friction factor).
-    pub points: &'a [PointState],
-    /// The hardening law giving the flow stress.
-    pub hardening: &'a Hardening,
-    /// The points' temperatures (degrees C) in a thermal scene, where the flow stress
-    /// depends on them.
-    pub temperature: Option<&'a [Real]>,
-    /// Plane strain (areas per `depth_m`) or axisymmetry (areas of whole rings).
-    pub kinematics: Kinematics,
-    /// Depth of a plane-strain model (m).
-    pub depth_m: Real,
-}
-
-impl Body<'_> {
-    /// Predicted position `x_J = X_J + sum_I N_I(X_J) (d_I + dt v*_I)` (m) and velocity
-    /// `v_J = sum_I N_I(X_J) v*_I` (m/s) of particle `j`.
-    fn predicted(&self, j: usize, dt: Real) -> [[Real; 2]; 2] {
-        let (d, v, nodal) = (self.d, self.v, self.nodal);
-        let (mut x, mut vj) = (self.reference[j], [0.0; 2]);
-        for e in nodal.row(j) {
-            let i = nodal.index[e] as usize;
-            let n = nodal.n[e];
-            x[0] += n * (d[i][0] + dt * v[i][0]);
-            x[1] += n * (d[i][1] + dt * v[i][1]);
-            vj[0] += n * v[i][0];
-            vj[1] += n * v[i][1];
-        }
-        [x, vj]
-    }
-}
-
-/// What the contact stage keeps for each candidate `k` (boundary ring first, then the
-/// inside particles; [`Contact::candidates`]) on each tool `t` from step to step, at index
-/// `k * tools + t` (part of the saved state).
-pub struct Pairs<'a> {
-    /// Whether the particle is held on the tool (a tool without separation; empty when
-    /// every tool separates): a particle that penetrates such a tool is held from then on.
-    pub held: &'a mut [bool],
-    /// Whether the particle is held on each symmetry plane, at `k * planes + p` (empty
-    /// without planes): a particle that reached a plane stays on it.
-    pub plane_held: &'a mut [bool],
-    /// Whether each boundary ring particle (the first candidates) is in contact with the
-    /// workpiece's own surface (empty without self-contact; [`crate::self_contact`]).
-    pub self_touching: &'a mut [bool],
-    /// The particle's friction state while it stays in contact with a tool that has
-    /// friction.
-    pub stick: &'a mut [Option<Stick>],
-    /// Normal force (N) on each tool's pressure stations, tool by tool, `stations` per tool
-    /// (empty without stations); filled by the stage.
-    pub pressure: &'a mut [Real],
-    /// Pressure stations per tool (0: none).
-    pub stations: usize,
-    /// Normal impulse of the contact forces on each particle, `sum |f_n| dt_avg` (N s),
-    /// added to by the stage (empty: not booked); the heat stage takes it for the contact
-    /// pressure of a heat transfer coefficient over pressure.
-    pub impulse: &'a mut [Real],
-}
 
 /// What [`Contact::carry`] needs to book the friction work of a thermal scene.
 pub struct Slip<'a> {
@@ -135,15 +65,6 @@ pub struct Slip<'a> {
     pub tools: &'a [Tool],
     /// Friction work of each particle since the heat stage last took it (J).
     pub work: &'a mut [Real],
-}
-
-/// A particle's friction on a tool, kept from one step to the next.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Stick {
-    /// The part of the last step's friction force that the corrector did not realise on
-    /// the particle (N; [`Contact::carry`]), added to this step's stick force
-    /// ([`crate::tools::penalty_force`]).
-    pub carried: [Real; 2],
 }
 
 /// A particle-tool pair with friction that was in contact in the last contact stage.
@@ -364,8 +285,8 @@ impl Contact {
 
     /// Contact of the predicted particle positions with `tools` and the symmetry `planes` at
     /// `t_{n+1}` (paper eqs. 4-7), then of the tools' convex corners with the predicted
-    /// surface ([`crate::corners`]), then of the surface with itself
-    /// ([`crate::self_contact`]). The positions are predicted over the solver's natural
+    /// surface ([`crate::contact::corners`]), then of the surface with itself
+    /// ([`crate::contact::self_contact`]). The positions are predicted over the solver's natural
     /// step `dt` (s; equal to the actual step except when a step is shortened to land on a
     /// requested time), where the tools must be too, and the penalty stiffness `m_s / dt^2`
     /// uses it, so a short step never turns a residual penetration into a huge impulse;
@@ -596,7 +517,7 @@ impl Contact {
                 touch.tools = true;
             }
             // The symmetry planes: frictionless, holding a particle once it reached one
-            // (`crate::symmetry`); the particles the essential conditions hold are theirs.
+            // (`crate::contact::symmetry`); the particles the essential conditions hold are theirs.
             for (p, plane) in planes.iter().enumerate() {
                 if plane.exact[j] {
                     continue;
@@ -685,7 +606,7 @@ impl Contact {
     }
 
     /// The self-contact search on the predicted ring, `due` full or local, and its forces
-    /// ([`crate::self_contact`]), `touching` the ring particles in contact at the last stage,
+    /// ([`crate::contact::self_contact`]), `touching` the ring particles in contact at the last stage,
     /// updated: each pair's force on its slave, its reaction on the master point shared by
     /// the segment's two particles, each spread with eq. 7; whether any acts. A full search
     /// reads the ring the stage interpolated whole; a local one reads it too when the stage
@@ -783,7 +704,7 @@ impl Contact {
 
     /// After the corrector: what the friction force `f_T` of each pair in contact did not
     /// realise on its particle, carried to the next step's stick force
-    /// ([`crate::tools::penalty_force`]) as `c = f_T + m_J P_T (v*_J - v_J) / dt_avg` (N),
+    /// ([`crate::contact::sidibe2009::penalty_force`]) as `c = f_T + m_J P_T (v*_J - v_J) / dt_avg` (N),
     /// with `v*_J` the particle's predicted velocity the force was computed from,
     /// `v_J = sum_I N_I(X_J) v_I` its velocity after the corrector and the essential
     /// conditions (m/s; `v` the coefficient velocities), `P_T` the projection on the tool's

@@ -9,7 +9,7 @@
 //! (the paper's master particles "connected into piecewise linear segments"). Every ring
 //! particle `k` is a slave of every ring segment `(a, a + 1)` except those that touch a
 //! ring particle sharing its RK coefficients ([`neighbours`]); the segments near it are
-//! found in uniform bins over the ring ([`crate::tools::SegmentBins`]), not by an all-pairs
+//! found in uniform bins over the ring ([`crate::segment_bins::SegmentBins`]), not by an all-pairs
 //! search.
 //!
 //! A slave is in contact when the closest point `c` of its candidate segments lies behind
@@ -30,7 +30,7 @@
 //! master is not rigid: `f_n = mu g / (dt dt_avg)`, `mu = m_k m_c / (m_k + m_c)` (kg) with
 //! `m_c = (1 - t) m_a + t m_b` the master point's interpolated mass (kg) and `t` its
 //! parameter on the segment, along the push direction `(c - x_k) / g`; friction as for tools
-//! (eqs. 5-6, [`crate::tools::penalty_force`]) with the scene's law and the velocity
+//! (eqs. 5-6, [`crate::contact::sidibe2009::penalty_force`]) with the scene's law and the velocity
 //! relative to the master point `v_k - (1 - t) v_a - t v_b` (m/s). Every ring particle is a
 //! slave and every segment a master (a symmetric two-pass treatment, Hallquist, Goudreau
 //! and Benson 1985): where two faces meet, both see the other, so each pass carries half of
@@ -45,11 +45,13 @@
 //! itself, and only the slaves near another part checked against them). Skipping gives the
 //! bits of searching.
 
+use crate::contact::sidibe2009::{penalty_force, Interface, Slave};
 use crate::friction::Friction;
 use crate::geometry::{closest_on_segment, left_normal, vertex_normal};
 use crate::math::Real;
 use crate::scene::SelfContactSpec;
-use crate::tools::{penalty_force, Interface, Penetration, SegmentBins, Slave};
+use crate::segment_bins::SegmentBins;
+use crate::tools::Penetration;
 
 /// Largest gap of a self-contact that goes on, in smallest particle spacings: a penalty
 /// contact holds a gap near a thousandth of a spacing, so a deeper slave has passed
