@@ -36,7 +36,10 @@ upsetting scenes/press_upsetting.toml [6,16] 0.3 1
 block_press scenes/block_forging_press.toml [11,11] 1.0 1
 wheel_press scenes/wheel_forging_press.toml [15,15] 0.2 1
 flash scenes/flash_quarter.toml [21,13] 0.044 1
-pin scenes/lap_around_pin.toml [21,11] 0.038 1"
+pin scenes/lap_around_pin.toml [21,11] 0.038 1
+hot_upsetting scenes/hot_upsetting.toml [6,16] 0.3 1
+hot_hub scenes/closed_die_hub_hot.toml [11,31] 0.03 1
+ofhc scenes/taylor_ofhc.toml [6,34] 40.0e-6 1"
 if [ "${FULL:-0}" = 1 ]; then
   cases=$(for f in scenes/*.toml; do echo "$(basename "$f" .toml) $f - - 1"; done)
 fi
