@@ -5,7 +5,10 @@
 //! metal parts over the pin and the two fronts meet on the centre line under it. Without
 //! self-contact the fronts passed through each other and nothing was reported.
 
-use rkforge_core::{Scene, Simulation};
+mod common;
+
+use common::run_measured;
+use rkforge_core::Scene;
 
 /// The shipped pin scene on a coarse grid (21 x 11, 1 mm), self-contact on or off.
 fn pin(self_contact: bool) -> Scene {
@@ -17,30 +20,10 @@ fn pin(self_contact: bool) -> Scene {
     scene
 }
 
-/// Runs `scene` to its end, measuring the boundary against itself at every history sample:
-/// the most crossings, the deepest surface particle inside another part of the workpiece (in
-/// smallest spacings) and the largest difference between the boundary's volume change and the
-/// material's own.
-fn run(scene: &Scene) -> (Simulation, usize, f64, f64) {
-    let mut sim = Simulation::new(scene).unwrap();
-    let h = sim.spacing()[0].min(sim.spacing()[1]);
-    let interval = scene.history_interval();
-    let samples = (scene.time.end_s / interval).round() as usize;
-    let (mut crossings, mut inside, mut volume) = (0, 0.0f64, 0.0f64);
-    for k in 1..=samples {
-        sim.run_to(k as f64 * interval, |_| {}).unwrap();
-        let d = sim.measure_penetration().unwrap();
-        crossings = crossings.max(d.crossings);
-        inside = inside.max(d.itself.depth / h);
-        let boundary = sim.volume() / sim.reference_volume() - 1.0;
-        volume = volume.max((boundary - sim.integrated_volume_change()).abs());
-    }
-    (sim, crossings, inside, volume)
-}
-
 #[test]
 fn the_fronts_that_meet_under_the_pin_form_a_lap_on_the_centre_line() {
-    let (sim, crossings, inside, volume) = run(&pin(true));
+    let (sim, w) = run_measured(&pin(true));
+    let (crossings, inside, volume) = (w.crossings, w.itself, w.volume);
     let h = sim.spacing()[0];
     assert_eq!(crossings, 0, "the boundary crossed itself");
     assert!(
@@ -88,7 +71,8 @@ fn the_fronts_that_meet_under_the_pin_form_a_lap_on_the_centre_line() {
 
 #[test]
 fn without_self_contact_the_fronts_pass_through_each_other() {
-    let (sim, crossings, inside, _) = run(&pin(false));
+    let (sim, w) = run_measured(&pin(false));
+    let (crossings, inside) = (w.crossings, w.itself);
     assert!(crossings > 0, "the boundary never crossed itself");
     assert!(inside > 0.1, "deepest {inside:.3} spacings inside");
     assert!(sim.laps().is_empty());

@@ -7,7 +7,10 @@
 //! spacings deep on the 21 x 13 grid and 7 spacings on the 41 x 25 grid at the end of the
 //! stroke (the rounded land entry on 41 x 25: 7.5), while the run said "ok".
 
-use rkforge_core::{IntegrationRule, Scene, Simulation};
+mod common;
+
+use common::run_measured;
+use rkforge_core::{IntegrationRule, Scene};
 
 /// The shipped flash scene on the coarse grid, with the die's sharp land entry or a 2 mm
 /// radius there (six segments), with `rule`.
@@ -29,28 +32,6 @@ fn flash(rounded: bool, rule: IntegrationRule) -> Scene {
     scene
 }
 
-/// Runs `scene` to its end, measuring at every history sample every particle against the
-/// plane, the axis and the die, and the boundary against itself; returns the deepest beyond
-/// a plane and in a tool (in smallest spacings), the most crossings of the boundary, and the
-/// largest difference between the boundary's volume change and the material's own.
-fn worst(scene: &Scene) -> (f64, f64, usize, f64) {
-    let mut sim = Simulation::new(scene).unwrap();
-    let h = sim.spacing()[0].min(sim.spacing()[1]);
-    let interval = scene.history_interval();
-    let samples = (scene.time.end_s / interval).round() as usize;
-    let (mut plane, mut tool, mut crossings, mut volume) = (0.0f64, 0.0f64, 0, 0.0f64);
-    for k in 1..=samples {
-        sim.run_to(k as f64 * interval, |_| {}).unwrap();
-        let d = sim.measure_penetration().unwrap();
-        plane = plane.max(d.planes.depth / h);
-        tool = tool.max(d.tools.depth / h);
-        crossings = crossings.max(d.crossings);
-        let boundary = sim.volume() / sim.reference_volume() - 1.0;
-        volume = volume.max((boundary - sim.integrated_volume_change()).abs());
-    }
-    (plane, tool, crossings, volume)
-}
-
 /// With every rule the flash stays above the mid-plane and out of the die. With the Gauss
 /// rules the boundary never crosses itself and encloses the material's own volume within
 /// 1 %. With SCNI it does not: the top face under the die's ceiling takes a saw-tooth (a
@@ -67,7 +48,8 @@ fn the_flash_stays_on_its_side_of_the_mid_plane_with_any_rule() {
             IntegrationRule::Q4,
             IntegrationRule::Scni,
         ] {
-            let (plane, tool, crossings, volume) = worst(&flash(rounded, rule));
+            let (_, w) = run_measured(&flash(rounded, rule));
+            let (plane, tool, crossings, volume) = (w.planes, w.tools, w.crossings, w.volume);
             let case = format!("rounded {rounded}, {rule:?}");
             assert!(
                 plane < 0.05,

@@ -3,6 +3,7 @@
 
 use rkforge_core::material::Hardening;
 use rkforge_core::scene::*;
+use rkforge_core::Simulation;
 
 /// A free square patch of copper (no tools, no constraints).
 pub fn patch(kin: Kinematics, n: usize, rule: IntegrationRule, support: f64) -> Scene {
@@ -81,4 +82,40 @@ pub fn block_at_press_speed(n: usize, speed: f64) -> Scene {
     s.time.dt_s = None;
     s.time.dt_safety = 0.9;
     s
+}
+
+/// The worst a run met over its history samples, every particle measured at its physical
+/// position: the deepest beyond a symmetry plane or the axis, in a tool and inside another
+/// part of the workpiece (in smallest spacings), the most crossings of the boundary at a
+/// sample, and the largest difference between the boundary's volume change and the
+/// material's own (`integrated_volume_change`).
+#[derive(Debug, Default)]
+pub struct Worst {
+    pub planes: f64,
+    pub tools: f64,
+    pub itself: f64,
+    pub crossings: usize,
+    pub volume: f64,
+}
+
+/// Runs `scene` to its end, measuring at every history sample ([`Worst`]).
+pub fn run_measured(scene: &Scene) -> (Simulation, Worst) {
+    let mut sim = Simulation::new(scene).unwrap();
+    let h = sim.spacing()[0].min(sim.spacing()[1]);
+    let interval = scene.history_interval();
+    let samples = (scene.time.end_s / interval).round() as usize;
+    let mut w = Worst::default();
+    for k in 1..=samples {
+        sim.run_to(k as f64 * interval, |_| {}).unwrap();
+        let d = sim.measure_penetration().unwrap();
+        w.planes = w.planes.max(d.planes.depth / h);
+        w.tools = w.tools.max(d.tools.depth / h);
+        w.itself = w.itself.max(d.itself.depth / h);
+        w.crossings = w.crossings.max(d.crossings);
+        let boundary = sim.volume() / sim.reference_volume() - 1.0;
+        w.volume = w
+            .volume
+            .max((boundary - sim.integrated_volume_change()).abs());
+    }
+    (sim, w)
 }
