@@ -59,7 +59,7 @@ pub use fill::FillPoint;
 pub use heat::{Heat, Temperatures, THERMAL_MEASURES};
 pub use mass_scaling::MassScalingReport;
 pub use penetration::{Depths, Penetrated, Within};
-pub use rereference::Reference;
+pub use state::Reference;
 pub use state::{Filled, State};
 
 use crate::constraints::Constraints;

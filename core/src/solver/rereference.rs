@@ -38,6 +38,7 @@
 //! Lagrangian kernel. SCNI is refused by the scene: its nodal domains are not rebuilt.
 
 use super::energy::kinetic_energy;
+use super::state::Reference;
 use super::Simulation;
 use crate::constraints::Constraints;
 use crate::error::{Error, Result};
@@ -46,33 +47,11 @@ use crate::material::PointState;
 use crate::math::Real;
 use crate::rk_shape::{KernelCloud, ShapeTable};
 use crate::scene::Kinematics;
-use serde::{Deserialize, Serialize};
 
 /// Conjugate-gradient iterations allowed for the velocity transfer.
 const FIT_ITERATIONS: usize = 500;
 /// Relative residual at which the velocity transfer stops (-).
 const FIT_TOLERANCE: Real = 1e-12;
-
-/// The configuration the kernel was last rebuilt on, saved with the state.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Reference {
-    /// Re-references so far.
-    pub count: u32,
-    /// Time of the last one (s).
-    pub time_s: Real,
-    /// Particle positions `X'` (m).
-    pub particles: Vec<[Real; 2]>,
-    /// Planar kernel volumes `V'` (m^2).
-    pub volumes: Vec<Real>,
-    /// Each particle's deformed cell `G = [G_11, G_12, G_21, G_22]` (m).
-    pub cells: Vec<[Real; 4]>,
-    /// Integration point positions (m).
-    pub points: Vec<[Real; 2]>,
-    /// `J = det F` of each point from the original configuration (-).
-    pub point_jacobian: Vec<Real>,
-    /// Relative residual of the velocity transfer (-).
-    pub fit_residual: Real,
-}
 
 /// The deformation at one integration point: `F = I + sum_I d_I (x) grad N_I`
 /// (`[F_xX, F_xY, F_yX, F_yY]`), the out-of-plane stretch and the displacement (m).

@@ -2,7 +2,6 @@
 
 use super::energy::Energy;
 use super::heat::Heat;
-use super::rereference::Reference;
 use crate::contact::Stick;
 use crate::laps::Lap;
 use crate::material::PointState;
@@ -104,4 +103,25 @@ pub struct Filled {
     pub time_s: Real,
     /// The tool's stroke then (m).
     pub stroke_m: Real,
+}
+
+/// The configuration the kernel was last rebuilt on, saved with the state.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Reference {
+    /// Re-references so far.
+    pub count: u32,
+    /// Time of the last one (s).
+    pub time_s: Real,
+    /// Particle positions `X'` (m).
+    pub particles: Vec<[Real; 2]>,
+    /// Planar kernel volumes `V'` (m^2).
+    pub volumes: Vec<Real>,
+    /// Each particle's deformed cell `G = [G_11, G_12, G_21, G_22]` (m).
+    pub cells: Vec<[Real; 4]>,
+    /// Integration point positions (m).
+    pub points: Vec<[Real; 2]>,
+    /// `J = det F` of each point from the original configuration (-).
+    pub point_jacobian: Vec<Real>,
+    /// Relative residual of the velocity transfer (-).
+    pub fit_residual: Real,
 }
