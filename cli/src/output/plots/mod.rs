@@ -8,6 +8,7 @@
 //! are skipped, degenerate ranges are widened, and every problem is reported as an
 //! `Err(String)`: nothing in here panics on user data.
 
+mod clip;
 mod colour_bar;
 mod line;
 mod shape;
