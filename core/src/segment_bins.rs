@@ -19,17 +19,24 @@ pub struct SegmentBins {
     cursor: Vec<u32>,
 }
 
+/// The bounds `[lo, hi]` (m) of `points` grown by `pad` (m) on every side, as the bins of
+/// segments through them need.
+pub fn padded_bounds(points: &[[Real; 2]], pad: Real) -> [[Real; 2]; 2] {
+    let mut lo = [Real::INFINITY; 2];
+    let mut hi = [Real::NEG_INFINITY; 2];
+    for p in points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k] - pad);
+            hi[k] = hi[k].max(p[k] + pad);
+        }
+    }
+    [lo, hi]
+}
+
 impl SegmentBins {
     /// Bins of size `depth` (m) over the segments of `verts`.
     pub fn new(verts: &[[Real; 2]], depth: Real) -> SegmentBins {
-        let mut lo = [Real::INFINITY; 2];
-        let mut hi = [Real::NEG_INFINITY; 2];
-        for v in verts {
-            for k in 0..2 {
-                lo[k] = lo[k].min(v[k] - depth);
-                hi[k] = hi[k].max(v[k] + depth);
-            }
-        }
+        let [lo, hi] = padded_bounds(verts, depth);
         // At most about 4096 bins per direction.
         let size = depth.max((hi[0] - lo[0]).max(hi[1] - lo[1]) / 4096.0);
         let mut bins = SegmentBins::default();

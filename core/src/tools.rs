@@ -6,6 +6,7 @@
 //! applies it is [`crate::contact`].
 
 use crate::friction::Friction;
+use crate::geometry::closest_on_segment;
 use crate::math::Real;
 use crate::scene::{Motion, ToolSpec};
 use crate::segment_bins::SegmentBins;
@@ -201,12 +202,7 @@ impl Tool {
             let (a, b) = (seg[0], seg[1]);
             let d = [b[0] - a[0], b[1] - a[1]];
             let len2 = d[0] * d[0] + d[1] * d[1];
-            let t = if len2 > 0.0 {
-                (((p[0] - a[0]) * d[0] + (p[1] - a[1]) * d[1]) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let q = [a[0] + t * d[0], a[1] + t * d[1]];
+            let (t, q, _) = closest_on_segment(a, b, p);
             let dist = (p[0] - q[0]).hypot(p[1] - q[1]);
             if dist < best {
                 best = dist;

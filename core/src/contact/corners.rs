@@ -20,6 +20,7 @@
 //! frictionless: a corner touches the material over a point, where the particle pass
 //! carries the friction of the faces on either side.
 
+use crate::geometry::closest_on_segment;
 use crate::math::Real;
 use crate::tools::Tool;
 
@@ -126,15 +127,7 @@ fn nearest_segment(x: &[[Real; 2]], v: [Real; 2]) -> Corner {
         gap: Real::INFINITY,
     };
     for k in 0..n {
-        let (a, b) = (x[k], x[(k + 1) % n]);
-        let t = [b[0] - a[0], b[1] - a[1]];
-        let len2 = t[0] * t[0] + t[1] * t[1];
-        let s = if len2 > 0.0 {
-            (((v[0] - a[0]) * t[0] + (v[1] - a[1]) * t[1]) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let c = [a[0] + s * t[0], a[1] + s * t[1]];
+        let (s, c, _) = closest_on_segment(x[k], x[(k + 1) % n], v);
         let gap = (v[0] - c[0]).hypot(v[1] - c[1]);
         if gap < best.gap {
             best = Corner {

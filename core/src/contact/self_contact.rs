@@ -50,7 +50,7 @@ use crate::friction::Friction;
 use crate::geometry::{closest_on_segment, left_normal, vertex_normal};
 use crate::math::Real;
 use crate::scene::SelfContactSpec;
-use crate::segment_bins::SegmentBins;
+use crate::segment_bins::{padded_bounds, SegmentBins};
 use crate::tools::Penetration;
 
 /// Largest gap of a self-contact that goes on, in smallest particle spacings: a penalty
@@ -224,14 +224,7 @@ impl SelfContact {
             touching.fill(false);
             return;
         }
-        let mut lo = [Real::INFINITY; 2];
-        let mut hi = [Real::NEG_INFINITY; 2];
-        for p in x {
-            for c in 0..2 {
-                lo[c] = lo[c].min(p[c] - reach);
-                hi[c] = hi[c].max(p[c] + reach);
-            }
-        }
+        let [lo, hi] = padded_bounds(x, reach);
         // Bins of the reach, but no more than about one per segment.
         let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
         let size = reach.max((area / n as Real).sqrt());
