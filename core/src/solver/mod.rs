@@ -899,7 +899,7 @@ impl Simulation {
         let n = self.st.max_crossings;
         (n > 0).then(|| {
             let why = match self.scene.self_contact.enabled {
-                true => "a fold shorter than the kernel's support passed through itself; a finer grid resolves it",
+                true => "a fold shorter than the kernel's support passed through itself (two surface particles swapping places on a coarse grid, or the saw-tooth nodal integration leaves on a free surface), which contact does not hold",
                 false => "[self_contact] enabled = false lets it pass through itself",
             };
             format!(
