@@ -54,6 +54,49 @@ pub fn rule_points(rule: IntegrationRule) -> Vec<(Real, Real, Real)> {
 /// Edge quadrature points per nodal domain: 3-point Gauss on each of 4 edges.
 pub const SCNI_EDGE_POINTS: usize = 12;
 
+/// Edge quadrature points per quadrant of a nodal domain: 2-point Gauss on each of its 4
+/// edges (the stabilization's smoothed gradients, [`nodal_quadrants`]).
+pub const QUADRANT_EDGE_POINTS: usize = 8;
+
+/// Boundary sites of the rectangle `[x0, x1] x [y0, y1]` (offsets from `node`'s particle),
+/// counter-clockwise from the bottom edge, at the points `(t, weight)` of an edge rule on
+/// `[0, 1]`, with the outward normal times the weight and the edge's length (m).
+fn rectangle_boundary(
+    node: [usize; 2],
+    [x0, x1, y0, y1]: [Real; 4],
+    rule: &[(Real, Real)],
+    sites: &mut Vec<Site>,
+    nw: &mut Vec<[Real; 2]>,
+) {
+    let edges = [
+        ([x0, y0], [x1, y0], [0.0, -1.0]),
+        ([x1, y0], [x1, y1], [1.0, 0.0]),
+        ([x1, y1], [x0, y1], [0.0, 1.0]),
+        ([x0, y1], [x0, y0], [-1.0, 0.0]),
+    ];
+    for (a, b, n) in edges {
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        for &(t, w) in rule {
+            sites.push(Site {
+                node,
+                offset: [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])],
+            });
+            nw.push([n[0] * w * len, n[1] * w * len]);
+        }
+    }
+}
+
+/// The nodal domain of each particle of the lattice as `[x0, x1, y0, y1]` relative to the
+/// particle (m): half a spacing each way, cut at the workpiece's edges; row by row.
+fn domain_bounds(lattice: &Lattice) -> impl Iterator<Item = ([usize; 2], [Real; 4])> {
+    let (h, [nx, ny]) = (lattice.spacing(), lattice.dims());
+    let lo = move |k: usize, i: usize| if i > 0 { -0.5 * h[k] } else { 0.0 };
+    let hi = move |k: usize, i: usize, n: usize| if i + 1 < n { 0.5 * h[k] } else { 0.0 };
+    (0..ny).flat_map(move |j| {
+        (0..nx).map(move |i| ([i, j], [lo(0, i), hi(0, i, nx), lo(1, j), hi(1, j, ny)]))
+    })
+}
+
 /// The nodal domains of SCNI: one point per particle at its domain's centroid with the
 /// domain's area, and for each domain [`SCNI_EDGE_POINTS`] boundary sites with their
 /// outward normal times the quadrature weight (m). Everything is formed relative to the
@@ -65,38 +108,55 @@ pub fn nodal_domains(lattice: &Lattice) -> (PointSet, Vec<Site>, Vec<[Real; 2]>)
         (0.5, 8.0 / 18.0),
         (0.5 + g, 5.0 / 18.0),
     ];
-    let (h, [nx, ny]) = (lattice.spacing(), lattice.dims());
+    let nx = lattice.dims()[0];
     let mut s = PointSet::default();
     let (mut edge_sites, mut edge_nw) = (Vec::new(), Vec::new());
-    // Domain bounds relative to particle `i` of `n`: half a spacing, cut at the edges.
-    let lo = |k: usize, i: usize| if i > 0 { -0.5 * h[k] } else { 0.0 };
-    let hi = |k: usize, i: usize, n: usize| if i + 1 < n { 0.5 * h[k] } else { 0.0 };
-    for j in 0..ny {
-        for i in 0..nx {
-            let node = [i, j];
-            let (x0, x1, y0, y1) = (lo(0, i), hi(0, i, nx), lo(1, j), hi(1, j, ny));
+    for (node, b @ [x0, x1, y0, y1]) in domain_bounds(lattice) {
+        let centre = Site {
+            node,
+            offset: [0.5 * (x0 + x1), 0.5 * (y0 + y1)],
+        };
+        s.push(
+            lattice,
+            centre,
+            (x1 - x0) * (y1 - y0),
+            node[1] * nx + node[0],
+        );
+        rectangle_boundary(node, b, &gauss, &mut edge_sites, &mut edge_nw);
+    }
+    (s, edge_sites, edge_nw)
+}
+
+/// The four quadrants of every nodal domain (cut through the domain's centroid), for the
+/// stabilization of nodal integration: the quadrants as points (centroid, area; cell = the
+/// domain's particle), domain by domain in the order lower-left, lower-right, upper-right,
+/// upper-left, and [`QUADRANT_EDGE_POINTS`] boundary sites per quadrant with their outward
+/// normal times the quadrature weight (m).
+pub fn nodal_quadrants(lattice: &Lattice) -> (PointSet, Vec<Site>, Vec<[Real; 2]>) {
+    let g = 0.5 / 3.0_f64.sqrt();
+    let gauss = [(0.5 - g, 0.5), (0.5 + g, 0.5)];
+    let nx = lattice.dims()[0];
+    let mut s = PointSet::default();
+    let (mut edge_sites, mut edge_nw) = (Vec::new(), Vec::new());
+    for (node, [x0, x1, y0, y1]) in domain_bounds(lattice) {
+        let (xc, yc) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        for b @ [a0, a1, b0, b1] in [
+            [x0, xc, y0, yc],
+            [xc, x1, y0, yc],
+            [xc, x1, yc, y1],
+            [x0, xc, yc, y1],
+        ] {
             let centre = Site {
                 node,
-                offset: [0.5 * (x0 + x1), 0.5 * (y0 + y1)],
+                offset: [0.5 * (a0 + a1), 0.5 * (b0 + b1)],
             };
-            s.push(lattice, centre, (x1 - x0) * (y1 - y0), j * nx + i);
-            // Counter-clockwise edges: bottom, right, top, left, with outward normals.
-            let edges = [
-                ([x0, y0], [x1, y0], [0.0, -1.0]),
-                ([x1, y0], [x1, y1], [1.0, 0.0]),
-                ([x1, y1], [x0, y1], [0.0, 1.0]),
-                ([x0, y1], [x0, y0], [-1.0, 0.0]),
-            ];
-            for (a, b, n) in edges {
-                let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-                for &(t, w) in &gauss {
-                    edge_sites.push(Site {
-                        node,
-                        offset: [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])],
-                    });
-                    edge_nw.push([n[0] * w * len, n[1] * w * len]);
-                }
-            }
+            s.push(
+                lattice,
+                centre,
+                (a1 - a0) * (b1 - b0),
+                node[1] * nx + node[0],
+            );
+            rectangle_boundary(node, b, &gauss, &mut edge_sites, &mut edge_nw);
         }
     }
     (s, edge_sites, edge_nw)
@@ -135,7 +195,15 @@ pub fn point_shapes(lattice: &Lattice, rule: IntegrationRule) -> Result<(PointSe
     Ok(match rule {
         IntegrationRule::Scni => {
             let (points, edges, nw) = nodal_domains(lattice);
-            let pt = smoothed_shape_table(lattice, &points, &edges, &nw)?;
+            let at_centre =
+                lattice.shape_table(&points.sites, &|p| format!("nodal integration point {p}"))?;
+            let on_edges = lattice.shape_table(&edges, &|q| {
+                format!(
+                    "boundary point {q} of nodal domain {}",
+                    q / SCNI_EDGE_POINTS
+                )
+            })?;
+            let pt = smoothed(Some(&at_centre), &on_edges, &nw, &points.areas);
             (points, pt)
         }
         rule => {
@@ -148,35 +216,47 @@ pub fn point_shapes(lattice: &Lattice, rule: IntegrationRule) -> Result<(PointSe
     })
 }
 
-/// SCNI shape table (Chen, Wu, Yoon, You 2001): per nodal domain `L`, `N_I` at its centroid
-/// and the smoothed gradient `B_I = (1 / A_L) sum_edges N_I(x_g) n w_g` from the boundary
-/// quadrature points of the domain.
-fn smoothed_shape_table(
-    lattice: &Lattice,
-    points: &PointSet,
-    edges: &[Site],
-    nw: &[[Real; 2]],
-) -> Result<ShapeTable> {
-    let at_centre =
-        lattice.shape_table(&points.sites, &|p| format!("nodal integration point {p}"))?;
-    let on_edges = lattice.shape_table(edges, &|q| {
+/// The quadrants of the nodal domains ([`nodal_quadrants`]) with their smoothed gradients
+/// `B^k_I = (1 / A_k) sum_edges N_I(x_g) n w_g` (1/m; no values `N_I`).
+pub fn quadrant_shapes(lattice: &Lattice) -> Result<(PointSet, ShapeTable)> {
+    let (quadrants, edges, nw) = nodal_quadrants(lattice);
+    let on_edges = lattice.shape_table(&edges, &|q| {
         format!(
-            "boundary point {q} of nodal domain {}",
-            q / SCNI_EDGE_POINTS
+            "boundary point {q} of quadrant {} of nodal domain {}",
+            q / QUADRANT_EDGE_POINTS % 4,
+            q / (4 * QUADRANT_EDGE_POINTS)
         )
     })?;
+    let table = smoothed(None, &on_edges, &nw, &quadrants.areas);
+    Ok((quadrants, table))
+}
+
+/// Smoothed shape table (Chen, Wu, Yoon, You 2001): per domain `L` of area `A_L`, `N_I` at
+/// its centroid (from `at_centre`, or none) and the smoothed gradient
+/// `B_I = (1 / A_L) sum_edges N_I(x_g) n w_g` from the domain's boundary sites (`on_edges`,
+/// `nw.len() / areas.len()` consecutive rows per domain, `nw` their outward normal times
+/// weight).
+fn smoothed(
+    at_centre: Option<&ShapeTable>,
+    on_edges: &ShapeTable,
+    nw: &[[Real; 2]],
+    areas: &[Real],
+) -> ShapeTable {
+    let per_domain = nw.len() / areas.len();
     let mut t = ShapeTable {
         offsets: vec![0],
         ..Default::default()
     };
     let mut row: std::collections::BTreeMap<u32, [Real; 3]> = Default::default();
-    for (p, area) in points.areas.iter().enumerate() {
+    for (p, area) in areas.iter().enumerate() {
         row.clear();
-        for e in at_centre.row(p) {
-            row.entry(at_centre.index[e]).or_default()[0] = at_centre.n[e];
+        if let Some(c) = at_centre {
+            for e in c.row(p) {
+                row.entry(c.index[e]).or_default()[0] = c.n[e];
+            }
         }
-        let first = p * SCNI_EDGE_POINTS;
-        for (q, w) in nw.iter().enumerate().skip(first).take(SCNI_EDGE_POINTS) {
+        let first = p * per_domain;
+        for (q, w) in nw.iter().enumerate().skip(first).take(per_domain) {
             for e in on_edges.row(q) {
                 let v = row.entry(on_edges.index[e]).or_default();
                 v[1] += on_edges.n[e] * w[0] / area;
@@ -185,13 +265,15 @@ fn smoothed_shape_table(
         }
         for (&i, v) in &row {
             t.index.push(i);
-            t.n.push(v[0]);
+            if at_centre.is_some() {
+                t.n.push(v[0]);
+            }
             t.dx.push(v[1]);
             t.dy.push(v[2]);
         }
         t.offsets.push(t.index.len() as u32);
     }
-    Ok(t)
+    t
 }
 
 #[cfg(test)]

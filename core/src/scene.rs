@@ -337,6 +337,13 @@ pub struct Discretization {
     /// ([`crate::solver`]'s `rereference.rs`). Absent: the Lagrangian kernel throughout.
     #[serde(default)]
     pub rereference_stretch: Option<Real>,
+    /// With `integration = "scni"`: the coefficient `c` (-) of the stabilization of nodal
+    /// integration (Puso, Chen, Zywicz, Elmer 2008's MSCNI; [`crate::solver`]'s
+    /// `nodal_stabilization.rs`), a stiffness `c mu` against the variation of the
+    /// displacement gradient over the quadrants of each nodal domain, which holds the
+    /// saw-tooth SCNI leaves free on a surface. Absent or 0: plain SCNI.
+    #[serde(default)]
+    pub scni_stabilization: Option<Real>,
 }
 
 fn default_support() -> [Real; 2] {
@@ -349,6 +356,7 @@ impl Default for Discretization {
             integration: IntegrationRule::default(),
             support: default_support(),
             rereference_stretch: None,
+            scni_stabilization: None,
         }
     }
 }

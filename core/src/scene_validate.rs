@@ -390,6 +390,13 @@ impl Scene {
                 "re-referencing works with the cell rules q2 and q4; scni's nodal domains are not rebuilt on the deformed particles".into(),
             );
         }
+        if let Some(c) = self.discretization.scni_stabilization {
+            out.check(
+                c.is_finite() && (0.0..=1.0).contains(&c),
+                "discretization.scni_stabilization",
+                format!("must lie in [0, 1] (a fraction of the shear modulus), got {c}"),
+            );
+        }
     }
 
     /// End time, fixed step and step safety factor.

@@ -17,7 +17,8 @@
 //! 1. stress (`stress.rs`): `F = I + sum_I d_I (x) grad N_I` at each point (plus
 //!    `F_33 = 1 + u_r / R` in axisymmetry), Hencky J2 update, first Piola-Kirchhoff stress
 //!    `P`, fused with the scatter of `w_p (P grad N_I + e_r P_33 N_I / R)` into chunk
-//!    buffers;
+//!    buffers; with scni and `discretization.scni_stabilization`, the stabilization's
+//!    force on the quadrants of the nodal domains (`nodal_stabilization.rs`);
 //! 2. time step (`stable_step.rs`): fixed, or `dt_safety * dt_crit`, with
 //!    `dt_crit = dt_crit0 h_min / h_min0` from the smallest altitude of the deformed cells;
 //! 3. force gather and predictor (`update.rs`): `f_I` summed in a fixed order,
@@ -42,6 +43,7 @@ mod fill;
 mod heat;
 mod layout;
 mod mass_scaling;
+mod nodal_stabilization;
 mod outline;
 mod penetration;
 mod rereference;
@@ -139,6 +141,9 @@ pub struct Simulation {
     /// The point shape functions live only in the scatter's shared blocks
     /// ([`Scatter::point_row`]); the point-major table is dropped after setup.
     scatter: Scatter,
+    /// The stabilization of nodal integration, when the scene asks for it
+    /// (`nodal_stabilization.rs`).
+    stabilization: Option<nodal_stabilization::NodalStabilization>,
     /// `N_I(X_J)` in row `J`, for positions and contact; its gradients are freed after
     /// setup (nothing reads them).
     nodal: ShapeTable,
@@ -747,8 +752,14 @@ impl Simulation {
         }
         self.st.energy.thermoelastic += sums.thermoelastic;
         self.st.energy.thermoelastic_abs += sums.thermoelastic.abs();
+        let stabilization = match &mut self.stabilization {
+            Some(s) => {
+                nodal_stabilization::stage(&self.team, s, &self.st.d, self.simd && has_avx2())
+            }
+            None => 0.0,
+        };
         self.times.stress += t0.elapsed();
-        Ok((sums.elastic, sums.plastic))
+        Ok((sums.elastic + stabilization, sums.plastic))
     }
 
     /// The internal force gather (`update.rs`), timed; with
@@ -764,7 +775,9 @@ impl Simulation {
             inv_mass: &self.inv_mass,
             track,
         });
-        let speed = update::gather_forces(&self.team, &self.scatter, &mut self.f_int, predictor);
+        let extra = self.stabilization.as_ref().map(|s| &s.force[..]);
+        let speed =
+            update::gather_forces(&self.team, &self.scatter, extra, &mut self.f_int, predictor);
         if let Some((_, dt)) = predict {
             self.contact.predicted_move(dt * speed);
         }
@@ -828,6 +841,7 @@ impl Simulation {
                 * (r2 + 3 * 8 + std::mem::size_of::<PointState>() + std::mem::size_of::<PointOut>())
             + self.boundary.len() * 4
             + self.outline.memory_bytes()
+            + self.stabilization.as_ref().map_or(0, |s| s.memory_bytes())
     }
 
     /// Critical step measured on the undeformed discretisation (s).
@@ -899,7 +913,7 @@ impl Simulation {
         let n = self.st.max_crossings;
         (n > 0).then(|| {
             let why = match self.scene.self_contact.enabled {
-                true => "a fold shorter than the kernel's support passed through itself (two surface particles swapping places on a coarse grid, or the saw-tooth nodal integration leaves on a free surface), which contact does not hold",
+                true => "a fold shorter than the kernel's support passed through itself (two surface particles swapping places on a coarse grid, or the saw-tooth plain nodal integration leaves on a free surface: discretization.scni_stabilization holds it), which contact does not hold",
                 false => "[self_contact] enabled = false lets it pass through itself",
             };
             format!(

@@ -7,6 +7,7 @@ use super::energy::{kinetic_energy, Energy};
 use super::heat::Heat;
 use super::layout::{Scatter, MAX_GROUP};
 use super::mass_scaling::{stiffness_bounds, Plan};
+use super::nodal_stabilization::NodalStabilization;
 use super::outline::Outline;
 use super::state::State;
 use super::stress::PointOut;
@@ -16,11 +17,11 @@ use crate::contact::self_contact::SelfContact;
 use crate::contact::symmetry;
 use crate::contact::Contact;
 use crate::error::{Error, Result};
-use crate::integration::{point_shapes, PointSet};
+use crate::integration::{point_shapes, quadrant_shapes, PointSet};
 use crate::material::{HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::{Lattice, ShapeTable, Site};
-use crate::scene::{Component, Edge, Kinematics, Scene};
+use crate::scene::{Component, Edge, IntegrationRule, Kinematics, Scene};
 use crate::team::Team;
 use crate::tools::{Tool, SEARCH_DEPTH_SPACINGS};
 use std::f64::consts::PI;
@@ -64,6 +65,16 @@ impl Simulation {
         // the threads, few enough that the buffers overlap little.
         let chunk = (2 * pt.rows() / (ny - 1)).max(64);
         let scatter = Scatter::new(&pt, np, chunk, MAX_GROUP);
+        let stabilization = match scene.discretization.scni_stabilization {
+            Some(c) if c > 0.0 && scene.discretization.integration == IntegrationRule::Scni => {
+                let (quadrants, table) = quadrant_shapes(&lattice)?;
+                let (weights, _) = point_weights(&quadrants, scene);
+                let m = &scene.material;
+                let mu = m.youngs_modulus_pa / (2.0 * (1.0 + m.poisson_ratio));
+                Some(NodalStabilization::new(c, mu, &table, &weights, np))
+            }
+            _ => None,
+        };
         let mut material = HenckyJ2::new(
             scene.material.youngs_modulus_pa,
             scene.material.poisson_ratio,
@@ -128,6 +139,7 @@ impl Simulation {
             weights,
             inv_radius,
             scatter,
+            stabilization,
             contact,
             boundary,
             outline,

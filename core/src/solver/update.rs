@@ -57,11 +57,13 @@ pub(super) struct Predictor<'a> {
 
 /// Internal force gather over fixed blocks of particles on `team`, fused with the
 /// predictor: `f_I` (N) sums the chunk buffers covering `I` in chunk order (per block, the
-/// overlapping slice of each chunk in turn). With a [`Predictor`], returns the largest
-/// component of `v*` (m/s; 0 when not tracked).
+/// overlapping slice of each chunk in turn), then `extra_I` when given (the stabilization
+/// of nodal integration). With a [`Predictor`], returns the largest component of `v*` (m/s;
+/// 0 when not tracked).
 pub(super) fn gather_forces(
     team: &Team,
     sc: &Scatter,
+    extra: Option<&[[Real; 2]]>,
     f_int: &mut [[Real; 2]],
     predict: Option<Predictor<'_>>,
 ) -> Real {
@@ -93,6 +95,12 @@ pub(super) fn gather_forces(
             let (a, e) = (range.start.max(lo), range.end.min(hi));
             let src = &sc.buf[sc.offsets[c] + a - lo..sc.offsets[c] + e - lo];
             for (f, v) in fs[a - range.start..e - range.start].iter_mut().zip(src) {
+                f[0] += v[0];
+                f[1] += v[1];
+            }
+        }
+        if let Some(extra) = extra {
+            for (f, v) in fs.iter_mut().zip(&extra[range.clone()]) {
                 f[0] += v[0];
                 f[1] += v[1];
             }

@@ -41,6 +41,7 @@ pub fn patch(kin: Kinematics, n: usize, rule: IntegrationRule, support: f64) -> 
             integration: rule,
             support: [support, support],
             rereference_stretch: None,
+            scni_stabilization: None,
         },
         time: TimeSpec {
             end_s: 1e-6,
