@@ -51,11 +51,15 @@
 //! temperature in it, at most doubled or halved, so a die touching the hot billet is met
 //! with short steps that lengthen as the chill spreads.
 
-use super::Simulation;
+use super::discretization::{Discretization, Thermal, Transfer};
+use super::heat::Heat;
+use super::state::State;
+use super::stress::PointOut;
 use crate::error::{Error, Result};
-use crate::material::HeatCapacity;
+use crate::material::{HeatCapacity, PointState};
 use crate::math::Real;
-use crate::scene::Kinematics;
+use crate::scene::{Kinematics, Scene};
+use crate::tools::Tool;
 use std::f64::consts::PI;
 
 /// Stefan-Boltzmann constant (W/(m^2 K^4)).
@@ -73,137 +77,271 @@ fn kelvin(t_c: Real) -> Real {
 /// Power iterations for conduction's largest eigenvalue at setup.
 const POWER_ITERATIONS: usize = 60;
 
-impl Simulation {
-    /// Lumped thermal masses `M_I = sum_p N_I(X_p) rho_0 w_p` (kg, the physical density):
-    /// a particle's heat capacity is `M_I c(T_I)`. An error names a particle whose mass is
-    /// not positive.
-    fn thermal_masses(&self) -> Result<Vec<Real>> {
-        let rho = self.scene.material.density_kg_per_m3;
-        let mut mass = vec![0.0; self.ref_pos.len()];
-        for (p, &w) in self.weights.iter().enumerate() {
-            for (i, [n, _, _]) in self.scatter.point_row(p) {
-                mass[i] += n * w * rho;
+/// Stage 9 of the step, after a step of `dt` (s): runs the heat stage when the time since
+/// its last run would pass the heat step at the next mechanical step, in as many equal
+/// sub-steps as that step needs, updating the points' flow stresses in `out`. A scene whose
+/// heat does not move never runs it.
+pub(super) fn stage_if_due(
+    scene: &Scene,
+    disc: &Discretization,
+    tools: &[Tool],
+    st: &mut State,
+    out: &mut [PointOut],
+    dt: Real,
+) -> Result<()> {
+    let (Some(thermal), Some(heat)) = (&disc.thermal, &mut st.heat) else {
+        return Ok(());
+    };
+    let Some(transfer) = &thermal.transfer else {
+        return Ok(());
+    };
+    let inputs = Inputs {
+        scene,
+        disc,
+        thermal,
+        transfer,
+        tools,
+        d: &st.d,
+        points: &st.points,
+        step: st.step,
+        time: st.time,
+        stable_dt: st.stable_dt,
+    };
+    inputs.run_if_due(heat, out, dt)
+}
+
+/// Conduction's largest eigenvalue `lambda_max(C^-1 K)` (1/s) of `disc` on the undeformed
+/// body, stored in its heat settings when the scene's heat moves; `step` and `time` (s)
+/// name where in the run a particle's thermal mass is not positive.
+pub(super) fn update_eigenvalue(disc: &mut Discretization, step: u64, time: Real) -> Result<()> {
+    let lambda = match disc.thermal.as_ref() {
+        Some(th) if th.transfer.is_some() => eigenvalue(disc, th, step, time)?,
+        _ => return Ok(()),
+    };
+    if let Some(transfer) = disc.thermal.as_mut().and_then(|th| th.transfer.as_mut()) {
+        transfer.lambda0 = lambda;
+    }
+    Ok(())
+}
+
+/// Lumped thermal masses `M_I = sum_p N_I(X_p) rho_0 w_p` (kg, the physical density
+/// `density`): a particle's heat capacity is `M_I c(T_I)`. An error names a particle whose
+/// mass is not positive, at `step` and `time` (s).
+fn thermal_masses(
+    disc: &Discretization,
+    density: Real,
+    step: u64,
+    time: Real,
+) -> Result<Vec<Real>> {
+    let mut mass = vec![0.0; disc.ref_pos.len()];
+    for (p, &w) in disc.weights.iter().enumerate() {
+        for (i, [n, _, _]) in disc.scatter.point_row(p) {
+            mass[i] += n * w * density;
+        }
+    }
+    match mass.iter().position(|&m| m.is_nan() || m <= 0.0) {
+        Some(i) => Err(Error::Diverged {
+            step,
+            time,
+            what: format!(
+                "thermal mass of particle {i} at {:?} m is {:.3e} kg, not positive",
+                disc.original[i], mass[i]
+            ),
+        }),
+        None => Ok(mass),
+    }
+}
+
+/// The particles' temperatures `t` interpolated at the points of `disc`, `sum_I N_I(X_p)
+/// t_I` (in enthalpy with a capacity over temperature, [`HeatCapacity::interpolate`]).
+fn at_points(disc: &Discretization, capacity: &HeatCapacity, t: &[Real]) -> Vec<Real> {
+    (0..disc.weights.len())
+        .map(|p| capacity.interpolate(disc.scatter.point_row(p).map(|(i, [n, _, _])| (n, t[i]))))
+        .collect()
+}
+
+/// Conduction heat rates `R_I` (W) of the particles' temperatures `t` (step 2 of the
+/// module doc), each point conducting at `k(p)` (W/(m K)), with `F` of the displacement
+/// `deformed` (m; with `F_33` when `axi`), or `F = I` without one.
+fn conduction_rates(
+    disc: &Discretization,
+    t: &[Real],
+    k: impl Fn(usize) -> Real,
+    deformed: Option<&[[Real; 2]]>,
+    axi: bool,
+) -> Vec<Real> {
+    let mut rates = vec![0.0; t.len()];
+    for p in 0..disc.weights.len() {
+        let (mut g, mut f, mut ur) = ([0.0; 2], [1.0, 0.0, 0.0, 1.0], 0.0);
+        for (i, [n, nx, ny]) in disc.scatter.point_row(p) {
+            g[0] += t[i] * nx;
+            g[1] += t[i] * ny;
+            if let Some(d) = deformed {
+                let d = d[i];
+                f[0] += d[0] * nx;
+                f[1] += d[0] * ny;
+                f[2] += d[1] * nx;
+                f[3] += d[1] * ny;
+                ur += n * d[0];
             }
         }
-        match mass.iter().position(|&m| m.is_nan() || m <= 0.0) {
-            Some(i) => Err(Error::Diverged {
-                step: self.st.step,
-                time: self.st.time,
-                what: format!(
-                    "thermal mass of particle {i} at {:?} m is {:.3e} kg, not positive",
-                    self.original[i], mass[i]
-                ),
-            }),
-            None => Ok(mass),
-        }
-    }
-
-    /// The workpiece's heat capacity.
-    fn capacity(&self) -> &HeatCapacity {
-        self.heat_capacity.as_ref().expect("a thermal scene")
-    }
-
-    /// The particles' temperatures `t` interpolated at the points, `sum_I N_I(X_p) t_I`
-    /// (in enthalpy with a capacity over temperature, [`HeatCapacity::interpolate`]).
-    fn at_points(&self, t: &[Real]) -> Vec<Real> {
-        let capacity = self.capacity();
-        (0..self.weights.len())
-            .map(|p| {
-                capacity.interpolate(self.scatter.point_row(p).map(|(i, [n, _, _])| (n, t[i])))
-            })
-            .collect()
-    }
-
-    /// Conduction heat rates `R_I` (W) of the particles' temperatures `t` (step 2 of the
-    /// module doc), each point conducting at `k(p)` (W/(m K)), with `F` of the current
-    /// displacement, or `F = I` when `deformed` is false.
-    fn conduction_rates(&self, t: &[Real], k: impl Fn(usize) -> Real, deformed: bool) -> Vec<Real> {
-        let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
-        let mut rates = vec![0.0; t.len()];
-        for p in 0..self.weights.len() {
-            let (mut g, mut f, mut ur) = ([0.0; 2], [1.0, 0.0, 0.0, 1.0], 0.0);
-            for (i, [n, nx, ny]) in self.scatter.point_row(p) {
-                g[0] += t[i] * nx;
-                g[1] += t[i] * ny;
-                if deformed {
-                    let d = self.st.d[i];
-                    f[0] += d[0] * nx;
-                    f[1] += d[0] * ny;
-                    f[2] += d[1] * nx;
-                    f[3] += d[1] * ny;
-                    ur += n * d[0];
-                }
-            }
-            let det2 = f[0] * f[3] - f[1] * f[2];
-            let f33 = if axi && deformed {
-                1.0 + ur * self.inv_radius[p]
-            } else {
-                1.0
-            };
-            // F^-1 = [[F22, -F12], [-F21, F11]] / det2; C^-1 = F^-1 F^-T; q = k J C^-1 g.
-            let inv = [f[3] / det2, -f[1] / det2, -f[2] / det2, f[0] / det2];
-            let c11 = inv[0] * inv[0] + inv[1] * inv[1];
-            let c12 = inv[0] * inv[2] + inv[1] * inv[3];
-            let c22 = inv[2] * inv[2] + inv[3] * inv[3];
-            // The volume the point stands for now, `w_p J_ref J` (the weight is per original
-            // volume; `J_ref` the Jacobian at the last re-reference, 1 without one).
-            let kj = k(p) * det2 * f33 * self.weights[p] * self.reference_jacobian[p];
-            let q = [
-                kj * (c11 * g[0] + c12 * g[1]),
-                kj * (c12 * g[0] + c22 * g[1]),
-            ];
-            for (i, [_, nx, ny]) in self.scatter.point_row(p) {
-                rates[i] -= nx * q[0] + ny * q[1];
-            }
-        }
-        rates
-    }
-
-    /// Conduction's largest eigenvalue `lambda_max(C^-1 K)` (1/s) on the undeformed body, by
-    /// power iteration from the checkerboard of the particle grid (the shortest wave the
-    /// grid carries); 0 without conduction.
-    pub(super) fn conduction_eigenvalue(&self) -> Result<Real> {
-        let Some(spec) = &self.scene.thermal else {
-            return Ok(0.0);
+        let det2 = f[0] * f[3] - f[1] * f[2];
+        let f33 = if axi && deformed.is_some() {
+            1.0 + ur * disc.inv_radius[p]
+        } else {
+            1.0
         };
-        // The largest conductivity the table holds: the stable step's bound for any
-        // temperature.
-        let k = spec.conductivity_max();
-        if k == 0.0 {
-            return Ok(0.0);
+        // F^-1 = [[F22, -F12], [-F21, F11]] / det2; C^-1 = F^-1 F^-T; q = k J C^-1 g.
+        let inv = [f[3] / det2, -f[1] / det2, -f[2] / det2, f[0] / det2];
+        let c11 = inv[0] * inv[0] + inv[1] * inv[1];
+        let c12 = inv[0] * inv[2] + inv[1] * inv[3];
+        let c22 = inv[2] * inv[2] + inv[3] * inv[3];
+        // The volume the point stands for now, `w_p J_ref J` (the weight is per original
+        // volume; `J_ref` the Jacobian at the last re-reference, 1 without one).
+        let kj = k(p) * det2 * f33 * disc.weights[p] * disc.reference_jacobian[p];
+        let q = [
+            kj * (c11 * g[0] + c12 * g[1]),
+            kj * (c12 * g[0] + c22 * g[1]),
+        ];
+        for (i, [_, nx, ny]) in disc.scatter.point_row(p) {
+            rates[i] -= nx * q[0] + ny * q[1];
         }
-        // The least capacity: the stable step's bound for any temperature.
-        let least = self.capacity().least();
-        let cap: Vec<Real> = self.thermal_masses()?.iter().map(|m| m * least).collect();
-        let mut v: Vec<Real> = (0..cap.len())
-            .map(|j| {
-                if (j % self.nx + j / self.nx) % 2 == 0 {
-                    1.0
-                } else {
-                    -1.0
-                }
-            })
-            .collect();
-        let mut lambda = 0.0;
-        for _ in 0..POWER_ITERATIONS {
-            // A v = -C^-1 R(v); Rayleigh quotient in the C inner product.
-            let r = self.conduction_rates(&v, |_| k, false);
-            let av: Vec<Real> = r.iter().zip(&cap).map(|(r, c)| -r / c).collect();
-            let num: Real = av
-                .iter()
-                .zip(&v)
-                .zip(&cap)
-                .map(|((a, v), c)| a * v * c)
-                .sum();
-            let den: Real = v.iter().zip(&cap).map(|(v, c)| v * v * c).sum();
-            lambda = num / den;
-            let norm = av.iter().map(|a| a * a).sum::<Real>().sqrt();
-            if norm.is_nan() || norm <= 0.0 {
-                break;
+    }
+    rates
+}
+
+/// Conduction's largest eigenvalue `lambda_max(C^-1 K)` (1/s) on the undeformed body, by
+/// power iteration from the checkerboard of the particle grid (the shortest wave the grid
+/// carries); 0 without conduction.
+fn eigenvalue(disc: &Discretization, thermal: &Thermal, step: u64, time: Real) -> Result<Real> {
+    // The largest conductivity the table holds: the stable step's bound for any
+    // temperature.
+    let k = thermal.spec.conductivity_max();
+    if k == 0.0 {
+        return Ok(0.0);
+    }
+    // The least capacity: the stable step's bound for any temperature.
+    let least = thermal.capacity.least();
+    let cap: Vec<Real> = thermal_masses(disc, thermal.density, step, time)?
+        .iter()
+        .map(|m| m * least)
+        .collect();
+    let mut v: Vec<Real> = (0..cap.len())
+        .map(|j| {
+            if (j % disc.nx + j / disc.nx) % 2 == 0 {
+                1.0
+            } else {
+                -1.0
             }
-            v = av.iter().map(|a| a / norm).collect();
+        })
+        .collect();
+    let mut lambda = 0.0;
+    for _ in 0..POWER_ITERATIONS {
+        // A v = -C^-1 R(v); Rayleigh quotient in the C inner product.
+        let r = conduction_rates(disc, &v, |_| k, None, false);
+        let av: Vec<Real> = r.iter().zip(&cap).map(|(r, c)| -r / c).collect();
+        let num: Real = av
+            .iter()
+            .zip(&v)
+            .zip(&cap)
+            .map(|((a, v), c)| a * v * c)
+            .sum();
+        let den: Real = v.iter().zip(&cap).map(|(v, c)| v * v * c).sum();
+        lambda = num / den;
+        let norm = av.iter().map(|a| a * a).sum::<Real>().sqrt();
+        if norm.is_nan() || norm <= 0.0 {
+            break;
         }
-        Ok(lambda)
+        v = av.iter().map(|a| a / norm).collect();
+    }
+    Ok(lambda)
+}
+
+/// What the heat stage reads besides the heat state: the scene, the discretization with
+/// its heat settings, the tools and the mechanical state now.
+struct Inputs<'a> {
+    scene: &'a Scene,
+    disc: &'a Discretization,
+    thermal: &'a Thermal,
+    transfer: &'a Transfer,
+    tools: &'a [Tool],
+    /// Displacement coefficients (m).
+    d: &'a [[Real; 2]],
+    /// The points' histories (their plastic strains for the flow stresses).
+    points: &'a [PointState],
+    step: u64,
+    /// Time (s).
+    time: Real,
+    /// The mechanical stable step estimate now (s).
+    stable_dt: Real,
+}
+
+impl Inputs<'_> {
+    /// The heat stage when due (see [`stage_if_due`]).
+    fn run_if_due(&self, heat: &mut Heat, out: &mut [PointOut], dt: Real) -> Result<()> {
+        heat.since_s += dt;
+        if heat.since_s + dt < heat.step_s {
+            return Ok(());
+        }
+        let elapsed = std::mem::take(&mut heat.since_s);
+        let mass = thermal_masses(self.disc, self.thermal.density, self.step, self.time)?;
+        self.gather_point_heat(heat, &mass);
+        // The mean normal contact force on each particle since the last stage (N).
+        let normal_force: Vec<Real> = heat
+            .normal_impulse
+            .iter_mut()
+            .map(|i| std::mem::take(i) / elapsed)
+            .collect();
+        let before = (!heat.stage_change_k.is_empty()).then(|| heat.temperature_c.clone());
+        let mut done = 0.0;
+        while done < elapsed {
+            done += self.heat_step(heat, out, elapsed - done, &mass, &normal_force)?;
+        }
+        // The stage's change at each point, for the elasticity over temperature to ramp in.
+        if let Some(before) = before {
+            for ((c, t), b) in heat
+                .stage_change_k
+                .iter_mut()
+                .zip(&heat.temperature_c)
+                .zip(before)
+            {
+                *c = t - b;
+            }
+        }
+        Ok(())
+    }
+
+    /// What the points gained since the last heat stage (plastic work), the heat `dQ_p =
+    /// rho_0 w_p (h(T_p) - h(sum_I N_I T_I))` (J; `rho_0 c w_p dT_p` for a constant
+    /// capacity), into the particles: `Q_I = sum_p N_I dQ_p`, the heat kept exactly; with
+    /// the workpiece's share of the friction work done at each particle since then, `Q_J +=
+    /// phi W_J`; each particle heated by `Q_I / M_I` (J/kg).
+    fn gather_point_heat(&self, heat: &mut Heat, mass: &[Real]) {
+        let (disc, capacity) = (self.disc, &self.thermal.capacity);
+        let base = at_points(disc, capacity, &heat.particle_c);
+        let rho = self.thermal.density;
+        let mut gain = vec![0.0; mass.len()];
+        for (p, (&w, (&t, b))) in disc
+            .weights
+            .iter()
+            .zip(heat.temperature_c.iter().zip(base))
+            .enumerate()
+        {
+            let dq = rho * w * capacity.heat_between(b, t);
+            for (i, [n, _, _]) in disc.scatter.point_row(p) {
+                gain[i] += n * dq;
+            }
+        }
+        let share = self.thermal.spec.friction_heat_to_workpiece;
+        // Friction work at the tools since the last stage, the workpiece's share at the
+        // particles where it was done.
+        for (g, w) in gain.iter_mut().zip(&mut heat.friction_work) {
+            heat.friction_heat_j += *w;
+            *g += share * std::mem::take(w);
+        }
+        for ((t, g), m) in heat.particle_c.iter_mut().zip(gain).zip(mass) {
+            *t = capacity.heat(*t, g / m);
+        }
     }
 
     /// The boundary ring's surface flows (W) into each ring particle (step 3 of the module
@@ -214,14 +352,14 @@ impl Simulation {
     /// particle's mean normal contact force since the last heat stage: over the particle's
     /// contact area it is the pressure the coefficient is read at.
     fn surface_flows(&self, t: &[Real], mass: &[Real], normal_force: &[Real]) -> SurfaceFlows {
-        let capacity = self.capacity();
-        let spec = self.scene.thermal.as_ref().expect("a thermal scene");
+        let (disc, capacity, spec) = (self.disc, &self.thermal.capacity, &self.thermal.spec);
+        let adiabatic_edge = &self.transfer.adiabatic_edge;
         let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
         let depth = self.scene.model.depth_m;
-        let ring = &self.boundary;
+        let ring = &disc.boundary;
         let n = ring.len();
-        let x: Vec<[Real; 2]> = ring.iter().map(|&j| self.position(j as usize)).collect();
-        let touch = TOUCH_SPACINGS * self.spacing[0].min(self.spacing[1]);
+        let x = disc.ring(self.d);
+        let touch = TOUCH_SPACINGS * disc.h_min();
         let mut out = SurfaceFlows {
             into: vec![0.0; n],
             tools: vec![0.0; self.tools.len()],
@@ -236,9 +374,9 @@ impl Simulation {
             let j = ring[k] as usize;
             // The field's temperature at the particle, `sum_I N_I(X_J) T_I`.
             let tj = capacity.interpolate(
-                self.nodal
+                disc.nodal
                     .row(j)
-                    .map(|e| (self.nodal.n[e], t[self.nodal.index[e] as usize])),
+                    .map(|e| (disc.nodal.n[e], t[disc.nodal.index[e] as usize])),
             );
             // The particle's share of the ring, and of it what lies along a tool it touches
             // (each half segment projected on the tool's tangent; the rest is free surface).
@@ -249,7 +387,7 @@ impl Simulation {
                 .find_map(|(tt, tool)| tool.touches(x[k], touch).map(|tangent| (tt, tangent)));
             let (mut area, mut contact) = (0.0, 0.0);
             for other in [(k + n - 1) % n, (k + 1) % n] {
-                if self.adiabatic_edge[j] && self.adiabatic_edge[ring[other] as usize] {
+                if adiabatic_edge[j] && adiabatic_edge[ring[other] as usize] {
                     continue;
                 }
                 let mid = [0.5 * (x[k][0] + x[other][0]), 0.5 * (x[k][1] + x[other][1])];
@@ -294,113 +432,40 @@ impl Simulation {
         out
     }
 
-    /// After a step of `dt` (s): runs the heat stage when the time since its last run would
-    /// pass the heat step at the next mechanical step, in as many equal sub-steps as that
-    /// step needs. A scene whose heat does not move never runs it.
-    pub(super) fn heat_stage_if_due(&mut self, dt: Real) -> Result<()> {
-        if !self.transfers_heat {
-            return Ok(());
-        }
-        let heat = self.st.heat.as_mut().expect("a thermal scene");
-        heat.since_s += dt;
-        if heat.since_s + dt < heat.step_s {
-            return Ok(());
-        }
-        let elapsed = std::mem::take(&mut heat.since_s);
-        let mass = self.thermal_masses()?;
-        self.gather_point_heat(&mass);
-        // The mean normal contact force on each particle since the last stage (N).
-        let normal_force: Vec<Real> = (self.st.heat.as_mut().expect("a thermal scene"))
-            .normal_impulse
-            .iter_mut()
-            .map(|i| std::mem::take(i) / elapsed)
-            .collect();
-        let before = (self.st.heat.as_ref())
-            .filter(|h| !h.stage_change_k.is_empty())
-            .map(|h| h.temperature_c.clone());
-        let mut done = 0.0;
-        while done < elapsed {
-            done += self.heat_step(elapsed - done, &mass, &normal_force)?;
-        }
-        // The stage's change at each point, for the elasticity over temperature to ramp in.
-        let heat = self.st.heat.as_mut().expect("a thermal scene");
-        if let Some(before) = before {
-            for ((c, t), b) in heat
-                .stage_change_k
-                .iter_mut()
-                .zip(&heat.temperature_c)
-                .zip(before)
-            {
-                *c = t - b;
-            }
-        }
-        Ok(())
-    }
-
-    /// What the points gained since the last heat stage (plastic work), the heat `dQ_p =
-    /// rho_0 w_p (h(T_p) - h(sum_I N_I T_I))` (J; `rho_0 c w_p dT_p` for a constant
-    /// capacity), into the particles: `Q_I = sum_p N_I dQ_p`, the heat kept exactly; with
-    /// the workpiece's share of the friction work done at each particle since then, `Q_J +=
-    /// phi W_J`; each particle heated by `Q_I / M_I` (J/kg).
-    fn gather_point_heat(&mut self, mass: &[Real]) {
-        let heat = self.st.heat.as_ref().expect("a thermal scene");
-        let base = self.at_points(&heat.particle_c);
-        let rho = self.scene.material.density_kg_per_m3;
-        let capacity = self.heat_capacity.as_ref().expect("a thermal scene");
-        let mut gain = vec![0.0; mass.len()];
-        for (p, (&w, (&t, b))) in self
-            .weights
-            .iter()
-            .zip(heat.temperature_c.iter().zip(base))
-            .enumerate()
-        {
-            let dq = rho * w * capacity.heat_between(b, t);
-            for (i, [n, _, _]) in self.scatter.point_row(p) {
-                gain[i] += n * dq;
-            }
-        }
-        let share = self
-            .scene
-            .thermal
-            .as_ref()
-            .map_or(0.0, |t| t.friction_heat_to_workpiece);
-        let heat = self.st.heat.as_mut().expect("a thermal scene");
-        // Friction work at the tools since the last stage, the workpiece's share at the
-        // particles where it was done.
-        for (g, w) in gain.iter_mut().zip(&mut heat.friction_work) {
-            heat.friction_heat_j += *w;
-            *g += share * std::mem::take(w);
-        }
-        for ((t, g), m) in heat.particle_c.iter_mut().zip(gain).zip(mass) {
-            *t = capacity.heat(*t, g / m);
-        }
-    }
-
     /// One heat step of at most `at_most` (s), the rest of the elapsed time (steps 1-4 of
     /// the module doc): returns the step taken, the stable step's share of it when that is
     /// shorter. Updates the heat step for the next trigger and the yield test's flow
-    /// stresses of the laws of temperature.
-    fn heat_step(&mut self, at_most: Real, mass: &[Real], normal_force: &[Real]) -> Result<Real> {
-        let spec = self.scene.thermal.clone().expect("a thermal scene");
-        let t = &self.st.heat.as_ref().expect("a thermal scene").particle_c;
+    /// stresses of the laws of temperature in `out`.
+    fn heat_step(
+        &self,
+        heat: &mut Heat,
+        out: &mut [PointOut],
+        at_most: Real,
+        mass: &[Real],
+        normal_force: &[Real],
+    ) -> Result<Real> {
+        let (disc, spec, capacity) = (self.disc, &self.thermal.spec, &self.thermal.capacity);
+        let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
+        let t = &heat.particle_c;
         let mut rates = if spec.conductivity_max() > 0.0 {
-            let temps = &self
-                .st
-                .heat
-                .as_ref()
-                .expect("a thermal scene")
-                .temperature_c;
-            self.conduction_rates(t, |p| spec.conductivity_at(temps[p]), true)
+            let temps = &heat.temperature_c;
+            conduction_rates(
+                disc,
+                t,
+                |p| spec.conductivity_at(temps[p]),
+                Some(self.d),
+                axi,
+            )
         } else {
             vec![0.0; t.len()]
         };
         let surface = self.surface_flows(t, mass, normal_force);
-        for (k, &j) in self.boundary.iter().enumerate() {
+        for (k, &j) in disc.boundary.iter().enumerate() {
             rates[j as usize] += surface.into[k];
         }
         // Conduction's bound at this deformation: 2 / lambda, lambda ~ 1 / h_min^2.
-        let shrink = self.critical_dt0 / self.st.stable_dt.max(Real::MIN_POSITIVE);
-        let lambda = self.conduction_lambda0 * shrink * shrink;
+        let shrink = disc.critical_dt0 / self.stable_dt.max(Real::MIN_POSITIVE);
+        let lambda = self.transfer.lambda0 * shrink * shrink;
         let conduction = if lambda > 0.0 {
             2.0 / lambda
         } else {
@@ -410,14 +475,13 @@ impl Simulation {
         let dt = at_most.min(stable);
         if dt.is_nan() || dt <= 0.0 {
             return Err(Error::Diverged {
-                step: self.st.step,
-                time: self.st.time,
+                step: self.step,
+                time: self.time,
                 what: format!("heat step {dt:.3e} s is not positive"),
             });
         }
         let mut particle = t.clone();
         let mut largest: Real = 0.0;
-        let capacity = self.capacity();
         for ((t, r), m) in particle.iter_mut().zip(&rates).zip(mass) {
             let heated = capacity.heat(*t, dt * r / m);
             largest = largest.max((heated - *t).abs());
@@ -430,8 +494,7 @@ impl Simulation {
         } else {
             2.0
         };
-        let points = self.at_points(&particle);
-        let heat = self.st.heat.as_mut().expect("a thermal scene");
+        let points = at_points(disc, capacity, &particle);
         heat.particle_c = particle;
         heat.temperature_c = points;
         for (total, flow) in heat.to_tools_j.iter_mut().zip(&surface.tools) {
@@ -442,21 +505,19 @@ impl Simulation {
         heat.step_s = (growth * dt).min(stable);
         if let Some(bad) = heat.temperature_c.iter().position(|t| !t.is_finite()) {
             return Err(Error::Diverged {
-                step: self.st.step,
-                time: self.st.time,
+                step: self.step,
+                time: self.time,
                 what: format!(
                     "temperature of integration point {bad} at {:?} m is not finite",
-                    self.points.positions[bad]
+                    disc.points.positions[bad]
                 ),
             });
         }
-        if self.material.hardening.is_thermal() {
-            let heat = self.st.heat.as_ref().expect("a thermal scene");
-            for (p, out) in self.out.iter_mut().enumerate() {
-                out.flow_stress = self
-                    .material
-                    .hardening
-                    .flow(self.st.points[p].eps_p, 0.0, heat.temperature_c[p])
+        let hardening = &disc.material.hardening;
+        if hardening.is_thermal() {
+            for (p, out) in out.iter_mut().enumerate() {
+                out.flow_stress = hardening
+                    .flow(self.points[p].eps_p, 0.0, heat.temperature_c[p])
                     .stress;
             }
         }
@@ -464,7 +525,7 @@ impl Simulation {
     }
 }
 
-/// What [`Simulation::surface_flows`] returns.
+/// What [`Inputs::surface_flows`] returns.
 struct SurfaceFlows {
     /// Heat flow into each boundary ring particle (W), in ring order.
     into: Vec<Real>,

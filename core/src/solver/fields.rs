@@ -2,7 +2,8 @@
 //! of the workpiece, tool penetration, particle fields smoothed from the integration points,
 //! and the points' own data.
 
-use super::Simulation;
+use super::discretization::Discretization;
+use super::simulation::Simulation;
 use crate::geometry::{bounds, enclosed_volume, Extents};
 use crate::math::Real;
 use crate::scene::Edge;
@@ -27,10 +28,18 @@ pub struct Fields {
     pub lap: Vec<Real>,
 }
 
+/// Physical positions `X_J + sum_I N_I(X_J) d_I` of all particles of `disc` (m) for the
+/// displacement coefficients `d` (m).
+pub(super) fn positions(disc: &Discretization, d: &[[Real; 2]]) -> Vec<[Real; 2]> {
+    (0..disc.ref_pos.len())
+        .map(|j| disc.position(d, j))
+        .collect()
+}
+
 impl Simulation {
     /// Physical positions `X_J + sum_I N_I(X_J) d_I` of all particles (m).
     pub fn positions(&self) -> Vec<[Real; 2]> {
-        (0..self.ref_pos.len()).map(|j| self.position(j)).collect()
+        positions(&self.disc, &self.st.d)
     }
 
     /// Bounds of the deformed workpiece over all particles (m).
@@ -49,15 +58,16 @@ impl Simulation {
     /// `outline::POINTS_PER_SEGMENT` points along each boundary segment from its first
     /// particle on, counter-clockwise.
     pub fn outline(&self) -> Vec<[Real; 2]> {
-        self.outline.positions(&self.st.d)
+        self.disc.outline.positions(&self.st.d)
     }
 
     /// Current volume as the integration rule sees it, `sum_p J_p w_p` (m^3), at the last
     /// stress stage.
     pub fn integrated_volume(&self) -> Real {
-        self.out
+        self.ws
+            .out
             .iter()
-            .zip(&self.weights)
+            .zip(&self.disc.weights)
             .map(|(o, w)| o.jacobian * w)
             .sum()
     }
@@ -68,16 +78,17 @@ impl Simulation {
     /// difference between the two is volume the discretisation gains or loses (a fold of
     /// the boundary, material inside a tool), not compression.
     pub fn integrated_volume_change(&self) -> Real {
-        self.integrated_volume() / self.weights.iter().sum::<Real>() - 1.0
+        self.integrated_volume() / self.disc.weights.iter().sum::<Real>() - 1.0
     }
 
     /// Volume of the undeformed workpiece (m^3): its rectangle, by Pappus' theorem
     /// `2 pi r_c A` in axisymmetry, `A depth` in plane strain.
     pub fn reference_volume(&self) -> Real {
         let ring: Vec<[Real; 2]> = self
+            .disc
             .boundary
             .iter()
-            .map(|&j| self.original[j as usize])
+            .map(|&j| self.disc.original[j as usize])
             .collect();
         let model = &self.scene.model;
         enclosed_volume(&ring, model.kinematics, model.depth_m)
@@ -88,9 +99,9 @@ impl Simulation {
     /// the free-face length.
     pub fn face_extents(&self, edge: Edge) -> Extents {
         let x: Vec<[Real; 2]> = edge
-            .particles(self.nx, self.ny)
+            .particles(self.disc.nx, self.disc.ny)
             .into_iter()
-            .map(|j| self.position(j as usize))
+            .map(|j| self.disc.position(&self.st.d, j as usize))
             .collect();
         bounds(&x)
     }
@@ -99,7 +110,7 @@ impl Simulation {
     /// plastic strain, von Mises stress and temperature smoothed from the points with
     /// weights `|N_I| w_p`.
     pub fn fields(&self) -> Fields {
-        let np = self.ref_pos.len();
+        let np = self.disc.ref_pos.len();
         let mut f = Fields {
             positions: self.positions(),
             ..Default::default()
@@ -107,10 +118,10 @@ impl Simulation {
         let (mut wsum, mut ep, mut vm) = (vec![0.0; np], vec![0.0; np], vec![0.0; np]);
         let temps = self.point_temperature();
         let mut tp = vec![0.0; if temps.is_some() { np } else { 0 }];
-        for p in 0..self.weights.len() {
-            let (eps_p, mises) = (self.st.points[p].eps_p, self.out[p].von_mises);
-            for (i, [n, _, _]) in self.scatter.point_row(p) {
-                let w = (n * self.weights[p]).abs();
+        for p in 0..self.disc.weights.len() {
+            let (eps_p, mises) = (self.st.points[p].eps_p, self.ws.out[p].von_mises);
+            for (i, [n, _, _]) in self.disc.scatter.point_row(p) {
+                let w = (n * self.disc.weights[p]).abs();
                 wsum[i] += w;
                 ep[i] += w * eps_p;
                 vm[i] += w * mises;
@@ -121,13 +132,13 @@ impl Simulation {
         }
         for j in 0..np {
             f.displacement.push(match self.st.reference {
-                None => self.nodal.interpolate(j, &self.st.d),
+                None => self.disc.nodal.interpolate(j, &self.st.d),
                 Some(_) => {
-                    let (x, x0) = (f.positions[j], self.original[j]);
+                    let (x, x0) = (f.positions[j], self.disc.original[j]);
                     [x[0] - x0[0], x[1] - x0[1]]
                 }
             });
-            f.velocity.push(self.nodal.interpolate(j, &self.st.v));
+            f.velocity.push(self.disc.nodal.interpolate(j, &self.st.v));
             let w = if wsum[j] > 0.0 { 1.0 / wsum[j] } else { 0.0 };
             f.plastic_strain.push(ep[j] * w);
             f.von_mises.push(vm[j] * w);
@@ -139,7 +150,7 @@ impl Simulation {
         f.lap = vec![0.0; np];
         for (l, lap) in self.st.laps.iter().enumerate() {
             for &k in &lap.ring {
-                f.lap[self.boundary[k as usize] as usize] = (l + 1) as Real;
+                f.lap[self.disc.boundary[k as usize] as usize] = (l + 1) as Real;
             }
         }
         f
@@ -149,25 +160,25 @@ impl Simulation {
     /// with `[N_I, dN_I/dX, dN_I/dY]` (1, 1/m), including zeros where `I` is outside the
     /// point's own support.
     pub fn point_shapes(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
-        self.scatter.point_row(p)
+        self.disc.scatter.point_row(p)
     }
     /// Reference volume weights of the integration points (m^3; 2 pi R included).
     pub fn point_weights(&self) -> &[Real] {
-        &self.weights
+        &self.disc.weights
     }
     /// Reference positions of the integration points (m).
     pub fn point_positions(&self) -> &[[Real; 2]] {
-        &self.points.positions
+        &self.disc.points.positions
     }
     /// Mises equivalent of the Cauchy stress at each integration point (Pa), at the last
     /// stress stage.
     pub fn point_von_mises(&self) -> Vec<Real> {
-        self.out.iter().map(|o| o.von_mises).collect()
+        self.ws.out.iter().map(|o| o.von_mises).collect()
     }
     /// `J = det F` of each integration point at the last stress stage (-): the Mises
     /// Kirchhoff stress the yield condition holds is `J` times [`Simulation::point_von_mises`].
     pub fn point_jacobian(&self) -> Vec<Real> {
-        self.out.iter().map(|o| o.jacobian).collect()
+        self.ws.out.iter().map(|o| o.jacobian).collect()
     }
     /// Equivalent plastic strain at each integration point.
     pub fn point_plastic_strain(&self) -> Vec<Real> {

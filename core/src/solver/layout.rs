@@ -20,7 +20,8 @@ pub const BLOCK: usize = 128;
 /// Deterministic parallel scatter of point forces. The points are cut into fixed chunks of
 /// `chunk` points (cells in row order, so a chunk touches a contiguous band of particles);
 /// chunk `c` adds its contributions to particles `lo[c]..lo[c] + len` into its own slice
-/// `offsets[c]..offsets[c + 1]` of `buf`, and each particle then sums the slices that cover
+/// `offsets[c]..offsets[c + 1]` of the chunk buffers ([`Scatter::buffers`], the workspace's),
+/// and each particle then sums the slices that cover
 /// it in chunk order (a block of [`BLOCK`] particles adds the overlapping part of each
 /// chunk in `block_chunks`). The bits do not depend on the number of threads.
 #[derive(Debug, Clone, Default)]
@@ -28,7 +29,6 @@ pub struct Scatter {
     pub(super) chunk: usize,
     pub(super) lo: Vec<u32>,
     pub(super) offsets: Vec<usize>,
-    pub(super) buf: Vec<[Real; 2]>,
     /// The chunks whose particles overlap each block of particles, ascending:
     /// `block_chunks[block_offsets[b]..block_offsets[b + 1]]`.
     pub(super) block_offsets: Vec<u32>,
@@ -197,7 +197,6 @@ impl Scatter {
             table_start,
             chunk,
             lo,
-            buf: vec![[0.0; 2]; *offsets.last().unwrap_or(&0)],
             offsets,
             block_offsets,
             block_chunks,
@@ -221,10 +220,15 @@ impl Scatter {
             })
     }
 
-    /// Bytes held by the chunk buffers, the groups' lists and the shared blocks.
+    /// Zeroed chunk buffers for this scatter (N): chunk `c`'s slice is
+    /// `offsets[c]..offsets[c + 1]`.
+    pub(super) fn buffers(&self) -> Vec<[Real; 2]> {
+        vec![[0.0; 2]; *self.offsets.last().unwrap_or(&0)]
+    }
+
+    /// Bytes held by the groups' lists and the shared blocks.
     pub(super) fn memory_bytes(&self) -> usize {
-        self.buf.len() * std::mem::size_of::<[Real; 2]>()
-            + self.table.len() * 8
+        self.table.len() * 8
             + (self.table_start.len()
                 + self.base.len()
                 + self.lists.len()

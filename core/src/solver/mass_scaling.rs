@@ -15,10 +15,17 @@
 //! paper eqs. 4-6, the constraint projection, momentum and the energy account) uses the
 //! scaled masses.
 
-use super::Simulation;
+use super::discretization::Discretization;
+use super::energy::Energy;
+use super::stable_step::measure_critical_step;
+use super::state::State;
+use super::update::initial_motion;
+use super::workspace::Workspace;
+use crate::constraints::Constraints;
 use crate::error::Result;
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
+use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
 
 /// Most rounds of calibrated selective scaling and measurement of the critical step.
@@ -84,92 +91,97 @@ pub(super) enum Plan {
     Selective { target: Real, stiffness: Vec<Real> },
 }
 
-impl Simulation {
-    /// The quasi-static watch after a step in which `contact` forces acted or not: the
-    /// kinetic-to-internal energy ratio once the start-up is over (`kinetic_to_internal_from`
-    /// of the time from the first contact, or from t = 0 without tools, to the end), its
-    /// largest value kept, and the run stopped past `checks.kinetic_to_internal_max`.
-    pub(super) fn watch_quasi_static(&mut self, contact: bool) -> Result<()> {
-        let st = &mut self.st;
-        if contact && st.first_contact_s.is_none() {
-            st.first_contact_s = Some(st.time);
+/// Applies mass scaling to the unscaled masses of `disc` (and the critical step measured
+/// with them), at setup.
+pub(super) fn scale(
+    scene: &Scene,
+    disc: &mut Discretization,
+    st: &mut State,
+    ws: &mut Workspace,
+    plan: Plan,
+) -> Result<()> {
+    let unscaled = disc.mass.clone();
+    let critical_dt_unscaled_s = disc.critical_dt0;
+    match plan {
+        Plan::Uniform(f) => {
+            let scaled = unscaled.iter().map(|m| m * f).collect();
+            set_masses(scene, disc, st, ws, scaled)?;
+            disc.critical_dt0 = measure_critical_step(scene, disc, st, ws)?;
         }
-        let start = if self.tools.is_empty() {
-            Some(0.0)
-        } else {
-            st.first_contact_s
-        };
-        let (checks, end) = (&self.scene.checks, self.scene.time.end_s);
-        if start.is_some_and(|t0| st.time >= t0 + checks.kinetic_to_internal_from * (end - t0)) {
-            let ratio = st.energy.kinetic_to_internal();
-            st.kinetic_to_internal_max = st.kinetic_to_internal_max.max(ratio);
-            if let Some(bound) = checks.kinetic_to_internal_max {
-                st.energy
-                    .check_quasi_static(ratio, bound, st.step, st.time)?;
-            }
-        }
-        Ok(())
-    }
-
-    /// Applies mass scaling to the unscaled masses (and the critical step measured with
-    /// them).
-    pub(super) fn scale_masses(&mut self, plan: Plan) -> Result<()> {
-        let unscaled = self.mass.clone();
-        let critical_dt_unscaled_s = self.critical_dt0;
-        match plan {
-            Plan::Uniform(f) => {
-                let scaled = unscaled.iter().map(|m| m * f).collect();
-                self.set_masses(scaled)?;
-                self.critical_dt0 = self.measure_critical_step()?;
-            }
-            Plan::Selective { target, stiffness } => {
-                let safety = self.scene.time.dt_safety;
-                for _ in 0..MAX_ROUNDS {
-                    if safety * self.critical_dt0 >= target {
-                        break;
-                    }
-                    let local: Vec<Real> = self
-                        .mass
-                        .iter()
-                        .zip(&stiffness)
-                        .map(|(m, k)| 2.0 * (m / k).sqrt())
-                        .collect();
-                    let shortest = local.iter().copied().fold(Real::INFINITY, Real::min);
-                    let calibration = self.critical_dt0 / shortest;
-                    let scaled = self
-                        .mass
-                        .iter()
-                        .zip(&local)
-                        .map(|(m, dt)| {
-                            let ratio = AIM * target / (safety * calibration * dt);
-                            if ratio > 1.0 {
-                                m * ratio * ratio
-                            } else {
-                                *m
-                            }
-                        })
-                        .collect();
-                    self.set_masses(scaled)?;
-                    self.critical_dt0 = self.measure_critical_step()?;
+        Plan::Selective { target, stiffness } => {
+            let safety = scene.time.dt_safety;
+            for _ in 0..MAX_ROUNDS {
+                if safety * disc.critical_dt0 >= target {
+                    break;
                 }
+                let local: Vec<Real> = disc
+                    .mass
+                    .iter()
+                    .zip(&stiffness)
+                    .map(|(m, k)| 2.0 * (m / k).sqrt())
+                    .collect();
+                let shortest = local.iter().copied().fold(Real::INFINITY, Real::min);
+                let calibration = disc.critical_dt0 / shortest;
+                let scaled = disc
+                    .mass
+                    .iter()
+                    .zip(&local)
+                    .map(|(m, dt)| {
+                        let ratio = AIM * target / (safety * calibration * dt);
+                        if ratio > 1.0 {
+                            m * ratio * ratio
+                        } else {
+                            *m
+                        }
+                    })
+                    .collect();
+                set_masses(scene, disc, st, ws, scaled)?;
+                disc.critical_dt0 = measure_critical_step(scene, disc, st, ws)?;
             }
         }
-        let total: Real = unscaled.iter().sum();
-        let added: Real = self.mass.iter().sum::<Real>() - total;
-        let (mut most, mut count) = (0.0, 0);
-        for (m, m0) in self.mass.iter().zip(&unscaled) {
-            if m > m0 {
-                most = Real::max(most, (m - m0) / m0);
-                count += 1;
-            }
-        }
-        self.mass_scaling = Some(MassScalingReport {
-            added_mass_rel: added / total,
-            max_added_rel: most,
-            scaled_particles: count,
-            critical_dt_unscaled_s,
-            critical_dt_s: self.critical_dt0,
-        });
-        Ok(())
     }
+    let total: Real = unscaled.iter().sum();
+    let added: Real = disc.mass.iter().sum::<Real>() - total;
+    let (mut most, mut count) = (0.0, 0);
+    for (m, m0) in disc.mass.iter().zip(&unscaled) {
+        if m > m0 {
+            most = Real::max(most, (m - m0) / m0);
+            count += 1;
+        }
+    }
+    disc.mass_scaling = Some(MassScalingReport {
+        added_mass_rel: added / total,
+        max_added_rel: most,
+        scaled_particles: count,
+        critical_dt_unscaled_s,
+        critical_dt_s: disc.critical_dt0,
+    });
+    Ok(())
+}
+
+/// Replaces the lumped masses (kg) of `disc` and what depends on them: inverse masses, the
+/// essential conditions' projection, the initial velocities projected onto them and the
+/// initial kinetic energy.
+fn set_masses(
+    scene: &Scene,
+    disc: &mut Discretization,
+    st: &mut State,
+    ws: &mut Workspace,
+    mass: Vec<Real>,
+) -> Result<()> {
+    if let Some(c) = &disc.constraints {
+        disc.constraints = Constraints::new(c.rows.clone(), &disc.nodal, &mass)?;
+    }
+    let v0 = scene.workpiece.initial_velocity_m_per_s;
+    let (v, initial) = initial_motion(v0, disc.constraints.as_ref(), &mass);
+    disc.inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+    disc.mass = mass;
+    st.v.clone_from(&v);
+    ws.v_prev = v;
+    st.energy = Energy {
+        initial,
+        kinetic: initial,
+        ..Default::default()
+    };
+    Ok(())
 }

@@ -45,14 +45,9 @@ const DOMAINS: usize = 64;
 /// Particles per block of the second phase.
 const PARTICLES: usize = 128;
 
-/// The quadrants' smoothed gradients by domain and by particle, their weights, and the
-/// stage's force. A domain's four quadrants share one entry per particle:
-/// `[B^0_x, B^0_y, B^1_x, B^1_y, B^2_x, B^2_y, B^3_x, B^3_y]` (1/m), zero for a quadrant
-/// that does not involve the particle.
+/// The stage's working arrays: the quadrants' stresses and the force.
 #[derive(Debug, Clone)]
-pub(super) struct NodalStabilization {
-    /// The weights and gradients, fixed after setup.
-    tables: Tables,
+pub(super) struct Forces {
     /// `c mu w_k T^k` of each domain's quadrants (N m): `[xX, xY]` of quadrants 0..3, then
     /// `[yX, yY]` of quadrants 0..3.
     stress: Vec<[Real; 4 * QUADRANTS]>,
@@ -60,9 +55,27 @@ pub(super) struct NodalStabilization {
     pub force: Vec<[Real; 2]>,
 }
 
-/// What the stage reads: the coefficient, the weights and both orders of the gradients.
+impl Forces {
+    /// Zero arrays for `tables` over `particles` particles.
+    pub(super) fn new(tables: &Tables, particles: usize) -> Forces {
+        Forces {
+            stress: vec![[0.0; 4 * QUADRANTS]; tables.weights.len()],
+            force: vec![[0.0; 2]; particles],
+        }
+    }
+
+    /// Bytes held.
+    pub(super) fn memory_bytes(&self) -> usize {
+        self.stress.len() * 32 * QUADRANTS + self.force.len() * 16
+    }
+}
+
+/// What the stage reads, fixed after setup: the coefficient, the weights and both orders of
+/// the quadrants' smoothed gradients. A domain's four quadrants share one entry per
+/// particle: `[B^0_x, B^0_y, B^1_x, B^1_y, B^2_x, B^2_y, B^3_x, B^3_y]` (1/m), zero for a
+/// quadrant that does not involve the particle.
 #[derive(Debug, Clone)]
-struct Tables {
+pub(super) struct Tables {
     /// `c mu` (Pa).
     modulus: Real,
     /// `w_k` of quadrant `k` of domain `L` (m^3).
@@ -79,7 +92,7 @@ struct Tables {
     particle_gradients: Vec<[Real; 2 * QUADRANTS]>,
 }
 
-impl NodalStabilization {
+impl Tables {
     /// The stabilization of `particles` particles with coefficient `c` (-), shear modulus
     /// `mu` (Pa), quadrant gradients `quadrants` (rows `4 L + k`) and weights `weights`
     /// (m^3, the same order).
@@ -89,7 +102,7 @@ impl NodalStabilization {
         quadrants: &ShapeTable,
         weights: &[Real],
         particles: usize,
-    ) -> NodalStabilization {
+    ) -> Tables {
         let domain_count = quadrants.rows() / QUADRANTS;
         let mut by_domain = vec![0u32];
         let (mut members, mut domain_gradients) = (Vec::new(), Vec::new());
@@ -130,7 +143,7 @@ impl NodalStabilization {
                 particle_gradients[at] = domain_gradients[e];
             }
         }
-        let tables = Tables {
+        Tables {
             modulus: c * mu,
             weights: weights
                 .chunks_exact(QUADRANTS)
@@ -142,32 +155,24 @@ impl NodalStabilization {
             by_particle,
             domains,
             particle_gradients,
-        };
-        NodalStabilization {
-            tables,
-            stress: vec![[0.0; 4 * QUADRANTS]; domain_count],
-            force: vec![[0.0; 2]; particles],
         }
     }
 
-    /// Bytes held (the tables and the stage's arrays).
+    /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        let (t, entry) = (&self.tables, 4 + 16 * QUADRANTS);
-        (t.by_domain.len() + t.by_particle.len()) * 4
-            + (t.particles.len() + t.domains.len()) * entry
-            + t.weights.len() * 8 * QUADRANTS
-            + self.stress.len() * 32 * QUADRANTS
-            + self.force.len() * 16
+        let entry = 4 + 16 * QUADRANTS;
+        (self.by_domain.len() + self.by_particle.len()) * 4
+            + (self.particles.len() + self.domains.len()) * entry
+            + self.weights.len() * 8 * QUADRANTS
     }
 }
 
-/// The stabilization stage on the displacement coefficients `d` (m): fills `s.force` (N)
+/// The stabilization stage of `t` on the displacement coefficients `d` (m): fills `s.force` (N)
 /// and returns the stored energy `W_s` (J). Two parallel phases over fixed blocks: the
 /// quadrants' gradients and stresses domain by domain, then each particle's force summed
 /// over its domains in ascending order. Every product is a fused multiply-add, so the
 /// AVX2 build (`avx2`, where the CPU has it) gives the same bits as the portable one.
-pub(super) fn stage(team: &Team, s: &mut NodalStabilization, d: &[[Real; 2]], avx2: bool) -> Real {
-    let t = &s.tables;
+pub(super) fn stage(team: &Team, t: &Tables, s: &mut Forces, d: &[[Real; 2]], avx2: bool) -> Real {
     let domains = t.weights.len();
     let blocks = domains.div_ceil(DOMAINS);
     let mut energies = vec![0.0; blocks];
@@ -312,16 +317,17 @@ mod tests {
     use crate::rk_shape::Lattice;
 
     /// A 9 x 7 lattice of 1 mm spacing with its stabilization (`c mu` = 1 Pa, unit depth).
-    fn patch() -> (Lattice, NodalStabilization) {
+    fn patch() -> (Lattice, Tables, Forces) {
         let lattice = Lattice::new([0.0, 0.0], [1e-3, 1e-3], [9, 7], [2e-3, 2e-3]);
         let (quadrants, table) = quadrant_shapes(&lattice).unwrap();
-        let s = NodalStabilization::new(1.0, 1.0, &table, &quadrants.areas, 63);
-        (lattice, s)
+        let t = Tables::new(1.0, 1.0, &table, &quadrants.areas, 63);
+        let s = Forces::new(&t, 63);
+        (lattice, t, s)
     }
 
     #[test]
     fn each_quadrant_reproduces_a_linear_gradient() {
-        let (lattice, _) = patch();
+        let (lattice, _, _) = patch();
         let (quadrants, table) = quadrant_shapes(&lattice).unwrap();
         let x = &lattice.cloud().positions;
         let u = |p: [Real; 2]| [0.3 * p[0] - 0.2 * p[1], 0.1 * p[0] + 0.4 * p[1]];
@@ -344,7 +350,7 @@ mod tests {
 
     #[test]
     fn a_linear_field_and_a_rigid_motion_cost_nothing() {
-        let (lattice, mut s) = patch();
+        let (lattice, t, mut s) = patch();
         // The RK coefficients of a linear field are its nodal values (linear basis).
         let d: Vec<[Real; 2]> = lattice
             .cloud()
@@ -358,7 +364,7 @@ mod tests {
             })
             .collect();
         for avx2 in [false, crate::solver::stress::has_avx2()] {
-            let w = stage(&Team::default(), &mut s, &d, avx2);
+            let w = stage(&Team::default(), &t, &mut s, &d, avx2);
             assert!(w.abs() < 1e-20, "energy {w}");
             let f = s
                 .force
@@ -371,7 +377,7 @@ mod tests {
 
     #[test]
     fn a_saw_tooth_stores_energy_and_the_force_is_its_gradient() {
-        let (_, mut s) = patch();
+        let (_, t, mut s) = patch();
         // The top row alternating up and down.
         let d: Vec<[Real; 2]> = (0..63)
             .map(|i| match i / 9 == 6 {
@@ -380,7 +386,7 @@ mod tests {
             })
             .collect();
         let team = Team::default();
-        let w = stage(&team, &mut s, &d, false);
+        let w = stage(&team, &t, &mut s, &d, false);
         assert!(w > 0.0);
         let force = s.force.clone();
         // W is quadratic in d: W(d) = f . d / 2, and each force component is the central
@@ -397,7 +403,8 @@ mod tests {
                 let (mut up, mut down) = (d.clone(), d.clone());
                 up[i][c] += h;
                 down[i][c] -= h;
-                let fd = (stage(&team, &mut s, &up, false) - stage(&team, &mut s, &down, false))
+                let fd = (stage(&team, &t, &mut s, &up, false)
+                    - stage(&team, &t, &mut s, &down, false))
                     / (2.0 * h);
                 let tol = 1e-6
                     * force
@@ -413,7 +420,7 @@ mod tests {
         }
         // The AVX2 build gives the same bits.
         if crate::solver::stress::has_avx2() {
-            let w2 = stage(&team, &mut s, &d, true);
+            let w2 = stage(&team, &t, &mut s, &d, true);
             assert_eq!(w.to_bits(), w2.to_bits());
             assert_eq!(force, s.force);
         }

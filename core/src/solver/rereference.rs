@@ -37,16 +37,23 @@
 //! Without re-referencing (the default) nothing here runs and the bits are those of the
 //! Lagrangian kernel. SCNI is refused by the scene: its nodal domains are not rebuilt.
 
+use super::contact_stage;
+use super::discretization::Discretization;
 use super::energy::kinetic_energy;
-use super::state::Reference;
-use super::Simulation;
+use super::layout::{Scatter, MAX_GROUP};
+use super::outline::Outline;
+use super::stable_step::measure_critical_step;
+use super::state::{Reference, State};
+use super::workspace::Workspace;
+use super::{conduction, fields};
 use crate::constraints::Constraints;
 use crate::error::{Error, Result};
 use crate::material::simo1992_hencky_j2::elastic_left_cauchy_green;
 use crate::material::PointState;
 use crate::math::Real;
 use crate::rk_shape::{KernelCloud, ShapeTable};
-use crate::scene::Kinematics;
+use crate::scene::{Kinematics, Scene};
+use crate::tools::Tool;
 
 /// Conjugate-gradient iterations allowed for the velocity transfer.
 const FIT_ITERATIONS: usize = 500;
@@ -61,245 +68,246 @@ struct PointMotion {
     u: [Real; 2],
 }
 
-impl Simulation {
-    /// Re-references the kernel when the last stress stage's largest stretch reached the
-    /// scene's `discretization.rereference_stretch`.
-    pub(super) fn rereference_if_due(&mut self) -> Result<()> {
-        match self.scene.discretization.rereference_stretch {
-            Some(limit) if self.st.max_stretch >= limit => self.rereference(),
-            _ => Ok(()),
+/// Stage 0 of the step: re-references the kernel when the last stress stage's largest
+/// stretch reached the scene's `discretization.rereference_stretch`; a failure stops the
+/// run naming the step ([`failed`]).
+pub(super) fn if_due(
+    scene: &Scene,
+    disc: &mut Discretization,
+    tools: &[Tool],
+    st: &mut State,
+    ws: &mut Workspace,
+) -> Result<()> {
+    match scene.discretization.rereference_stretch {
+        Some(limit) if st.max_stretch >= limit => {
+            now(scene, disc, tools, st, ws).map_err(|e| failed(st.step, st.time, e))
         }
-    }
-
-    /// Re-references the kernel now, on the positions of the current displacement (see
-    /// the module doc); a run does it itself when `discretization.rereference_stretch` is
-    /// reached.
-    pub fn rereference(&mut self) -> Result<()> {
-        let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
-        let np = self.ref_pos.len();
-        let npts = self.weights.len();
-        let positions = self.positions();
-        let motions: Vec<PointMotion> = (0..npts).map(|p| self.point_motion(p, axi)).collect();
-        // Particle averages of F and det F over the points that see them.
-        let mut sum = vec![[0.0; 6]; np];
-        for (p, m) in motions.iter().enumerate() {
-            let det = m.f[0] * m.f[3] - m.f[1] * m.f[2];
-            for (i, [n, _, _]) in self.scatter.point_row(p) {
-                let w = (n * self.weights[p]).abs();
-                let s = &mut sum[i];
-                for (sk, fk) in s.iter_mut().zip(m.f) {
-                    *sk += w * fk;
-                }
-                s[4] += w * det;
-                s[5] += w;
-            }
-        }
-        let (old_cells, old_volumes, old_jacobian) = self.current_reference();
-        let mut cells = Vec::with_capacity(np);
-        let mut volumes = Vec::with_capacity(np);
-        for (i, s) in sum.iter().enumerate() {
-            let (f, det) = match s[5] > 0.0 {
-                true => ([s[0], s[1], s[2], s[3]].map(|x| x / s[5]), s[4] / s[5]),
-                false => ([1.0, 0.0, 0.0, 1.0], 1.0),
-            };
-            let g = old_cells[i];
-            cells.push([
-                f[0] * g[0] + f[1] * g[2],
-                f[0] * g[1] + f[1] * g[3],
-                f[2] * g[0] + f[3] * g[2],
-                f[2] * g[1] + f[3] * g[3],
-            ]);
-            volumes.push(old_volumes[i] * det);
-        }
-        let points: Vec<[Real; 2]> = motions
-            .iter()
-            .enumerate()
-            .map(|(p, m)| {
-                let x = self.points.positions[p];
-                [x[0] + m.u[0], x[1] + m.u[1]]
-            })
-            .collect();
-        let point_jacobian: Vec<Real> = motions
-            .iter()
-            .zip(&old_jacobian)
-            .map(|(m, j)| j * (m.f[0] * m.f[3] - m.f[1] * m.f[2]) * m.f33)
-            .collect();
-        // The history pushed forward: C_p'^{-1} = b_e = F C_p^{-1} F^T (F_33^2 out of plane).
-        for (state, m) in self.st.points.iter_mut().zip(&motions) {
-            state.cp_inv = elastic_left_cauchy_green(m.f, m.f33, state.cp_inv);
-        }
-        // Physical velocities before the new shape functions replace the old.
-        let v_now: Vec<[Real; 2]> = (0..np)
-            .map(|j| self.nodal.interpolate(j, &self.st.v))
-            .collect();
-        let v_before: Vec<[Real; 2]> = (0..np)
-            .map(|j| self.nodal.interpolate(j, &self.v_prev))
-            .collect();
-        let kinetic_before = kinetic_energy(&self.mass, &self.st.v);
-        // The temperature field at the particles, `sum_I N_I(X_J) T_I`, before the shape
-        // functions change (a scene whose heat moves).
-        let temperature_now: Option<Vec<[Real; 2]>> = match (&self.st.heat, &self.heat_capacity) {
-            (Some(h), Some(c)) if !h.particle_c.is_empty() => Some(
-                (0..np)
-                    .map(|j| {
-                        let row = self.nodal.row(j);
-                        let t = c.interpolate(row.map(|e| {
-                            (self.nodal.n[e], h.particle_c[self.nodal.index[e] as usize])
-                        }));
-                        [t, 0.0]
-                    })
-                    .collect(),
-            ),
-            _ => None,
-        };
-        let previous = self.st.reference.as_ref();
-        let mut reference = Reference {
-            count: previous.map_or(0, |r| r.count) + 1,
-            time_s: self.st.time,
-            particles: positions,
-            volumes,
-            cells,
-            points,
-            point_jacobian,
-            fit_residual: 0.0,
-        };
-        self.install(&reference)?;
-        let (v, r1) = fit(&self.nodal, &v_now);
-        let (v_prev, r2) = fit(&self.nodal, &v_before);
-        reference.fit_residual = r1.max(r2);
-        if let (Some(t), Some(h)) = (temperature_now, self.st.heat.as_mut()) {
-            let (fitted, r3) = fit(&self.nodal, &t);
-            h.particle_c = fitted.iter().map(|t| t[0]).collect();
-            reference.fit_residual = reference.fit_residual.max(r3);
-        }
-        self.st.v = v;
-        self.v_prev = v_prev;
-        if let Some(c) = &self.constraints {
-            c.project(&mut self.st.v, &self.mass);
-            c.project(&mut self.v_prev, &self.mass);
-        }
-        self.st.d = vec![[0.0; 2]; np];
-        let kinetic_after = kinetic_energy(&self.mass, &self.st.v);
-        self.st.energy.remap += kinetic_after - kinetic_before;
-        self.st.energy.kinetic += kinetic_after - kinetic_before;
-        self.st.reference = Some(reference);
-        self.st.stable_dt = self.critical_dt0;
-        self.st.max_stretch = 1.0;
-        Ok(())
-    }
-
-    /// The particles' cells and kernel volumes and the points' Jacobians of the current
-    /// reference (the lattice's before the first re-reference).
-    fn current_reference(&self) -> (Vec<[Real; 4]>, Vec<Real>, Vec<Real>) {
-        match &self.st.reference {
-            Some(r) => (r.cells.clone(), r.volumes.clone(), r.point_jacobian.clone()),
-            None => {
-                let [hx, hy] = self.spacing;
-                (
-                    vec![[hx, 0.0, 0.0, hy]; self.ref_pos.len()],
-                    self.lattice_volumes.clone(),
-                    vec![1.0; self.weights.len()],
-                )
-            }
-        }
-    }
-
-    /// `F`, `F_33` and the displacement at point `p` from the current coefficients.
-    fn point_motion(&self, p: usize, axi: bool) -> PointMotion {
-        let (mut f, mut u) = ([1.0, 0.0, 0.0, 1.0], [0.0; 2]);
-        for (i, [n, nx, ny]) in self.scatter.point_row(p) {
-            let d = self.st.d[i];
-            f[0] += d[0] * nx;
-            f[1] += d[0] * ny;
-            f[2] += d[1] * nx;
-            f[3] += d[1] * ny;
-            u[0] += d[0] * n;
-            u[1] += d[1] * n;
-        }
-        let f33 = match axi {
-            true => 1.0 + u[0] * self.inv_radius[p],
-            false => 1.0,
-        };
-        PointMotion { f, f33, u }
-    }
-
-    /// Builds the shape functions, the scatter, the essential conditions, the contact
-    /// stage and the critical step on `reference`; the state is left to the caller.
-    pub(super) fn install(&mut self, reference: &Reference) -> Result<()> {
-        let axi = self.scene.model.kinematics == Kinematics::Axisymmetric;
-        let s = self.scene.discretization.support;
-        let supports = reference
-            .cells
-            .iter()
-            .map(|g| [s[0] * g[0].hypot(g[1]), s[1] * g[2].hypot(g[3])])
-            .collect();
-        let cloud = KernelCloud::with_supports(
-            reference.particles.clone(),
-            reference.volumes.clone(),
-            supports,
-        );
-        let count = reference.count;
-        let pt = cloud.shape_table(&reference.points, &|p| {
-            format!("integration point {p} at re-reference {count}")
-        })?;
-        let mut nodal = cloud.shape_table(&reference.particles, &|j| {
-            format!("particle {j} at re-reference {count}")
-        })?;
-        nodal.drop_gradients();
-        let np = reference.particles.len();
-        self.scatter = super::layout::Scatter::new(&pt, np, self.scatter.chunk, super::MAX_GROUP);
-        if let Some(c) = &self.constraints {
-            self.constraints = Constraints::new(c.rows.clone(), &nodal, &self.mass)?;
-        }
-        self.outline =
-            super::outline::Outline::on_cloud(&cloud, &reference.particles, &self.boundary)?;
-        self.contact = super::setup::contact_stage(
-            &self.scene,
-            &self.boundary,
-            &nodal,
-            &reference.particles,
-            &reference.points,
-            &self.tools,
-        );
-        self.nodal = nodal;
-        self.ref_pos.clone_from(&reference.particles);
-        self.points.positions.clone_from(&reference.points);
-        if axi {
-            self.inv_radius = reference.points.iter().map(|x| 1.0 / x[0]).collect();
-        }
-        self.reference_jacobian
-            .clone_from(&reference.point_jacobian);
-        // The critical step of the new shape functions, measured with unstressed points as
-        // at the start (the stressed ones would answer with their stress, not stiffness).
-        let (points, out) = (self.st.points.clone(), self.out.clone());
-        self.st.points = vec![PointState::default(); points.len()];
-        let measured = self.measure_critical_step();
-        self.st.points = points;
-        self.out = out;
-        self.critical_dt0 = measured?;
-        // Conduction's largest eigenvalue on the new shape functions.
-        if self.transfers_heat {
-            self.conduction_lambda0 = self.conduction_eigenvalue()?;
-        }
-        Ok(())
+        _ => Ok(()),
     }
 }
 
-impl Simulation {
-    /// Takes the lattice discretisation of `fresh` (a new simulation of the same scene),
-    /// for a restore to a state saved before the first re-reference.
-    pub(super) fn take_discretization(&mut self, fresh: Simulation) {
-        self.nodal = fresh.nodal;
-        self.scatter = fresh.scatter;
-        self.constraints = fresh.constraints;
-        self.contact = fresh.contact;
-        self.outline = fresh.outline;
-        self.ref_pos = fresh.ref_pos;
-        self.points = fresh.points;
-        self.inv_radius = fresh.inv_radius;
-        self.reference_jacobian = fresh.reference_jacobian;
-        self.critical_dt0 = fresh.critical_dt0;
+/// Re-references the kernel now, on the positions of the current displacement (see the
+/// module doc).
+pub(super) fn now(
+    scene: &Scene,
+    disc: &mut Discretization,
+    tools: &[Tool],
+    st: &mut State,
+    ws: &mut Workspace,
+) -> Result<()> {
+    let axi = scene.model.kinematics == Kinematics::Axisymmetric;
+    let np = disc.ref_pos.len();
+    let npts = disc.weights.len();
+    let positions = fields::positions(disc, &st.d);
+    let motions: Vec<PointMotion> = (0..npts)
+        .map(|p| point_motion(disc, &st.d, p, axi))
+        .collect();
+    // Particle averages of F and det F over the points that see them.
+    let mut sum = vec![[0.0; 6]; np];
+    for (p, m) in motions.iter().enumerate() {
+        let det = m.f[0] * m.f[3] - m.f[1] * m.f[2];
+        for (i, [n, _, _]) in disc.scatter.point_row(p) {
+            let w = (n * disc.weights[p]).abs();
+            let s = &mut sum[i];
+            for (sk, fk) in s.iter_mut().zip(m.f) {
+                *sk += w * fk;
+            }
+            s[4] += w * det;
+            s[5] += w;
+        }
     }
+    let (old_cells, old_volumes, old_jacobian) = current_reference(disc, st);
+    let mut cells = Vec::with_capacity(np);
+    let mut volumes = Vec::with_capacity(np);
+    for (i, s) in sum.iter().enumerate() {
+        let (f, det) = match s[5] > 0.0 {
+            true => ([s[0], s[1], s[2], s[3]].map(|x| x / s[5]), s[4] / s[5]),
+            false => ([1.0, 0.0, 0.0, 1.0], 1.0),
+        };
+        let g = old_cells[i];
+        cells.push([
+            f[0] * g[0] + f[1] * g[2],
+            f[0] * g[1] + f[1] * g[3],
+            f[2] * g[0] + f[3] * g[2],
+            f[2] * g[1] + f[3] * g[3],
+        ]);
+        volumes.push(old_volumes[i] * det);
+    }
+    let points: Vec<[Real; 2]> = motions
+        .iter()
+        .enumerate()
+        .map(|(p, m)| {
+            let x = disc.points.positions[p];
+            [x[0] + m.u[0], x[1] + m.u[1]]
+        })
+        .collect();
+    let point_jacobian: Vec<Real> = motions
+        .iter()
+        .zip(&old_jacobian)
+        .map(|(m, j)| j * (m.f[0] * m.f[3] - m.f[1] * m.f[2]) * m.f33)
+        .collect();
+    // The history pushed forward: C_p'^{-1} = b_e = F C_p^{-1} F^T (F_33^2 out of plane).
+    for (state, m) in st.points.iter_mut().zip(&motions) {
+        state.cp_inv = elastic_left_cauchy_green(m.f, m.f33, state.cp_inv);
+    }
+    // Physical velocities before the new shape functions replace the old.
+    let v_now: Vec<[Real; 2]> = (0..np).map(|j| disc.nodal.interpolate(j, &st.v)).collect();
+    let v_before: Vec<[Real; 2]> = (0..np)
+        .map(|j| disc.nodal.interpolate(j, &ws.v_prev))
+        .collect();
+    let kinetic_before = kinetic_energy(&disc.mass, &st.v);
+    // The temperature field at the particles, `sum_I N_I(X_J) T_I`, before the shape
+    // functions change (a scene whose heat moves).
+    let temperature_now: Option<Vec<[Real; 2]>> = match (&st.heat, &disc.thermal) {
+        (Some(h), Some(th)) if !h.particle_c.is_empty() => Some(
+            (0..np)
+                .map(|j| {
+                    let row = disc.nodal.row(j);
+                    let t =
+                        th.capacity.interpolate(row.map(|e| {
+                            (disc.nodal.n[e], h.particle_c[disc.nodal.index[e] as usize])
+                        }));
+                    [t, 0.0]
+                })
+                .collect(),
+        ),
+        _ => None,
+    };
+    let previous = st.reference.as_ref();
+    let mut reference = Reference {
+        count: previous.map_or(0, |r| r.count) + 1,
+        time_s: st.time,
+        particles: positions,
+        volumes,
+        cells,
+        points,
+        point_jacobian,
+        fit_residual: 0.0,
+    };
+    install(scene, disc, tools, st, ws, &reference)?;
+    let (v, r1) = fit(&disc.nodal, &v_now);
+    let (v_prev, r2) = fit(&disc.nodal, &v_before);
+    reference.fit_residual = r1.max(r2);
+    if let (Some(t), Some(h)) = (temperature_now, st.heat.as_mut()) {
+        let (fitted, r3) = fit(&disc.nodal, &t);
+        h.particle_c = fitted.iter().map(|t| t[0]).collect();
+        reference.fit_residual = reference.fit_residual.max(r3);
+    }
+    st.v = v;
+    ws.v_prev = v_prev;
+    if let Some(c) = &disc.constraints {
+        c.project(&mut st.v, &disc.mass);
+        c.project(&mut ws.v_prev, &disc.mass);
+    }
+    st.d = vec![[0.0; 2]; np];
+    let kinetic_after = kinetic_energy(&disc.mass, &st.v);
+    st.energy.remap += kinetic_after - kinetic_before;
+    st.energy.kinetic += kinetic_after - kinetic_before;
+    st.reference = Some(reference);
+    st.stable_dt = disc.critical_dt0;
+    st.max_stretch = 1.0;
+    Ok(())
+}
+
+/// The particles' cells and kernel volumes and the points' Jacobians of the current
+/// reference (the lattice's before the first re-reference).
+fn current_reference(disc: &Discretization, st: &State) -> (Vec<[Real; 4]>, Vec<Real>, Vec<Real>) {
+    match &st.reference {
+        Some(r) => (r.cells.clone(), r.volumes.clone(), r.point_jacobian.clone()),
+        None => {
+            let [hx, hy] = disc.spacing;
+            (
+                vec![[hx, 0.0, 0.0, hy]; disc.ref_pos.len()],
+                disc.lattice_volumes.clone(),
+                vec![1.0; disc.weights.len()],
+            )
+        }
+    }
+}
+
+/// `F`, `F_33` and the displacement at point `p` from the coefficients `d` (m).
+fn point_motion(disc: &Discretization, d: &[[Real; 2]], p: usize, axi: bool) -> PointMotion {
+    let (mut f, mut u) = ([1.0, 0.0, 0.0, 1.0], [0.0; 2]);
+    for (i, [n, nx, ny]) in disc.scatter.point_row(p) {
+        let d = d[i];
+        f[0] += d[0] * nx;
+        f[1] += d[0] * ny;
+        f[2] += d[1] * nx;
+        f[3] += d[1] * ny;
+        u[0] += d[0] * n;
+        u[1] += d[1] * n;
+    }
+    let f33 = match axi {
+        true => 1.0 + u[0] * disc.inv_radius[p],
+        false => 1.0,
+    };
+    PointMotion { f, f33, u }
+}
+
+/// Builds the shape functions, the scatter, the essential conditions, the contact stage
+/// and the critical step on `reference`, and conduction's eigenvalue; the rest of the
+/// state is left to the caller.
+pub(super) fn install(
+    scene: &Scene,
+    disc: &mut Discretization,
+    tools: &[Tool],
+    st: &mut State,
+    ws: &mut Workspace,
+    reference: &Reference,
+) -> Result<()> {
+    let axi = scene.model.kinematics == Kinematics::Axisymmetric;
+    let s = scene.discretization.support;
+    let supports = reference
+        .cells
+        .iter()
+        .map(|g| [s[0] * g[0].hypot(g[1]), s[1] * g[2].hypot(g[3])])
+        .collect();
+    let cloud = KernelCloud::with_supports(
+        reference.particles.clone(),
+        reference.volumes.clone(),
+        supports,
+    );
+    let count = reference.count;
+    let pt = cloud.shape_table(&reference.points, &|p| {
+        format!("integration point {p} at re-reference {count}")
+    })?;
+    let mut nodal = cloud.shape_table(&reference.particles, &|j| {
+        format!("particle {j} at re-reference {count}")
+    })?;
+    nodal.drop_gradients();
+    let np = reference.particles.len();
+    disc.scatter = Scatter::new(&pt, np, disc.scatter.chunk, MAX_GROUP);
+    ws.buf = disc.scatter.buffers();
+    if let Some(c) = &disc.constraints {
+        disc.constraints = Constraints::new(c.rows.clone(), &nodal, &disc.mass)?;
+    }
+    disc.outline = Outline::on_cloud(&cloud, &reference.particles, &disc.boundary)?;
+    ws.contact = contact_stage::build(
+        scene,
+        &disc.boundary,
+        &nodal,
+        &reference.particles,
+        &reference.points,
+        tools,
+    );
+    disc.nodal = nodal;
+    disc.ref_pos.clone_from(&reference.particles);
+    disc.points.positions.clone_from(&reference.points);
+    if axi {
+        disc.inv_radius = reference.points.iter().map(|x| 1.0 / x[0]).collect();
+    }
+    disc.reference_jacobian
+        .clone_from(&reference.point_jacobian);
+    // The critical step of the new shape functions, measured with unstressed points as at
+    // the start (the stressed ones would answer with their stress, not stiffness).
+    let (points, out) = (st.points.clone(), ws.out.clone());
+    st.points = vec![PointState::default(); points.len()];
+    let measured = measure_critical_step(scene, disc, st, ws);
+    st.points = points;
+    ws.out = out;
+    disc.critical_dt0 = measured?;
+    // Conduction's largest eigenvalue on the new shape functions.
+    conduction::update_eigenvalue(disc, st.step, st.time)
 }
 
 /// The coefficients `c` with `sum_I N_I(X_J) c_I = target_J` at every particle: the

@@ -3,19 +3,23 @@
 //! row-sum lumped masses, the boundary ring, the essential conditions, the tools and the
 //! contact stage, the critical step and, if the scene asks, mass scaling.
 
-use super::energy::{kinetic_energy, Energy};
+use super::conduction::update_eigenvalue;
+use super::contact_stage;
+use super::discretization::{Discretization, Thermal, Transfer};
+use super::energy::Energy;
 use super::heat::Heat;
 use super::layout::{Scatter, MAX_GROUP};
-use super::mass_scaling::{stiffness_bounds, Plan};
-use super::nodal_stabilization::NodalStabilization;
+use super::mass_scaling::{self, stiffness_bounds, Plan};
+use super::nodal_stabilization::{Forces, Tables};
 use super::outline::Outline;
+use super::simulation::{Simulation, StageTimes};
+use super::stable_step::measure_critical_step;
 use super::state::State;
-use super::stress::PointOut;
-use super::{Simulation, StageTimes};
+use super::stress::{self, PointOut};
+use super::update::{self, initial_motion};
+use super::workspace::Workspace;
 use crate::constraints::Constraints;
-use crate::contact::self_contact::SelfContact;
 use crate::contact::symmetry;
-use crate::contact::Contact;
 use crate::error::{Error, Result};
 use crate::integration::{point_shapes, quadrant_shapes, PointSet};
 use crate::material::{HenckyJ2, PointState};
@@ -71,7 +75,7 @@ impl Simulation {
                 let (weights, _) = point_weights(&quadrants, scene);
                 let m = &scene.material;
                 let mu = m.youngs_modulus_pa / (2.0 * (1.0 + m.poisson_ratio));
-                Some(NodalStabilization::new(c, mu, &table, &weights, np))
+                Some(Tables::new(c, mu, &table, &weights, np))
             }
             _ => None,
         };
@@ -109,7 +113,7 @@ impl Simulation {
             0.0,
             scene.thermal.as_ref().map(|t| t.initial_temperature_c),
         );
-        let contact = contact_stage(
+        let contact = contact_stage::build(
             scene,
             &boundary,
             &nodal,
@@ -129,7 +133,16 @@ impl Simulation {
             false => vec![false; pairs],
         };
         let stick = vec![None; pairs];
-        let mut sim = Simulation {
+        let thermal = scene.thermal.as_ref().map(|spec| Thermal {
+            spec: spec.clone(),
+            capacity: spec.heat_capacity(),
+            density: rho,
+            transfer: scene.transfers_heat().then(|| Transfer {
+                adiabatic_edge: adiabatic_edges(scene),
+                lambda0: 0.0,
+            }),
+        });
+        let mut disc = Discretization {
             material,
             nx,
             ny,
@@ -138,103 +151,102 @@ impl Simulation {
             mass,
             weights,
             inv_radius,
-            scatter,
-            stabilization,
-            contact,
-            boundary,
-            outline,
-            constraints,
-            st: State {
-                step: 0,
-                time: 0.0,
-                dt_prev: 0.0,
-                d: vec![[0.0; 2]; np],
-                v: v.clone(),
-                points: vec![PointState::default(); npts],
-                tools: tools.iter().map(|t| t.state).collect(),
-                energy: Energy {
-                    initial,
-                    kinetic: initial,
-                    ..Default::default()
-                },
-                max_penetration: 0.0,
-                stable_dt,
-                anchor_time: 0.0,
-                anchor_step: 0,
-                kinetic_to_internal_max: 0.0,
-                first_contact_s: None,
-                held,
-                plane_held,
-                self_touching,
-                max_beyond_plane: 0.0,
-                max_inside_itself: 0.0,
-                max_crossings: 0,
-                laps: Vec::new(),
-                stick,
-                fill: vec![None; scene.tools.iter().map(|t| t.fill_points.len()).sum()],
-                reference: None,
-                max_stretch: 0.0,
-                pressure: vec![
-                    0.0;
-                    scene.tools.len() * scene.output.pressure_stations.unwrap_or(0)
-                ],
-                heat: scene.thermal.as_ref().map(|t| {
-                    let particles = if scene.transfers_heat() { np } else { 0 };
-                    let (friction, pressure) = (
-                        scene.heats_by_friction(),
-                        scene.transfers_heat_by_pressure(),
-                    );
-                    // E(T) / E at the initial temperature, unstrained.
-                    let thermoelastic = t
-                        .thermoelastic()
-                        .map(|te| [te.modulus_factor_at(t.initial_temperature_c), 0.0, 0.0, 0.0]);
-                    Heat::initial(
-                        t,
-                        npts,
-                        scene.tools.len(),
-                        particles,
-                        friction,
-                        pressure,
-                        thermoelastic,
-                    )
-                }),
-            },
-            tools,
-            planes,
-            out: vec![out; npts],
-            f_int: vec![[0.0; 2]; np],
-            v_prev: v,
-            critical_dt0: stable_dt,
-            mass_scaling: None,
-            simd: true,
-            team: Team::default(),
             ref_pos,
             original: lattice.cloud().positions.clone(),
             lattice_volumes: lattice.cloud().volumes.clone(),
             reference_jacobian: vec![1.0; npts],
             points,
+            scatter,
+            stabilization,
             nodal,
-            transfers_heat: scene.transfers_heat(),
-            adiabatic_edge: adiabatic_edges(scene),
-            conduction_lambda0: 0.0,
-            heat_capacity: scene.thermal.as_ref().map(|t| t.heat_capacity()),
-            scene: scene.clone(),
-            times: StageTimes {
-                setup: t0.elapsed(),
+            boundary,
+            outline,
+            constraints,
+            planes,
+            critical_dt0: stable_dt,
+            mass_scaling: None,
+            thermal,
+        };
+        let mut ws = Workspace {
+            out: vec![out; npts],
+            buf: disc.scatter.buffers(),
+            f_int: vec![[0.0; 2]; np],
+            v_prev: v.clone(),
+            stabilization: disc.stabilization.as_ref().map(|t| Forces::new(t, np)),
+            contact,
+            team: Team::default(),
+            simd: true,
+        };
+        let mut st = State {
+            step: 0,
+            time: 0.0,
+            dt_prev: 0.0,
+            d: vec![[0.0; 2]; np],
+            v: v.clone(),
+            points: vec![PointState::default(); npts],
+            tools: tools.iter().map(|t| t.state).collect(),
+            energy: Energy {
+                initial,
+                kinetic: initial,
                 ..Default::default()
             },
+            max_penetration: 0.0,
+            stable_dt,
+            anchor_time: 0.0,
+            anchor_step: 0,
+            kinetic_to_internal_max: 0.0,
+            first_contact_s: None,
+            held,
+            plane_held,
+            self_touching,
+            max_beyond_plane: 0.0,
+            max_inside_itself: 0.0,
+            max_crossings: 0,
+            laps: Vec::new(),
+            stick,
+            fill: vec![None; scene.tools.iter().map(|t| t.fill_points.len()).sum()],
+            reference: None,
+            max_stretch: 0.0,
+            pressure: vec![0.0; scene.tools.len() * scene.output.pressure_stations.unwrap_or(0)],
+            heat: scene.thermal.as_ref().map(|t| {
+                let particles = if scene.transfers_heat() { np } else { 0 };
+                let (friction, pressure) = (
+                    scene.heats_by_friction(),
+                    scene.transfers_heat_by_pressure(),
+                );
+                // E(T) / E at the initial temperature, unstrained.
+                let thermoelastic = t
+                    .thermoelastic()
+                    .map(|te| [te.modulus_factor_at(t.initial_temperature_c), 0.0, 0.0, 0.0]);
+                Heat::initial(
+                    t,
+                    npts,
+                    scene.tools.len(),
+                    particles,
+                    friction,
+                    pressure,
+                    thermoelastic,
+                )
+            }),
         };
-        sim.critical_dt0 = sim.measure_critical_step()?;
-        sim.conduction_lambda0 = sim.conduction_eigenvalue()?;
+        disc.critical_dt0 = measure_critical_step(scene, &disc, &mut st, &mut ws)?;
+        update_eigenvalue(&mut disc, 0, 0.0)?;
         if let Some(plan) = scaling {
-            sim.scale_masses(plan)?;
+            mass_scaling::scale(scene, &mut disc, &mut st, &mut ws, plan)?;
         }
-        sim.stress_stage()?;
-        sim.force_stage(None);
-        sim.times = StageTimes {
-            setup: t0.elapsed(),
-            shape_functions,
-            ..Default::default()
+        stress::run(scene, &disc, &mut st, &mut ws)?;
+        update::forces(&disc, &tools, &mut st, &mut ws, None);
+        let sim = Simulation {
+            scene: scene.clone(),
+            disc,
+            tools,
+            st,
+            ws,
+            times: StageTimes {
+                setup: t0.elapsed(),
+                shape_functions,
+                ..Default::default()
+            },
         };
         sim.check_fixed_step(h[0].min(h[1]) / wave_speed)?;
         Ok(sim)
@@ -304,36 +316,6 @@ fn lumped_masses(
     }
 }
 
-/// The contact stage of `scene` ([`Contact::new`]) for particles with the rows of `nodal`,
-/// the counter-clockwise `boundary` ring, reference positions `reference` and integration
-/// points at `points` (m), with `tools`: the flow stress where a friction law needs it, the
-/// self-contact unless the scene turns it off.
-pub(super) fn contact_stage(
-    scene: &Scene,
-    boundary: &[u32],
-    nodal: &ShapeTable,
-    reference: &[[Real; 2]],
-    points: &[[Real; 2]],
-    tools: &[Tool],
-) -> Contact {
-    let [nx, ny] = scene.workpiece.particles;
-    let size = scene.workpiece.size_m;
-    let h = [size[0] / (nx - 1) as Real, size[1] / (ny - 1) as Real];
-    let self_contact = SelfContact::new(&scene.self_contact, h, scene.discretization.support);
-    let flow_stress = tools.iter().any(|t| t.friction.needs_flow_stress())
-        || self_contact
-            .as_ref()
-            .is_some_and(|s| s.friction.needs_flow_stress());
-    Contact::new(
-        boundary,
-        nodal,
-        reference,
-        points,
-        flow_stress,
-        self_contact,
-    )
-}
-
 /// The boundary particles of an `nx x ny` lattice, counter-clockwise from the lower-left.
 fn boundary_ring(nx: usize, ny: usize) -> Vec<u32> {
     let id = |i: usize, j: usize| (j * nx + i) as u32;
@@ -380,20 +362,4 @@ fn adiabatic_edges(scene: &Scene) -> Vec<bool> {
         }
     }
     on
-}
-
-/// The initial coefficient velocities (m/s): the workpiece's initial velocity `v0` projected
-/// onto the essential conditions with the masses `mass` (kg), and their kinetic energy
-/// `sum m_I |v_I|^2 / 2` (J).
-pub(super) fn initial_motion(
-    v0: [Real; 2],
-    constraints: Option<&Constraints>,
-    mass: &[Real],
-) -> (Vec<[Real; 2]>, Real) {
-    let mut v = vec![v0; mass.len()];
-    if let Some(c) = constraints {
-        c.project(&mut v, mass);
-    }
-    let initial = kinetic_energy(mass, &v);
-    (v, initial)
 }

@@ -1,8 +1,14 @@
 //! The length of each step: the critical step of central differences measured once on the
-//! undeformed discretisation, and the equal steps that land on a requested instant.
+//! undeformed discretisation, the tools' speed limit, and the equal steps that land on a
+//! requested instant.
 
+use super::discretization::Discretization;
+use super::state::State;
+use super::workspace::Workspace;
+use super::{stress, update};
 use crate::error::{Error, Result};
 use crate::math::Real;
+use crate::scene::Scene;
 use crate::tools::Tool;
 
 /// Most Lanczos products for the critical step.
@@ -202,6 +208,99 @@ pub(super) fn tool_step_limit(
         limited = limited.min(short);
     }
     Ok(limited)
+}
+
+/// The step the next call to `step` takes when not limited (s): the scene's fixed
+/// `time.dt_s`, or `dt_safety` times the stable estimate.
+pub(super) fn next_dt(scene: &Scene, st: &State) -> Real {
+    scene
+        .time
+        .dt_s
+        .unwrap_or(scene.time.dt_safety * st.stable_dt)
+}
+
+/// The step's first check ([`tool_step_limit`] on the natural step): the longest step the
+/// tools' speeds allow (s), or an error naming the step, the time and the tool too fast
+/// for it, before anything changes.
+pub(super) fn tool_limit(scene: &Scene, tools: &[Tool], st: &State, h_min: Real) -> Result<Real> {
+    tool_step_limit(tools, st.time, next_dt(scene, st), h_min)
+        .map_err(|what| Error::Request(format!("step {} (t = {:.6e} s): {what}", st.step, st.time)))
+}
+
+/// The lengths of one step (s).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct StepLength {
+    /// The step taken, `dt_{n+1}`.
+    pub dt: Real,
+    /// The natural step it was shortened from to land on a requested time (`dt` itself
+    /// otherwise).
+    pub full: Real,
+    /// `(dt_n + dt_{n+1}) / 2`, the predictor's and corrector's step.
+    pub avg: Real,
+}
+
+/// Stage 2, the time step: the natural step ([`next_dt`]) within the tools' limit
+/// `tool_dt` (s), shortened to land on `max_dt` ([`landing_step`]); an error when it is not
+/// positive.
+pub(super) fn length(
+    scene: &Scene,
+    st: &State,
+    tool_dt: Real,
+    max_dt: Option<Real>,
+) -> Result<StepLength> {
+    let full = next_dt(scene, st).min(tool_dt);
+    let dt = landing_step(full, max_dt);
+    if dt.is_nan() || dt <= 0.0 {
+        return Err(Error::Request(format!(
+            "step length {dt} s is not positive"
+        )));
+    }
+    Ok(StepLength {
+        dt,
+        full,
+        avg: 0.5 * (dt + st.dt_prev),
+    })
+}
+
+/// The critical step on the undeformed discretisation ([`critical_step`]), with `K x` the
+/// internal force of a displacement of 1e-7 of the spacing; the state is left undeformed.
+/// With a modulus over temperature the points answer at their temperatures now: the step
+/// is scaled by `sqrt(f_now / f_max)`, `f_now` the largest modulus factor of the points'
+/// temperatures and `f_max` the table's largest, so that it holds when a die chills the
+/// body stiffer.
+pub(super) fn measure_critical_step(
+    scene: &Scene,
+    disc: &Discretization,
+    st: &mut State,
+    ws: &mut Workspace,
+) -> Result<Real> {
+    let stiffening = match (&disc.material.thermoelastic, &st.heat) {
+        (Some(te), Some(h)) if !te.modulus_factor.is_empty() => {
+            let now = h
+                .temperature_c
+                .iter()
+                .map(|&t| te.modulus_factor_at(t))
+                .fold(Real::NEG_INFINITY, Real::max);
+            (now / te.modulus_factor_max()).sqrt()
+        }
+        _ => 1.0,
+    };
+    let saved_points = st.points.clone();
+    // The stress stage also heats the points and books the energy: neither is the run's.
+    let (saved_heat, saved_energy) = (st.heat.clone(), st.energy);
+    let amplitude = 1e-7 * disc.h_min();
+    let inv_sqrt_m: Vec<Real> = disc.mass.iter().map(|m| 1.0 / m.sqrt()).collect();
+    let dt = critical_step(&inv_sqrt_m, amplitude, |d| {
+        st.d = d;
+        stress::run(scene, disc, st, ws)?;
+        update::forces(disc, &[], st, ws, None);
+        Ok(ws.f_int.clone())
+    });
+    st.d = vec![[0.0; 2]; disc.ref_pos.len()];
+    st.points = saved_points;
+    st.heat = saved_heat;
+    st.energy = saved_energy;
+    dt.map(|dt| dt * stiffening)
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use crate::contact::Stick;
 use crate::laps::Lap;
 use crate::material::PointState;
 use crate::math::Real;
-use crate::tools::ToolState;
+use crate::tools::{Tool, ToolState};
 use serde::{Deserialize, Serialize};
 
 /// Everything that changes during a run: saving and restoring it continues bit for bit.
@@ -94,6 +94,44 @@ pub struct State {
     /// Temperatures and plastic work of the points in a scene with `[thermal]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub heat: Option<Heat>,
+}
+
+impl State {
+    /// Whether `other` has the lengths of this state's arrays: saved from a simulation of
+    /// the same discretisation, tools and outputs.
+    pub(super) fn same_shape(&self, other: &State) -> bool {
+        self.d.len() == other.d.len()
+            && self.v.len() == other.v.len()
+            && self.points.len() == other.points.len()
+            && self.tools.len() == other.tools.len()
+            && self.held.len() == other.held.len()
+            && self.plane_held.len() == other.plane_held.len()
+            && self.self_touching.len() == other.self_touching.len()
+            && self.stick.len() == other.stick.len()
+            && self.fill.len() == other.fill.len()
+    }
+
+    /// The clock after a step of `dt` (s), with the `tools` saved as they ended it. A run of
+    /// the scene's fixed step `fixed` keeps the time as `t_anchor + k dt_s` (no round-off
+    /// piling up over millions of steps); any other step (a landing or a limited one)
+    /// adds up and anchors the time anew.
+    pub(super) fn advance_clock(&mut self, fixed: Option<Real>, dt: Real, tools: &[Tool]) {
+        self.step += 1;
+        match fixed {
+            Some(fixed) if dt == fixed => {
+                self.time = self.anchor_time + (self.step - self.anchor_step) as Real * fixed;
+            }
+            _ => {
+                self.time += dt;
+                self.anchor_time = self.time;
+                self.anchor_step = self.step;
+            }
+        }
+        self.dt_prev = dt;
+        for (t, s) in tools.iter().zip(self.tools.iter_mut()) {
+            *s = t.state;
+        }
+    }
 }
 
 /// The moment the material first reached a tool's fill point.

@@ -11,11 +11,17 @@
 //! per batch in SIMD lanes; the AVX2+FMA build ([`avx2`]) is chosen at run time and gives
 //! the generic build's bits. Chunks of points run on the team in parallel.
 
+use super::discretization::Discretization;
 use super::heat::Heating;
 use super::layout::{Scatter, MAX_GROUP};
+use super::nodal_stabilization;
+use super::state::State;
+use super::workspace::Workspace;
+use crate::error::{Error, Result};
 use crate::lanes::{Lanes, LANES};
 use crate::material::{HenckyJ2, PointLanes, PointState};
 use crate::math::Real;
+use crate::scene::{Kinematics, Scene};
 use crate::team::{part, Parts, Team};
 
 #[cfg(target_arch = "x86_64")]
@@ -540,23 +546,98 @@ pub(super) struct Sums {
     pub max_stretch: Real,
 }
 
+/// Stage 1 of the step: the stress stage ([`stage`]) on the points of `disc` with the
+/// coefficients of `st`, and with scni and `discretization.scni_stabilization` the
+/// stabilization's force (`nodal_stabilization.rs`); a point whose update fails stops the
+/// run with a diagnosis naming it. Sets the stable step estimate `dt_crit0 h_min / h_min0`
+/// from the smallest deformed altitude and books the thermoelastic energy. Returns the
+/// elastic (the stabilization's included) and plastic energy (J).
+pub(super) fn run(
+    scene: &Scene,
+    disc: &Discretization,
+    st: &mut State,
+    ws: &mut Workspace,
+) -> Result<(Real, Real)> {
+    let heating = disc.thermal.as_ref().map(|th| {
+        let mut h = Heating::new(&th.spec, &th.capacity, th.density, st.dt_prev);
+        if let Some(heat) = &st.heat {
+            h.ramp = if heat.step_s > 0.0 {
+                (1.0 - heat.since_s / heat.step_s).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+        }
+        h
+    });
+    let avx2 = ws.simd && has_avx2();
+    let input = Inputs {
+        d: &st.d,
+        material: &disc.material,
+        weights: &disc.weights,
+        inv_radius: &disc.inv_radius,
+        reference_jacobian: &disc.reference_jacobian,
+        track_stretch: scene.discretization.rereference_stretch.is_some(),
+        axi: scene.model.kinematics == Kinematics::Axisymmetric,
+        spacing: disc.spacing,
+        avx2,
+        heating,
+    };
+    let heat = st.heat.as_mut().map(|h| {
+        (
+            &mut h.temperature_c[..],
+            &mut h.plastic_work[..],
+            &mut h.plastic_rate[..],
+            (!h.elastic_state.is_empty())
+                .then_some((&mut h.elastic_state[..], &h.stage_change_k[..])),
+        )
+    });
+    let sums = stage(
+        &ws.team,
+        &disc.scatter,
+        &mut ws.buf,
+        &input,
+        &mut st.points,
+        &mut ws.out,
+        heat,
+    )
+    .map_err(|(p, m)| Error::Diverged {
+        step: st.step,
+        time: st.time,
+        what: format!(
+            "integration point {p} (reference position {:?} m): {m}",
+            disc.points.positions[p]
+        ),
+    })?;
+    st.stable_dt = disc.critical_dt0 * sums.min_altitude / disc.h_min();
+    if scene.discretization.rereference_stretch.is_some() {
+        st.max_stretch = sums.max_stretch;
+    }
+    st.energy.thermoelastic += sums.thermoelastic;
+    st.energy.thermoelastic_abs += sums.thermoelastic.abs();
+    let stabilization = match (&disc.stabilization, &mut ws.stabilization) {
+        (Some(t), Some(s)) => nodal_stabilization::stage(&ws.team, t, s, &st.d, avx2),
+        _ => 0.0,
+    };
+    Ok((sums.elastic + stabilization, sums.plastic))
+}
+
 /// Runs the stress stage over all points on `team`: updates each point's history in
 /// `states` and its outputs in `outs`, and in a thermal scene the points' temperatures and
-/// plastic work in `heat`; fills the chunk buffers of `scatter`. A point whose update fails
+/// plastic work in `heat`; fills the chunk buffers `buf` of `scatter`. A point whose update fails
 /// stops the stage: `Err((point, message))`, the first in point order.
 pub(super) fn stage(
     team: &Team,
-    scatter: &mut Scatter,
+    scatter: &Scatter,
+    buf: &mut [[Real; 2]],
     input: &Inputs<'_>,
     states: &mut [PointState],
     outs: &mut [PointOut],
     heat: Option<HeatSlices<'_>>,
-) -> Result<Sums, (usize, String)> {
+) -> std::result::Result<Sums, (usize, String)> {
     let Scatter {
         chunk,
         lo,
         offsets,
-        buf,
         group,
         lists,
         list_range,
@@ -584,7 +665,7 @@ pub(super) fn stage(
         heating: input.heating,
     };
     let avx2 = input.avx2;
-    let (chunk, lo, offsets) = (*chunk, &*lo, &*offsets);
+    let chunk = *chunk;
     let points = states.len();
     let mut sums = vec![ChunkSums::default(); lo.len()];
     let (states, outs, bufs, slots) = (

@@ -1,7 +1,8 @@
 //! Tests of the solver's internals: grouped and SIMD stress stages, shared blocks and
 //! contact skipping against their plain counterparts, bit for bit.
 
-use super::{Scatter, Simulation};
+use super::layout::Scatter;
+use super::Simulation;
 use crate::integration::point_shapes;
 use crate::rk_shape::{Lattice, ShapeTable};
 use crate::{IntegrationRule, Scene};
@@ -41,7 +42,7 @@ fn grouped_points_give_the_bits_of_single_points() {
     for rule in RULES {
         let scene = taylor(rule, [11, 26]);
         let mut grouped = Simulation::new(&scene).unwrap();
-        let sc = &grouped.scatter;
+        let sc = &grouped.disc.scatter;
         let in_quads = sc.group.iter().filter(|&&g| g == 4).count() * 4;
         assert!(
             in_quads * 10 >= sc.group.len() * 9,
@@ -61,7 +62,12 @@ fn grouped_points_give_the_bits_of_single_points() {
             "{rule:?}: unions {longest_union:?}, own lists {longest_own:?}"
         );
         let mut single = grouped.clone();
-        single.scatter = Scatter::new(&pt, single.ref_pos.len(), grouped.scatter.chunk, 1);
+        single.disc.scatter = Scatter::new(
+            &pt,
+            single.disc.ref_pos.len(),
+            grouped.disc.scatter.chunk,
+            1,
+        );
         for _ in 0..200 {
             grouped.step(None).unwrap();
             single.step(None).unwrap();
@@ -85,7 +91,7 @@ fn interior_groups_share_their_stored_tables() {
     for rule in RULES {
         let scene = taylor(rule, [81, 201]);
         let sim = Simulation::new(&scene).unwrap();
-        let sc = &sim.scatter;
+        let sc = &sim.disc.scatter;
         let unshared: usize = (0..sc.group.len())
             .filter(|&p| sc.group[p] > 0)
             .map(|p| {
@@ -139,7 +145,7 @@ fn simd_and_generic_stress_stages_give_the_same_bits() {
         let scene = taylor(rule, [11, 26]);
         let mut simd = Simulation::new(&scene).unwrap();
         let mut generic = simd.clone();
-        generic.simd = false;
+        generic.ws.simd = false;
         for _ in 0..300 {
             simd.step(None).unwrap();
             generic.step(None).unwrap();
@@ -170,7 +176,7 @@ fn contact_skipping_gives_the_bits_of_checking_every_particle() {
         scene.workpiece.particles = particles;
         let mut skipping = Simulation::new(&scene).unwrap();
         let mut all = skipping.clone();
-        all.contact.skip = false;
+        all.ws.contact.skip = false;
         let (mut skipped, mut evaluated) = (0, 0);
         for step in 0..steps {
             if step == steps / 3 || step == 2 * steps / 3 {
@@ -191,13 +197,14 @@ fn contact_skipping_gives_the_bits_of_checking_every_particle() {
             skipping.step(None).unwrap();
             all.step(None).unwrap();
             let positive = skipping
+                .ws
                 .contact
                 .clearance
                 .iter()
                 .filter(|&&c| c > 0.0)
                 .count();
             skipped += positive;
-            evaluated += skipping.boundary.len() - positive;
+            evaluated += skipping.disc.boundary.len() - positive;
         }
         assert_eq!(skipping.state(), all.state(), "{name}");
         assert!(

@@ -10,9 +10,18 @@
 //! Particles are cut into fixed blocks of [`BLOCK`], summed in block order, so the bits do
 //! not depend on the number of threads.
 
+use super::discretization::Discretization;
+use super::energy::kinetic_energy;
 use super::layout::{Scatter, BLOCK};
+use super::stable_step::StepLength;
+use super::state::State;
+use super::workspace::Workspace;
+use crate::constraints::Constraints;
+use crate::contact::Slip;
+use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::team::{part, particle_phase, Parts, Team};
+use crate::tools::Tool;
 
 /// Largest velocity component `max_I max(|v_I,x|, |v_I,y|)` (m/s) of `vs`, infinite if
 /// one is not finite (then the sum of the magnitudes is not finite either). Written with
@@ -56,13 +65,14 @@ pub(super) struct Predictor<'a> {
 }
 
 /// Internal force gather over fixed blocks of particles on `team`, fused with the
-/// predictor: `f_I` (N) sums the chunk buffers covering `I` in chunk order (per block, the
+/// predictor: `f_I` (N) sums the chunk buffers `buf` of `sc` covering `I` in chunk order (per block, the
 /// overlapping slice of each chunk in turn), then `extra_I` when given (the stabilization
 /// of nodal integration). With a [`Predictor`], returns the largest component of `v*` (m/s;
 /// 0 when not tracked).
 pub(super) fn gather_forces(
     team: &Team,
     sc: &Scatter,
+    buf: &[[Real; 2]],
     extra: Option<&[[Real; 2]]>,
     f_int: &mut [[Real; 2]],
     predict: Option<Predictor<'_>>,
@@ -93,7 +103,7 @@ pub(super) fn gather_forces(
             let lo = sc.lo[c] as usize;
             let hi = lo + sc.offsets[c + 1] - sc.offsets[c];
             let (a, e) = (range.start.max(lo), range.end.min(hi));
-            let src = &sc.buf[sc.offsets[c] + a - lo..sc.offsets[c] + e - lo];
+            let src = &buf[sc.offsets[c] + a - lo..sc.offsets[c] + e - lo];
             for (f, v) in fs[a - range.start..e - range.start].iter_mut().zip(src) {
                 f[0] += v[0];
                 f[1] += v[1];
@@ -130,7 +140,7 @@ pub(super) fn gather_forces(
 
 /// Corrector: `v += dt_avg f_c / m` (m/s) with the contact forces `f_con` (N) and the inverse
 /// masses `inv_mass` (1/kg).
-pub(super) fn correct(v: &mut [[Real; 2]], f_con: &[[Real; 2]], inv_mass: &[Real], dt_avg: Real) {
+fn correct_velocities(v: &mut [[Real; 2]], f_con: &[[Real; 2]], inv_mass: &[Real], dt_avg: Real) {
     for ((v, f), im) in v.iter_mut().zip(f_con).zip(inv_mass) {
         let a = dt_avg * im;
         v[0] += a * f[0];
@@ -139,7 +149,7 @@ pub(super) fn correct(v: &mut [[Real; 2]], f_con: &[[Real; 2]], inv_mass: &[Real
 }
 
 /// What the update reads: the velocities of the step and the forces that acted.
-pub(super) struct Motion<'a> {
+struct Motion<'a> {
     /// `v_{n+1/2}` (m/s).
     pub v: &'a [[Real; 2]],
     /// `v_{n-1/2}` (m/s).
@@ -152,8 +162,8 @@ pub(super) struct Motion<'a> {
     pub f_con: &'a [[Real; 2]],
 }
 
-/// The step's sums from [`update`].
-pub(super) struct Update {
+/// The step's sums from [`update`] (and [`advance`]).
+pub(super) struct Sums {
     /// Kinetic energy `sum m |v_{n+1/2}|^2 / 2` (J).
     pub kinetic: Real,
     /// Contact work `sum dt_avg f_c . (v_{n+1/2} + v_{n-1/2}) / 2` (J).
@@ -169,7 +179,7 @@ pub(super) struct Update {
 /// interleaved running sums, added pairwise) and the blocks in order. The contact work is
 /// the exact discrete identity of the corrector, summed when `contact` forces act; the
 /// largest speed is found when `track` is set.
-pub(super) fn update(
+fn update(
     team: &Team,
     d: &mut [[Real; 2]],
     m: &Motion<'_>,
@@ -177,7 +187,7 @@ pub(super) fn update(
     dt_avg: Real,
     contact: bool,
     track: bool,
-) -> Update {
+) -> Sums {
     let np = m.v.len();
     let blocks = np.div_ceil(BLOCK);
     let mut sums = vec![[0.0; 4]; blocks];
@@ -225,10 +235,136 @@ pub(super) fn update(
     let [kinetic, contact_work, half_step, largest_speed] = sums.iter().fold([0.0; 4], |a, s| {
         [a[0] + s[0], a[1] + s[1], a[2] + s[2], a[3].max(s[3])]
     });
-    Update {
+    Sums {
         kinetic,
         contact_work,
         half_step,
         largest_speed,
     }
+}
+
+/// Whether the contact stage has anything to do: `tools`, symmetry planes or the surface
+/// against itself (the predictor and the update then bound how far the particles move, for
+/// its skips).
+fn contacts_anything(disc: &Discretization, tools: &[Tool], ws: &Workspace) -> bool {
+    !tools.is_empty() || !disc.planes.is_empty() || ws.contact.self_contact().is_some()
+}
+
+/// Stage 3: the internal force gather ([`gather_forces`] of the stress stage's buffers and
+/// the stabilization's force) into `ws.f_int` (N); with `predict`, fused with the
+/// predictor on `st.v`, recording the move bound `dt V*` (m) for the contact stage.
+pub(super) fn forces(
+    disc: &Discretization,
+    tools: &[Tool],
+    st: &mut State,
+    ws: &mut Workspace,
+    predict: Option<StepLength>,
+) {
+    let track = contacts_anything(disc, tools, ws);
+    let predictor = predict.map(|step| Predictor {
+        dt_avg: step.avg,
+        v: &mut st.v,
+        v_prev: &mut ws.v_prev,
+        inv_mass: &disc.inv_mass,
+        track,
+    });
+    let extra = ws.stabilization.as_ref().map(|s| &s.force[..]);
+    let speed = gather_forces(
+        &ws.team,
+        &disc.scatter,
+        &ws.buf,
+        extra,
+        &mut ws.f_int,
+        predictor,
+    );
+    if let Some(step) = predict {
+        ws.contact.predicted_move(step.full * speed);
+    }
+}
+
+/// Stage 5: the corrector with the contact forces when `contact` forces act, the projection
+/// onto the essential conditions, and the friction the corrector did not realise carried
+/// to the next step ([`crate::contact::Contact::carry`]; with friction heating, its work
+/// booked at the particles), all with the step's `dt_avg` (s).
+pub(super) fn correct(
+    disc: &Discretization,
+    tools: &[Tool],
+    st: &mut State,
+    ws: &mut Workspace,
+    contact: bool,
+    dt_avg: Real,
+) {
+    if contact {
+        correct_velocities(&mut st.v, &ws.contact.force, &disc.inv_mass, dt_avg);
+    }
+    if let Some(c) = &disc.constraints {
+        c.project(&mut st.v, &disc.mass);
+    }
+    if contact {
+        let slip = match &mut st.heat {
+            Some(h) if !h.friction_work.is_empty() => Some(Slip {
+                tools,
+                work: &mut h.friction_work,
+            }),
+            _ => None,
+        };
+        ws.contact
+            .carry(&disc.nodal, &disc.mass, &st.v, &mut st.stick, dt_avg, slip);
+    }
+}
+
+/// Stage 6: the update of the coefficients over the step `step` ([`update`]), recording the
+/// move bound for the contact stage; a velocity that is not finite stops the run naming
+/// the particle.
+pub(super) fn advance(
+    disc: &Discretization,
+    tools: &[Tool],
+    st: &mut State,
+    ws: &mut Workspace,
+    contact: bool,
+    step: StepLength,
+) -> Result<Sums> {
+    let motion = Motion {
+        v: &st.v,
+        v_prev: &ws.v_prev,
+        mass: &disc.mass,
+        f_int: &ws.f_int,
+        f_con: &ws.contact.force,
+    };
+    let track = contacts_anything(disc, tools, ws);
+    let u = update(
+        &ws.team, &mut st.d, &motion, step.dt, step.avg, contact, track,
+    );
+    ws.contact.updated_move(step.dt * u.largest_speed);
+    if !u.kinetic.is_finite() {
+        let i =
+            st.v.iter()
+                .position(|v| !(v[0].is_finite() && v[1].is_finite()))
+                .unwrap_or(0);
+        return Err(Error::Diverged {
+            step: st.step,
+            time: st.time,
+            what: format!(
+                "velocity of particle {i} at {:?} m is not finite",
+                disc.original[i]
+            ),
+        });
+    }
+    Ok(u)
+}
+
+/// The initial coefficient velocities (m/s): the workpiece's initial velocity `v0` projected
+/// onto the essential conditions with the masses `mass` (kg), and their kinetic energy
+/// `sum m_I |v_I|^2 / 2` (J).
+pub(super) fn initial_motion(
+    v0: [Real; 2],
+    constraints: Option<&Constraints>,
+    mass: &[Real],
+) -> (Vec<[Real; 2]>, Real) {
+    let mut v = vec![v0; mass.len()];
+    if let Some(c) = constraints {
+        c.project(&mut v, mass);
+    }
+    let initial = kinetic_energy(mass, &v);
+    (v, initial)
 }
