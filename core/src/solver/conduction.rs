@@ -53,8 +53,8 @@
 
 use super::discretization::{Discretization, Thermal, Transfer};
 use super::heat::Heat;
+use super::point_outputs::PointOut;
 use super::state::State;
-use super::stress::PointOut;
 use crate::error::{Error, Result};
 use crate::material::{HeatCapacity, PointState};
 use crate::math::Real;

@@ -5,7 +5,6 @@
 //! stages read it; none writes it.
 
 use super::layout::Scatter;
-use super::mass_scaling::MassScalingReport;
 use super::nodal_stabilization::Tables;
 use super::outline::Outline;
 use crate::constraints::Constraints;
@@ -15,6 +14,7 @@ use crate::material::{HeatCapacity, HenckyJ2};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::ThermalSpec;
+use serde::{Deserialize, Serialize};
 
 /// The discretization of one scene.
 #[derive(Debug, Clone)]
@@ -99,6 +99,21 @@ pub(super) struct Transfer {
     pub lambda0: Real,
 }
 
+/// What mass scaling added, for the summary.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MassScalingReport {
+    /// Mass added relative to the workpiece's mass, `(sum m'_I - sum m_I) / sum m_I` (-).
+    pub added_mass_rel: Real,
+    /// Largest mass added to one particle relative to its own mass, `max (m'_I - m_I) / m_I`.
+    pub max_added_rel: Real,
+    /// Particles that got mass.
+    pub scaled_particles: usize,
+    /// Critical step of the undeformed discretisation without scaling (s).
+    pub critical_dt_unscaled_s: Real,
+    /// Critical step with the scaled masses (s).
+    pub critical_dt_s: Real,
+}
+
 impl Discretization {
     /// The smaller particle spacing (m).
     pub fn h_min(&self) -> Real {
@@ -110,6 +125,14 @@ impl Discretization {
     pub fn position(&self, d: &[[Real; 2]], j: usize) -> [Real; 2] {
         let u = self.nodal.interpolate(j, d);
         [self.ref_pos[j][0] + u[0], self.ref_pos[j][1] + u[1]]
+    }
+
+    /// The physical positions of every particle (m), for the displacement coefficients `d`
+    /// (m).
+    pub fn positions(&self, d: &[[Real; 2]]) -> Vec<[Real; 2]> {
+        (0..self.ref_pos.len())
+            .map(|j| self.position(d, j))
+            .collect()
     }
 
     /// The physical positions of the boundary ring's particles (m), in ring order.

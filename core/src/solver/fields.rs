@@ -2,7 +2,6 @@
 //! of the workpiece, tool penetration, particle fields smoothed from the integration points,
 //! and the points' own data.
 
-use super::discretization::Discretization;
 use super::simulation::Simulation;
 use crate::geometry::{bounds, enclosed_volume, Extents};
 use crate::math::Real;
@@ -28,18 +27,10 @@ pub struct Fields {
     pub lap: Vec<Real>,
 }
 
-/// Physical positions `X_J + sum_I N_I(X_J) d_I` of all particles of `disc` (m) for the
-/// displacement coefficients `d` (m).
-pub(super) fn positions(disc: &Discretization, d: &[[Real; 2]]) -> Vec<[Real; 2]> {
-    (0..disc.ref_pos.len())
-        .map(|j| disc.position(d, j))
-        .collect()
-}
-
 impl Simulation {
     /// Physical positions `X_J + sum_I N_I(X_J) d_I` of all particles (m).
     pub fn positions(&self) -> Vec<[Real; 2]> {
-        positions(&self.disc, &self.st.d)
+        self.disc.positions(&self.st.d)
     }
 
     /// Bounds of the deformed workpiece over all particles (m).

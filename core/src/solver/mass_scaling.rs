@@ -15,9 +15,9 @@
 //! paper eqs. 4-6, the constraint projection, momentum and the energy account) uses the
 //! scaled masses.
 
-use super::discretization::Discretization;
+use super::critical_step::measure_critical_step;
+use super::discretization::{Discretization, MassScalingReport};
 use super::energy::Energy;
-use super::stable_step::measure_critical_step;
 use super::state::State;
 use super::update::initial_motion;
 use super::workspace::Workspace;
@@ -26,7 +26,6 @@ use crate::error::Result;
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::Scene;
-use serde::{Deserialize, Serialize};
 
 /// Most rounds of calibrated selective scaling and measurement of the critical step.
 const MAX_ROUNDS: usize = 10;
@@ -35,21 +34,6 @@ const MAX_ROUNDS: usize = 10;
 /// lengthens its neighbours' steps, so the calibrated local estimate undershoots a little
 /// from round to round, and an exact aim approaches the target only slowly.
 const AIM: Real = 1.02;
-
-/// What mass scaling added, for the summary.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct MassScalingReport {
-    /// Mass added relative to the workpiece's mass, `(sum m'_I - sum m_I) / sum m_I` (-).
-    pub added_mass_rel: Real,
-    /// Largest mass added to one particle relative to its own mass, `max (m'_I - m_I) / m_I`.
-    pub max_added_rel: Real,
-    /// Particles that got mass.
-    pub scaled_particles: usize,
-    /// Critical step of the undeformed discretisation without scaling (s).
-    pub critical_dt_unscaled_s: Real,
-    /// Critical step with the scaled masses (s).
-    pub critical_dt_s: Real,
-}
 
 /// Upper bounds `k_I = M sum_p w_p g_I(p) sum_J g_J(p)` (N/m) of the stiffness row sums of
 /// each of `particles` particles from the point shape table `pt` (weights `w_p`, m^3; `1/R_p`,

@@ -37,15 +37,15 @@
 //! Without re-referencing (the default) nothing here runs and the bits are those of the
 //! Lagrangian kernel. SCNI is refused by the scene: its nodal domains are not rebuilt.
 
+use super::conduction;
 use super::contact_stage;
+use super::critical_step::measure_critical_step;
 use super::discretization::Discretization;
 use super::energy::kinetic_energy;
 use super::layout::{Scatter, MAX_GROUP};
 use super::outline::Outline;
-use super::stable_step::measure_critical_step;
 use super::state::{Reference, State};
 use super::workspace::Workspace;
-use super::{conduction, fields};
 use crate::constraints::Constraints;
 use crate::error::{Error, Result};
 use crate::material::simo1992_hencky_j2::elastic_left_cauchy_green;
@@ -98,7 +98,7 @@ pub(super) fn now(
     let axi = scene.model.kinematics == Kinematics::Axisymmetric;
     let np = disc.ref_pos.len();
     let npts = disc.weights.len();
-    let positions = fields::positions(disc, &st.d);
+    let positions = disc.positions(&st.d);
     let motions: Vec<PointMotion> = (0..npts)
         .map(|p| point_motion(disc, &st.d, p, axi))
         .collect();

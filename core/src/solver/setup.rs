@@ -5,6 +5,7 @@
 
 use super::conduction::update_eigenvalue;
 use super::contact_stage;
+use super::critical_step::measure_critical_step;
 use super::discretization::{Discretization, Thermal, Transfer};
 use super::energy::Energy;
 use super::heat::Heat;
@@ -12,10 +13,10 @@ use super::layout::{Scatter, MAX_GROUP};
 use super::mass_scaling::{self, stiffness_bounds, Plan};
 use super::nodal_stabilization::{Forces, Tables};
 use super::outline::Outline;
+use super::point_outputs::PointOut;
 use super::simulation::{Simulation, StageTimes};
-use super::stable_step::measure_critical_step;
 use super::state::State;
-use super::stress::{self, PointOut};
+use super::stress;
 use super::update::{self, initial_motion};
 use super::workspace::Workspace;
 use crate::constraints::Constraints;

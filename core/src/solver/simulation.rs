@@ -4,12 +4,11 @@
 //! ([`Simulation::run_toward`]).
 
 use super::contact_stage;
-use super::discretization::Discretization;
+use super::discretization::{Discretization, MassScalingReport};
 use super::energy::{Energy, StepEnergy};
-use super::mass_scaling::MassScalingReport;
+use super::point_outputs::PointOut;
 use super::quasi_static::{self, QUASI_STATIC_WARNING};
 use super::state::{Reference, State};
-use super::stress::PointOut;
 use super::workspace::Workspace;
 use super::{conduction, fill, penetration, rereference, stable_step, stress, update};
 use crate::contact::self_contact::neighbours;

@@ -1,151 +1,12 @@
-//! The length of each step: the critical step of central differences measured once on the
-//! undeformed discretisation, the tools' speed limit, and the equal steps that land on a
-//! requested instant.
+//! The length of each step (stage 2): the natural step from the critical step
+//! (`critical_step.rs`) and the stable estimate on the current deformation, the tools'
+//! speed limit, and the equal steps that land on a requested instant.
 
-use super::discretization::Discretization;
 use super::state::State;
-use super::workspace::Workspace;
-use super::{stress, update};
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::scene::Scene;
 use crate::tools::Tool;
-
-/// Most Lanczos products for the critical step.
-const LANCZOS_MAX: usize = 300;
-
-/// Critical step of central differences with lumped masses on the undeformed
-/// discretisation, `dt_crit = 2 / omega_max` (s), with `omega_max^2` the largest
-/// eigenvalue of `M^{-1} K`, found by Lanczos iteration on the symmetric
-/// `A = M^{-1/2} K M^{-1/2}` (Golub & Van Loan, Matrix Computations, sec. 10.1): the
-/// largest eigenvalue of the tridiagonal `T_k` converges to it from below in a few tens
-/// of products, where power iteration needs hundreds on large models. `K x` is the
-/// internal force (N) that `internal_force` returns for a displacement `x` (m) scaled to
-/// `amplitude` (m; small enough to stay linear elastic); `inv_sqrt_m` is `1 / sqrt(m_I)`
-/// (kg^-1/2). The estimate depends on the support, the integration rule and the mass
-/// lumping, which `h / c` ignores.
-pub(super) fn critical_step(
-    inv_sqrt_m: &[Real],
-    amplitude: Real,
-    mut internal_force: impl FnMut(Vec<[Real; 2]>) -> Result<Vec<[Real; 2]>>,
-) -> Result<Real> {
-    let np = inv_sqrt_m.len();
-    // Deterministic pseudo-random start (xorshift), so no mode is missed by symmetry.
-    let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut rnd = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
-    };
-    let mut v: Vec<[Real; 2]> = (0..np).map(|_| [rnd(), rnd()]).collect();
-    let norm = |x: &[[Real; 2]]| {
-        x.iter()
-            .map(|a| a[0] * a[0] + a[1] * a[1])
-            .sum::<Real>()
-            .sqrt()
-    };
-    let n0 = norm(&v);
-    v.iter_mut().for_each(|a| *a = [a[0] / n0, a[1] / n0]);
-    let mut v_prev = vec![[0.0; 2]; np];
-    let (mut alpha, mut beta) = (Vec::new(), Vec::new());
-    let mut lambda = 0.0;
-    for it in 0..LANCZOS_MAX {
-        // w = A v: K applied to the displacement M^{-1/2} v, scaled to `amplitude`.
-        let xmax = v
-            .iter()
-            .zip(inv_sqrt_m)
-            .map(|(a, s)| (a[0].abs().max(a[1].abs())) * s)
-            .fold(0.0, Real::max);
-        let scale = amplitude / xmax;
-        let f_int = internal_force(
-            v.iter()
-                .zip(inv_sqrt_m)
-                .map(|(a, s)| [a[0] * s * scale, a[1] * s * scale])
-                .collect(),
-        )?;
-        let b_prev = beta.last().copied().unwrap_or(0.0);
-        let mut w: Vec<[Real; 2]> = f_int
-            .iter()
-            .zip(inv_sqrt_m)
-            .zip(&v_prev)
-            .map(|((f, s), vp)| {
-                [
-                    f[0] * s / scale - b_prev * vp[0],
-                    f[1] * s / scale - b_prev * vp[1],
-                ]
-            })
-            .collect();
-        let a: Real = w
-            .iter()
-            .zip(&v)
-            .map(|(x, y)| x[0] * y[0] + x[1] * y[1])
-            .sum();
-        w.iter_mut().zip(&v).for_each(|(x, y)| {
-            x[0] -= a * y[0];
-            x[1] -= a * y[1];
-        });
-        alpha.push(a);
-        let next = tridiagonal_max_eigenvalue(&alpha, &beta);
-        let b = norm(&w);
-        let converged = it >= 10 && (next - lambda).abs() <= 1e-6 * next;
-        lambda = next;
-        if converged || b <= 1e-12 * next.abs() {
-            break;
-        }
-        beta.push(b);
-        w.iter_mut().for_each(|x| *x = [x[0] / b, x[1] / b]);
-        v_prev = std::mem::replace(&mut v, w);
-    }
-    if !(lambda > 0.0 && lambda.is_finite()) {
-        return Err(Error::ShapeFunctions(format!(
-            "the stiffness has no positive eigenvalue ({lambda:.3e})"
-        )));
-    }
-    Ok(2.0 / lambda.sqrt())
-}
-
-/// Largest eigenvalue of the symmetric tridiagonal matrix with diagonal `a` and
-/// off-diagonal `b` (`b.len() + 1 == a.len()`), by Sturm-sequence bisection between the
-/// Gershgorin bounds: the count of eigenvalues below `x` is the number of negative pivots
-/// of `T - x I` (Golub & Van Loan, sec. 8.4).
-fn tridiagonal_max_eigenvalue(a: &[Real], b: &[Real]) -> Real {
-    let radius =
-        |i: usize| (if i > 0 { b[i - 1].abs() } else { 0.0 }) + b.get(i).map_or(0.0, |x| x.abs());
-    let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
-    for (i, &ai) in a.iter().enumerate() {
-        lo = lo.min(ai - radius(i));
-        hi = hi.max(ai + radius(i));
-    }
-    let below = |x: Real| {
-        let mut count = 0;
-        let mut q = 1.0;
-        for (i, &ai) in a.iter().enumerate() {
-            let off = if i > 0 { b[i - 1] * b[i - 1] } else { 0.0 };
-            q = ai - x - if i > 0 { off / q } else { 0.0 };
-            if q == 0.0 {
-                q = -Real::EPSILON * (x.abs() + 1.0);
-            }
-            if q < 0.0 {
-                count += 1;
-            }
-        }
-        count
-    };
-    let n = a.len();
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            break;
-        }
-        if below(mid) < n {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    hi
-}
 
 /// Length of the next step: the full step `dt_full`, or, when `max_dt` (the time left to a
 /// requested instant) is not a whole number of full steps, that time split into equal steps,
@@ -262,66 +123,9 @@ pub(super) fn length(
     })
 }
 
-/// The critical step on the undeformed discretisation ([`critical_step`]), with `K x` the
-/// internal force of a displacement of 1e-7 of the spacing; the state is left undeformed.
-/// With a modulus over temperature the points answer at their temperatures now: the step
-/// is scaled by `sqrt(f_now / f_max)`, `f_now` the largest modulus factor of the points'
-/// temperatures and `f_max` the table's largest, so that it holds when a die chills the
-/// body stiffer.
-pub(super) fn measure_critical_step(
-    scene: &Scene,
-    disc: &Discretization,
-    st: &mut State,
-    ws: &mut Workspace,
-) -> Result<Real> {
-    let stiffening = match (&disc.material.thermoelastic, &st.heat) {
-        (Some(te), Some(h)) if !te.modulus_factor.is_empty() => {
-            let now = h
-                .temperature_c
-                .iter()
-                .map(|&t| te.modulus_factor_at(t))
-                .fold(Real::NEG_INFINITY, Real::max);
-            (now / te.modulus_factor_max()).sqrt()
-        }
-        _ => 1.0,
-    };
-    let saved_points = st.points.clone();
-    // The stress stage also heats the points and books the energy: neither is the run's.
-    let (saved_heat, saved_energy) = (st.heat.clone(), st.energy);
-    let amplitude = 1e-7 * disc.h_min();
-    let inv_sqrt_m: Vec<Real> = disc.mass.iter().map(|m| 1.0 / m.sqrt()).collect();
-    let dt = critical_step(&inv_sqrt_m, amplitude, |d| {
-        st.d = d;
-        stress::run(scene, disc, st, ws)?;
-        update::forces(disc, &[], st, ws, None);
-        Ok(ws.f_int.clone())
-    });
-    st.d = vec![[0.0; 2]; disc.ref_pos.len()];
-    st.points = saved_points;
-    st.heat = saved_heat;
-    st.energy = saved_energy;
-    dt.map(|dt| dt * stiffening)
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{landing_step, tridiagonal_max_eigenvalue};
-
-    #[test]
-    fn tridiagonal_largest_eigenvalue() {
-        // Second-difference matrix: eigenvalues 2 - 2 cos(k pi / (n + 1)).
-        for n in [1, 2, 5, 40] {
-            let a = vec![2.0; n];
-            let b = vec![-1.0; n - 1];
-            let exact = 2.0 - 2.0 * (n as f64 * std::f64::consts::PI / (n as f64 + 1.0)).cos();
-            let got = tridiagonal_max_eigenvalue(&a, &b);
-            assert!(
-                (got - exact).abs() <= 1e-12 * exact,
-                "n {n}: {got} vs {exact}"
-            );
-        }
-        assert_eq!(tridiagonal_max_eigenvalue(&[3.0, -1.0], &[0.0]), 3.0);
-    }
+    use super::landing_step;
 
     #[test]
     fn landing_steps_are_equal_and_never_overshoot() {

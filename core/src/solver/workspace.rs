@@ -3,7 +3,7 @@
 //! from the state).
 
 use super::nodal_stabilization::Forces;
-use super::stress::PointOut;
+use super::point_outputs::PointOut;
 use crate::contact::Contact;
 use crate::math::Real;
 use crate::team::Team;
