@@ -31,7 +31,9 @@ mod scene_validate;
 pub mod segment_bins;
 pub mod solver;
 pub mod team;
+pub mod thermal;
 pub mod tools;
+mod validation;
 
 pub use error::{Error, Result};
 pub use geometry::Extents;

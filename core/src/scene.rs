@@ -8,10 +8,11 @@
 
 use crate::error::{Error, Result};
 pub use crate::friction::Friction;
-use crate::material::thermal_properties::{interpolate, Expansion, Thermoelastic};
-use crate::material::{Hardening, HeatCapacity};
+use crate::material::Hardening;
 use crate::math::Real;
 use crate::scene_keys::{key_line, syntax_message};
+use crate::thermal::properties::interpolate;
+pub use crate::thermal::ThermalSpec;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -113,85 +114,6 @@ pub struct MaterialSpec {
     pub hardening: Hardening,
 }
 
-/// Temperature and heat in the workpiece (`[thermal]`): its initial temperature, heat
-/// capacity and conductivity, and the share of plastic work that becomes heat. Needed by
-/// the flow stresses of rate and temperature (`material.hardening.law = "johnson_cook"`,
-/// `"hensel_spittel"`, `"table"`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct ThermalSpec {
-    /// Initial temperature of the workpiece (degrees C).
-    pub initial_temperature_c: Real,
-    /// Specific heat capacity `c` (J/(kg K)), of the physical density: mass scaling adds
-    /// inertia, never heat capacity. 0 (the default) when `specific_heat_by_temperature`
-    /// gives it.
-    #[serde(default)]
-    pub specific_heat_j_per_kg_k: Real,
-    /// Specific heat capacity over temperature instead of the constant: `[[T (degrees C), c
-    /// (J/(kg K))], ...]`, T increasing, linear between the points and held beyond them.
-    /// The heat held is the enthalpy `int c dT`, kept exactly as the capacity changes.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub specific_heat_by_temperature: Vec<[Real; 2]>,
-    /// Taylor-Quinney coefficient `beta` (-): the fraction of the plastic work that becomes
-    /// heat (Taylor and Quinney 1934); 0.9 by default.
-    #[serde(default = "taylor_quinney")]
-    pub taylor_quinney: Real,
-    /// Thermal conductivity `k` (W/(m K)); 0 (the default): no conduction in the workpiece.
-    #[serde(default)]
-    pub conductivity_w_per_m_k: Real,
-    /// Conductivity over temperature instead of the constant: `[[T (degrees C), k
-    /// (W/(m K))], ...]`, T increasing, linear between the points and held beyond them; each
-    /// integration point conducts at its own temperature.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub conductivity_by_temperature: Vec<[Real; 2]>,
-    /// Temperature of the surroundings, for convection and radiation (degrees C); 20 by
-    /// default.
-    #[serde(default = "ambient")]
-    pub ambient_temperature_c: Real,
-    /// Convection coefficient from the free surface to the surroundings (W/(m^2 K)); 0 by
-    /// default.
-    #[serde(default)]
-    pub convection_w_per_m2_k: Real,
-    /// Emissivity of the free surface for radiation to the surroundings (-), in [0, 1]; 0
-    /// by default.
-    #[serde(default)]
-    pub emissivity: Real,
-    /// Fraction of the heat stage's critical step it takes (-), in (0, 1]; 0.5 by default.
-    /// The heat stage runs when that much time has passed since its last run (sub-cycled:
-    /// the thermal step is far longer than the mechanical one).
-    #[serde(default = "half")]
-    pub dt_safety: Real,
-    /// The largest temperature change of a particle in one heat step (K), the heat stage's
-    /// accuracy: the step grows (at most doubling) while the changes stay below it and
-    /// shrinks (at most halving) when they pass it, within the stable step. 5 K by default.
-    #[serde(default = "five")]
-    pub max_change_per_step_k: Real,
-    /// The share of the friction work at a tool that heats the workpiece (-), in [0, 1]; the
-    /// tool takes the rest. 0.5 by default (equal shares).
-    #[serde(default = "half")]
-    pub friction_heat_to_workpiece: Real,
-    /// Young's modulus over temperature, as a factor on `material.youngs_modulus_pa`:
-    /// `[[T (degrees C), E(T) / E], ...]`, T increasing, linear between the points and held
-    /// beyond them (Poisson's ratio held). Absent: the modulus of every temperature.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub modulus_factor_by_temperature: Vec<[Real; 2]>,
-    /// Thermal expansion, a constant secant coefficient `alpha` (1/K): the thermal stretch
-    /// `1 + alpha (T - T_0)` from the initial temperature, where the body is free of stress.
-    /// 0 (the default): none.
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub expansion_per_k: Real,
-    /// Thermal expansion as the linear thermal strain over temperature instead of the
-    /// coefficient: `[[T (degrees C), dl/l], ...]` from any reference, T increasing, linear
-    /// between the points and held beyond them; the thermal stretch is `(1 + s(T)) / (1 +
-    /// s(T_0))`.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub thermal_strain_by_temperature: Vec<[Real; 2]>,
-}
-
-fn five() -> Real {
-    5.0
-}
-
 impl Scene {
     /// Whether heat moves in the workpiece or across its surface, or is made at it: a
     /// `[thermal]` section with conduction, convection or radiation, a tool with heat
@@ -221,69 +143,6 @@ impl Scene {
                 .iter()
                 .any(|t| !t.heat_transfer_by_pressure.is_empty())
     }
-}
-
-impl ThermalSpec {
-    /// The conductivity at `temp_c` (degrees C): the table's, linear between its points and
-    /// held beyond them, or the constant (W/(m K)).
-    pub fn conductivity_at(&self, temp_c: Real) -> Real {
-        if self.conductivity_by_temperature.is_empty() {
-            self.conductivity_w_per_m_k
-        } else {
-            interpolate(&self.conductivity_by_temperature, temp_c)
-        }
-    }
-
-    /// The elasticity over temperature the section asks for, `None` when it asks for none
-    /// (the modulus and no thermal strain at every temperature).
-    pub fn thermoelastic(&self) -> Option<Thermoelastic> {
-        let expansion = if !self.thermal_strain_by_temperature.is_empty() {
-            let points = self.thermal_strain_by_temperature.clone();
-            let at_start = 1.0 + interpolate(&points, self.initial_temperature_c);
-            Expansion::Table { points, at_start }
-        } else if self.expansion_per_k != 0.0 {
-            Expansion::Coefficient {
-                per_k: self.expansion_per_k,
-                from_c: self.initial_temperature_c,
-            }
-        } else {
-            Expansion::None
-        };
-        (expansion != Expansion::None || !self.modulus_factor_by_temperature.is_empty()).then(
-            || Thermoelastic {
-                modulus_factor: self.modulus_factor_by_temperature.clone(),
-                expansion,
-            },
-        )
-    }
-
-    /// The specific heat capacity, the constant or the table (J/(kg K)).
-    pub fn heat_capacity(&self) -> HeatCapacity {
-        HeatCapacity::new(
-            self.specific_heat_j_per_kg_k,
-            &self.specific_heat_by_temperature,
-        )
-    }
-
-    /// The largest conductivity the scene can take (W/(m K)), for the stable heat step.
-    pub fn conductivity_max(&self) -> Real {
-        self.conductivity_by_temperature
-            .iter()
-            .map(|p| p[1])
-            .fold(self.conductivity_w_per_m_k, Real::max)
-    }
-}
-
-fn taylor_quinney() -> Real {
-    0.9
-}
-
-fn ambient() -> Real {
-    20.0
-}
-
-fn half() -> Real {
-    0.5
 }
 
 /// Background-cell integration rule.

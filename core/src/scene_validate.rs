@@ -5,43 +5,7 @@
 use crate::material::Hardening;
 use crate::math::Real;
 use crate::scene::*;
-
-/// The findings of a validation, as (key path, message).
-#[derive(Default)]
-struct Checks(Vec<(String, String)>);
-
-impl Checks {
-    /// Records `msg` under `key` unless `ok`.
-    fn check(&mut self, ok: bool, key: &str, msg: String) {
-        if !ok {
-            self.0.push((key.to_string(), msg));
-        }
-    }
-}
-
-/// A finite, positive number.
-fn pos(x: Real) -> bool {
-    x.is_finite() && x > 0.0
-}
-
-/// A finite temperature above absolute zero (degrees C).
-fn above_absolute_zero(t: Real) -> bool {
-    t.is_finite() && t > -273.15
-}
-
-/// A table `[[x, value], ...]` (over temperature, pressure): its `x` finite and increasing,
-/// each value finite and accepted by `value_ok`.
-fn increasing_table(table: &[[Real; 2]], value_ok: impl Fn(Real) -> bool) -> bool {
-    table
-        .iter()
-        .all(|p| p[0].is_finite() && p[1].is_finite() && value_ok(p[1]))
-        && table.windows(2).all(|w| w[0][0] < w[1][0])
-}
-
-/// A name usable in outputs and interfaces: non-empty, letters, digits and `_`.
-fn is_name(name: &str) -> bool {
-    !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-}
+use crate::validation::{above_absolute_zero, increasing_table, is_name, pos, Checks};
 
 impl Scene {
     /// Every non-physical or inconsistent value, as (key path, message), in the order of
@@ -191,7 +155,8 @@ impl Scene {
         }
     }
 
-    /// The `[thermal]` section, and that a law of rate and temperature has one.
+    /// The `[thermal]` section ([`ThermalSpec::check`]), what the tools' heat transfer
+    /// needs, and that a law of rate and temperature has one.
     fn check_thermal(&self, out: &mut Checks) {
         let Some(t) = &self.thermal else {
             out.check(
@@ -210,57 +175,7 @@ impl Scene {
             }
             return;
         };
-        out.check(
-            t.conductivity_w_per_m_k.is_finite() && t.conductivity_w_per_m_k >= 0.0,
-            "thermal.conductivity_w_per_m_k",
-            format!("must be zero or positive, got {}", t.conductivity_w_per_m_k),
-        );
-        let table = &t.conductivity_by_temperature;
-        out.check(
-            table.is_empty() || t.conductivity_w_per_m_k == 0.0,
-            "thermal.conductivity_by_temperature",
-            "give the conductivity as a constant or as a table over temperature, not both".into(),
-        );
-        out.check(
-            increasing_table(table, |k| k >= 0.0),
-            "thermal.conductivity_by_temperature",
-            format!(
-                "must be [[T, k], ...] with T increasing and k zero or positive, got {table:?}"
-            ),
-        );
-        out.check(
-            above_absolute_zero(t.ambient_temperature_c),
-            "thermal.ambient_temperature_c",
-            format!(
-                "must be above absolute zero (-273.15), got {}",
-                t.ambient_temperature_c
-            ),
-        );
-        out.check(
-            t.convection_w_per_m2_k.is_finite() && t.convection_w_per_m2_k >= 0.0,
-            "thermal.convection_w_per_m2_k",
-            format!("must be zero or positive, got {}", t.convection_w_per_m2_k),
-        );
-        out.check(
-            t.emissivity.is_finite() && (0.0..=1.0).contains(&t.emissivity),
-            "thermal.emissivity",
-            format!("must lie in [0, 1], got {}", t.emissivity),
-        );
-        out.check(
-            pos(t.dt_safety) && t.dt_safety <= 1.0,
-            "thermal.dt_safety",
-            format!("must lie in (0, 1], got {}", t.dt_safety),
-        );
-        out.check(
-            (0.0..=1.0).contains(&t.friction_heat_to_workpiece),
-            "thermal.friction_heat_to_workpiece",
-            format!("must lie in [0, 1], got {}", t.friction_heat_to_workpiece),
-        );
-        out.check(
-            pos(t.max_change_per_step_k),
-            "thermal.max_change_per_step_k",
-            format!("must be positive, got {}", t.max_change_per_step_k),
-        );
+        t.check(out);
         for tool in &self.tools {
             let key = |k: &str| format!("tools.{}.{k}", tool.name);
             if let Some(temp) = tool.temperature_c {
@@ -301,71 +216,6 @@ impl Scene {
                 ),
             );
         }
-        out.check(
-            above_absolute_zero(t.initial_temperature_c),
-            "thermal.initial_temperature_c",
-            format!(
-                "must be above absolute zero (-273.15), got {}",
-                t.initial_temperature_c
-            ),
-        );
-        let table = &t.modulus_factor_by_temperature;
-        out.check(
-            increasing_table(table, pos),
-            "thermal.modulus_factor_by_temperature",
-            format!("must be [[T, E(T) / E], ...] with T increasing and factors positive, got {table:?}"),
-        );
-        out.check(
-            t.expansion_per_k.is_finite() && t.expansion_per_k.abs() < 1e-3,
-            "thermal.expansion_per_k",
-            format!(
-                "must be a thermal expansion coefficient (1/K) below 1e-3 in size, got {}",
-                t.expansion_per_k
-            ),
-        );
-        let table = &t.thermal_strain_by_temperature;
-        out.check(
-            table.is_empty() || t.expansion_per_k == 0.0,
-            "thermal.thermal_strain_by_temperature",
-            "give the thermal expansion as a coefficient or as a strain over temperature, not both"
-                .into(),
-        );
-        out.check(
-            increasing_table(table, |s| s.abs() < 0.5),
-            "thermal.thermal_strain_by_temperature",
-            format!(
-                "must be [[T, dl/l], ...] with T increasing and strains below 0.5 in size, got \
-                 {table:?}"
-            ),
-        );
-        let table = &t.specific_heat_by_temperature;
-        if table.is_empty() {
-            out.check(
-                pos(t.specific_heat_j_per_kg_k),
-                "thermal.specific_heat_j_per_kg_k",
-                format!(
-                    "must be positive (or give specific_heat_by_temperature), got {}",
-                    t.specific_heat_j_per_kg_k
-                ),
-            );
-        } else {
-            out.check(
-                t.specific_heat_j_per_kg_k == 0.0,
-                "thermal.specific_heat_by_temperature",
-                "give the specific heat as a constant or as a table over temperature, not both"
-                    .into(),
-            );
-            out.check(
-                increasing_table(table, pos),
-                "thermal.specific_heat_by_temperature",
-                format!("must be [[T, c], ...] with T increasing and c positive, got {table:?}"),
-            );
-        }
-        out.check(
-            t.taylor_quinney.is_finite() && (0.0..=1.0).contains(&t.taylor_quinney),
-            "thermal.taylor_quinney",
-            format!("must lie in [0, 1], got {}", t.taylor_quinney),
-        );
     }
 
     /// Kernel support and re-referencing.

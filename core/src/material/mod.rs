@@ -3,9 +3,8 @@
 pub mod hardening;
 pub mod rate_temperature;
 pub mod simo1992_hencky_j2;
-pub mod thermal_properties;
 
+pub use crate::thermal::HeatCapacity;
 pub use hardening::Hardening;
 pub use rate_temperature::Flow;
 pub use simo1992_hencky_j2::{HenckyJ2, PointLanes, PointState, StressLanes, StressUpdate};
-pub use thermal_properties::HeatCapacity;

@@ -21,10 +21,10 @@
 //! Kinematics are 2D with an out-of-plane stretch `F_33`: 1 in plane strain, the hoop
 //! stretch `r / R` in axisymmetry; `b_e` stays block diagonal (in-plane 2x2 and `33`).
 
-use super::thermal_properties::Thermoelastic;
 use super::Hardening;
 use crate::lanes::{self, Lanes, LANES};
 use crate::math::{sym_spectral2, Real};
+use crate::thermal::properties::Thermoelastic;
 use serde::{Deserialize, Serialize};
 
 /// Trial elastic left Cauchy-Green tensor `b_e = F C_p^{-1} F^T` (step 1 of the module doc)
