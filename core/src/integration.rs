@@ -108,23 +108,7 @@ pub fn nodal_domains(lattice: &Lattice) -> (PointSet, Vec<Site>, Vec<[Real; 2]>)
         (0.5, 8.0 / 18.0),
         (0.5 + g, 5.0 / 18.0),
     ];
-    let nx = lattice.dims()[0];
-    let mut s = PointSet::default();
-    let (mut edge_sites, mut edge_nw) = (Vec::new(), Vec::new());
-    for (node, b @ [x0, x1, y0, y1]) in domain_bounds(lattice) {
-        let centre = Site {
-            node,
-            offset: [0.5 * (x0 + x1), 0.5 * (y0 + y1)],
-        };
-        s.push(
-            lattice,
-            centre,
-            (x1 - x0) * (y1 - y0),
-            node[1] * nx + node[0],
-        );
-        rectangle_boundary(node, b, &gauss, &mut edge_sites, &mut edge_nw);
-    }
-    (s, edge_sites, edge_nw)
+    smoothing_cells(lattice, |b| [b], &gauss)
 }
 
 /// The four quadrants of every nodal domain (cut through the domain's centroid), for the
@@ -135,17 +119,36 @@ pub fn nodal_domains(lattice: &Lattice) -> (PointSet, Vec<Site>, Vec<[Real; 2]>)
 pub fn nodal_quadrants(lattice: &Lattice) -> (PointSet, Vec<Site>, Vec<[Real; 2]>) {
     let g = 0.5 / 3.0_f64.sqrt();
     let gauss = [(0.5 - g, 0.5), (0.5 + g, 0.5)];
+    smoothing_cells(
+        lattice,
+        |[x0, x1, y0, y1]| {
+            let (xc, yc) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+            [
+                [x0, xc, y0, yc],
+                [xc, x1, y0, yc],
+                [xc, x1, yc, y1],
+                [x0, xc, yc, y1],
+            ]
+        },
+        &gauss,
+    )
+}
+
+/// The smoothing cells that `split` cuts each nodal domain `[x0, x1, y0, y1]` (offsets
+/// from its particle, m) into: each cell as a point at its centroid with its area (cell =
+/// the domain's particle), domain by domain, and the Gauss points `rule` (position along
+/// an edge, weight) on each cell's edges as boundary sites with their outward normal times
+/// the weight (m).
+fn smoothing_cells<const K: usize>(
+    lattice: &Lattice,
+    split: impl Fn([Real; 4]) -> [[Real; 4]; K],
+    rule: &[(Real, Real)],
+) -> (PointSet, Vec<Site>, Vec<[Real; 2]>) {
     let nx = lattice.dims()[0];
     let mut s = PointSet::default();
     let (mut edge_sites, mut edge_nw) = (Vec::new(), Vec::new());
-    for (node, [x0, x1, y0, y1]) in domain_bounds(lattice) {
-        let (xc, yc) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-        for b @ [a0, a1, b0, b1] in [
-            [x0, xc, y0, yc],
-            [xc, x1, y0, yc],
-            [xc, x1, yc, y1],
-            [x0, xc, yc, y1],
-        ] {
+    for (node, domain) in domain_bounds(lattice) {
+        for b @ [a0, a1, b0, b1] in split(domain) {
             let centre = Site {
                 node,
                 offset: [0.5 * (a0 + a1), 0.5 * (b0 + b1)],
@@ -156,7 +159,7 @@ pub fn nodal_quadrants(lattice: &Lattice) -> (PointSet, Vec<Site>, Vec<[Real; 2]
                 (a1 - a0) * (b1 - b0),
                 node[1] * nx + node[0],
             );
-            rectangle_boundary(node, b, &gauss, &mut edge_sites, &mut edge_nw);
+            rectangle_boundary(node, b, rule, &mut edge_sites, &mut edge_nw);
         }
     }
     (s, edge_sites, edge_nw)
