@@ -27,7 +27,6 @@ pub mod scene;
 pub mod scene_keys;
 pub mod scene_overrides;
 pub mod scene_parameters;
-mod scene_validate;
 pub mod segment_bins;
 pub mod solver;
 pub mod team;

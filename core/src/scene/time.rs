@@ -1,0 +1,96 @@
+//! The `[time]` section: the time span, the step and mass scaling, with what they must be
+//! ([`TimeSpec::check`], [`MassScaling::check`]).
+
+use crate::math::Real;
+use crate::validation::{pos, Checks};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// Time span and step.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TimeSpec {
+    /// End time (s).
+    pub end_s: Real,
+    /// Fixed step (s); when absent, `dt_safety` times the stable step, updated every step.
+    #[serde(default)]
+    pub dt_s: Option<Real>,
+    /// Fraction of the stable step used when `dt_s` is absent (-), in (0, 1].
+    #[serde(default = "default_safety")]
+    pub dt_safety: Real,
+    /// Added mass that lengthens the explicit step; none when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_scaling: Option<MassScaling>,
+}
+
+/// Mass scaling: mass added to the particles so that the explicit step, bounded by the
+/// wave speed `sqrt((K + 4G/3) / rho)`, grows (the critical step grows with the square root
+/// of the mass). For rate-independent forming, where inertia is negligible, a factor `f^2`
+/// on the mass has the effect of running the tools `f` times faster; the run watches that
+/// inertia stays negligible (`checks.kinetic_to_internal_max`). One of the two keys.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct MassScaling {
+    /// Uniform: every particle's mass times `factor` (-), at least 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub factor: Option<Real>,
+    /// Selective (as LS-DYNA's DT2MS): mass is added only to the particles whose local
+    /// step is below what it takes for the run's step, `dt_safety` times the critical
+    /// step of the undeformed discretisation, to reach `target_dt_s` (s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_dt_s: Option<Real>,
+}
+
+fn default_safety() -> Real {
+    0.5
+}
+
+impl TimeSpec {
+    /// The end time, fixed step and step safety factor a run cannot use, under their
+    /// dotted keys `time.*`; the mass scaling has its own check ([`MassScaling::check`]),
+    /// which the scene's validation runs last.
+    pub(crate) fn check(&self, out: &mut Checks) {
+        out.check(
+            pos(self.end_s),
+            "time.end_s",
+            format!("must be positive, got {}", self.end_s),
+        );
+        if let Some(dt) = self.dt_s {
+            out.check(pos(dt), "time.dt_s", format!("must be positive, got {dt}"));
+            out.check(
+                !pos(dt) || !pos(self.end_s) || self.end_s / dt <= 1e9,
+                "time.dt_s",
+                format!("{dt} s gives more than 1e9 steps"),
+            );
+        }
+        out.check(
+            self.dt_safety.is_finite() && self.dt_safety > 0.0 && self.dt_safety <= 1.0,
+            "time.dt_safety",
+            format!("must lie in (0, 1], got {}", self.dt_safety),
+        );
+    }
+}
+
+impl MassScaling {
+    /// One of a uniform factor (at least 1) or a target step (positive), under the dotted
+    /// keys `time.mass_scaling.*`.
+    pub(crate) fn check(&self, out: &mut Checks) {
+        match (self.factor, self.target_dt_s) {
+            (Some(f), None) => out.check(
+                f.is_finite() && f >= 1.0,
+                "time.mass_scaling.factor",
+                format!("must be at least 1, got {f}"),
+            ),
+            (None, Some(dt)) => out.check(
+                pos(dt),
+                "time.mass_scaling.target_dt_s",
+                format!("must be positive, got {dt}"),
+            ),
+            _ => out.check(
+                false,
+                "time.mass_scaling",
+                "give one of `factor` (uniform) or `target_dt_s` (selective)".into(),
+            ),
+        }
+    }
+}
