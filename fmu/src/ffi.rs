@@ -1,134 +1,34 @@
 //! The FMI 2.0 Co-Simulation C API.
 //!
-//! Every exported function is a thin forwarder that runs its body inside
-//! [`std::panic::catch_unwind`], so no panic crosses into the host; a panic becomes
-//! `fmi2Fatal` with a log message. Pointers from the host are checked here (null, and
-//! lengths before building slices); everything else is the safe [`Instance`].
+//! Every exported function is a thin wrapper over a body it shares with FMI 3.0 (the crate's
+//! `component`, `values` and `fmu_state` modules), run inside the panic barrier
+//! ([`crate::host::with`]), so no panic crosses into the host; a panic becomes `fmi2Fatal`
+//! with a log message. Pointers from the host are checked there (null, and
+//! lengths before building slices); everything else is the safe [`Slave`]: a forging
+//! [`crate::Instance`] or a press plant ([`crate::press::Press`]).
 
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
-use crate::{press, Instance, Phase, Slave};
-use std::ffi::{c_char, c_int, c_uint, c_void, CString};
-use std::panic::{catch_unwind, AssertUnwindSafe};
+use crate::component::{self, Component};
+use crate::host::{slice_mut, text, DISCARD, OK};
+use crate::logging::{Callback, Env, Fmi2Logger, Log};
+use crate::{fmu_state, resources, values, Phase, Slave};
+use std::ffi::{c_char, c_int, c_uint, c_void};
 
 /// `fmi2Status` (the same codes as `fmi3Status`, [`crate::host`]).
 pub type fmi2Status = c_int;
-use crate::host::{self, slice, slice_mut, text, Host, DISCARD, ERROR, OK};
 
-type Env = *mut c_void;
-type Logger =
-    unsafe extern "C" fn(Env, *const c_char, fmi2Status, *const c_char, *const c_char, ...);
+/// The model of an FMI 2.0 component: a forging scene or a press plant.
+type Fmi2 = Box<dyn Slave>;
 
 /// `fmi2CallbackFunctions`.
 #[repr(C)]
 pub struct CallbackFunctions {
-    logger: Option<Logger>,
+    logger: Option<Fmi2Logger>,
     allocate_memory: Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>,
     free_memory: Option<unsafe extern "C" fn(*mut c_void)>,
     step_finished: Option<unsafe extern "C" fn(Env, fmi2Status)>,
     component_environment: Env,
-}
-
-/// What the host's `fmi2Component` points to.
-pub struct Component {
-    model: Box<dyn Slave>,
-    name: CString,
-    logger: Option<Logger>,
-    env: Env,
-    logging: bool,
-    categories: [bool; 3],
-    strings: Vec<CString>,
-}
-
-impl Component {
-    fn log(&self, status: fmi2Status, message: &str) {
-        let category = host::category(status);
-        if !(self.logging && (self.categories[category] || self.categories[2])) {
-            return;
-        }
-        if let Some(logger) = self.logger {
-            let msg = CString::new(message.replace('\0', " ")).unwrap_or_default();
-            let cat = CString::new(host::CATEGORY_NAMES[category]).unwrap_or_default();
-            // SAFETY: the host gave this logger for this environment; the format string is a
-            // literal "%s" and its one argument a valid NUL-terminated string.
-            unsafe {
-                logger(
-                    self.env,
-                    self.name.as_ptr(),
-                    status,
-                    cat.as_ptr(),
-                    c"%s".as_ptr(),
-                    msg.as_ptr(),
-                )
-            };
-        }
-    }
-}
-
-impl Host for Component {
-    fn fail(&self, status: fmi2Status, message: &str) -> fmi2Status {
-        self.log(status, message);
-        status
-    }
-}
-
-/// [`host::with`] on an FMI 2.0 [`Component`].
-fn with(
-    c: *mut c_void,
-    what: &str,
-    body: impl FnOnce(&mut Component) -> Result<fmi2Status, String>,
-) -> fmi2Status {
-    host::with::<Component>(c, what, body)
-}
-
-/// The slave the FMU's resources describe: a press plant (`press.toml`: `press = "crank"`)
-/// or a forging scene (`scene.toml`).
-fn slave(folder: &std::path::Path) -> Result<Box<dyn Slave>, String> {
-    let press = folder.join("press.toml");
-    if press.is_file() {
-        let text = std::fs::read_to_string(&press)
-            .map_err(|e| format!("cannot read {}: {e}", press.display()))?;
-        let name = text
-            .lines()
-            .find_map(|l| l.trim().strip_prefix("press = "))
-            .map(|v| v.trim().trim_matches('"'))
-            .unwrap_or_default();
-        let kind = press::parse(name).ok_or_else(|| {
-            format!(
-                "{}: `press = \"{name}\"` is no press of rkforge",
-                press.display()
-            )
-        })?;
-        return Ok(Box::new(press::Press::new(kind)));
-    }
-    let path = folder.join("scene.toml");
-    let scene = std::fs::read_to_string(&path)
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    Ok(Box::new(
-        Instance::new(&scene, &path.display().to_string()).map_err(|e| e.to_string())?,
-    ))
-}
-
-/// The folder of a `file:` URI (`file:///a/b%20c`, `file:/a/b`).
-fn uri_to_path(uri: &str) -> Option<std::path::PathBuf> {
-    let rest = uri
-        .strip_prefix("file://")
-        .map(|r| r.strip_prefix("localhost").unwrap_or(r))
-        .or_else(|| uri.strip_prefix("file:"))?;
-    let mut out = Vec::new();
-    let b = rest.as_bytes();
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%' && i + 2 < b.len() {
-            let hex = std::str::from_utf8(&b[i + 1..i + 3]).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(b[i]);
-            i += 1;
-        }
-    }
-    Some(std::path::PathBuf::from(String::from_utf8(out).ok()?))
 }
 
 #[no_mangle]
@@ -141,34 +41,6 @@ pub extern "C" fn fmi2GetVersion() -> *const c_char {
     c"2.0".as_ptr()
 }
 
-/// Report a problem before a component exists, through the host's logger.
-unsafe fn log_early(f: *const CallbackFunctions, name: *const c_char, message: &str) {
-    if f.is_null() {
-        return;
-    }
-    // SAFETY: checked non-null; the host's callback struct lives through fmi2Instantiate.
-    let f = unsafe { &*f };
-    if let Some(logger) = f.logger {
-        let msg = CString::new(message.replace('\0', " ")).unwrap_or_default();
-        let name = if name.is_null() {
-            c"rkforge".as_ptr()
-        } else {
-            name
-        };
-        // SAFETY: as in Component::log.
-        unsafe {
-            logger(
-                f.component_environment,
-                name,
-                ERROR,
-                c"logStatusError".as_ptr(),
-                c"%s".as_ptr(),
-                msg.as_ptr(),
-            )
-        };
-    }
-}
-
 #[no_mangle]
 pub unsafe extern "C" fn fmi2Instantiate(
     instance_name: *const c_char,
@@ -179,7 +51,14 @@ pub unsafe extern "C" fn fmi2Instantiate(
     _visible: c_int,
     logging_on: c_int,
 ) -> *mut c_void {
-    let made = catch_unwind(AssertUnwindSafe(|| -> Result<Box<Component>, String> {
+    // SAFETY: checked non-null; copied out, the host may free its struct afterwards.
+    let (logger, env) = if functions.is_null() {
+        (None, std::ptr::null_mut())
+    } else {
+        unsafe { ((*functions).logger, (*functions).component_environment) }
+    };
+    let callback = logger.map(Callback::Fmi2);
+    let make = || -> Result<Component<Fmi2>, String> {
         if fmu_type != 1 {
             return Err(
                 "this FMU supports Co-Simulation only (fmuType must be fmi2CoSimulation)".into(),
@@ -189,58 +68,23 @@ pub unsafe extern "C" fn fmi2Instantiate(
         let name = unsafe { text(instance_name) }.ok_or("instanceName is null")?;
         let uri = unsafe { text(resource_location) }
             .ok_or("fmuResourceLocation is null: the scene lives in resources/")?;
-        let folder = uri_to_path(&uri)
+        let folder = resources::uri_to_path(&uri)
             .ok_or_else(|| format!("fmuResourceLocation `{uri}` is not a file: URI"))?;
-        let model = slave(&folder)?;
-        if let Some(g) = unsafe { text(guid) } {
-            if g != model.guid() {
-                return Err(format!(
-                    "GUID {g} does not match the model in resources/ ({})",
-                    model.guid()
-                ));
-            }
-        }
-        // SAFETY: checked non-null; copied out, the host may free its struct afterwards.
-        let (logger, env) = if functions.is_null() {
-            (None, std::ptr::null_mut())
-        } else {
-            unsafe { ((*functions).logger, (*functions).component_environment) }
-        };
-        Ok(Box::new(Component {
-            model,
-            name: CString::new(name.replace('\0', " ")).unwrap_or_default(),
-            logger,
-            env,
-            logging: logging_on != 0,
-            categories: [true; 3],
-            strings: Vec::new(),
-        }))
-    }));
-    match made {
-        Ok(Ok(c)) => Box::into_raw(c) as *mut c_void,
-        Ok(Err(msg)) => {
-            // SAFETY: pointers as received from the host.
-            unsafe { log_early(functions, instance_name, &format!("fmi2Instantiate: {msg}")) };
-            std::ptr::null_mut()
-        }
-        Err(_) => {
-            // SAFETY: as above.
-            unsafe {
-                log_early(
-                    functions,
-                    instance_name,
-                    "fmi2Instantiate: internal error (panic)",
-                )
-            };
-            std::ptr::null_mut()
-        }
+        let model = resources::slave(&folder)?;
+        resources::check_token(unsafe { text(guid) }, "GUID", model.guid(), "model")?;
+        let log = Log::new(callback, env, &name, logging_on != 0);
+        Ok(Component::new(model, log))
+    };
+    // SAFETY: the host's logger, environment and instance name as received.
+    unsafe {
+        component::instantiate::<Fmi2>("fmi2Instantiate", (callback, env, instance_name), make)
     }
 }
 
-#[no_mangle]
-pub unsafe extern "C" fn fmi2FreeInstance(c: *mut c_void) {
-    // SAFETY: made by fmi2Instantiate and not yet freed (the host's duty).
-    unsafe { host::free::<Component>(c) }
+// Freeing, leaving initialization, terminating and resetting, over the bodies FMI 3.0 shares.
+component::entry_points! {
+    model: Fmi2, free: fmi2FreeInstance,
+    exit_initialization: fmi2ExitInitializationMode, terminate: fmi2Terminate, reset: fmi2Reset,
 }
 
 #[no_mangle]
@@ -250,13 +94,10 @@ pub unsafe extern "C" fn fmi2SetDebugLogging(
     n: usize,
     categories: *const *const c_char,
 ) -> fmi2Status {
-    with(c, "fmi2SetDebugLogging", |comp| {
-        // SAFETY: `n` category strings at `categories`.
-        let wanted = unsafe { host::wanted_categories(n, categories) }?;
-        comp.logging = on != 0;
-        comp.categories = wanted;
-        Ok(OK)
-    })
+    // SAFETY: `n` category strings at `categories`.
+    unsafe {
+        component::set_debug_logging::<Fmi2>(c, "fmi2SetDebugLogging", on != 0, n, categories)
+    }
 }
 
 #[no_mangle]
@@ -268,92 +109,51 @@ pub extern "C" fn fmi2SetupExperiment(
     _stop_defined: c_int,
     _stop: f64,
 ) -> fmi2Status {
-    with(c, "fmi2SetupExperiment", |comp| {
-        comp.model
-            .setup_experiment(start)
-            .map(|_| OK)
-            .map_err(|e| e.to_string())
-    })
+    component::call::<Fmi2>(c, "fmi2SetupExperiment", |s| s.setup_experiment(start))
 }
 
 #[no_mangle]
 pub extern "C" fn fmi2EnterInitializationMode(c: *mut c_void) -> fmi2Status {
-    with(c, "fmi2EnterInitializationMode", |comp| {
-        comp.model
-            .enter_initialization()
-            .map(|_| OK)
-            .map_err(|e| e.to_string())
+    component::call::<Fmi2>(c, "fmi2EnterInitializationMode", |s| {
+        s.enter_initialization()
     })
 }
 
-#[no_mangle]
-pub extern "C" fn fmi2ExitInitializationMode(c: *mut c_void) -> fmi2Status {
-    with(c, "fmi2ExitInitializationMode", |comp| {
-        comp.model
-            .exit_initialization()
-            .map(|_| OK)
-            .map_err(|e| e.to_string())
-    })
-}
-
-#[no_mangle]
-pub extern "C" fn fmi2Terminate(c: *mut c_void) -> fmi2Status {
-    with(c, "fmi2Terminate", |comp| {
-        comp.model
-            .terminate()
-            .map(|_| OK)
-            .map_err(|e| e.to_string())
-    })
-}
-
-#[no_mangle]
-pub extern "C" fn fmi2Reset(c: *mut c_void) -> fmi2Status {
-    with(c, "fmi2Reset", |comp| {
-        comp.model.reset();
-        Ok(OK)
-    })
-}
-
-macro_rules! getter {
-    ($fname:ident, $t:ty, $get:ident, $conv:expr) => {
+/// `fmi2Get<Type>` and `fmi2Set<Type>` of a type of variables: the slave's getter and
+/// setter over the host's arrays ([`values::get`], [`values::set`]).
+macro_rules! scalars {
+    ($($get:ident, $set:ident: $t:ty => $getter:ident, $setter:ident;)*) => {$(
         #[no_mangle]
-        pub unsafe extern "C" fn $fname(
+        pub unsafe extern "C" fn $get(
             c: *mut c_void,
             vr: *const c_uint,
             n: usize,
             values: *mut $t,
         ) -> fmi2Status {
-            with(c, stringify!($fname), |comp| {
-                // SAFETY: `n` value references and `n` output slots from the host.
-                let vrs = unsafe { slice(vr, n, "vr") }?;
-                let out = unsafe { slice_mut(values, n, "value") }?;
-                for (v, o) in vrs.iter().zip(out.iter_mut()) {
-                    let x = comp.model.$get(*v).map_err(|e| e.to_string())?;
-                    *o = $conv(x);
-                }
-                Ok(OK)
-            })
+            let call = (stringify!($get), stringify!($get));
+            // SAFETY: `n` value references and `n` output slots from the host.
+            unsafe { values::get::<Fmi2, _>(c, call, ((vr, n), (values, n)), |s, v| s.$getter(v)) }
         }
-    };
+
+        #[no_mangle]
+        pub unsafe extern "C" fn $set(
+            c: *mut c_void,
+            vr: *const c_uint,
+            n: usize,
+            values: *const $t,
+        ) -> fmi2Status {
+            let call = (stringify!($set), stringify!($set));
+            // SAFETY: `n` value references and `n` values from the host.
+            unsafe {
+                values::set::<Fmi2, _>(c, call, ((vr, n), (values, n)), |s, v, x| s.$setter(v, x))
+            }
+        }
+    )*};
 }
 
-getter!(fmi2GetReal, f64, get_real, |x| x);
-getter!(fmi2GetInteger, c_int, get_integer, |x| x);
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetBoolean(
-    c: *mut c_void,
-    _vr: *const c_uint,
-    n: usize,
-    _values: *mut c_int,
-) -> fmi2Status {
-    with(c, "fmi2GetBoolean", |_| {
-        if n == 0 {
-            Ok(OK)
-        } else {
-            Err("this FMU has no Boolean variables".into())
-        }
-    })
+scalars! {
+    fmi2GetReal, fmi2SetReal: f64 => get_real, set_real;
+    fmi2GetInteger, fmi2SetInteger: c_int => get_integer, set_integer;
 }
 
 #[no_mangle]
@@ -363,72 +163,13 @@ pub unsafe extern "C" fn fmi2GetString(
     n: usize,
     values: *mut *const c_char,
 ) -> fmi2Status {
-    with(c, "fmi2GetString", |comp| {
-        // SAFETY: as in the getters above.
-        let vrs = unsafe { slice(vr, n, "vr") }?;
-        let out = unsafe { slice_mut(values, n, "value") }?;
-        comp.strings.clear();
-        for v in vrs {
-            let s = comp.model.get_string(*v).map_err(|e| e.to_string())?;
-            comp.strings.push(CString::new(s).unwrap_or_default());
-        }
-        for (o, s) in out.iter_mut().zip(&comp.strings) {
-            *o = s.as_ptr();
-        }
-        Ok(OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetReal(
-    c: *mut c_void,
-    vr: *const c_uint,
-    n: usize,
-    values: *const f64,
-) -> fmi2Status {
-    with(c, "fmi2SetReal", |comp| {
-        // SAFETY: `n` value references and `n` values from the host.
-        let vrs = unsafe { slice(vr, n, "vr") }?;
-        let vals = unsafe { slice(values, n, "value") }?;
-        for (v, x) in vrs.iter().zip(vals) {
-            comp.model.set_real(*v, *x).map_err(|e| e.to_string())?;
-        }
-        Ok(OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetInteger(
-    c: *mut c_void,
-    vr: *const c_uint,
-    n: usize,
-    values: *const c_int,
-) -> fmi2Status {
-    with(c, "fmi2SetInteger", |comp| {
-        // SAFETY: as in fmi2SetReal.
-        let vrs = unsafe { slice(vr, n, "vr") }?;
-        let vals = unsafe { slice(values, n, "value") }?;
-        for (v, x) in vrs.iter().zip(vals) {
-            comp.model.set_integer(*v, *x).map_err(|e| e.to_string())?;
-        }
-        Ok(OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetBoolean(
-    c: *mut c_void,
-    _vr: *const c_uint,
-    n: usize,
-    _values: *const c_int,
-) -> fmi2Status {
-    with(c, "fmi2SetBoolean", |_| {
-        if n == 0 {
-            Ok(OK)
-        } else {
-            Err("this FMU has no Boolean variables".into())
-        }
-    })
+    let arrays = ((vr, n), (values, n));
+    // SAFETY: `n` value references and `n` output slots from the host.
+    unsafe {
+        values::get_strings::<Fmi2>(c, ("fmi2GetString", "String"), arrays, |s, v| {
+            s.get_string(v)
+        })
+    }
 }
 
 #[no_mangle]
@@ -438,33 +179,55 @@ pub unsafe extern "C" fn fmi2SetString(
     n: usize,
     values: *const *const c_char,
 ) -> fmi2Status {
-    with(c, "fmi2SetString", |comp| {
-        // SAFETY: as in fmi2SetReal; each string NUL-terminated.
-        let vrs = unsafe { slice(vr, n, "vr") }?;
-        let vals = unsafe { slice(values, n, "value") }?;
-        for (v, p) in vrs.iter().zip(vals) {
-            let s = unsafe { text(*p) }.ok_or("a String value is a null pointer")?;
-            comp.model.set_string(*v, &s).map_err(|e| e.to_string())?;
-        }
-        Ok(OK)
-    })
+    let arrays = ((vr, n), (values, n));
+    // SAFETY: `n` value references and `n` NUL-terminated strings from the host.
+    unsafe {
+        values::set_strings::<Fmi2>(c, ("fmi2SetString", "String"), arrays, |s, v, x| {
+            s.set_string(v, x)
+        })
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBoolean(
+    c: *mut c_void,
+    _vr: *const c_uint,
+    n: usize,
+    _values: *mut c_int,
+) -> fmi2Status {
+    values::none::<Fmi2>(c, "fmi2GetBoolean", n, "Boolean")
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetBoolean(
+    c: *mut c_void,
+    _vr: *const c_uint,
+    n: usize,
+    _values: *const c_int,
+) -> fmi2Status {
+    values::none::<Fmi2>(c, "fmi2SetBoolean", n, "Boolean")
 }
 
 #[no_mangle]
 pub extern "C" fn fmi2DoStep(c: *mut c_void, t: f64, h: f64, _no_prior: c_int) -> fmi2Status {
-    with(c, "fmi2DoStep", |comp| {
-        comp.model
-            .do_step(t, h)
-            .map(|_| OK)
-            .map_err(|e| e.to_string())
-    })
+    component::call::<Fmi2>(c, "fmi2DoStep", |s| s.do_step(t, h))
+}
+
+// The FMU-state functions, over the bodies FMI 3.0 shares.
+fmu_state::entry_points! {
+    model: Fmi2, byte: c_char,
+    get: fmi2GetFMUstate, set: fmi2SetFMUstate, free: fmi2FreeFMUstate,
+    size: fmi2SerializedFMUstateSize, serialize: fmi2SerializeFMUstate,
+    deserialize: fmi2DeSerializeFMUstate,
 }
 
 #[no_mangle]
 pub extern "C" fn fmi2CancelStep(c: *mut c_void) -> fmi2Status {
-    with(c, "fmi2CancelStep", |_| {
-        Err("steps run synchronously; there is nothing to cancel".into())
-    })
+    component::not_provided::<Fmi2>(
+        c,
+        "fmi2CancelStep",
+        "steps run synchronously; there is nothing to cancel",
+    )
 }
 
 #[no_mangle]
@@ -475,9 +238,11 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     _order: *const c_int,
     _v: *const f64,
 ) -> fmi2Status {
-    with(c, "fmi2SetRealInputDerivatives", |_| {
-        Err("input derivatives are not supported (canInterpolateInputs = false)".into())
-    })
+    component::not_provided::<Fmi2>(
+        c,
+        "fmi2SetRealInputDerivatives",
+        "input derivatives are not supported (canInterpolateInputs = false)",
+    )
 }
 
 #[no_mangle]
@@ -488,9 +253,11 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     _order: *const c_int,
     _v: *mut f64,
 ) -> fmi2Status {
-    with(c, "fmi2GetRealOutputDerivatives", |_| {
-        Err("output derivatives are not provided (maxOutputDerivativeOrder = 0)".into())
-    })
+    component::not_provided::<Fmi2>(
+        c,
+        "fmi2GetRealOutputDerivatives",
+        "output derivatives are not provided (maxOutputDerivativeOrder = 0)",
+    )
 }
 
 #[no_mangle]
@@ -503,9 +270,11 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     _dv: *const f64,
     _dz: *mut f64,
 ) -> fmi2Status {
-    with(c, "fmi2GetDirectionalDerivative", |_| {
-        Err("directional derivatives are not provided".into())
-    })
+    component::not_provided::<Fmi2>(
+        c,
+        "fmi2GetDirectionalDerivative",
+        "directional derivatives are not provided",
+    )
 }
 
 #[no_mangle]
@@ -514,7 +283,31 @@ pub unsafe extern "C" fn fmi2GetStatus(
     _kind: c_int,
     _value: *mut c_int,
 ) -> fmi2Status {
-    with(c, "fmi2GetStatus", |_| Ok(DISCARD))
+    component::with::<Fmi2>(c, "fmi2GetStatus", |_| Ok(DISCARD))
+}
+
+/// `fmi2Get<Type>Status` named `what` of the one `kind` of that type the FMU reports: the
+/// slave's answer in the host's one `value` (`Discard` for another kind).
+///
+/// # Safety
+///
+/// `value` is one writable value.
+unsafe fn status<T>(
+    c: *mut c_void,
+    what: &str,
+    (kind, reported): (c_int, c_int),
+    value: *mut T,
+    answer: impl FnOnce(&dyn Slave) -> T,
+) -> fmi2Status {
+    component::with::<Fmi2>(c, what, |comp| {
+        if kind != reported {
+            return Ok(DISCARD);
+        }
+        // SAFETY: as the caller promises.
+        let out = unsafe { slice_mut(value, 1, "value") }?;
+        out[0] = answer(comp.model.as_ref());
+        Ok(OK)
+    })
 }
 
 #[no_mangle]
@@ -523,15 +316,8 @@ pub unsafe extern "C" fn fmi2GetRealStatus(
     kind: c_int,
     value: *mut f64,
 ) -> fmi2Status {
-    with(c, "fmi2GetRealStatus", |comp| {
-        if kind != 2 {
-            return Ok(DISCARD);
-        }
-        // SAFETY: one writable value.
-        let out = unsafe { slice_mut(value, 1, "value") }?;
-        out[0] = comp.model.time();
-        Ok(OK)
-    })
+    // SAFETY: one writable value; `fmi2LastSuccessfulTime`.
+    unsafe { status(c, "fmi2GetRealStatus", (kind, 2), value, |s| s.time()) }
 }
 
 #[no_mangle]
@@ -540,7 +326,7 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
     _kind: c_int,
     _value: *mut c_int,
 ) -> fmi2Status {
-    with(c, "fmi2GetIntegerStatus", |_| Ok(DISCARD))
+    component::with::<Fmi2>(c, "fmi2GetIntegerStatus", |_| Ok(DISCARD))
 }
 
 #[no_mangle]
@@ -549,15 +335,12 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     kind: c_int,
     value: *mut c_int,
 ) -> fmi2Status {
-    with(c, "fmi2GetBooleanStatus", |comp| {
-        if kind != 3 {
-            return Ok(DISCARD);
-        }
-        // SAFETY: one writable value.
-        let out = unsafe { slice_mut(value, 1, "value") }?;
-        out[0] = c_int::from(comp.model.phase() == Phase::Terminated);
-        Ok(OK)
-    })
+    // SAFETY: one writable value; `fmi2Terminated`.
+    unsafe {
+        status(c, "fmi2GetBooleanStatus", (kind, 3), value, |s| {
+            c_int::from(s.phase() == Phase::Terminated)
+        })
+    }
 }
 
 #[no_mangle]
@@ -566,94 +349,13 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     _kind: c_int,
     _value: *mut *const c_char,
 ) -> fmi2Status {
-    with(c, "fmi2GetStringStatus", |_| Ok(DISCARD))
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2GetFMUstate(c: *mut c_void, slot: *mut *mut c_void) -> fmi2Status {
-    with(c, "fmi2GetFMUstate", |comp| {
-        // SAFETY: the host's slot for the state pointer.
-        unsafe { host::get_state(comp.model.as_ref(), slot) }.map(|()| OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SetFMUstate(c: *mut c_void, state: *mut c_void) -> fmi2Status {
-    with(c, "fmi2SetFMUstate", |comp| {
-        // SAFETY: made by fmi2GetFMUstate / fmi2DeSerializeFMUstate and not yet freed.
-        unsafe { host::set_state(comp.model.as_mut(), state) }.map(|()| OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2FreeFMUstate(c: *mut c_void, slot: *mut *mut c_void) -> fmi2Status {
-    with(c, "fmi2FreeFMUstate", |_| {
-        // SAFETY: the host's slot, holding a state made here or null.
-        unsafe { host::free_state(slot) };
-        Ok(OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
-    c: *mut c_void,
-    state: *mut c_void,
-    size: *mut usize,
-) -> fmi2Status {
-    with(c, "fmi2SerializedFMUstateSize", |comp| {
-        // SAFETY: a state made here; one writable size slot.
-        unsafe { host::state_size(comp.model.as_ref(), state, size) }.map(|()| OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2SerializeFMUstate(
-    c: *mut c_void,
-    state: *mut c_void,
-    bytes: *mut c_char,
-    size: usize,
-) -> fmi2Status {
-    with(c, "fmi2SerializeFMUstate", |comp| {
-        // SAFETY: a state made here; `size` writable bytes.
-        unsafe { host::serialize_state(comp.model.as_ref(), state, bytes as *mut u8, size) }
-            .map(|()| OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
-    c: *mut c_void,
-    bytes: *const c_char,
-    size: usize,
-    slot: *mut *mut c_void,
-) -> fmi2Status {
-    with(c, "fmi2DeSerializeFMUstate", |comp| {
-        // SAFETY: `size` readable bytes; one writable slot.
-        unsafe { host::deserialize_state(comp.model.as_ref(), bytes as *const u8, size, slot) }
-            .map(|()| OK)
-    })
+    component::with::<Fmi2>(c, "fmi2GetStringStatus", |_| Ok(DISCARD))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn file_uris_become_paths() {
-        assert_eq!(
-            uri_to_path("file:///tmp/a%20b/resources").unwrap(),
-            std::path::PathBuf::from("/tmp/a b/resources")
-        );
-        assert_eq!(
-            uri_to_path("file:/tmp/x").unwrap(),
-            std::path::PathBuf::from("/tmp/x")
-        );
-        assert_eq!(
-            uri_to_path("file://localhost/tmp/x").unwrap(),
-            std::path::PathBuf::from("/tmp/x")
-        );
-        assert!(uri_to_path("http://example.org/x").is_none());
-    }
+    use crate::host::ERROR;
 
     #[test]
     fn null_component_and_bad_instantiation_are_errors_not_crashes() {

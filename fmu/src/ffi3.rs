@@ -1,52 +1,59 @@
 //! The FMI 3.0 Co-Simulation C API over the same [`Instance`] as FMI 2.0 ([`crate::ffi`]).
 //!
 //! Every exported function runs its body inside [`host::with`] (no panic crosses into the
-//! host; an error is logged through the host's `logMessage` and returned as `fmi3Error`).
-//! The variables are the 2.0 table's with the same value references (`Float64`, `Int32`,
-//! `String`), plus the independent variable `time` and the early-return switches (`Boolean`
-//! `<tool>.early_return.contact` and `.force`, `Float64` `.force_level`): with
-//! `earlyReturnAllowed`, `fmi3DoStep` ends at the solver step where an armed event happens,
-//! with `earlyReturn` and `lastSuccessfulTime`. With `output.pressure_stations` in the
-//! scene, `<tool>.contact_pressure` is a `Float64` array output (one value per station). With
-//! an `intermediateUpdate` callback, it
-//! is called after every solver step (on the thread that steps, while the host waits in
+//! host; an error is logged through the host's `logMessage` and returned as `fmi3Error`),
+//! most of them a thin wrapper over a body shared with FMI 2.0 (the crate's `component`,
+//! `values` and `fmu_state` modules). The variables are the 2.0 table's with the same value
+//! references (`Float64`, `Int32`, `String`), plus the independent variable `time` and the
+//! early-return switches (`Boolean` `<tool>.early_return.contact` and `.force`, `Float64`
+//! `.force_level`): with `earlyReturnAllowed`, `fmi3DoStep` ends at the solver step where
+//! an armed event happens, with `earlyReturn` and `lastSuccessfulTime`. With
+//! `output.pressure_stations` in the scene, `<tool>.contact_pressure` is a `Float64` array
+//! output (one value per station). With an `intermediateUpdate` callback, it is called
+//! after every solver step (on the thread that steps, while the host waits in
 //! `fmi3DoStep`); the time and the outputs are readable in it, and with early return
-//! allowed it may ask the step to return there. Every function of the standard's
-//! headers is exported (importers such as fmpy bind them all); the other types, Model
-//! Exchange, Scheduled Execution, event mode, clocks and derivatives are not provided and
-//! answer `fmi3Error` with a message naming what was asked.
+//! allowed it may ask the step to return there. Every function of the standard's headers is
+//! exported (importers such as fmpy bind them all); the other types, Model Exchange,
+//! Scheduled Execution, event mode, clocks and derivatives are not provided and answer
+//! `fmi3Error` with a message naming what was asked.
 
 #![allow(non_snake_case, non_camel_case_types, clippy::missing_safety_doc)]
 
-use crate::host::{self, slice, slice_mut, text, Host, ERROR, OK};
-use crate::Instance;
-use std::ffi::{c_char, c_int, c_void, CString};
+use crate::component::{self, Component};
+use crate::host::{self, slice, slice_mut, text, ERROR, OK};
+use crate::logging::{self, Callback, Env, Fmi3LogMessage, Log};
+use crate::{fmu_state, resources, values, Instance, Slave};
+use rkforge_core::Error;
+use std::ffi::{c_char, c_int, c_void};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 /// `fmi3Status`.
 pub type fmi3Status = c_int;
 /// `fmi3ValueReference`.
 type Vr = u32;
-type Env = *mut c_void;
-/// `fmi3LogMessageCallback`.
-type LogMessage = unsafe extern "C" fn(Env, fmi3Status, *const c_char, *const c_char);
 /// `fmi3IntermediateUpdateCallback`: called after every solver step of a `fmi3DoStep`.
 type IntermediateUpdate =
     unsafe extern "C" fn(Env, f64, bool, bool, bool, bool, *mut bool, *mut f64);
 
-/// What the host's `fmi3Instance` points to.
-pub struct Component {
+/// The model of an FMI 3.0 component: the forging instance and what the importer asked at
+/// instantiation.
+struct Fmi3 {
     instance: Instance,
-    log_message: Option<LogMessage>,
-    env: Env,
-    logging: bool,
-    categories: [bool; 3],
-    strings: Vec<CString>,
     time_vr: Vr,
     /// The importer allows `fmi3DoStep` to return early (`earlyReturnAllowed`).
     early_return: bool,
     /// The importer's intermediate-update callback.
     intermediate_update: Option<IntermediateUpdate>,
+}
+
+impl component::Model for Fmi3 {
+    const ARRAYS: [&'static str; 2] = ["valueReferences", "values"];
+    fn slave(&self) -> &dyn Slave {
+        &self.instance
+    }
+    fn slave_mut(&mut self) -> &mut dyn Slave {
+        &mut self.instance
+    }
 }
 
 /// The host's environment pointer, carried into the stepping thread (the host's callback
@@ -64,48 +71,6 @@ impl HostEnv {
     }
 }
 
-impl Component {
-    fn log(&self, status: fmi3Status, message: &str) {
-        let category = host::category(status);
-        if !(self.logging && (self.categories[category] || self.categories[2])) {
-            return;
-        }
-        if let Some(log) = self.log_message {
-            let msg = CString::new(message.replace('\0', " ")).unwrap_or_default();
-            let cat = CString::new(host::CATEGORY_NAMES[category]).unwrap_or_default();
-            // SAFETY: the host's callback for this environment, with valid C strings.
-            unsafe { log(self.env, status, cat.as_ptr(), msg.as_ptr()) };
-        }
-    }
-}
-
-impl Host for Component {
-    fn fail(&self, status: fmi3Status, message: &str) -> fmi3Status {
-        self.log(status, message);
-        status
-    }
-}
-
-/// [`host::with`] on an FMI 3.0 [`Component`].
-fn with(
-    c: *mut c_void,
-    what: &str,
-    body: impl FnOnce(&mut Component) -> Result<fmi3Status, String>,
-) -> fmi3Status {
-    host::with::<Component>(c, what, body)
-}
-
-/// Scalar variables only: one value per value reference.
-fn scalars(what: &str, n_vr: usize, n_values: usize) -> Result<(), String> {
-    if n_vr == n_values {
-        Ok(())
-    } else {
-        Err(format!(
-            "{n_values} values for {n_vr} value references ({what}: every variable is a scalar)"
-        ))
-    }
-}
-
 #[no_mangle]
 pub extern "C" fn fmi3GetVersion() -> *const c_char {
     c"3.0".as_ptr()
@@ -118,22 +83,8 @@ pub unsafe extern "C" fn fmi3SetDebugLogging(
     n: usize,
     categories: *const *const c_char,
 ) -> fmi3Status {
-    with(c, "fmi3SetDebugLogging", |comp| {
-        // SAFETY: `n` category strings at `categories`.
-        let wanted = unsafe { host::wanted_categories(n, categories) }?;
-        comp.logging = on;
-        comp.categories = wanted;
-        Ok(OK)
-    })
-}
-
-/// Report a problem before an instance exists, through the host's `logMessage`.
-unsafe fn log_early(log: Option<LogMessage>, env: Env, message: &str) {
-    if let Some(log) = log {
-        let msg = CString::new(message.replace('\0', " ")).unwrap_or_default();
-        // SAFETY: the host's callback with valid C strings.
-        unsafe { log(env, ERROR, c"logStatusError".as_ptr(), msg.as_ptr()) };
-    }
+    // SAFETY: `n` category strings at `categories`.
+    unsafe { component::set_debug_logging::<Fmi3>(c, "fmi3SetDebugLogging", on, n, categories) }
 }
 
 #[no_mangle]
@@ -148,68 +99,65 @@ pub unsafe extern "C" fn fmi3InstantiateCoSimulation(
     _required_intermediate: *const Vr,
     _n_required_intermediate: usize,
     env: Env,
-    log_message: Option<LogMessage>,
+    log_message: Option<Fmi3LogMessage>,
     intermediate_update: Option<IntermediateUpdate>,
 ) -> *mut c_void {
-    let made = catch_unwind(AssertUnwindSafe(|| -> Result<Box<Component>, String> {
+    let callback = log_message.map(Callback::Fmi3);
+    let make = || -> Result<Component<Fmi3>, String> {
         // SAFETY (all three): host strings, NUL-terminated when non-null.
-        unsafe { text(instance_name) }.ok_or("instanceName is null")?;
+        let name = unsafe { text(instance_name) }.ok_or("instanceName is null")?;
         if event_mode_used {
             return Err("eventModeUsed: this FMU has no event mode (hasEventMode = false)".into());
         }
         let folder = unsafe { text(resource_path) }
             .ok_or("resourcePath is null: the scene lives in resources/")?;
-        let path = std::path::Path::new(&folder).join("scene.toml");
-        let scene = std::fs::read_to_string(&path)
-            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        let instance =
-            Instance::new(&scene, &path.display().to_string()).map_err(|e| e.to_string())?;
-        if let Some(t) = unsafe { text(token) } {
-            if t != instance.guid() {
-                return Err(format!(
-                    "instantiationToken {t} does not match the scene in resources/ ({})",
-                    instance.guid()
-                ));
-            }
-        }
-        let time_vr = instance.time_value_reference();
-        Ok(Box::new(Component {
+        let instance = resources::scene_instance(std::path::Path::new(&folder))?;
+        let given = unsafe { text(token) };
+        resources::check_token(given, "instantiationToken", instance.guid(), "scene")?;
+        let model = Fmi3 {
+            time_vr: instance.time_value_reference(),
             instance,
-            log_message,
-            env,
-            logging: logging_on,
-            categories: [true; 3],
-            strings: Vec::new(),
-            time_vr,
             early_return: early_return_allowed,
             intermediate_update,
-        }))
-    }));
-    match made {
-        Ok(Ok(c)) => Box::into_raw(c) as *mut c_void,
-        Ok(Err(msg)) => {
-            // SAFETY: the host's callback and environment as received.
-            unsafe {
-                log_early(
-                    log_message,
-                    env,
-                    &format!("fmi3InstantiateCoSimulation: {msg}"),
-                )
-            };
-            std::ptr::null_mut()
-        }
-        Err(_) => {
-            // SAFETY: as above.
-            unsafe {
-                log_early(
-                    log_message,
-                    env,
-                    "fmi3InstantiateCoSimulation: internal error (panic)",
-                )
-            };
-            std::ptr::null_mut()
-        }
+        };
+        Ok(Component::new(
+            model,
+            Log::new(callback, env, &name, logging_on),
+        ))
+    };
+    // SAFETY: the host's callback and environment as received; FMI 3.0's logger takes no
+    // instance name.
+    unsafe {
+        component::instantiate::<Fmi3>(
+            "fmi3InstantiateCoSimulation",
+            (callback, env, std::ptr::null()),
+            make,
+        )
     }
+}
+
+/// The instantiate function `what` of an interface type other than Co-Simulation: logs
+/// that this FMU is Co-Simulation only and gives null.
+///
+/// # Safety
+///
+/// `env` is the environment the host gave with `log_message`.
+unsafe fn co_simulation_only(
+    what: &str,
+    env: Env,
+    log_message: Option<Fmi3LogMessage>,
+) -> *mut c_void {
+    let message = format!("{what}: this FMU is Co-Simulation only");
+    // SAFETY: as the caller promises.
+    unsafe {
+        logging::early(
+            log_message.map(Callback::Fmi3),
+            env,
+            std::ptr::null(),
+            &message,
+        )
+    };
+    std::ptr::null_mut()
 }
 
 #[no_mangle]
@@ -220,17 +168,10 @@ pub unsafe extern "C" fn fmi3InstantiateModelExchange(
     _visible: bool,
     _logging_on: bool,
     env: Env,
-    log_message: Option<LogMessage>,
+    log_message: Option<Fmi3LogMessage>,
 ) -> *mut c_void {
     // SAFETY: the host's callback and environment as received.
-    unsafe {
-        log_early(
-            log_message,
-            env,
-            "fmi3InstantiateModelExchange: this FMU is Co-Simulation only",
-        )
-    };
-    std::ptr::null_mut()
+    unsafe { co_simulation_only("fmi3InstantiateModelExchange", env, log_message) }
 }
 
 #[no_mangle]
@@ -241,26 +182,19 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
     _visible: bool,
     _logging_on: bool,
     env: Env,
-    log_message: Option<LogMessage>,
+    log_message: Option<Fmi3LogMessage>,
     _clock_update: *mut c_void,
     _lock: *mut c_void,
     _unlock: *mut c_void,
 ) -> *mut c_void {
     // SAFETY: the host's callback and environment as received.
-    unsafe {
-        log_early(
-            log_message,
-            env,
-            "fmi3InstantiateScheduledExecution: this FMU is Co-Simulation only",
-        )
-    };
-    std::ptr::null_mut()
+    unsafe { co_simulation_only("fmi3InstantiateScheduledExecution", env, log_message) }
 }
 
-#[no_mangle]
-pub unsafe extern "C" fn fmi3FreeInstance(c: *mut c_void) {
-    // SAFETY: made by fmi3InstantiateCoSimulation and not yet freed (the host's duty).
-    unsafe { host::free::<Component>(c) }
+// Freeing, leaving initialization, terminating and resetting, over the bodies FMI 2.0 shares.
+component::entry_points! {
+    model: Fmi3, free: fmi3FreeInstance,
+    exit_initialization: fmi3ExitInitializationMode, terminate: fmi3Terminate, reset: fmi3Reset,
 }
 
 #[no_mangle]
@@ -272,40 +206,9 @@ pub extern "C" fn fmi3EnterInitializationMode(
     _stop_defined: bool,
     _stop: f64,
 ) -> fmi3Status {
-    with(c, "fmi3EnterInitializationMode", |comp| {
-        comp.instance
-            .setup_experiment(start)
-            .and_then(|()| comp.instance.enter_initialization())
-            .map(|()| OK)
-            .map_err(|e| e.to_string())
-    })
-}
-
-#[no_mangle]
-pub extern "C" fn fmi3ExitInitializationMode(c: *mut c_void) -> fmi3Status {
-    with(c, "fmi3ExitInitializationMode", |comp| {
-        comp.instance
-            .exit_initialization()
-            .map(|()| OK)
-            .map_err(|e| e.to_string())
-    })
-}
-
-#[no_mangle]
-pub extern "C" fn fmi3Terminate(c: *mut c_void) -> fmi3Status {
-    with(c, "fmi3Terminate", |comp| {
-        comp.instance
-            .terminate()
-            .map(|()| OK)
-            .map_err(|e| e.to_string())
-    })
-}
-
-#[no_mangle]
-pub extern "C" fn fmi3Reset(c: *mut c_void) -> fmi3Status {
-    with(c, "fmi3Reset", |comp| {
-        comp.instance.reset();
-        Ok(OK)
+    component::call::<Fmi3>(c, "fmi3EnterInitializationMode", |s| {
+        s.setup_experiment(start)?;
+        s.enter_initialization()
     })
 }
 
@@ -320,13 +223,14 @@ pub unsafe extern "C" fn fmi3GetFloat64(
     if host::in_intermediate(c as usize) {
         return intermediate_floats(c as usize, vr, n_vr, values, n_values);
     }
-    with(c, "fmi3GetFloat64", |comp| {
+    component::with::<Fmi3>(c, "fmi3GetFloat64", |comp| {
+        let (instance, time_vr) = (&mut comp.model.instance, comp.model.time_vr);
         // SAFETY: `n_vr` value references and `n_values` output slots from the host.
         let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
         let out = unsafe { slice_mut(values, n_values, "values") }?;
         let sizes: Vec<usize> = vrs
             .iter()
-            .map(|v| comp.instance.array_len(*v).unwrap_or(1))
+            .map(|v| instance.array_len(*v).unwrap_or(1))
             .collect();
         let total: usize = sizes.iter().sum();
         if total != n_values {
@@ -336,17 +240,14 @@ pub unsafe extern "C" fn fmi3GetFloat64(
         }
         let mut at = 0;
         for (v, n) in vrs.iter().zip(sizes) {
-            if comp.instance.array_len(*v).is_some() {
-                let array = comp
-                    .instance
-                    .get_real_array(*v)
-                    .map_err(|e| e.to_string())?;
+            if instance.array_len(*v).is_some() {
+                let array = instance.get_real_array(*v).map_err(|e| e.to_string())?;
                 out[at..at + n].copy_from_slice(&array);
             } else {
-                out[at] = if *v == comp.time_vr {
-                    comp.instance.time()
+                out[at] = if *v == time_vr {
+                    instance.time()
                 } else {
-                    comp.instance.get_real(*v).map_err(|e| e.to_string())?
+                    instance.get_real(*v).map_err(|e| e.to_string())?
                 };
             }
             at += n;
@@ -366,7 +267,7 @@ unsafe fn intermediate_floats(
     n_values: usize,
 ) -> fmi3Status {
     let read = || -> Result<(), String> {
-        scalars("Float64", n_vr, n_values)?;
+        values::scalars("Float64", n_vr, n_values)?;
         // SAFETY: as in fmi3GetFloat64.
         let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
         let out = unsafe { slice_mut(values, n_values, "values") }?;
@@ -391,161 +292,17 @@ pub unsafe extern "C" fn fmi3SetFloat64(
     values: *const f64,
     n_values: usize,
 ) -> fmi3Status {
-    with(c, "fmi3SetFloat64", |comp| {
-        scalars("Float64", n_vr, n_values)?;
-        // SAFETY: `n_vr` value references and as many values from the host.
-        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
-        let vals = unsafe { slice(values, n_values, "values") }?;
-        for (v, x) in vrs.iter().zip(vals) {
-            if *v == comp.time_vr {
-                return Err("`time` is the independent variable and cannot be set".into());
+    let arrays = ((vr, n_vr), (values, n_values));
+    // SAFETY: the host's arrays, checked in values::set.
+    unsafe {
+        values::set::<Fmi3, _>(c, ("fmi3SetFloat64", "Float64"), arrays, |m, v, x| {
+            if v == m.time_vr {
+                return Err(Error::Request(
+                    "`time` is the independent variable and cannot be set".into(),
+                ));
             }
-            comp.instance.set_real(*v, *x).map_err(|e| e.to_string())?;
-        }
-        Ok(OK)
-    })
-}
-
-/// `fmi3Get<Type>` of scalars: one value per value reference through `get`.
-unsafe fn get_scalars<T>(
-    c: *mut c_void,
-    what: &str,
-    (vr, n_vr): (*const Vr, usize),
-    (values, n_values): (*mut T, usize),
-    get: impl Fn(&mut Instance, Vr) -> crate::Result<T>,
-) -> fmi3Status {
-    with(c, what, |comp| {
-        scalars(what, n_vr, n_values)?;
-        // SAFETY: `n_vr` value references and as many output slots from the host.
-        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
-        let out = unsafe { slice_mut(values, n_values, "values") }?;
-        for (v, o) in vrs.iter().zip(out.iter_mut()) {
-            *o = get(&mut comp.instance, *v).map_err(|e| e.to_string())?;
-        }
-        Ok(OK)
-    })
-}
-
-/// `fmi3Set<Type>` of scalars: one value per value reference through `set`.
-unsafe fn set_scalars<T: Copy>(
-    c: *mut c_void,
-    what: &str,
-    (vr, n_vr): (*const Vr, usize),
-    (values, n_values): (*const T, usize),
-    set: impl Fn(&mut Instance, Vr, T) -> Result<(), String>,
-) -> fmi3Status {
-    with(c, what, |comp| {
-        scalars(what, n_vr, n_values)?;
-        // SAFETY: `n_vr` value references and as many values from the host.
-        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
-        let vals = unsafe { slice(values, n_values, "values") }?;
-        for (v, x) in vrs.iter().zip(vals) {
-            set(&mut comp.instance, *v, *x)?;
-        }
-        Ok(OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3GetInt32(
-    c: *mut c_void,
-    vr: *const Vr,
-    n_vr: usize,
-    values: *mut i32,
-    n_values: usize,
-) -> fmi3Status {
-    // SAFETY: the host's arrays, checked in get_scalars.
-    unsafe {
-        get_scalars(
-            c,
-            "fmi3GetInt32",
-            (vr, n_vr),
-            (values, n_values),
-            Instance::get_integer,
-        )
-    }
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SetInt32(
-    c: *mut c_void,
-    vr: *const Vr,
-    n_vr: usize,
-    values: *const i32,
-    n_values: usize,
-) -> fmi3Status {
-    // SAFETY: the host's arrays, checked in set_scalars.
-    unsafe {
-        set_scalars(
-            c,
-            "fmi3SetInt32",
-            (vr, n_vr),
-            (values, n_values),
-            |i, v, x| i.set_integer(v, x).map_err(|e| e.to_string()),
-        )
-    }
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3GetBoolean(
-    c: *mut c_void,
-    vr: *const Vr,
-    n_vr: usize,
-    values: *mut bool,
-    n_values: usize,
-) -> fmi3Status {
-    // SAFETY: the host's arrays, checked in get_scalars.
-    unsafe {
-        get_scalars(
-            c,
-            "fmi3GetBoolean",
-            (vr, n_vr),
-            (values, n_values),
-            |i, v| i.get_boolean(v),
-        )
-    }
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SetBoolean(
-    c: *mut c_void,
-    vr: *const Vr,
-    n_vr: usize,
-    values: *const bool,
-    n_values: usize,
-) -> fmi3Status {
-    // SAFETY: the host's arrays, checked in set_scalars.
-    unsafe {
-        set_scalars(
-            c,
-            "fmi3SetBoolean",
-            (vr, n_vr),
-            (values, n_values),
-            |i, v, x| i.set_boolean(v, x).map_err(|e| e.to_string()),
-        )
-    }
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SetString(
-    c: *mut c_void,
-    vr: *const Vr,
-    n_vr: usize,
-    values: *const *const c_char,
-    n_values: usize,
-) -> fmi3Status {
-    // SAFETY: the host's arrays, checked in set_scalars; each string NUL-terminated.
-    unsafe {
-        set_scalars(
-            c,
-            "fmi3SetString",
-            (vr, n_vr),
-            (values, n_values),
-            |i, v, p| {
-                let s = text(p).ok_or("a String value is a null pointer")?;
-                i.set_string(v, &s).map_err(|e| e.to_string())
-            },
-        )
+            m.instance.set_real(v, x)
+        })
     }
 }
 
@@ -557,21 +314,69 @@ pub unsafe extern "C" fn fmi3GetString(
     values: *mut *const c_char,
     n_values: usize,
 ) -> fmi3Status {
-    with(c, "fmi3GetString", |comp| {
-        scalars("String", n_vr, n_values)?;
-        // SAFETY: as in fmi3GetFloat64.
-        let vrs = unsafe { slice(vr, n_vr, "valueReferences") }?;
-        let out = unsafe { slice_mut(values, n_values, "values") }?;
-        comp.strings.clear();
-        for v in vrs {
-            let s = comp.instance.get_string(*v).map_err(|e| e.to_string())?;
-            comp.strings.push(CString::new(s).unwrap_or_default());
+    let arrays = ((vr, n_vr), (values, n_values));
+    // SAFETY: the host's arrays, checked in values::get_strings.
+    unsafe {
+        values::get_strings::<Fmi3>(c, ("fmi3GetString", "String"), arrays, |m, v| {
+            m.instance.get_string(v)
+        })
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi3SetString(
+    c: *mut c_void,
+    vr: *const Vr,
+    n_vr: usize,
+    values: *const *const c_char,
+    n_values: usize,
+) -> fmi3Status {
+    let arrays = ((vr, n_vr), (values, n_values));
+    // SAFETY: the host's arrays, checked in values::set_strings; each string NUL-terminated.
+    unsafe {
+        values::set_strings::<Fmi3>(c, ("fmi3SetString", "fmi3SetString"), arrays, |m, v, x| {
+            m.instance.set_string(v, x)
+        })
+    }
+}
+
+/// `fmi3Get<Type>` and `fmi3Set<Type>` of a type of scalar variables: the instance's getter
+/// and setter over the host's arrays ([`values::get`], [`values::set`]).
+macro_rules! scalars {
+    ($($get:ident, $set:ident: $t:ty => $getter:ident, $setter:ident;)*) => {$(
+        #[no_mangle]
+        pub unsafe extern "C" fn $get(
+            c: *mut c_void,
+            vr: *const Vr,
+            n_vr: usize,
+            values: *mut $t,
+            n_values: usize,
+        ) -> fmi3Status {
+            let (call, arrays) = (stringify!($get), ((vr, n_vr), (values, n_values)));
+            // SAFETY: the host's arrays, checked in values::get.
+            unsafe { values::get::<Fmi3, _>(c, (call, call), arrays, |m, v| m.instance.$getter(v)) }
         }
-        for (o, s) in out.iter_mut().zip(&comp.strings) {
-            *o = s.as_ptr();
+
+        #[no_mangle]
+        pub unsafe extern "C" fn $set(
+            c: *mut c_void,
+            vr: *const Vr,
+            n_vr: usize,
+            values: *const $t,
+            n_values: usize,
+        ) -> fmi3Status {
+            let (call, arrays) = (stringify!($set), ((vr, n_vr), (values, n_values)));
+            // SAFETY: the host's arrays, checked in values::set.
+            unsafe {
+                values::set::<Fmi3, _>(c, (call, call), arrays, |m, v, x| m.instance.$setter(v, x))
+            }
         }
-        Ok(OK)
-    })
+    )*};
+}
+
+scalars! {
+    fmi3GetInt32, fmi3SetInt32: i32 => get_integer, set_integer;
+    fmi3GetBoolean, fmi3SetBoolean: bool => get_boolean, set_boolean;
 }
 
 /// Getters and setters of the types this FMU has no variables of: fine for no value
@@ -586,13 +391,7 @@ macro_rules! no_variables {
             _values: $t,
             _n_values: usize,
         ) -> fmi3Status {
-            with(c, stringify!($name), |_| {
-                if n_vr == 0 {
-                    Ok(OK)
-                } else {
-                    Err(concat!("this FMU has no ", $type_name, " variables").into())
-                }
-            })
+            values::none::<Fmi3>(c, stringify!($name), n_vr, $type_name)
         }
     )*};
 }
@@ -625,13 +424,7 @@ pub unsafe extern "C" fn fmi3GetBinary(
     _values: *mut *const u8,
     _n_values: usize,
 ) -> fmi3Status {
-    with(c, "fmi3GetBinary", |_| {
-        if n_vr == 0 {
-            Ok(OK)
-        } else {
-            Err("this FMU has no Binary variables".into())
-        }
-    })
+    values::none::<Fmi3>(c, "fmi3GetBinary", n_vr, "Binary")
 }
 
 #[no_mangle]
@@ -643,13 +436,7 @@ pub unsafe extern "C" fn fmi3SetBinary(
     _values: *const *const u8,
     _n_values: usize,
 ) -> fmi3Status {
-    with(c, "fmi3SetBinary", |_| {
-        if n_vr == 0 {
-            Ok(OK)
-        } else {
-            Err("this FMU has no Binary variables".into())
-        }
-    })
+    values::none::<Fmi3>(c, "fmi3SetBinary", n_vr, "Binary")
 }
 
 /// Functions of capabilities this FMU does not declare: always `fmi3Error` naming what was
@@ -659,7 +446,7 @@ macro_rules! not_provided {
         #[no_mangle]
         pub unsafe extern "C" fn $name(c: *mut c_void, $($arg: $t),*) -> fmi3Status {
             $(let _ = $arg;)*
-            with(c, stringify!($name), |_| Err($why.into()))
+            component::not_provided::<Fmi3>(c, stringify!($name), $why)
         }
     )*};
 }
@@ -710,19 +497,20 @@ pub unsafe extern "C" fn fmi3DoStep(
     early_return: *mut bool,
     last_successful_time: *mut f64,
 ) -> fmi3Status {
-    with(c, "fmi3DoStep", |comp| {
+    component::with::<Fmi3>(c, "fmi3DoStep", |comp| {
+        let model = &mut comp.model;
         // SAFETY: one writable value each, from the host.
         let event = unsafe { slice_mut(event_handling_needed, 1, "eventHandlingNeeded") }?;
         let terminate = unsafe { slice_mut(terminate_simulation, 1, "terminateSimulation") }?;
         let early = unsafe { slice_mut(early_return, 1, "earlyReturn") }?;
         let last = unsafe { slice_mut(last_successful_time, 1, "lastSuccessfulTime") }?;
-        let stepped = match comp.intermediate_update {
+        let stepped = match model.intermediate_update {
             Some(update) => {
                 let (env, key, early, time_vr) = (
-                    HostEnv(comp.env),
+                    HostEnv(comp.log.env()),
                     c as usize,
-                    comp.early_return,
-                    comp.time_vr,
+                    model.early_return,
+                    model.time_vr,
                 );
                 let mut observe = move |time: f64, outputs: &[(Vr, f64)]| -> bool {
                     let (mut requested, mut when) = (false, 0.0);
@@ -744,80 +532,25 @@ pub unsafe extern "C" fn fmi3DoStep(
                     });
                     requested
                 };
-                comp.instance.do_step_observed(t, h, early, &mut observe)
+                model.instance.do_step_observed(t, h, early, &mut observe)
             }
-            None if comp.early_return => comp.instance.do_step_early(t, h),
-            None => comp.instance.do_step(t, h).map(|()| None),
+            None if model.early_return => model.instance.do_step_early(t, h),
+            None => model.instance.do_step(t, h).map(|()| None),
         };
         event[0] = false;
         terminate[0] = false;
         early[0] = matches!(stepped, Ok(Some(_)));
-        last[0] = comp.instance.time();
+        last[0] = model.instance.time();
         stepped.map(|_| OK).map_err(|e| e.to_string())
     })
 }
 
-#[no_mangle]
-pub unsafe extern "C" fn fmi3GetFMUState(c: *mut c_void, slot: *mut *mut c_void) -> fmi3Status {
-    with(c, "fmi3GetFMUState", |comp| {
-        // SAFETY: the host's slot for the state pointer.
-        unsafe { host::get_state(&comp.instance, slot) }.map(|()| OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SetFMUState(c: *mut c_void, state: *mut c_void) -> fmi3Status {
-    with(c, "fmi3SetFMUState", |comp| {
-        // SAFETY: made by fmi3GetFMUState / fmi3DeserializeFMUState and not yet freed.
-        unsafe { host::set_state(&mut comp.instance, state) }.map(|()| OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3FreeFMUState(c: *mut c_void, slot: *mut *mut c_void) -> fmi3Status {
-    with(c, "fmi3FreeFMUState", |_| {
-        // SAFETY: the host's slot, holding a state made here or null.
-        unsafe { host::free_state(slot) };
-        Ok(OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
-    c: *mut c_void,
-    state: *mut c_void,
-    size: *mut usize,
-) -> fmi3Status {
-    with(c, "fmi3SerializedFMUStateSize", |comp| {
-        // SAFETY: a state made here; one writable size slot.
-        unsafe { host::state_size(&comp.instance, state, size) }.map(|()| OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3SerializeFMUState(
-    c: *mut c_void,
-    state: *mut c_void,
-    bytes: *mut u8,
-    size: usize,
-) -> fmi3Status {
-    with(c, "fmi3SerializeFMUState", |comp| {
-        // SAFETY: a state made here; `size` writable bytes.
-        unsafe { host::serialize_state(&comp.instance, state, bytes, size) }.map(|()| OK)
-    })
-}
-
-#[no_mangle]
-pub unsafe extern "C" fn fmi3DeserializeFMUState(
-    c: *mut c_void,
-    bytes: *const u8,
-    size: usize,
-    slot: *mut *mut c_void,
-) -> fmi3Status {
-    with(c, "fmi3DeserializeFMUState", |comp| {
-        // SAFETY: `size` readable bytes; one writable slot.
-        unsafe { host::deserialize_state(&comp.instance, bytes, size, slot) }.map(|()| OK)
-    })
+// The FMU-state functions, over the bodies FMI 2.0 shares.
+fmu_state::entry_points! {
+    model: Fmi3, byte: u8,
+    get: fmi3GetFMUState, set: fmi3SetFMUState, free: fmi3FreeFMUState,
+    size: fmi3SerializedFMUStateSize, serialize: fmi3SerializeFMUState,
+    deserialize: fmi3DeserializeFMUState,
 }
 
 #[cfg(test)]

@@ -1,9 +1,8 @@
-//! What the FMI 2.0 and 3.0 C APIs ([`crate::ffi`], [`crate::ffi3`]) share: the status
-//! codes (the same numbers in both), the panic barrier every exported function runs its body
-//! in, the checked conversions of host pointers, and the FMU state handles (a boxed
-//! [`Saved`]).
+//! The C boundary the FMI 2.0 and 3.0 APIs ([`crate::ffi`], [`crate::ffi3`]) share: the
+//! status codes (the same numbers in both), the panic barrier every exported function runs
+//! its body in, the checked conversions of host pointers, and the outputs readable while a
+//! step calls the host back (FMI 3.0 intermediate update).
 
-use crate::{Saved, Slave};
 use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -19,57 +18,8 @@ pub const ERROR: c_int = 3;
 /// `fmi2Fatal` / `fmi3Fatal`.
 pub const FATAL: c_int = 4;
 
-/// The log categories both APIs declare (`modelDescription.xml`'s `LogCategories`).
-pub const CATEGORY_NAMES: [&str; 3] = ["logStatusWarning", "logStatusError", "logAll"];
-
-/// The category a message of `status` is logged under (an index into [`CATEGORY_NAMES`]).
-pub fn category(status: c_int) -> usize {
-    match status {
-        OK => 2,
-        WARNING => 0,
-        _ => 1,
-    }
-}
-
-/// The categories a `SetDebugLogging` call asks for: all when it names none.
-///
-/// # Safety
-///
-/// `categories` holds `n` NUL-terminated strings when `n` is not zero.
-pub unsafe fn wanted_categories(
-    n: usize,
-    categories: *const *const c_char,
-) -> Result<[bool; 3], String> {
-    // SAFETY: `n` category strings at `categories`.
-    let list = unsafe { slice(categories, n, "categories") }?;
-    let mut wanted = [n == 0; 3];
-    for &p in list {
-        let name = unsafe { text(p) }.ok_or("a category is a null pointer")?;
-        let k = CATEGORY_NAMES
-            .iter()
-            .position(|c| *c == name)
-            .ok_or_else(|| format!("unknown log category `{name}`"))?;
-        wanted[k] = true;
-    }
-    Ok(wanted)
-}
-
-/// Free the component behind `c` (made by `Box::into_raw` of a `Box<C>`), catching a panic.
-///
-/// # Safety
-///
-/// `c` is null or a component of type `C` made by its API's instantiate function and not
-/// yet freed.
-pub unsafe fn free<C>(c: *mut c_void) {
-    if !c.is_null() {
-        // SAFETY: as the caller promises; the host frees it once.
-        let _ = catch_unwind(AssertUnwindSafe(|| {
-            drop(unsafe { Box::from_raw(c as *mut C) })
-        }));
-    }
-}
-
-/// What the host's instance pointer points to: a slave and the host's logger.
+/// What the host's instance pointer points to (a `component::Component`), as the panic
+/// barrier needs it: a way to report a failure to the host.
 pub trait Host {
     /// Log `message` with `status` through the host's logger; returns `status`.
     fn fail(&self, status: c_int, message: &str) -> c_int;
@@ -208,121 +158,4 @@ pub unsafe fn text(p: *const c_char) -> Option<String> {
     }
     // SAFETY: a non-null string from the host is NUL-terminated.
     Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
-}
-
-/// `GetFMUState`: a new handle holding the slave's [`Slave::save`] in the host's slot (the
-/// state the slot held, if any, is freed).
-///
-/// # Safety
-///
-/// `slot` is a writable pointer slot holding null or a state made here.
-pub unsafe fn get_state(slave: &dyn Slave, slot: *mut *mut c_void) -> Result<(), String> {
-    // SAFETY: one writable slot for the state pointer.
-    let slot = unsafe { slice_mut(slot, 1, "FMUState") }?;
-    if !slot[0].is_null() {
-        // SAFETY: a non-null state given back to us was made here and not yet freed.
-        drop(unsafe { Box::from_raw(slot[0] as *mut Saved) });
-    }
-    slot[0] = Box::into_raw(Box::new(slave.save())) as *mut c_void;
-    Ok(())
-}
-
-/// The saved state behind a handle.
-///
-/// # Safety
-///
-/// `handle` is null or a state made here and not yet freed.
-pub unsafe fn state<'a>(handle: *mut c_void) -> Result<&'a Saved, String> {
-    if handle.is_null() {
-        return Err("FMUState is null".into());
-    }
-    // SAFETY: made by get_state / deserialize_state and not yet freed.
-    Ok(unsafe { &*(handle as *const Saved) })
-}
-
-/// `SetFMUState`.
-///
-/// # Safety
-///
-/// As [`state`].
-pub unsafe fn set_state(slave: &mut dyn Slave, handle: *mut c_void) -> Result<(), String> {
-    let saved = unsafe { state(handle) }?;
-    slave.load(saved).map_err(|e| e.to_string())
-}
-
-/// `FreeFMUState`: free the state in the host's slot and null it.
-///
-/// # Safety
-///
-/// `slot` is null or a slot holding null or a state made here.
-pub unsafe fn free_state(slot: *mut *mut c_void) {
-    if slot.is_null() {
-        return;
-    }
-    // SAFETY: `slot` points to a slot holding a state made here, or null.
-    let slot = unsafe { &mut *slot };
-    if !slot.is_null() {
-        drop(unsafe { Box::from_raw(*slot as *mut Saved) });
-        *slot = std::ptr::null_mut();
-    }
-}
-
-/// `SerializedFMUStateSize`.
-///
-/// # Safety
-///
-/// As [`state`]; `size` is one writable value.
-pub unsafe fn state_size(
-    slave: &dyn Slave,
-    handle: *mut c_void,
-    size: *mut usize,
-) -> Result<(), String> {
-    let n = slave
-        .serialize(unsafe { state(handle) }?)
-        .map_err(|e| e.to_string())?
-        .len();
-    unsafe { slice_mut(size, 1, "size") }?[0] = n;
-    Ok(())
-}
-
-/// `SerializeFMUState` into `size` bytes at `bytes` (`size` must be the serialized size).
-///
-/// # Safety
-///
-/// As [`state`]; `bytes` holds `size` writable bytes.
-pub unsafe fn serialize_state(
-    slave: &dyn Slave,
-    handle: *mut c_void,
-    bytes: *mut u8,
-    size: usize,
-) -> Result<(), String> {
-    let data = slave
-        .serialize(unsafe { state(handle) }?)
-        .map_err(|e| e.to_string())?;
-    if data.len() != size {
-        return Err(format!(
-            "size {size} does not match the serialized size {}",
-            data.len()
-        ));
-    }
-    unsafe { slice_mut(bytes, size, "serializedState") }?.copy_from_slice(&data);
-    Ok(())
-}
-
-/// `DeserializeFMUState`: a new state from `size` serialized bytes, into the host's slot.
-///
-/// # Safety
-///
-/// `bytes` holds `size` readable bytes; `slot` is one writable pointer slot.
-pub unsafe fn deserialize_state(
-    slave: &dyn Slave,
-    bytes: *const u8,
-    size: usize,
-    slot: *mut *mut c_void,
-) -> Result<(), String> {
-    let data = unsafe { slice(bytes, size, "serializedState") }?;
-    let saved = slave.deserialize(data).map_err(|e| e.to_string())?;
-    let slot = unsafe { slice_mut(slot, 1, "FMUState") }?;
-    slot[0] = Box::into_raw(Box::new(saved)) as *mut c_void;
-    Ok(())
 }

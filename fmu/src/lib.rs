@@ -1,22 +1,32 @@
-//! The rkforge FMU: FMI 2.0 Co-Simulation of any scene.
+//! The rkforge FMU: FMI 2.0 and 3.0 Co-Simulation of any scene.
 //!
 //! Two layers: [`Instance`] is safe Rust over an explicit FMI state machine, reading and
-//! writing variables through the scene's variable table; [`ffi`] holds the exported C
-//! functions, every one wrapped in `catch_unwind`, with all `unsafe` pointer handling in one
-//! place.
+//! writing variables through the scene's variable table and stepping its simulation on the
+//! run layer (`rkforge-runner`, as the command line does); [`ffi`] (FMI 2.0) and [`ffi3`]
+//! (FMI 3.0) hold the exported C functions, thin wrappers over the bodies both share
+//! (`component`, `values`, `fmu_state`, `logging`, `resources`), every one run in the panic
+//! barrier of [`host`], with all `unsafe` pointer handling there.
 
+mod component;
 pub mod ffi;
 pub mod ffi3;
+mod fmu_state;
 pub mod host;
+mod logging;
 pub mod press;
+mod resources;
 pub mod slave;
+mod stepping;
+mod values;
 
 pub use slave::{Saved, Slave};
+pub use stepping::Observer;
 
 use rkforge_core::scene_parameters::{parameters, Parameter};
 use rkforge_core::{Error, Result, Scene, SceneSource, Simulation, State};
 use rkforge_model_description::{variable_table3, xml, Binding, Causality, Kind, Variable};
 use serde::{Deserialize, Serialize};
+use stepping::{EarlyReturn, Stepper};
 
 /// Where an instance is in the FMI 2.0 Co-Simulation state machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -36,32 +46,6 @@ pub enum Phase {
 /// The values set on the scene's parameters, by parameter index
 /// ([`rkforge_core::scene_parameters::parameters`]); `None` keeps the scene's own.
 pub type Params = Vec<Option<toml::Value>>;
-
-/// The early-return events of one tool (FMI 3.0 `fmi3DoStep`).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-struct EarlyReturn {
-    /// At the first touch of the workpiece.
-    contact: bool,
-    /// When the force magnitude first reaches `level`.
-    force: bool,
-    /// Force level (N).
-    level: f64,
-}
-
-/// Whether tool `k` touches the workpiece, and whether its force magnitude has reached its
-/// early-return level: the states whose rise ends a step early.
-fn event_states(sim: &Simulation, early: &[EarlyReturn]) -> Vec<(bool, bool)> {
-    early
-        .iter()
-        .enumerate()
-        .map(|(k, e)| {
-            (
-                sim.contact_fraction(k) > 0.0,
-                sim.tools()[k].axial_force().abs() >= e.level,
-            )
-        })
-        .collect()
-}
 
 /// The value of a Real variable that the simulation answers (an input's current value, an
 /// output), `None` for the other bindings.
@@ -107,11 +91,6 @@ fn outputs_of(table: &[Variable], sim: &Simulation, commands: &[Option<f64>]) ->
         .collect()
 }
 
-/// What a step reports after each solver step (FMI 3.0 intermediate update): the time (s)
-/// and the Float64 outputs by value reference; it returns true to ask the step to return
-/// early there.
-pub type Observer<'a> = &'a mut (dyn FnMut(f64, &[(u32, f64)]) -> bool + Send);
-
 /// A saved FMU state: everything needed to continue bit for bit, also in a fresh instance.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot {
@@ -136,7 +115,8 @@ pub struct Instance {
     early: Vec<EarlyReturn>,
     params: Params,
     commands: Vec<Option<f64>>,
-    sim: Option<Simulation>,
+    /// The simulation on the run layer, once built.
+    sim: Option<Stepper>,
     phase: Phase,
     start_time: f64,
 }
@@ -184,11 +164,11 @@ impl Instance {
     }
     /// Current time (s).
     pub fn time(&self) -> f64 {
-        self.start_time + self.sim.as_ref().map_or(0.0, Simulation::time)
+        self.start_time + self.simulation().map_or(0.0, Simulation::time)
     }
     /// The simulation, once initialised.
     pub fn simulation(&self) -> Option<&Simulation> {
-        self.sim.as_ref()
+        self.sim.as_ref().map(Stepper::sim)
     }
 
     fn variable(&self, vr: u32) -> Result<&Variable> {
@@ -242,7 +222,7 @@ impl Instance {
                 sim.set_tool_velocity(k, *v)?;
             }
         }
-        self.sim = Some(sim);
+        self.sim = Some(Stepper::new(sim));
         Ok(())
     }
 
@@ -315,8 +295,7 @@ impl Instance {
         if self.sim.is_none() {
             self.build()?;
         }
-        self.sim
-            .as_ref()
+        self.simulation()
             .ok_or_else(|| request("no simulation".into()))
     }
 
@@ -406,7 +385,7 @@ impl Instance {
             (Binding::ToolVelocity(k), _) => {
                 self.commands[k] = Some(value);
                 if let Some(sim) = self.sim.as_mut() {
-                    sim.set_tool_velocity(k, value)?;
+                    sim.sim_mut().set_tool_velocity(k, value)?;
                 }
                 Ok(())
             }
@@ -481,7 +460,7 @@ impl Instance {
         t: f64,
         h: f64,
         early: bool,
-        mut observe: Option<Observer<'_>>,
+        observe: Option<Observer<'_>>,
     ) -> Result<Option<f64>> {
         self.expect(&[Phase::Stepping], "doStep")?;
         if !(h > 0.0 && h.is_finite()) {
@@ -496,56 +475,21 @@ impl Instance {
             )));
         }
         let target = now - self.start_time + h;
-        let armed: Vec<EarlyReturn> = self
-            .early
-            .iter()
-            .map(|e| EarlyReturn {
-                contact: e.contact && early,
-                force: e.force && early,
-                level: e.level,
-            })
-            .collect();
+        let armed: Vec<EarlyReturn> = self.early.iter().map(|e| e.armed(early)).collect();
         let (table, commands, start) = (&self.table, &self.commands, self.start_time);
-        let sim = self
+        let stepper = self
             .sim
             .as_mut()
             .ok_or_else(|| request("not initialised".into()))?;
-        let any_armed = armed.iter().any(|e| e.contact || e.force);
-        let mut before = if any_armed {
-            event_states(sim, &armed)
-        } else {
-            Vec::new()
-        };
-        // Before each solver step after the first: what the last one did. An armed state
-        // that rose ends the step; so does the observer's request, when early return is on.
-        let ran = sim.run_toward(target, u64::MAX, |sim, taken| {
-            if taken == 0 {
-                return true;
-            }
-            if any_armed {
-                let now = event_states(sim, &armed);
-                let fired = armed
-                    .iter()
-                    .zip(before.iter().zip(&now))
-                    .any(|(e, (b, n))| (e.contact && !b.0 && n.0) || (e.force && !b.1 && n.1));
-                before = now;
-                if fired {
-                    return false;
-                }
-            }
-            match observe.as_mut() {
-                Some(o) => !(o(start + sim.time(), &outputs_of(table, sim, commands)) && early),
-                None => true,
-            }
+        let mut report = observe.map(|o| {
+            move |sim: &Simulation| o(start + sim.time(), &outputs_of(table, sim, commands))
         });
-        if let (Ok(r), Some(o)) = (&ran, observe.as_mut()) {
-            if r.reached && r.steps > 0 {
-                o(start + sim.time(), &outputs_of(table, sim, commands));
-            }
-        }
-        match ran {
-            Ok(r) if r.interrupted => Ok(Some(start + sim.time())),
-            Ok(_) => Ok(None),
+        let report = report
+            .as_mut()
+            .map(|r| r as &mut (dyn FnMut(&Simulation) -> bool + Send));
+        match stepper.step_to(target, &armed, early, report) {
+            Ok(true) => Ok(Some(start + stepper.sim().time())),
+            Ok(false) => Ok(None),
             Err(e) => {
                 self.phase = Phase::Failed;
                 Err(e)
@@ -600,7 +544,7 @@ impl Instance {
             params: self.params.clone(),
             start_time: self.start_time,
             commands: self.commands.clone(),
-            state: self.sim.as_ref().map(|s| s.state().clone()),
+            state: self.simulation().map(|s| s.state().clone()),
         }
     }
 
@@ -617,15 +561,14 @@ impl Instance {
         match &s.state {
             Some(state) => {
                 if self
-                    .sim
-                    .as_ref()
+                    .simulation()
                     .is_none_or(|sim| sim.state().d.len() != state.d.len())
                 {
                     self.sim = None;
                     self.build()?;
                 }
                 if let Some(sim) = self.sim.as_mut() {
-                    sim.restore(state.clone())?;
+                    sim.sim_mut().restore(state.clone())?;
                 }
             }
             None => self.sim = None,
@@ -695,6 +638,26 @@ mod tests {
         // most the largest force over the stroke (the force rises as the bar arrives).
         let work = inst.get_real(vr(&inst, "energy.tool_work")).unwrap();
         assert!(work < 0.0 && -work <= f * 2.0 * 5e-6, "{work} J");
+    }
+
+    /// A step that returns early leaves its communication point unreached; the next step
+    /// runs from where it returned to its own point, not to the one left behind.
+    #[test]
+    fn a_step_after_an_early_return_lands_on_its_own_point() {
+        let mut i = Instance::new(&scene_text(), "t").unwrap();
+        i.set_boolean(vr(&i, "wall.early_return.force"), true)
+            .unwrap();
+        i.set_real(vr(&i, "wall.early_return.force_level"), 1e4)
+            .unwrap();
+        i.enter_initialization().unwrap();
+        i.exit_initialization().unwrap();
+        let h = 1e-4;
+        let back = i.do_step_early(0.0, h).unwrap().expect("an early return");
+        assert!(back > 0.0 && back < h, "{back}");
+        assert_eq!(i.time(), back);
+        i.do_step(back, 1e-6).unwrap();
+        assert!((i.time() - (back + 1e-6)).abs() < 1e-15, "{}", i.time());
+        assert_eq!(i.do_step_early(i.time(), 1e-6).unwrap(), None);
     }
 
     #[test]

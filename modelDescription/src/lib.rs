@@ -9,6 +9,7 @@
 //! the same table. The same table is meant to drive `modelDescription.xml` and the FMU's
 //! getters and setters, so the two cannot drift.
 
+mod document;
 pub mod press;
 pub mod xml;
 pub mod xml3;

@@ -1,10 +1,12 @@
 //! `modelDescription.xml` (FMI 2.0 Co-Simulation) written from the variable table with
-//! quick-xml, and read back with quick-xml to check what a host will see; the parts FMI 3.0
-//! shares with it (units, log categories, default experiment) for [`crate::xml3`].
+//! quick-xml over the parts FMI 3.0 shares ([`crate::document`]), and read back with
+//! quick-xml to check what a host will see; the [`Header`], log categories and GUID both
+//! versions use.
 
-use crate::{Causality, Kind, Variability, Variable};
-use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
-use quick_xml::{Reader, Writer};
+use crate::document::{self, Doc, Version};
+use crate::{Causality, Kind, Variable};
+use quick_xml::events::{BytesStart, Event};
+use quick_xml::Reader;
 
 /// Facts about the FMU besides its variables.
 #[derive(Debug, Clone, PartialEq)]
@@ -52,166 +54,19 @@ pub fn guid(text: &str) -> String {
     )
 }
 
-fn unit_base(unit: &str) -> &'static [(&'static str, &'static str)] {
-    match unit {
-        "m" => &[("m", "1")],
-        "s" => &[("s", "1")],
-        "m/s" => &[("m", "1"), ("s", "-1")],
-        "N" => &[("kg", "1"), ("m", "1"), ("s", "-2")],
-        "J" => &[("kg", "1"), ("m", "2"), ("s", "-2")],
-        "W" => &[("kg", "1"), ("m", "2"), ("s", "-3")],
-        "W/(m.K)" => &[("kg", "1"), ("m", "1"), ("s", "-3"), ("K", "-1")],
-        "W/(m2.K)" => &[("kg", "1"), ("s", "-3"), ("K", "-1")],
-        "Pa" => &[("kg", "1"), ("m", "-1"), ("s", "-2")],
-        "kg/m3" => &[("kg", "1"), ("m", "-3")],
-        "1/s" => &[("s", "-1")],
-        "1/K" => &[("K", "-1")],
-        "degC" => &[("K", "1"), ("offset", "273.15")],
-        "K" => &[("K", "1")],
-        "J/(kg.K)" => &[("m", "2"), ("s", "-2"), ("K", "-1")],
-        _ => &[],
-    }
-}
-
-/// The document under construction.
-pub(crate) type Doc = Writer<Vec<u8>>;
-
-fn err(e: std::io::Error) -> String {
-    e.to_string()
-}
-
-/// `<UnitDefinitions>`: every unit the variables use, with its SI base units.
-pub(crate) fn write_units(w: &mut Doc, vars: &[Variable]) -> Result<(), String> {
-    let mut units: Vec<&str> = vars.iter().filter_map(|v| v.unit).collect();
-    units.sort_unstable();
-    units.dedup();
-    w.write_event(Event::Start(BytesStart::new("UnitDefinitions")))
-        .map_err(err)?;
-    for u in units {
-        let mut e = BytesStart::new("Unit");
-        e.push_attribute(("name", u));
-        w.write_event(Event::Start(e)).map_err(err)?;
-        let mut b = BytesStart::new("BaseUnit");
-        for &(k, v) in unit_base(u) {
-            b.push_attribute((k, v));
-        }
-        w.write_event(Event::Empty(b)).map_err(err)?;
-        w.write_event(Event::End(BytesEnd::new("Unit")))
-            .map_err(err)?;
-    }
-    w.write_event(Event::End(BytesEnd::new("UnitDefinitions")))
-        .map_err(err)?;
-    Ok(())
-}
-
-/// `<LogCategories>` from [`LOG_CATEGORIES`].
-pub(crate) fn write_log_categories(w: &mut Doc) -> Result<(), String> {
-    w.write_event(Event::Start(BytesStart::new("LogCategories")))
-        .map_err(err)?;
-    for (name, description) in LOG_CATEGORIES {
-        let mut e = BytesStart::new("Category");
-        e.push_attribute(("name", name));
-        e.push_attribute(("description", description));
-        w.write_event(Event::Empty(e)).map_err(err)?;
-    }
-    w.write_event(Event::End(BytesEnd::new("LogCategories")))
-        .map_err(err)?;
-    Ok(())
-}
-
-/// `<DefaultExperiment>`: from 0 to the scene's end at its history interval.
-pub(crate) fn write_default_experiment(w: &mut Doc, header: &Header) -> Result<(), String> {
-    let mut de = BytesStart::new("DefaultExperiment");
-    de.push_attribute(("startTime", "0"));
-    de.push_attribute(("stopTime", header.stop_time.to_string().as_str()));
-    de.push_attribute(("stepSize", header.step_size.to_string().as_str()));
-    w.write_event(Event::Empty(de)).map_err(err)?;
-    Ok(())
-}
-
-pub(crate) fn causality(c: Causality) -> &'static str {
-    match c {
-        Causality::Parameter => "parameter",
-        Causality::Input => "input",
-        Causality::Output => "output",
-    }
-}
-
-pub(crate) fn variability(v: Variability) -> &'static str {
-    match v {
-        Variability::Fixed => "fixed",
-        Variability::Continuous => "continuous",
-    }
-}
-
 /// Write the whole document.
 pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
-    let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
-    w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
-        .map_err(err)?;
-    let mut root = BytesStart::new("fmiModelDescription");
-    root.push_attribute(("fmiVersion", "2.0"));
-    root.push_attribute(("modelName", header.model_name.as_str()));
-    root.push_attribute(("guid", header.guid.as_str()));
-    root.push_attribute(("description", header.description.as_str()));
-    root.push_attribute((
-        "generationTool",
-        concat!("rkforge ", env!("CARGO_PKG_VERSION")),
-    ));
-    root.push_attribute(("variableNamingConvention", "structured"));
-    root.push_attribute(("numberOfEventIndicators", "0"));
-    w.write_event(Event::Start(root)).map_err(err)?;
-
-    let mut cs = BytesStart::new("CoSimulation");
-    cs.push_attribute(("modelIdentifier", header.model_identifier.as_str()));
-    cs.push_attribute(("canHandleVariableCommunicationStepSize", "true"));
-    cs.push_attribute(("canGetAndSetFMUstate", "true"));
-    cs.push_attribute(("canSerializeFMUstate", "true"));
-    cs.push_attribute(("canNotUseMemoryManagementFunctions", "true"));
-    w.write_event(Event::Empty(cs)).map_err(err)?;
-
-    write_units(&mut w, vars)?;
-    write_log_categories(&mut w)?;
-    write_default_experiment(&mut w, header)?;
-
-    w.write_event(Event::Start(BytesStart::new("ModelVariables")))
-        .map_err(err)?;
-    for v in vars {
-        let mut e = BytesStart::new("ScalarVariable");
-        e.push_attribute(("name", v.name.as_str()));
-        e.push_attribute(("valueReference", v.value_reference.to_string().as_str()));
-        e.push_attribute(("description", v.description.as_str()));
-        e.push_attribute(("causality", causality(v.causality)));
-        e.push_attribute(("variability", variability(v.variability)));
-        match v.causality {
-            Causality::Output => e.push_attribute(("initial", "calculated")),
-            Causality::Parameter => e.push_attribute(("initial", "exact")),
-            Causality::Input => {}
-        }
-        w.write_event(Event::Start(e)).map_err(err)?;
-        let (tag, start) = match &v.kind {
-            Kind::Real(s) => ("Real", s.map(|x| x.to_string())),
-            Kind::Integer(s) => ("Integer", s.map(|x| x.to_string())),
-            Kind::String(s) => ("String", s.clone()),
-            Kind::Boolean(s) => ("Boolean", s.map(|x| x.to_string())),
-            Kind::RealArray(_) => {
-                return Err(format!("`{}`: FMI 2.0 has no arrays", v.name));
-            }
-        };
-        let mut t = BytesStart::new(tag);
-        if let Some(u) = v.unit {
-            t.push_attribute(("unit", u));
-        }
-        if let Some(s) = &start {
-            t.push_attribute(("start", s.as_str()));
-        }
-        w.write_event(Event::Empty(t)).map_err(err)?;
-        w.write_event(Event::End(BytesEnd::new("ScalarVariable")))
-            .map_err(err)?;
-    }
-    w.write_event(Event::End(BytesEnd::new("ModelVariables")))
-        .map_err(err)?;
-
+    let version = Version {
+        fmi_version: "2.0",
+        guid_attribute: "guid",
+        root_extra: &[("numberOfEventIndicators", "0")],
+        capabilities: &[
+            "canHandleVariableCommunicationStepSize",
+            "canGetAndSetFMUstate",
+            "canSerializeFMUstate",
+            "canNotUseMemoryManagementFunctions",
+        ],
+    };
     // Outputs (1-based indices into ModelVariables); all of them are initial unknowns too.
     let outputs: Vec<usize> = vars
         .iter()
@@ -219,24 +74,43 @@ pub fn write(header: &Header, vars: &[Variable]) -> Result<String, String> {
         .filter(|(_, v)| v.causality == Causality::Output)
         .map(|(i, _)| i + 1)
         .collect();
-    w.write_event(Event::Start(BytesStart::new("ModelStructure")))
-        .map_err(err)?;
-    for list in ["Outputs", "InitialUnknowns"] {
-        w.write_event(Event::Start(BytesStart::new(list)))
-            .map_err(err)?;
-        for i in &outputs {
-            let mut u = BytesStart::new("Unknown");
-            u.push_attribute(("index", i.to_string().as_str()));
-            w.write_event(Event::Empty(u)).map_err(err)?;
+    let variables = |w: &mut Doc| vars.iter().try_for_each(|v| write_variable(w, v));
+    let structure = |w: &mut Doc| {
+        for list in ["Outputs", "InitialUnknowns"] {
+            w.start(BytesStart::new(list))?;
+            for i in &outputs {
+                let mut u = BytesStart::new("Unknown");
+                u.push_attribute(("index", i.to_string().as_str()));
+                w.empty(u)?;
+            }
+            w.end(list)?;
         }
-        w.write_event(Event::End(BytesEnd::new(list)))
-            .map_err(err)?;
+        Ok(())
+    };
+    document::write(&version, header, vars, variables, structure)
+}
+
+/// One `<ScalarVariable>` with its type element (unit, start).
+fn write_variable(w: &mut Doc, v: &Variable) -> Result<(), String> {
+    w.start(document::variable("ScalarVariable", v))?;
+    let (tag, start) = match &v.kind {
+        Kind::Real(s) => ("Real", s.map(|x| x.to_string())),
+        Kind::Integer(s) => ("Integer", s.map(|x| x.to_string())),
+        Kind::String(s) => ("String", s.clone()),
+        Kind::Boolean(s) => ("Boolean", s.map(|x| x.to_string())),
+        Kind::RealArray(_) => {
+            return Err(format!("`{}`: FMI 2.0 has no arrays", v.name));
+        }
+    };
+    let mut t = BytesStart::new(tag);
+    if let Some(u) = v.unit {
+        t.push_attribute(("unit", u));
     }
-    w.write_event(Event::End(BytesEnd::new("ModelStructure")))
-        .map_err(err)?;
-    w.write_event(Event::End(BytesEnd::new("fmiModelDescription")))
-        .map_err(err)?;
-    String::from_utf8(w.into_inner()).map_err(|e| e.to_string())
+    if let Some(s) = &start {
+        t.push_attribute(("start", s.as_str()));
+    }
+    w.empty(t)?;
+    w.end("ScalarVariable")
 }
 
 /// A variable as read back from the XML.
