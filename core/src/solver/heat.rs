@@ -146,59 +146,11 @@ pub struct Temperatures {
     pub mean_c: Real,
 }
 
-/// The thermal measures every front end reports for a scene with `[thermal]` (history
-/// columns `thermal.<key>`, the summary's `thermal`, FMU outputs `thermal.<name>`): key,
-/// unit (empty: none) and description, in the order of [`Simulation::thermal_values`].
-pub const THERMAL_MEASURES: [(&str, &str, &str); 9] = [
-    (
-        "temperature_min_c",
-        "degC",
-        "least temperature of the workpiece's integration points",
-    ),
-    (
-        "temperature_max_c",
-        "degC",
-        "largest temperature of the workpiece's integration points",
-    ),
-    (
-        "temperature_mean_c",
-        "degC",
-        "mean temperature of the workpiece, weighted by the points' volumes",
-    ),
-    (
-        "plastic_heat_J",
-        "J",
-        "heat released by plastic work since the start (Taylor-Quinney share)",
-    ),
-    (
-        "friction_heat_J",
-        "J",
-        "heat made by friction at the tools since the start (the workpiece takes its share)",
-    ),
-    (
-        "heat_content_J",
-        "J",
-        "heat held in the workpiece above its initial temperature",
-    ),
-    (
-        "heat_to_tools_J",
-        "J",
-        "heat that has flowed from the workpiece into the tools since the start",
-    ),
-    (
-        "heat_to_surroundings_J",
-        "J",
-        "heat that has left the free surface by convection and radiation since the start",
-    ),
-    (
-        "heat_balance_rel",
-        "",
-        "heat content less the heat made plus the heat lost, over the heat made and lost",
-    ),
-];
-
 impl Simulation {
-    /// The values of [`THERMAL_MEASURES`] now, `None` for an isothermal scene.
+    /// The thermal measures now, `None` for an isothermal scene: least, largest and mean
+    /// temperature (degrees C), the heat made by plastic work and by friction, the heat
+    /// content, the heat to the tools and to the surroundings (J), and the heat balance (-),
+    /// as [`crate::outputs::REGISTER`] names them (`thermal.*`).
     pub fn thermal_values(&self) -> Option<[Real; 9]> {
         let t = self.temperatures()?;
         let heat = self.st.heat.as_ref()?;

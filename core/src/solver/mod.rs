@@ -58,7 +58,7 @@ mod update;
 pub use energy::Energy;
 pub use fields::Fields;
 pub use fill::FillPoint;
-pub use heat::{Heat, Temperatures, THERMAL_MEASURES};
+pub use heat::{Heat, Temperatures};
 pub use mass_scaling::MassScalingReport;
 pub use penetration::{Depths, Penetrated, Within};
 pub use state::Reference;

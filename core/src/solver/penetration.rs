@@ -144,11 +144,18 @@ impl Simulation {
         worst
     }
 
-    /// Every particle against every tool at any depth and every symmetry plane, and the
-    /// boundary ring against itself, now (zero depths when nothing lies inside); also kept
-    /// as the run's largest; past the scene's bound in a tool or beyond a plane an error
-    /// naming the particle, where it lies and the depth.
+    /// [`Simulation::penetration`], also kept as the run's largest; past the scene's bound
+    /// in a tool or beyond a plane an error naming the particle, where it lies and the depth.
     pub fn measure_penetration(&mut self) -> Result<Depths> {
+        let d = self.penetration();
+        self.record_penetration(d)?;
+        Ok(d)
+    }
+
+    /// Every particle against every tool at any depth and every symmetry plane, and the
+    /// boundary ring against itself, now (zero depths when nothing lies inside), without
+    /// keeping it.
+    pub fn penetration(&self) -> Depths {
         let mut d = Depths::default();
         for j in 0..self.ref_pos.len() {
             let x = self.position(j);
@@ -182,8 +189,7 @@ impl Simulation {
         d.itself = self.inside_itself(&ring);
         let h = self.spacing[0].min(self.spacing[1]);
         d.crossings = crossings(&ring, CROSSING_TOLERANCE_SPACINGS * h);
-        self.record_penetration(d)?;
-        Ok(d)
+        d
     }
 
     /// The deepest ring particle inside another part of the workpiece, the ring at `ring`
