@@ -327,6 +327,14 @@ class Energy(IdlStruct, typename="rkforge_msgs::msg::dds_::Energy_"):
     tool_work: t.float64
 
 
+@dataclass
+class Outputs(IdlStruct, typename="rkforge_msgs::msg::dds_::Outputs_"):
+    header: Header
+    names: t.sequence[str]
+    units: t.sequence[str]
+    values: t.sequence[t.float64]
+
+
 # The SimulateSteps action as rcl_action puts it on DDS: services `<action>/_action/send_goal`,
 # `get_result`, `cancel_goal` (requests and replies with rmw_cyclonedds_cpp's header, as
 # above), topics `<action>/_action/feedback` and `status`.

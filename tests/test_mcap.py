@@ -29,6 +29,7 @@ TOPICS = {
     "/rkforge/die_fill": "rkforge_msgs/msg/DieFill",
     "/rkforge/laps": "rkforge_msgs/msg/Laps",
     "/rkforge/energy": "rkforge_msgs/msg/Energy",
+    "/rkforge/outputs": "rkforge_msgs/msg/Outputs",
     "/clock": "rosgraph_msgs/msg/Clock",
 }
 
@@ -144,6 +145,15 @@ def check_against_history(msgs, rows, particles=64):
         for field, column in ENERGY.items():
             assert getattr(e, field) == row[f"energy.{column}"], field
         assert e.initial == 0.0, "the block starts at rest"
+    # The register's outputs: every history column under its own name, bit for bit, with
+    # its unit beside it, and the figures only the summary and the FMU show.
+    for (_, o), row in zip(by_topic["/rkforge/outputs"], rows):
+        got = dict(zip(o.names, o.values))
+        assert {c: got[c] for c in row} == row
+        units = dict(zip(o.names, o.units))
+        assert (units["top.force_N"], units["top.pressure_mean_Pa"], units["energy.kinetic_J"],
+                units["workpiece.max_plastic_strain"]) == ("N", "Pa", "J", "1")
+        assert {"top.peak_force_N", "energy.initial_J"} <= set(got) - set(row)
     for (_, c), row in zip(by_topic["/clock"], rows):
         assert c.clock.sec * 10**9 + c.clock.nanosec == ns(row["time_s"])
 
@@ -202,6 +212,16 @@ def test_the_file_holds_the_scene_and_the_summary_of_its_run(recorded):
     summary = json.loads(meta["rkforge_summary"]["summary_json"])
     assert summary["end_time_s"] == rows[-1]["time_s"]
     assert attachments(path) == {scene.name: ("application/toml", scene.read_bytes())}
+    # The last sample's outputs are the summary's figures of the same names, bit for bit.
+    last = [m for topic, _, m in decoded(path) if topic == "/rkforge/outputs"][-1]
+    got = dict(zip(last.names, last.values))
+    for k, tool in enumerate(summary["tools"]):
+        for key in ("stroke_m", "contact_fraction", "pressure_mean_Pa", "peak_force_N"):
+            assert got[f"{tool['name']}.{key}"] == tool[key], key
+    assert tool["pressure_mean_Pa"] > 0
+    for key in ("initial_J", "kinetic_J", "contact_interface_J", "kinetic_to_internal_max"):
+        assert got[f"energy.{key}"] == summary["energy"][key], key
+    assert got["workpiece.height_m"] == summary["workpiece"]["height_m"]
 
 
 def test_the_node_records_the_same_bytes_as_rkforge_run(recorded, rkforge_ros_bin, tmp_path):

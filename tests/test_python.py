@@ -292,12 +292,46 @@ def test_read_mcap_gives_the_history_columns_and_the_point_clouds(rkforge_bin, t
     end = rec.history.iloc[-1]
     assert end["energy.internal_J"] == pytest.approx(end["energy.contact_J"] - end["energy.kinetic_J"], rel=1e-3)
     assert len(rec.clouds) == len(history) and np.array_equal(rec.cloud_times_s, rec.history["time_s"])
+    # The register's outputs: history.csv's columns under the same names and bits, units
+    # beside them, and outputs the history does not show (the summary's figures).
+    assert_same_history(rec.outputs[list(history.columns)], history)
+    assert rec.units["top.pressure_mean_Pa"] == "Pa" and rec.units["top.force_N"] == "N"
+    assert "top.peak_force_N" in rec.outputs.columns
     for cloud, (_, row) in zip(rec.clouds, history.iterrows()):
         assert set(cloud) == {"x", "y", "z", "plastic_strain", "von_mises"}
         assert cloud["x"].shape == (81,) and cloud["x"].dtype == np.float32
         assert cloud["x"].min() == pytest.approx(row["workpiece.x_min_m"], abs=1e-6)
         assert cloud["y"].max() == pytest.approx(row["workpiece.y_max_m"], abs=1e-6)
         assert cloud["plastic_strain"].max() <= row["workpiece.max_plastic_strain"] + 1e-6
+
+
+def test_outputs_come_from_the_register():
+    """`Simulation.outputs()` and `Scene.outputs()`: every output of the register under its
+    one name, the history's columns with the bits of `sample()`, the figures only the
+    summary shows with the summary's bits (the mean contact pressure among them), the fields
+    as numpy arrays."""
+    scene = block_scene()
+    sim = rkforge.Simulation(scene)
+    sim.run_to(1e-3)
+    values = sim.outputs()
+    row = sim.sample()
+    assert {c: values[c] for c in row} == row
+    summary = sim.summary()
+    for k, tool in enumerate(summary["tools"]):
+        for key in ("pressure_mean_Pa", "contact_length_m", "peak_force_N", "stroke_m"):
+            assert values[f"{tool['name']}.{key}"] == tool[key]
+    assert values["top.pressure_mean_Pa"] > 0 and values["energy.initial_J"] == 0.0
+    assert values["particles.plastic_strain"].shape == (81,)
+    assert values["points.jacobian"].shape == (summary["integration_points"],)
+    register = {o["name"]: o for o in scene.outputs()}
+    assert list(register) == list(values)
+    p = register["top.pressure_mean_Pa"]
+    assert (p["unit"], p["kind"], p["history"], p["summary"], p["fmu"]) == (
+        "Pa", "per tool", True, True, True)
+    assert "tool top" in p["description"]
+    assert [o["name"] for o in scene.outputs() if o["history"]] == list(row)
+    assert register["time_s"]["fmu"] is False
+    assert register["particles.von_mises_Pa"]["kind"] == "per particle"
 
 
 def test_stepping_releases_the_gil():

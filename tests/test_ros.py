@@ -16,7 +16,8 @@ from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest,
                       Float64, GetParametersReply, GetParametersRequest,
                       GetSimulationStateReply, GetSimulationStateRequest, JointState,
                       SetSimulationStateReply, SetSimulationStateRequest, SimulationState,
-                      ListParametersReply, ListParametersRequest, Parameter, Peer, PointCloud2,
+                      ListParametersReply, ListParametersRequest, Outputs, Parameter, Peer,
+                      PointCloud2,
                       ServiceClient, SetParametersReply, SetParametersRequest, SimulateSteps,
                       Simulator, WrenchStamped,
                       parameter_value, qos, quit_node, run_history, running_node, small_block,
@@ -39,6 +40,7 @@ class LockstepController:
                          for n in ["top", "bottom"]}
         self.clock = self.peer.reader("/clock", Clock, latched=True)
         self.energy = self.peer.reader(f"{NS}/energy", Energy, latched=True)
+        self.outputs = self.peer.reader(f"{NS}/outputs", Outputs, latched=True)
         self.cloud = self.peer.reader(f"{NS}/workpiece", PointCloud2, reliable=False)
         self.cmd = {n: self.peer.writer(f"{NS}/{n}/velocity_cmd", Float64)
                     for n in ["top", "bottom"]}
@@ -48,12 +50,14 @@ class LockstepController:
         self.clouds = {}
         self.clocks = set()
         self.energies = {}
+        self.register = {}
 
     def serve(self, node, timeout=120):
         t0 = time.monotonic()
         # Before its first answer the controller waits until every reader found the node
         # (the node holds the first sample until then): nothing published is missed.
-        wait_readers_matched([self.tools, self.clock, self.energy, *self.wrenches.values()])
+        wait_readers_matched([self.tools, self.clock, self.energy, self.outputs,
+                              *self.wrenches.values()])
         while node.poll() is None:
             assert time.monotonic() - t0 < timeout, "the lockstep run did not finish"
             for js in take(self.tools, 50):
@@ -73,6 +77,8 @@ class LockstepController:
                 self.clocks.add(c.clock.sec * 10**9 + c.clock.nanosec)
             for e in take(self.energy, 50):
                 self.energies[stamp_ns(e.header)] = e
+            for o in take(self.outputs, 50):
+                self.register[stamp_ns(o.header)] = o
             time.sleep(0.001)
         return node.communicate(timeout=10)
 
@@ -109,6 +115,14 @@ def test_a_cyclone_dds_peer_reads_the_topics_with_history_values(rkforge_bin, rk
         assert (e.kinetic, e.elastic, e.plastic, e.internal, e.contact_work, e.tool_work) == (
             row["energy.kinetic_J"], row["energy.elastic_J"], row["energy.plastic_J"],
             row["energy.internal_J"], row["energy.contact_J"], row["energy.tool_work_J"])
+    # The register's outputs: every history column under its own name, the same bits,
+    # with its unit beside it.
+    assert set(ctl.register) == set(stamps), "reliable outputs are all delivered"
+    for s, row in zip(stamps, rows):
+        o = ctl.register[s]
+        got = dict(zip(o.names, o.values))
+        assert {c: got[c] for c in row} == row
+        assert dict(zip(o.names, o.units))["top.pressure_mean_Pa"] == "Pa"
     assert ctl.clouds, "no point cloud arrived"
     by_stamp = dict(zip(stamps, rows))
     for s, c in ctl.clouds.items():

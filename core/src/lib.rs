@@ -8,7 +8,8 @@
 //! by the contact stage ([`contact`]), essential conditions ([`constraints`]), and the
 //! explicit solver that calls them in order ([`solver`], one file per stage). Scenes
 //! ([`scene`]) decide what is modelled; [`geometry`] and [`sampling`] serve the solver and
-//! every front end. Nothing below the solver imports it.
+//! every front end. Nothing below the solver imports it. Above it, [`outputs`] is the
+//! register of every figure a run reports, which every front end reads.
 
 pub mod constraints;
 pub mod contact;
@@ -21,6 +22,7 @@ pub mod lanes;
 pub mod laps;
 pub mod material;
 pub mod math;
+pub mod outputs;
 pub mod rk_shape;
 pub mod sampling;
 pub mod scene;
@@ -36,12 +38,11 @@ mod validation;
 
 pub use error::{Error, Result};
 pub use geometry::Extents;
+pub use outputs::THERMAL_MEASURES;
 pub use sampling::{sample_times, MAX_SAMPLES};
 pub use scene::{IntegrationRule, Kinematics, Scene};
 pub use scene_overrides::SceneSource;
-pub use solver::{
-    Energy, Fields, MassScalingReport, Ran, Simulation, StageTimes, State, THERMAL_MEASURES,
-};
+pub use solver::{Energy, Fields, MassScalingReport, Ran, Simulation, StageTimes, State};
 
 /// Size rayon's global pool, which runs the parallel stages, to `threads` worker threads
 /// (a `--threads` option); `None` keeps rayon's default of one per core. Results are the

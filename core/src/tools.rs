@@ -52,6 +52,13 @@ pub struct ToolState {
     pub command: Option<Real>,
     /// Force of the workpiece on the tool during the last step (N).
     pub force: [Real; 2],
+    /// Normal force of the workpiece on the tool during the last step (N): the normal parts
+    /// of the contact forces summed, each along its own contact normal (positive pressing,
+    /// negative where a tool without separation holds the surface back). On a flat tool it
+    /// is the force's component along the tool's normal; on a curved or closed die it is the
+    /// integral of the contact pressure, which the force's resultant is not.
+    #[serde(default)]
+    pub normal_force: Real,
     /// Largest force magnitude so far (N).
     pub peak_force: Real,
 }

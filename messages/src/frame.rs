@@ -19,6 +19,10 @@
 //!   formed and is now, and its length (summary.json's `laps`, history.csv's
 //!   `workpiece.laps`);
 //! - `rkforge_msgs/msg/Energy`: the energy account (J), history.csv's energy columns;
+//! - `rkforge_msgs/msg/Outputs`: every column of the register of outputs
+//!   ([`rkforge_core::outputs`]) with its unit and value, history.csv's columns bit for bit
+//!   and the figures only the summary and the FMU show (an output added to the register
+//!   appears here);
 //! - `rosgraph_msgs/msg/Clock`: the simulation time.
 //!
 //! Every header stamp is the simulation time rounded to the nearest nanosecond, in frame
@@ -27,8 +31,9 @@
 
 use crate::msgs::{
     point_cloud_xyz_fields, Clock, ColorRGBA, DieFill, Energy, Header, JointState, Laps, Marker,
-    MarkerArray, Point, RosMessage, StrainPoint, Time, Vector3, Wrench, WrenchStamped,
+    MarkerArray, Outputs, Point, RosMessage, StrainPoint, Time, Vector3, Wrench, WrenchStamped,
 };
+use rkforge_core::outputs;
 use rkforge_core::Simulation;
 
 /// The coordinate frame of every message: the scene's plane, SI units.
@@ -88,7 +93,8 @@ pub fn sample(sim: &Simulation) -> Sample {
         frame_id: FRAME_ID.to_owned(),
     };
     let tools = sim.tools();
-    let mut messages = Vec::with_capacity(tools.len() + 5);
+    let now = outputs::Sample::new(sim);
+    let mut messages = Vec::with_capacity(tools.len() + 8);
     for t in tools {
         let f = t.state.force;
         messages.push(
@@ -116,7 +122,7 @@ pub fn sample(sim: &Simulation) -> Sample {
         }
         .to_cdr(),
     );
-    let fields = sim.fields();
+    let fields = now.particle_fields();
     let points: Vec<StrainPoint> = fields
         .positions
         .iter()
@@ -188,6 +194,16 @@ pub fn sample(sim: &Simulation) -> Sample {
         }
         .to_cdr(),
     );
+    let register = outputs::columns(sim.scene());
+    messages.push(
+        Outputs {
+            header: header.clone(),
+            names: register.iter().map(|c| c.name.clone()).collect(),
+            units: register.iter().map(|c| c.unit().to_owned()).collect(),
+            values: register.iter().map(|c| c.value(&now)).collect(),
+        }
+        .to_cdr(),
+    );
     messages.push(
         Clock {
             clock: header.stamp,
@@ -248,7 +264,7 @@ fn tool_markers(sim: &Simulation, header: &Header) -> MarkerArray {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::msgs::{Clock, Energy, JointState, RosMessage, WrenchStamped};
+    use crate::msgs::{Clock, Energy, JointState, Outputs, RosMessage, WrenchStamped};
     use rkforge_core::Scene;
 
     fn block() -> Simulation {
@@ -286,7 +302,7 @@ mod tests {
         assert_eq!(j.position[1], sim.tools()[1].state.stroke);
         assert_eq!(j.velocity[0], 10.0);
         assert_eq!(j.effort[0], sim.tools()[0].axial_force());
-        let e = Energy::from_cdr(&s.messages[published - 2]).unwrap();
+        let e = Energy::from_cdr(&s.messages[published - 3]).unwrap();
         assert_eq!(e.header, w.header);
         let account = sim.energy();
         assert_eq!((e.kinetic, e.plastic), (account.kinetic, account.plastic));
@@ -295,6 +311,19 @@ mod tests {
         assert!(
             e.tool_work > 0.0 && e.internal > 0.0,
             "the tools are forging"
+        );
+        let o = Outputs::from_cdr(&s.messages[published - 2]).unwrap();
+        assert_eq!(o.header, w.header);
+        assert_eq!(o.names.len(), o.values.len());
+        assert_eq!(o.units.len(), o.values.len());
+        let value = |name: &str| o.values[o.names.iter().position(|n| n == name).unwrap()];
+        assert_eq!(value("top.force_N"), sim.tools()[0].axial_force());
+        assert_eq!(value("energy.plastic_J"), account.plastic);
+        let p = value("top.pressure_mean_Pa");
+        assert!(p > 0.0, "{p}");
+        assert_eq!(
+            o.units[o.names.iter().position(|n| n == "top.force_N").unwrap()],
+            "N"
         );
         let c = Clock::from_cdr(s.messages.last().unwrap()).unwrap();
         assert_eq!(c.clock, w.header.stamp);

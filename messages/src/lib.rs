@@ -66,7 +66,8 @@ pub fn validate_namespace(ns: &str) -> Result<(), String> {
 
 /// The topics of a scene under namespace `ns`: first the published ones in the order of the
 /// messages of a [`frame::Sample`] (one wrench per tool in scene order, `tools`, `workpiece`,
-/// `tool_markers`, `die_fill`, `laps`, `energy`, `/clock`), then one `velocity_cmd` subscription per movable tool.
+/// `tool_markers`, `die_fill`, `laps`, `energy`, `outputs`, `/clock`), then one `velocity_cmd`
+/// subscription per movable tool.
 ///
 /// # Errors
 ///
@@ -133,6 +134,14 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
         name: format!("{base}/energy"),
         message: msgs::Energy::TYPE_NAME,
         schema: msgs::Energy::SCHEMA,
+        publish: true,
+        reliable: true,
+        latched: true,
+    });
+    t.push(Topic {
+        name: format!("{base}/outputs"),
+        message: msgs::Outputs::TYPE_NAME,
+        schema: msgs::Outputs::SCHEMA,
         publish: true,
         reliable: true,
         latched: true,

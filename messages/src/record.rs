@@ -298,6 +298,8 @@ fn offered_qos(t: &Topic) -> String {
 mod tests {
     use super::*;
     use crate::frame::sample;
+    use crate::msgs::{Outputs, RosMessage};
+    use rkforge_core::outputs;
     use rkforge_core::{Scene, Simulation};
 
     /// Temporary file `rkforge_<name>_<pid>.<ext>`.
@@ -347,9 +349,9 @@ mod tests {
             let (bytes, sim) = record(&small_block(), "rec", 4, compression);
             let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
             let stats = summary.stats.unwrap();
-            assert_eq!(stats.message_count, 4 * 9);
-            assert_eq!(stats.channel_count, 9);
-            assert_eq!(stats.schema_count, 8);
+            assert_eq!(stats.message_count, 4 * 10);
+            assert_eq!(stats.channel_count, 10);
+            assert_eq!(stats.schema_count, 9);
             assert!(!summary.chunk_indexes.is_empty());
             let expected = match compression {
                 Compression::Zstd => "zstd",
@@ -363,7 +365,18 @@ mod tests {
                 .unwrap()
                 .map(Result::unwrap)
                 .collect();
-            assert_eq!(msgs.len(), 36);
+            assert_eq!(msgs.len(), 40);
+            // The register's outputs read back: every column, with the last sample's values.
+            let message = msgs.iter().rfind(|m| m.channel.topic == "/rkforge/outputs");
+            let o = Outputs::from_cdr(&message.unwrap().data).unwrap();
+            let now = outputs::Sample::new(&sim);
+            let register = outputs::columns(sim.scene());
+            assert_eq!(o.names.len(), register.len());
+            for (k, c) in register.iter().enumerate() {
+                assert_eq!(o.names[k], c.name);
+                assert_eq!(o.units[k], c.unit());
+                assert_eq!(o.values[k].to_bits(), c.value(&now).to_bits(), "{}", c.name);
+            }
             let last = msgs.last().unwrap();
             assert_eq!(last.channel.topic, "/clock");
             assert_eq!(last.log_time, crate::frame::nanos(sim.time()));
@@ -435,14 +448,14 @@ mod tests {
                 compression,
             );
             let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-            assert_eq!(summary.stats.unwrap().message_count, samples as u64 * 9);
+            assert_eq!(summary.stats.unwrap().message_count, samples as u64 * 10);
             let chunks = &summary.chunk_indexes;
             assert!(chunks.len() >= 2, "{} chunks", chunks.len());
             for pair in chunks.windows(2) {
                 assert!(pair[0].message_end_time < pair[1].message_start_time);
                 assert!(pair[0].uncompressed_size >= CHUNK_BYTES);
                 assert!(pair[0].uncompressed_size < CHUNK_BYTES + 64 * 1024);
-                assert_eq!(pair[0].message_index_offsets.len(), 9);
+                assert_eq!(pair[0].message_index_offsets.len(), 10);
             }
         }
     }
@@ -495,7 +508,7 @@ mod tests {
             messages: vec![vec![0, 1, 0, 0]],
         };
         let e = rec.write(&bad).unwrap_err();
-        assert!(e.contains("1 messages for 8 channels"), "{e}");
+        assert!(e.contains("1 messages for 9 channels"), "{e}");
         rec.finish("{}").unwrap();
         std::fs::remove_file(&path).unwrap();
         std::fs::remove_file(&scene_file).unwrap();

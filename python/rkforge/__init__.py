@@ -2,12 +2,14 @@
 
 - :class:`Scene` -- a scene file or text, with dotted-key overrides
   (``scene.set("tools.top.friction", 0.1)``) validated like the file itself.
-- :class:`Simulation` -- step a scene, command tool velocities, read forces, strokes and
-  particle fields (numpy), save and restore states. Stepping releases the GIL.
+- :class:`Simulation` -- step a scene, command tool velocities, read forces, strokes,
+  particle fields (numpy) and every output of the register by name (``outputs()``), save
+  and restore states. Stepping releases the GIL.
 - :func:`run` -- the whole run of ``rkforge run --no-frames``: its summary and history,
   the same bits.
 - :func:`study` -- a parameter study over dotted keys, locally or on a Dask cluster.
-- :func:`read_mcap` -- tool histories and point clouds of an MCAP recording.
+- :func:`read_mcap` -- tool histories, the register's outputs and point clouds of an MCAP
+  recording.
 """
 from __future__ import annotations
 

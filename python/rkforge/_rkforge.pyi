@@ -55,6 +55,10 @@ class Scene:
     def sample_times(self) -> List[float]:
         """The times (s) at which ``rkforge run --no-frames`` records history rows after
         t = 0."""
+    def outputs(self) -> List[Dict[str, Any]]:
+        """The register of outputs as this scene has it: per column and per field ``name``,
+        ``unit`` (``1`` for a pure number), ``kind``, ``description`` and whether
+        ``history``, ``summary`` and ``fmu`` show it."""
 
 class Simulation:
     """A simulation of a scene, stepped from Python with the GIL released."""
@@ -83,6 +87,10 @@ class Simulation:
         """Stroke of each tool along its axis (m), by tool name."""
     def sample(self) -> Dict[str, float]:
         """Record a history row now, as ``rkforge run`` does at its samples."""
+    def outputs(self) -> Dict[str, Union[float, npt.NDArray[np.float64]]]:
+        """Every output of the register now, by name: each column (history.csv's and those
+        only the summary and the FMU show, e.g. ``top.pressure_mean_Pa``) as a float, each
+        field (``particles.*``, ``points.*``) as a numpy array."""
     def tools(self) -> List[Dict[str, Any]]:
         """Every tool as in summary.json."""
     def laps(self) -> List[Dict[str, Any]]:

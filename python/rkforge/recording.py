@@ -32,11 +32,19 @@ class Recording:
     topic, and ``energy.initial_J``. ``clouds``: per sample, the particles as a
     dict of numpy arrays (``x``, ``y``, ``z``, ``plastic_strain``, ``von_mises``; float32 as
     recorded), at the times ``cloud_times_s``.
+
+    ``outputs``: where the recording has the ``outputs`` topic, one row per sample with
+    every output of the register under its own name (history.csv's columns from ``time_s``,
+    the same bits, and those only the summary and the FMU show, e.g.
+    ``<tool>.pressure_mean_Pa``, ``<tool>.peak_force_N``); ``units``: each output's unit
+    (``1`` for a pure number).
     """
 
     history: pd.DataFrame
     clouds: List[Dict[str, np.ndarray]] = field(default_factory=list)
     cloud_times_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    outputs: pd.DataFrame = field(default_factory=pd.DataFrame)
+    units: Dict[str, str] = field(default_factory=dict)
 
 
 def _cloud(msg) -> Dict[str, np.ndarray]:
@@ -52,8 +60,8 @@ def _cloud(msg) -> Dict[str, np.ndarray]:
 
 def read_mcap(path, namespace: str = "/rkforge") -> Recording:
     """Read a recording of the rkforge topics under ``namespace``: the tools' joint states
-    and wrenches and the energy account as history columns, the workpiece point clouds as
-    numpy arrays.
+    and wrenches and the energy account as history columns, the register's outputs by name,
+    the workpiece point clouds as numpy arrays.
 
     Compressed chunks (lz4, zstd) are read by the ``mcap`` reader; times are the messages'
     log times (simulation time, ns) in seconds.
@@ -63,6 +71,8 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
 
     ns = namespace.rstrip("/")
     rows: Dict[int, Dict[str, float]] = {}
+    outputs: Dict[int, Dict[str, float]] = {}
+    units: Dict[str, str] = {}
     clouds, cloud_times = [], []
     with open(path, "rb") as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
@@ -91,6 +101,9 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
                 row = rows.setdefault(message.log_time, {})
                 for name, column in _ENERGY.items():
                     row[f"energy.{column}"] = getattr(msg, name)
+            elif topic == f"{ns}/outputs":
+                outputs[message.log_time] = dict(zip(msg.names, msg.values))
+                units.update(zip(msg.names, msg.units))
             elif topic == f"{ns}/workpiece":
                 clouds.append(_cloud(msg))
                 cloud_times.append(message.log_time * 1e-9)
@@ -109,4 +122,6 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
         order += [c for c in ["workpiece.laps"] if c in history.columns]
         order += [f"energy.{c}" for c in _ENERGY.values() if f"energy.{c}" in history.columns]
         history = history[order]
-    return Recording(history=history, clouds=clouds, cloud_times_s=np.array(cloud_times))
+    register = pd.DataFrame([outputs[t] for t in sorted(outputs)])
+    return Recording(history=history, clouds=clouds, cloud_times_s=np.array(cloud_times),
+                     outputs=register, units=units)

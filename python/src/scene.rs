@@ -4,6 +4,7 @@ use crate::{guarded, to_py};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use rkforge_core::outputs::{self, Kind};
 use rkforge_core::SceneSource;
 use std::path::PathBuf;
 use toml::Value;
@@ -96,6 +97,32 @@ impl Scene {
             .map_err(pyo3::exceptions::PyValueError::new_err)
     }
 
+    /// The register of outputs (`rkforge_core::outputs`) as this scene has it: per column
+    /// and per field a dict of `name`, `unit` (as FMI writes it; `1` for a pure number),
+    /// `kind` (`scalar`, `per tool`, `per fill point`, `per face`, `per particle`,
+    /// `per point`), `description`, and whether `history.csv`, `summary.json` and the FMU
+    /// show it (`history`, `summary`, `fmu`).
+    fn outputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let scene = self.source.scene();
+        let list = PyList::empty(py);
+        let columns = outputs::columns(scene)
+            .into_iter()
+            .map(|c| (c.name.clone(), c.description(scene), c.output));
+        let fields = outputs::fields(scene).map(|o| (o.full_name(), o.description.into(), o));
+        for (name, description, o) in columns.chain(fields) {
+            let d = PyDict::new(py);
+            d.set_item("name", name)?;
+            d.set_item("unit", o.unit)?;
+            d.set_item("kind", kind_name(o.read.kind()))?;
+            d.set_item("description", description)?;
+            d.set_item("history", o.shown.history)?;
+            d.set_item("summary", o.shown.summary)?;
+            d.set_item("fmu", o.shown.fmu)?;
+            list.append(d)?;
+        }
+        Ok(list)
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Scene({:?} from {:?}, {} override(s))",
@@ -134,6 +161,18 @@ impl Scene {
                 source: SceneSource::with_overrides(text, file, overrides).map_err(to_py)?,
             })
         })
+    }
+}
+
+/// What an output is given for, in words.
+fn kind_name(kind: Kind) -> &'static str {
+    match kind {
+        Kind::Scalar => "scalar",
+        Kind::PerTool => "per tool",
+        Kind::PerFillPoint => "per fill point",
+        Kind::PerFace => "per face",
+        Kind::PerParticle => "per particle",
+        Kind::PerPoint => "per point",
     }
 }
 

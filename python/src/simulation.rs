@@ -1,4 +1,5 @@
-//! `rkforge.Simulation` (stepping, tool commands, fields, saved states, the summary) and
+//! `rkforge.Simulation` (stepping, tool commands, fields, the register's outputs, saved
+//! states, the summary) and
 //! `run_scene`, the whole run of `rkforge run --no-frames` (the history and summary of
 //! [`rkforge_runner`], so the same bits as the command line).
 
@@ -8,7 +9,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
-use rkforge_core::{IntegrationRule, State};
+use rkforge_core::{outputs, IntegrationRule, State};
 use serde::{Deserialize, Serialize};
 use std::sync::Mutex;
 use std::time::Instant;
@@ -237,6 +238,36 @@ impl Simulation {
         let d = PyDict::new(py);
         for (c, v) in columns.into_iter().zip(row) {
             d.set_item(c, v)?;
+        }
+        Ok(d)
+    }
+
+    /// Every output of the register of outputs (`rkforge_core::outputs`) now, by its name:
+    /// each column (history.csv's, and those only the summary and the FMU show) as a float,
+    /// each field (`particles.*`, `points.*`) as a numpy array. Unlike `sample`, reading
+    /// changes nothing (the run's largest penetration is not updated).
+    fn outputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (values, fields) = self.with(py, |s| {
+            let now = outputs::Sample::new(&s.sim);
+            let scene = s.sim.scene();
+            let values: Vec<(String, f64)> = outputs::columns(scene)
+                .into_iter()
+                .map(|c| {
+                    let v = c.value(&now);
+                    (c.name, v)
+                })
+                .collect();
+            let fields: Vec<(String, Vec<f64>)> = outputs::fields(scene)
+                .filter_map(|o| Some((o.full_name(), o.field(&now)?)))
+                .collect();
+            Ok((values, fields))
+        })?;
+        let d = PyDict::new(py);
+        for (name, v) in values {
+            d.set_item(name, v)?;
+        }
+        for (name, v) in fields {
+            d.set_item(name, PyArray1::from_vec(py, v))?;
         }
         Ok(d)
     }

@@ -3,8 +3,9 @@
 //! (`geometry_msgs::msg::dds_::WrenchStamped_`, ...) and QoS, a `std_msgs/msg/Float64`
 //! subscription per movable tool for velocity commands, the parameter and
 //! `simulation_interfaces` services and the `SimulateSteps` action. The state topics a
-//! controller needs from the start (wrenches, joint states, markers, energy, `/clock`) are
-//! transient local: a reader that matches after a sample was published still receives it.
+//! controller needs from the start (wrenches, joint states, markers, energy, outputs,
+//! `/clock`) are transient local: a reader that matches after a sample was published still
+//! receives it.
 //!
 //! The messages are those of a [`Sample`], already CDR-encoded by [`msgs`](crate::msgs); they
 //! are handed to DDS as they are (see [`Payload`]), so the wire bytes equal the MCAP bytes.
@@ -357,7 +358,7 @@ fn create_topic(node: &RosNode, t: &Topic) -> Result<DdsTopic, String> {
 mod tests {
     use super::*;
     use crate::msgs::{
-        Clock, DieFill, Energy, JointState, Laps, MarkerArray, PointCloud2, RosMessage,
+        Clock, DieFill, Energy, JointState, Laps, MarkerArray, Outputs, PointCloud2, RosMessage,
         WrenchStamped,
     };
 
@@ -388,6 +389,7 @@ mod tests {
             (Energy::TYPE_NAME, Energy::DDS_TYPE_NAME),
             (DieFill::TYPE_NAME, DieFill::DDS_TYPE_NAME),
             (Laps::TYPE_NAME, Laps::DDS_TYPE_NAME),
+            (Outputs::TYPE_NAME, Outputs::DDS_TYPE_NAME),
         ] {
             assert_eq!(type_name(name).unwrap().dds_msg_type(), dds);
         }

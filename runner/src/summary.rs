@@ -1,8 +1,16 @@
 //! The summary of a run (summary.json) and the table of our figures beside the scene's
 //! references.
+//!
+//! The figures of the register ([`rkforge_core::outputs`]) shown in the summary are placed
+//! at the path their names give (`workpiece.height_m`, `energy.kinetic_J`,
+//! `workpiece.face_y_min.x_max_m`, `thermal.*`; per tool in `tools[k]`, per fill point in
+//! its `tools[k].fill_points[i]`). What the summary says of the run as a whole is written
+//! here: how it ended, the discretisation, the time step, the bounds as ranges, the
+//! largest penetrations, each tool's force vector and fill times, the laps, mass scaling,
+//! re-referencing and the stage times.
 
-use crate::history::{face_values, measures, min_spacing, thermal_measures, FACE_KEYS};
 use crate::Ending;
+use rkforge_core::outputs::{columns, At, Column, Sample};
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -17,25 +25,9 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
         Ending::Stopped(reason) => ("stopped", Some(reason)),
         Ending::Failed(error) => ("error", Some(error)),
     };
-    let m = measures(sim);
-    let e = sim.energy();
-    let x = m.extents;
-    let (lat, lat_v) = x.lateral(sim.scene().model.kinematics);
-    let mut workpiece = json!({
-        "height_m": x.y[1] - x.y[0],
-        "x_range_m": x.x,
-        "y_range_m": x.y,
-        "volume_change_rel": m.volume_change_rel,
-        "integrated_volume_change_rel": m.integrated_volume_change_rel,
-        "max_plastic_strain": sim.max_plastic_strain(),
-    });
-    workpiece[lat] = json!(lat_v);
-    for &f in &sim.scene().output.faces {
-        let keys = FACE_KEYS.iter().map(|k| k.to_string());
-        let face: serde_json::Map<String, Value> =
-            keys.zip(face_values(sim, f).map(|v| json!(v))).collect();
-        workpiece[format!("face_{}", f.name())] = Value::Object(face);
-    }
+    let sample = Sample::new(sim);
+    let x = sample.extents();
+    let min_spacing = sample.min_spacing();
     let times = sim.times;
     let scene = sim.scene();
     let mut summary = json!({
@@ -60,29 +52,17 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "critical_initial_s": sim.critical_dt0(),
             "stable_estimate_now_s": sim.stable_dt(),
         },
-        "workpiece": workpiece,
-        "energy": {
-            "initial_J": e.initial,
-            "kinetic_J": e.kinetic,
-            "elastic_J": e.elastic,
-            "internal_J": e.internal(),
-            "plastic_J": e.plastic,
-            "contact_J": e.contact_work,
-            "tool_work_J": e.tool_work,
-            "contact_interface_J": e.interface_gain(),
-            "balance_error_rel": e.balance_error_rel(),
-            "kinetic_to_internal_max": sim.kinetic_to_internal_max(),
-        },
+        "workpiece": { "x_range_m": x.x, "y_range_m": x.y },
         "mass_scaling": sim.mass_scaling(),
         "warnings": sim.quasi_static_warning().into_iter().chain(sim.surface_warning()).collect::<Vec<_>>(),
-        "tools": (0..sim.tools().len()).map(|k| tool_json(sim, k)).collect::<Vec<_>>(),
+        "tools": (0..sim.tools().len()).map(|k| tool_in(&sample, k)).collect::<Vec<_>>(),
         "contact": {
             "max_penetration_m": sim.max_penetration(),
-            "max_penetration_rel": sim.max_penetration() / min_spacing(sim),
+            "max_penetration_rel": sim.max_penetration() / min_spacing,
             "max_beyond_symmetry_m": sim.max_beyond_symmetry(),
-            "max_beyond_symmetry_rel": sim.max_beyond_symmetry() / min_spacing(sim),
+            "max_beyond_symmetry_rel": sim.max_beyond_symmetry() / min_spacing,
             "max_inside_itself_m": sim.max_inside_itself(),
-            "max_inside_itself_rel": sim.max_inside_itself() / min_spacing(sim),
+            "max_inside_itself_rel": sim.max_inside_itself() / min_spacing,
             "max_boundary_crossings": sim.max_boundary_crossings(),
             "self_contact": scene.self_contact.enabled,
         },
@@ -100,22 +80,10 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
     if scene.transfers_heat() {
         summary["stage_seconds"]["heat"] = json!(times.heat.as_secs_f64());
     }
-    // Only a scene with elasticity over temperature: the elastic energy changes of
-    // temperature put in, a term of its energy account.
-    if scene
-        .thermal
-        .as_ref()
-        .is_some_and(|t| t.thermoelastic().is_some())
-    {
-        summary["energy"]["thermoelastic_J"] = json!(e.thermoelastic);
-    }
-    // Only a scene with temperature has the entry.
-    let thermal = thermal_measures(sim);
-    if !thermal.is_empty() {
-        summary["thermal"] = thermal
-            .into_iter()
-            .map(|(k, v)| (k.to_string(), json!(v)))
-            .collect();
+    // The register's figures of the whole workpiece and run (those per tool are in
+    // `tools`).
+    for c in shown(scene).filter(|c| matches!(c.at, At::Whole | At::Face(_))) {
+        *path(&mut summary, &c) = json!(c.value(&sample));
     }
     // Only a scene that re-references the kernel has the entry.
     if let Some(stretch) = scene.discretization.rereference_stretch {
@@ -123,7 +91,7 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "stretch": stretch,
             "count": sim.reference().map_or(0, |r| r.count),
             "last_s": sim.reference().map(|r| r.time_s),
-            "remap_J": e.remap,
+            "remap_J": sim.energy().remap,
             "velocity_fit_residual": sim.reference().map(|r| r.fit_residual),
         });
     }
@@ -244,8 +212,13 @@ pub fn reference_table(scene: &Scene, summary: &Value) -> String {
 
 /// The JSON object of one tool in the summary.
 pub fn tool_json(sim: &Simulation, k: usize) -> Value {
-    let t = &sim.tools()[k];
-    let fill: Vec<Value> = sim
+    tool_in(&Sample::new(sim), k)
+}
+
+/// [`tool_json`] of a sample.
+fn tool_in(sample: &Sample<'_>, k: usize) -> Value {
+    let t = &sample.tools()[k];
+    let fill: Vec<Value> = sample
         .fill_points()
         .into_iter()
         .filter(|p| p.tool == k)
@@ -261,19 +234,37 @@ pub fn tool_json(sim: &Simulation, k: usize) -> Value {
         .collect();
     let mut tool = json!({
         "name": t.name,
-        "stroke_m": t.state.stroke,
-        "velocity_m_per_s": t.state.velocity,
         "force_N": t.state.force,
         "axial_force_N": t.axial_force(),
-        "peak_force_N": t.state.peak_force,
-        "contact_length_m": sim.contact_length(k),
-        "contact_fraction": sim.contact_fraction(k),
         "fill_points": fill,
     });
-    // A thermal scene: the heat the tool took from the workpiece.
-    if let (Some(heat), Some(flows)) = (sim.tool_heat(k), sim.tool_heat_flows()) {
-        tool["heat_J"] = json!(heat);
+    for c in shown(sample.scene()) {
+        match c.at {
+            At::Tool(j) if j == k => tool[c.output.name] = json!(c.value(sample)),
+            At::FillPoint {
+                tool: j, within, ..
+            } if j == k => {
+                tool["fill_points"][within][c.output.name] = json!(c.value(sample));
+            }
+            _ => {}
+        }
+    }
+    // A thermal scene: every tool's heat flow, heated or not (the history has the heated
+    // tools' only).
+    if let Some(flows) = sample.tool_heat_flows() {
         tool["heat_flow_W"] = json!(flows[k]);
     }
     tool
+}
+
+/// The register's columns of `scene` shown in the summary.
+fn shown(scene: &Scene) -> impl Iterator<Item = Column> {
+    columns(scene)
+        .into_iter()
+        .filter(|c| c.output.shown.summary)
+}
+
+/// The place of a scalar or per-face column in the summary: the path of its dotted name.
+fn path<'v>(summary: &'v mut Value, c: &Column) -> &'v mut Value {
+    c.name.split('.').fold(summary, |v, key| &mut v[key])
 }

@@ -310,6 +310,7 @@ impl Contact {
     ) -> Touch {
         for t in tools.iter_mut() {
             t.state.force = [0.0; 2];
+            t.state.normal_force = 0.0;
         }
         self.near.clear();
         self.searched = false;
@@ -498,6 +499,7 @@ impl Contact {
                 tool.state.force[0] -= f[0];
                 tool.state.force[1] -= f[1];
                 let normal = f[0] * pen.normal[0] + f[1] * pen.normal[1];
+                tool.state.normal_force += normal;
                 if stations > 0 {
                     // The normal part of the penalty force, at the station of the closest
                     // point of the tool's polyline.
@@ -581,6 +583,8 @@ impl Contact {
                 }
                 tool.state.force[0] -= f[0];
                 tool.state.force[1] -= f[1];
+                // The corner pass is frictionless: its force lies along the surface's normal.
+                tool.state.normal_force += f[0].hypot(f[1]);
                 touch.tools = true;
                 touch.any = true;
             }

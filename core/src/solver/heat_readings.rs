@@ -1,14 +1,17 @@
 //! What the outputs read of a thermal scene's heat now: the temperatures of the points
 //! and the workpiece's least, largest and mean, the heat plastic work and friction made,
-//! the heat held and what flowed to the tools and the surroundings, in the order of
-//! [`super::THERMAL_MEASURES`].
+//! the heat held and what flowed to the tools and the surroundings, as the register of
+//! outputs names them ([`crate::outputs::THERMAL_MEASURES`]).
 
 use super::heat::Temperatures;
 use super::simulation::Simulation;
 use crate::math::Real;
 
 impl Simulation {
-    /// The values of [`super::THERMAL_MEASURES`] now, `None` for an isothermal scene.
+    /// The thermal measures now, `None` for an isothermal scene: least, largest and mean
+    /// temperature (degrees C), the heat made by plastic work and by friction, the heat
+    /// content, the heat to the tools and to the surroundings (J), and the heat balance (-),
+    /// as [`crate::outputs::REGISTER`] names them (`thermal.*`).
     pub fn thermal_values(&self) -> Option<[Real; 9]> {
         let t = self.temperatures()?;
         let heat = self.st.heat.as_ref()?;

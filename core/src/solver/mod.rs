@@ -77,7 +77,7 @@ mod workspace;
 pub use discretization::MassScalingReport;
 pub use energy::Energy;
 pub use fields::Fields;
-pub use heat::{Heat, Temperatures, THERMAL_MEASURES};
+pub use heat::{Heat, Temperatures};
 pub use penetration::{Depths, Penetrated, Within};
 pub use quasi_static::QUASI_STATIC_WARNING;
 pub use simulation::{Ran, Simulation, StageTimes};

@@ -160,16 +160,23 @@ fn deep_self_contacts(
     worst
 }
 
-/// Every particle against every tool at any depth and every symmetry plane, and the
-/// boundary ring against itself, now (zero depths when nothing lies inside); also kept as
-/// the run's largest; past the scene's bound in a tool or beyond a plane an error naming
-/// the particle, where it lies and the depth.
+/// [`depths`] now, also kept as the run's largest; past the scene's bound in a tool or
+/// beyond a plane an error naming the particle, where it lies and the depth.
 pub(super) fn measure(
     scene: &Scene,
     disc: &Discretization,
     tools: &[Tool],
     st: &mut State,
 ) -> Result<Depths> {
+    let d = depths(disc, tools, st);
+    record(scene, disc, tools, st, d)?;
+    Ok(d)
+}
+
+/// Every particle against every tool at any depth and every symmetry plane, and the
+/// boundary ring against itself, now (zero depths when nothing lies inside), without
+/// keeping it.
+pub(super) fn depths(disc: &Discretization, tools: &[Tool], st: &State) -> Depths {
     let mut d = Depths::default();
     for j in 0..disc.ref_pos.len() {
         let x = disc.position(&st.d, j);
@@ -198,8 +205,7 @@ pub(super) fn measure(
     let ring = disc.ring(&st.d);
     d.itself = inside_itself(disc, &ring);
     d.crossings = crossings(&ring, CROSSING_TOLERANCE_SPACINGS * disc.h_min());
-    record(scene, disc, tools, st, d)?;
-    Ok(d)
+    d
 }
 
 /// The deepest ring particle inside another part of the workpiece, the ring at `ring` (m):

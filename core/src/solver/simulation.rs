@@ -532,4 +532,11 @@ impl Simulation {
     pub fn measure_penetration(&mut self) -> Result<penetration::Depths> {
         penetration::measure(&self.scene, &self.disc, &self.tools, &mut self.st)
     }
+
+    /// Every particle against every tool at any depth and every symmetry plane, and the
+    /// boundary ring against itself, now (zero depths when nothing lies inside), without
+    /// keeping it (`penetration.rs`).
+    pub fn penetration(&self) -> penetration::Depths {
+        penetration::depths(&self.disc, &self.tools, &self.st)
+    }
 }

@@ -43,9 +43,10 @@ impl Simulation {
             .collect()
     }
 
-    /// Length of the workpiece's surface in contact with tool `t` now (m): the boundary
-    /// ring's segments whose two particles both lie on it, at their physical positions.
-    pub fn contact_length(&self, t: usize) -> Real {
+    /// The workpiece's surface in contact with tool `t` now: the boundary ring's segments
+    /// whose two particles both lie on it, each as its two ends at their physical positions
+    /// (m), counter-clockwise.
+    pub fn contact_segments(&self, t: usize) -> Vec<[[Real; 2]; 2]> {
         let below = -ON_TOOL_SPACINGS * self.disc.h_min();
         let x = self.disc.ring(&self.st.d);
         let inside: Vec<bool> = x
@@ -55,10 +56,16 @@ impl Simulation {
         let n = x.len();
         (0..n)
             .filter(|&k| inside[k] && inside[(k + 1) % n])
-            .map(|k| {
-                let (a, b) = (x[k], x[(k + 1) % n]);
-                (b[0] - a[0]).hypot(b[1] - a[1])
-            })
+            .map(|k| [x[k], x[(k + 1) % n]])
+            .collect()
+    }
+
+    /// Length of the workpiece's surface in contact with tool `t` now (m): the length of
+    /// its [`Simulation::contact_segments`].
+    pub fn contact_length(&self, t: usize) -> Real {
+        self.contact_segments(t)
+            .iter()
+            .map(|[a, b]| (b[0] - a[0]).hypot(b[1] - a[1]))
             .sum()
     }
 

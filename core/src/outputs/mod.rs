@@ -1,0 +1,454 @@
+//! The register of outputs: every figure a run reports, listed once ([`REGISTER`]) with its
+//! name, unit, description, kind and how it is read, so that every front end shows the same
+//! figure under the same name.
+//!
+//! Names carry their unit as the scene keys do (`_N`, `_m`, `_J`, `_m_per_s`, `_Pa`, `_W`,
+//! `_c` for degrees Celsius, `_rel` for ratios; none for strains, fractions and counts), and
+//! [`Output::unit`] is the same unit as FMI's `unit` attribute writes it (`"1"`: a pure
+//! number).
+//!
+//! An entry is expanded over a scene into [`Column`]s, one value each ([`columns`]), named
+//! `<group>.<instance>.<name>`: the instance is the tool's name for an entry per tool,
+//! `<tool>.<point>` per fill point, `face_<edge>` per followed face (`output.faces`), and
+//! nothing for a scalar (`energy.kinetic_J`, `top.force_N`, `top.corner.filled`,
+//! `workpiece.face_y_min.x_max_m`, `thermal.top.heat_flow_W`). The register is a list of
+//! sections, each of entries of one kind, expanded instance by instance: one tool's columns
+//! stand side by side. Entries per particle or per integration point are fields, read whole
+//! ([`Output::field`]).
+//!
+//! Who reads it: `history.csv` (the columns [`Shown::history`], in register order),
+//! `summary.json` (the columns [`Shown::summary`], at the path the column's name gives: the
+//! groups as objects, per tool under `tools[k]`, per fill point under its
+//! `tools[k].fill_points[i]`), the FMU's variables (the columns [`Shown::fmu`]), the ROS
+//! node's and the recordings' `outputs` topic and Python's `Simulation.outputs()` (every
+//! column and field). Every read goes through a [`Sample`] of the simulation: the public
+//! methods of [`Simulation`], with the measures several outputs share (the workpiece's
+//! extents, the penetration, the particle fields, the thermal measures) taken once.
+//!
+//! Adding an output is one entry in its section of `register.rs` plus its computation (a
+//! public method of [`Simulation`] or a function here, as [`mean_contact_pressure`]).
+
+mod pressure;
+mod register;
+
+pub use pressure::{contact_area, mean_contact_pressure};
+pub use register::{REGISTER, THERMAL_MEASURES};
+
+use crate::geometry::Extents;
+use crate::math::Real;
+use crate::scene::{Edge, Kinematics, Scene};
+use crate::solver::{Depths, Fields, Simulation};
+use std::cell::OnceCell;
+use std::ops::Deref;
+
+/// One output of the register.
+#[derive(Debug, Clone, Copy)]
+pub struct Output {
+    /// Name with its unit, without group or instance (`force_N`, `kinetic_J`).
+    pub name: &'static str,
+    /// Group the name begins with (`workpiece`, `energy`, `thermal`; empty for none).
+    pub group: &'static str,
+    /// Unit as FMI's `unit` attribute writes it (`N`, `m`, `m/s`, `J`, `Pa`, `degC`; `1`
+    /// for a pure number).
+    pub unit: &'static str,
+    /// What it is, for people: `{tool}`, `{point}` and `{face}` stand for the instance.
+    pub description: &'static str,
+    /// The scenes (and, per tool, the tools) that have it.
+    pub when: When,
+    /// The front ends that show it beside those that show every output.
+    pub shown: Shown,
+    /// How it is read, which also gives its kind.
+    pub read: Read,
+}
+
+/// What an output is given for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// One value.
+    Scalar,
+    /// One value per tool, in scene order.
+    PerTool,
+    /// One value per fill point of a tool, tool by tool in scene order.
+    PerFillPoint,
+    /// One value per followed face of the workpiece (`output.faces`).
+    PerFace,
+    /// A field: one value per particle.
+    PerParticle,
+    /// A field: one value per integration point.
+    PerPoint,
+}
+
+/// How an output is read from a [`Sample`].
+#[derive(Debug, Clone, Copy)]
+pub enum Read {
+    /// One value.
+    Scalar(fn(&Sample<'_>) -> Real),
+    /// The value for tool `k`.
+    Tool(fn(&Sample<'_>, usize) -> Real),
+    /// The value for fill point `i` of [`Simulation::fill_points`].
+    FillPoint(fn(&Sample<'_>, usize) -> Real),
+    /// The value for the face of the particles that started on an edge.
+    Face(fn(&Sample<'_>, Edge) -> Real),
+    /// One value per particle.
+    Particles(fn(&Sample<'_>) -> Vec<Real>),
+    /// One value per integration point.
+    Points(fn(&Sample<'_>) -> Vec<Real>),
+}
+
+impl Read {
+    /// What the output is given for.
+    pub fn kind(&self) -> Kind {
+        match self {
+            Read::Scalar(_) => Kind::Scalar,
+            Read::Tool(_) => Kind::PerTool,
+            Read::FillPoint(_) => Kind::PerFillPoint,
+            Read::Face(_) => Kind::PerFace,
+            Read::Particles(_) => Kind::PerParticle,
+            Read::Points(_) => Kind::PerPoint,
+        }
+    }
+}
+
+/// The scenes that have an output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum When {
+    /// Every scene.
+    Always,
+    /// Plane strain.
+    PlaneStrain,
+    /// Axisymmetry.
+    Axisymmetric,
+    /// A scene with `[thermal]`.
+    Thermal,
+    /// A scene with elasticity over temperature.
+    Thermoelastic,
+    /// Per tool: the tools of a scene with `[thermal]` with a heat transfer coefficient.
+    HeatedTool,
+}
+
+impl When {
+    /// Whether `scene` has the output at `at`.
+    pub fn holds(self, scene: &Scene, at: At) -> bool {
+        match self {
+            When::Always => true,
+            When::PlaneStrain => scene.model.kinematics == Kinematics::PlaneStrain,
+            When::Axisymmetric => scene.model.kinematics == Kinematics::Axisymmetric,
+            When::Thermal => scene.thermal.is_some(),
+            When::Thermoelastic => scene
+                .thermal
+                .as_ref()
+                .is_some_and(|t| t.thermoelastic().is_some()),
+            When::HeatedTool => {
+                scene.thermal.is_some()
+                    && matches!(at, At::Tool(k) if scene.tools[k].heat_transfer_w_per_m2_k > 0.0)
+            }
+        }
+    }
+}
+
+/// The front ends that show an output, beside the ROS node's `outputs` topic and Python's
+/// `Simulation.outputs()`, which show every one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shown {
+    /// A column of `history.csv`.
+    pub history: bool,
+    /// A value of `summary.json`, at the end of the run.
+    pub summary: bool,
+    /// An output variable of the FMU (FMI 2.0 and 3.0).
+    pub fmu: bool,
+}
+
+impl Shown {
+    /// In the history, the summary and the FMU.
+    pub const EVERYWHERE: Shown = Shown {
+        history: true,
+        summary: true,
+        fmu: true,
+    };
+    /// In the history and the FMU; the summary reports the run in its own way (a largest
+    /// value, a vector, a list).
+    pub const NOT_IN_SUMMARY: Shown = Shown {
+        history: true,
+        summary: false,
+        fmu: true,
+    };
+    /// In the summary and the FMU, not as a history column.
+    pub const NOT_IN_HISTORY: Shown = Shown {
+        history: false,
+        summary: true,
+        fmu: true,
+    };
+    /// In the history only (the time, which the FMU has as its own).
+    pub const HISTORY_ONLY: Shown = Shown {
+        history: true,
+        summary: false,
+        fmu: false,
+    };
+    /// In none of them: a field, read whole.
+    pub const FIELD: Shown = Shown {
+        history: false,
+        summary: false,
+        fmu: false,
+    };
+}
+
+/// Which instance of an output a column holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum At {
+    /// The one value of a scalar.
+    Whole,
+    /// Tool `k`.
+    Tool(usize),
+    /// A fill point: its tool, its index in [`Simulation::fill_points`] and among its
+    /// tool's points.
+    FillPoint {
+        /// The tool.
+        tool: usize,
+        /// Index over every tool's points.
+        index: usize,
+        /// Index among the tool's own points.
+        within: usize,
+    },
+    /// A followed face.
+    Face(Edge),
+}
+
+/// One value of an output in a scene: the output at one instance, with its name.
+#[derive(Debug, Clone)]
+pub struct Column {
+    /// The register's entry.
+    pub output: &'static Output,
+    /// The instance.
+    pub at: At,
+    /// `<group>.<instance>.<name>`.
+    pub name: String,
+}
+
+impl Column {
+    /// The value now.
+    pub fn value(&self, sample: &Sample<'_>) -> Real {
+        match (self.output.read, self.at) {
+            (Read::Scalar(f), At::Whole) => f(sample),
+            (Read::Tool(f), At::Tool(k)) => f(sample, k),
+            (Read::FillPoint(f), At::FillPoint { index, .. }) => f(sample, index),
+            (Read::Face(f), At::Face(e)) => f(sample, e),
+            (read, at) => unreachable!("`columns` gives {read:?} no instance {at:?}"),
+        }
+    }
+
+    /// The unit, as FMI's `unit` attribute writes it (`1`: a pure number).
+    pub fn unit(&self) -> &'static str {
+        self.output.unit
+    }
+
+    /// The description with the tool's, point's or face's name put in.
+    pub fn description(&self, scene: &Scene) -> String {
+        let d = self.output.description;
+        match self.at {
+            At::Whole => d.to_string(),
+            At::Tool(k) => d.replace("{tool}", &scene.tools[k].name),
+            At::FillPoint { tool, within, .. } => {
+                let t = &scene.tools[tool];
+                d.replace("{tool}", &t.name)
+                    .replace("{point}", &t.fill_points[within].name)
+            }
+            At::Face(e) => d.replace("{face}", e.name()),
+        }
+    }
+}
+
+/// Every column of `scene`: the scalar entries present in it, section by section in register
+/// order, each section instance by instance.
+pub fn columns(scene: &Scene) -> Vec<Column> {
+    let mut out = Vec::new();
+    for section in REGISTER {
+        let Some(first) = section.first() else {
+            continue;
+        };
+        for (at, instance) in instances(scene, first.read.kind()) {
+            for output in section.iter().filter(|o| o.when.holds(scene, at)) {
+                let name = [output.group, &instance, output.name]
+                    .into_iter()
+                    .filter(|s| !s.is_empty())
+                    .collect::<Vec<_>>()
+                    .join(".");
+                out.push(Column { output, at, name });
+            }
+        }
+    }
+    out
+}
+
+/// The instances of a kind in `scene`, with their names; none for a field.
+fn instances(scene: &Scene, kind: Kind) -> Vec<(At, String)> {
+    match kind {
+        Kind::Scalar => vec![(At::Whole, String::new())],
+        Kind::PerTool => (0..scene.tools.len())
+            .map(|k| (At::Tool(k), scene.tools[k].name.clone()))
+            .collect(),
+        Kind::PerFillPoint => scene
+            .tools
+            .iter()
+            .enumerate()
+            .flat_map(|(tool, t)| {
+                t.fill_points
+                    .iter()
+                    .enumerate()
+                    .map(move |(within, p)| (tool, within, format!("{}.{}", t.name, p.name)))
+            })
+            .enumerate()
+            .map(|(index, (tool, within, name))| {
+                (
+                    At::FillPoint {
+                        tool,
+                        index,
+                        within,
+                    },
+                    name,
+                )
+            })
+            .collect(),
+        Kind::PerFace => scene
+            .output
+            .faces
+            .iter()
+            .map(|&e| (At::Face(e), format!("face_{}", e.name())))
+            .collect(),
+        Kind::PerParticle | Kind::PerPoint => Vec::new(),
+    }
+}
+
+impl Output {
+    /// The field's values now (per particle or per integration point), `None` for an
+    /// output of another kind.
+    pub fn field(&self, sample: &Sample<'_>) -> Option<Vec<Real>> {
+        match self.read {
+            Read::Particles(f) | Read::Points(f) => Some(f(sample)),
+            _ => None,
+        }
+    }
+
+    /// `<group>.<name>`, the name of a field.
+    pub fn full_name(&self) -> String {
+        match self.group {
+            "" => self.name.to_string(),
+            g => format!("{g}.{}", self.name),
+        }
+    }
+}
+
+/// Every field present in `scene` (outputs per particle or per integration point), in
+/// register order.
+pub fn fields(scene: &Scene) -> impl Iterator<Item = &'static Output> + '_ {
+    REGISTER.iter().flat_map(|s| s.iter()).filter(move |o| {
+        matches!(o.read.kind(), Kind::PerParticle | Kind::PerPoint)
+            && o.when.holds(scene, At::Whole)
+    })
+}
+
+/// How deep the workpiece lay at a sample (m) in the tools, beyond the symmetry planes and
+/// inside itself, and how often its boundary crossed itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Penetration {
+    /// Deepest particle inside a tool (m).
+    pub tools_m: Real,
+    /// Deepest particle beyond a symmetry plane or the axis (m).
+    pub planes_m: Real,
+    /// Deepest surface particle inside another part of the workpiece (m).
+    pub itself_m: Real,
+    /// Crossings of the boundary ring's segments.
+    pub crossings: Real,
+}
+
+impl Penetration {
+    /// The depths of a measure.
+    pub fn of(d: &Depths) -> Penetration {
+        Penetration {
+            tools_m: d.tools.depth,
+            planes_m: d.planes.depth,
+            itself_m: d.itself.depth,
+            crossings: d.crossings as Real,
+        }
+    }
+
+    /// The run's largest so far, what a sample whose measure failed (a particle past the
+    /// scene's bound) records.
+    pub fn largest(sim: &Simulation) -> Penetration {
+        Penetration {
+            tools_m: sim.max_penetration(),
+            planes_m: sim.max_beyond_symmetry(),
+            itself_m: sim.max_inside_itself(),
+            crossings: sim.max_boundary_crossings() as Real,
+        }
+    }
+}
+
+/// A simulation at one instant as the outputs read it (it dereferences to the
+/// [`Simulation`]): the measures that several outputs share are taken once, when first read.
+pub struct Sample<'a> {
+    sim: &'a Simulation,
+    extents: OnceCell<Extents>,
+    penetration: OnceCell<Penetration>,
+    fields: OnceCell<Fields>,
+    thermal: OnceCell<Option<[Real; 9]>>,
+}
+
+impl<'a> Sample<'a> {
+    /// The simulation now; the penetration is measured when an output reads it
+    /// ([`Simulation::penetration`]).
+    pub fn new(sim: &'a Simulation) -> Sample<'a> {
+        Sample {
+            sim,
+            extents: OnceCell::new(),
+            penetration: OnceCell::new(),
+            fields: OnceCell::new(),
+            thermal: OnceCell::new(),
+        }
+    }
+
+    /// The simulation now with the penetration already measured.
+    pub fn with_penetration(sim: &'a Simulation, p: Penetration) -> Sample<'a> {
+        let sample = Sample::new(sim);
+        sample.penetration.get_or_init(|| p);
+        sample
+    }
+
+    /// Bounds of the deformed workpiece over all particles (m), [`Simulation::extents`].
+    pub fn extents(&self) -> Extents {
+        *self.extents.get_or_init(|| self.sim.extents())
+    }
+
+    /// The penetration now.
+    pub fn penetration(&self) -> Penetration {
+        *self
+            .penetration
+            .get_or_init(|| Penetration::of(&self.sim.penetration()))
+    }
+
+    /// The particle fields, [`Simulation::fields`].
+    pub fn particle_fields(&self) -> &Fields {
+        self.fields.get_or_init(|| self.sim.fields())
+    }
+
+    /// The thermal measures, [`Simulation::thermal_values`].
+    pub fn thermal_values(&self) -> Option<[Real; 9]> {
+        *self.thermal.get_or_init(|| self.sim.thermal_values())
+    }
+
+    /// The smallest particle spacing (m), the scale of the `_rel` depths.
+    pub fn min_spacing(&self) -> Real {
+        let h = self.sim.spacing();
+        h[0].min(h[1])
+    }
+}
+
+impl Deref for Sample<'_> {
+    type Target = Simulation;
+
+    fn deref(&self) -> &Simulation {
+        self.sim
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,642 @@
+//! The register itself: every output of a run, section by section, in the order of
+//! `history.csv`'s columns. Forces are for the whole ring in axisymmetry and per
+//! `model.depth_m` of depth in plane strain, as are energies and heat.
+
+use super::{mean_contact_pressure, Output, Read, Sample, Shown, When};
+use crate::math::Real;
+use crate::scene::Edge;
+
+/// The register: its sections in order, each of outputs of one kind.
+pub static REGISTER: [&[Output]; 10] = [
+    &TIME,
+    &TOOLS,
+    &FILL,
+    &WORKPIECE,
+    &FACES,
+    &ENERGY,
+    &THERMAL,
+    &TOOL_HEAT,
+    &PARTICLE_FIELDS,
+    &POINT_FIELDS,
+];
+
+/// The instant.
+const TIME: [Output; 2] = [
+    scalar("", "time_s", "s", "simulation time", |s| s.time()).showing(Shown::HISTORY_ONLY),
+    scalar(
+        "",
+        "dt_s",
+        "s",
+        "length of the last step (0 before the first)",
+        |s| s.state().dt_prev,
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+];
+
+/// Each tool.
+const TOOLS: [Output; 9] = [
+    tool(
+        "stroke_m",
+        "m",
+        "displacement of tool {tool} along its axis",
+        |s, k| s.tools()[k].state.stroke,
+    ),
+    tool(
+        "velocity_m_per_s",
+        "m/s",
+        "velocity of tool {tool} along its axis during the last step",
+        |s, k| s.tools()[k].state.velocity,
+    ),
+    tool(
+        "force_N",
+        "N",
+        "force of the workpiece on tool {tool} along its axis (positive pushing it along +axis)",
+        |s, k| s.tools()[k].axial_force(),
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    tool(
+        "force_x_N",
+        "N",
+        "x part of the force of the workpiece on tool {tool}",
+        |s, k| s.tools()[k].state.force[0],
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    tool(
+        "force_y_N",
+        "N",
+        "y part of the force of the workpiece on tool {tool}",
+        |s, k| s.tools()[k].state.force[1],
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    tool(
+        "contact_fraction",
+        "1",
+        "share of tool {tool}'s length that the workpiece touches",
+        |s, k| s.contact_fraction(k),
+    ),
+    tool(
+        "pressure_mean_Pa",
+        "Pa",
+        "mean contact pressure on tool {tool}: the normal contact force over the contact area",
+        |s, k| mean_contact_pressure(s, k),
+    ),
+    tool(
+        "contact_length_m",
+        "m",
+        "length of the workpiece's surface in contact with tool {tool}",
+        |s, k| s.contact_length(k),
+    )
+    .showing(Shown::NOT_IN_HISTORY),
+    tool(
+        "peak_force_N",
+        "N",
+        "largest magnitude of the force on tool {tool} so far",
+        |s, k| s.tools()[k].state.peak_force,
+    )
+    .showing(Shown::NOT_IN_HISTORY),
+];
+
+/// Each fill point of a tool (die fill).
+const FILL: [Output; 1] = [Output {
+    name: "filled",
+    group: "",
+    unit: "1",
+    description: "1 once the material has reached point {point} of tool {tool} (die fill), else 0",
+    when: When::Always,
+    shown: Shown::NOT_IN_SUMMARY,
+    read: Read::FillPoint(|s, i| match s.fill_points()[i].filled {
+        Some(_) => 1.0,
+        None => 0.0,
+    }),
+}];
+
+/// The workpiece as a whole.
+const WORKPIECE: [Output; 15] = [
+    scalar(
+        "workpiece",
+        "x_min_m",
+        "m",
+        "least x (r) of the particles",
+        |s| s.extents().x[0],
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar(
+        "workpiece",
+        "x_max_m",
+        "m",
+        "largest x (r) of the particles",
+        |s| s.extents().x[1],
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar(
+        "workpiece",
+        "y_min_m",
+        "m",
+        "least y (z) of the particles",
+        |s| s.extents().y[0],
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar(
+        "workpiece",
+        "y_max_m",
+        "m",
+        "largest y (z) of the particles",
+        |s| s.extents().y[1],
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar(
+        "workpiece",
+        "radius_m",
+        "m",
+        "largest radius of the workpiece",
+        |s| s.extents().x[1],
+    )
+    .present(When::Axisymmetric),
+    scalar(
+        "workpiece",
+        "width_m",
+        "m",
+        "width of the workpiece",
+        |s| {
+            let x = s.extents();
+            x.x[1] - x.x[0]
+        },
+    )
+    .present(When::PlaneStrain),
+    scalar("workpiece", "height_m", "m", "height of the workpiece", |s| {
+        let x = s.extents();
+        x.y[1] - x.y[0]
+    }),
+    scalar(
+        "workpiece",
+        "volume_change_rel",
+        "1",
+        "relative change of the volume its outline encloses",
+        |s| s.volume() / s.reference_volume() - 1.0,
+    ),
+    scalar(
+        "workpiece",
+        "integrated_volume_change_rel",
+        "1",
+        "relative change of the integration points' own volume, sum J_p w_p",
+        |s| s.integrated_volume_change(),
+    ),
+    scalar(
+        "workpiece",
+        "max_plastic_strain",
+        "1",
+        "largest equivalent plastic strain",
+        |s| s.max_plastic_strain(),
+    ),
+    scalar(
+        "workpiece",
+        "max_penetration_rel",
+        "1",
+        "deepest a particle lies inside a tool, in smallest particle spacings",
+        |s| s.penetration().tools_m / s.min_spacing(),
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar(
+        "workpiece",
+        "beyond_symmetry_rel",
+        "1",
+        "deepest a particle lies beyond a symmetry plane or the axis, in smallest particle spacings",
+        |s| s.penetration().planes_m / s.min_spacing(),
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar(
+        "workpiece",
+        "inside_itself_rel",
+        "1",
+        "deepest a surface particle lies inside another part of the workpiece, in smallest particle spacings",
+        |s| s.penetration().itself_m / s.min_spacing(),
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar(
+        "workpiece",
+        "boundary_crossings",
+        "1",
+        "crossings of the boundary's segments (0: the surface does not pass through itself)",
+        |s| s.penetration().crossings,
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar(
+        "workpiece",
+        "laps",
+        "1",
+        "how many laps (folds of the surface onto itself between points apart along it) formed so far",
+        |s| s.lap_count() as Real,
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+];
+
+/// Each followed face of the workpiece (`output.faces`): the bounds of the particles that
+/// started on an edge.
+const FACES: [Output; 4] = [
+    face(
+        "x_min_m",
+        "least x (r) of the particles that started on edge {face}",
+        |s, e| s.face_extents(e).x[0],
+    ),
+    face(
+        "x_max_m",
+        "largest x (r) of the particles that started on edge {face}",
+        |s, e| s.face_extents(e).x[1],
+    ),
+    face(
+        "y_min_m",
+        "least y (z) of the particles that started on edge {face}",
+        |s, e| s.face_extents(e).y[0],
+    ),
+    face(
+        "y_max_m",
+        "largest y (z) of the particles that started on edge {face}",
+        |s, e| s.face_extents(e).y[1],
+    ),
+];
+
+/// The energy account.
+const ENERGY: [Output; 12] = [
+    scalar(
+        "energy",
+        "kinetic_J",
+        "J",
+        "kinetic energy of the workpiece",
+        |s| s.energy().kinetic,
+    ),
+    scalar(
+        "energy",
+        "elastic_J",
+        "J",
+        "elastic energy stored in the workpiece",
+        |s| s.energy().elastic,
+    ),
+    scalar(
+        "energy",
+        "plastic_J",
+        "J",
+        "plastic dissipation in the workpiece",
+        |s| s.energy().plastic,
+    ),
+    scalar(
+        "energy",
+        "internal_J",
+        "J",
+        "internal energy: elastic plus plastic",
+        |s| s.energy().internal(),
+    ),
+    scalar(
+        "energy",
+        "contact_J",
+        "J",
+        "work of the contact forces on the workpiece since the start",
+        |s| s.energy().contact_work,
+    ),
+    scalar(
+        "energy",
+        "tool_work_J",
+        "J",
+        "work delivered by the tools' motion since the start, summed over the tools",
+        |s| s.energy().tool_work,
+    ),
+    scalar(
+        "energy",
+        "balance_error_rel",
+        "1",
+        "error of the energy balance over the energy exchanged",
+        |s| s.energy().balance_error_rel(),
+    ),
+    scalar(
+        "energy",
+        "kinetic_to_internal",
+        "1",
+        "ratio of kinetic to internal energy (quasi-static check)",
+        |s| s.energy().kinetic_to_internal(),
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar(
+        "energy",
+        "initial_J",
+        "J",
+        "kinetic energy at the start",
+        |s| s.energy().initial,
+    )
+    .showing(Shown::NOT_IN_HISTORY),
+    scalar(
+        "energy",
+        "contact_interface_J",
+        "J",
+        "contact work less tool work: what the contact interface gained (negative: friction heat and penalty losses)",
+        |s| s.energy().interface_gain(),
+    )
+    .showing(Shown::NOT_IN_HISTORY),
+    scalar(
+        "energy",
+        "kinetic_to_internal_max",
+        "1",
+        "largest ratio of kinetic to internal energy after the start-up (quasi-static check)",
+        |s| s.kinetic_to_internal_max(),
+    )
+    .showing(Shown::NOT_IN_HISTORY),
+    scalar(
+        "energy",
+        "thermoelastic_J",
+        "J",
+        "elastic energy that changes of temperature put in (elasticity over temperature)",
+        |s| s.energy().thermoelastic,
+    )
+    .showing(Shown::NOT_IN_HISTORY)
+    .present(When::Thermoelastic),
+];
+
+/// The temperatures and heat of a scene with `[thermal]`, in the order of
+/// [`crate::Simulation::thermal_values`].
+const THERMAL: [Output; 9] = [
+    thermal(
+        "temperature_min_c",
+        "degC",
+        "least temperature of the workpiece's integration points",
+        |s| measure(s, 0),
+    ),
+    thermal(
+        "temperature_max_c",
+        "degC",
+        "largest temperature of the workpiece's integration points",
+        |s| measure(s, 1),
+    ),
+    thermal(
+        "temperature_mean_c",
+        "degC",
+        "mean temperature of the workpiece, weighted by the points' volumes",
+        |s| measure(s, 2),
+    ),
+    thermal(
+        "plastic_heat_J",
+        "J",
+        "heat released by plastic work since the start (Taylor-Quinney share)",
+        |s| measure(s, 3),
+    ),
+    thermal(
+        "friction_heat_J",
+        "J",
+        "heat made by friction at the tools since the start (the workpiece takes its share)",
+        |s| measure(s, 4),
+    ),
+    thermal(
+        "heat_content_J",
+        "J",
+        "heat held in the workpiece above its initial temperature",
+        |s| measure(s, 5),
+    ),
+    thermal(
+        "heat_to_tools_J",
+        "J",
+        "heat that has flowed from the workpiece into the tools since the start",
+        |s| measure(s, 6),
+    ),
+    thermal(
+        "heat_to_surroundings_J",
+        "J",
+        "heat that has left the free surface by convection and radiation since the start",
+        |s| measure(s, 7),
+    ),
+    thermal(
+        "heat_balance_rel",
+        "1",
+        "heat content less the heat made plus the heat lost, over the heat made and lost",
+        |s| measure(s, 8),
+    ),
+];
+
+/// The heat each tool takes from the workpiece.
+const TOOL_HEAT: [Output; 2] = [
+    tool(
+        "heat_flow_W",
+        "W",
+        "heat flow from the workpiece into tool {tool} at the last heat stage",
+        |s, k| s.tool_heat_flows().map_or(Real::NAN, |f| f[k]),
+    )
+    .in_group("thermal")
+    .present(When::HeatedTool)
+    .showing(Shown::NOT_IN_SUMMARY),
+    tool(
+        "heat_J",
+        "J",
+        "heat that has flowed from the workpiece into tool {tool} since the start",
+        |s, k| s.tool_heat(k).unwrap_or(Real::NAN),
+    )
+    .in_group("thermal")
+    .present(When::Thermal)
+    .showing(Shown::NOT_IN_HISTORY),
+];
+
+/// Fields per particle, smoothed from the integration points with weights `|N_I| w_p`.
+const PARTICLE_FIELDS: [Output; 4] = [
+    particles(
+        "plastic_strain",
+        "1",
+        "equivalent plastic strain at the particles",
+        |s| s.particle_fields().plastic_strain.clone(),
+    ),
+    particles(
+        "von_mises_Pa",
+        "Pa",
+        "von Mises stress at the particles",
+        |s| s.particle_fields().von_mises.clone(),
+    ),
+    particles(
+        "temperature_c",
+        "degC",
+        "temperature at the particles",
+        |s| s.particle_fields().temperature.clone().unwrap_or_default(),
+    )
+    .present(When::Thermal),
+    particles(
+        "lap",
+        "1",
+        "the lap each particle took part in, numbered from 1 in the order they formed (0: none)",
+        |s| s.particle_fields().lap.clone(),
+    ),
+];
+
+/// Fields per integration point.
+const POINT_FIELDS: [Output; 5] = [
+    points(
+        "plastic_strain",
+        "1",
+        "equivalent plastic strain at the integration points",
+        |s| s.point_plastic_strain(),
+    ),
+    points(
+        "von_mises_Pa",
+        "Pa",
+        "von Mises stress (Cauchy) at the integration points at the last stress stage",
+        |s| s.point_von_mises(),
+    ),
+    points(
+        "jacobian",
+        "1",
+        "J = det F at the integration points at the last stress stage",
+        |s| s.point_jacobian(),
+    ),
+    points(
+        "temperature_c",
+        "degC",
+        "temperature at the integration points",
+        |s| {
+            s.point_temperature()
+                .map_or_else(Vec::new, <[Real]>::to_vec)
+        },
+    )
+    .present(When::Thermal),
+    points(
+        "plastic_strain_rate_per_s",
+        "1/s",
+        "plastic strain rate at the integration points at the last stress stage",
+        |s| {
+            s.point_plastic_strain_rate()
+                .map_or_else(Vec::new, <[Real]>::to_vec)
+        },
+    )
+    .present(When::Thermal),
+];
+
+/// The thermal measures as (name, unit, description) in the order of
+/// [`crate::Simulation::thermal_values`], the unit empty for a pure number: the register's
+/// `thermal.*` scalars as the FMU's variable table reads them until it reads [`REGISTER`].
+pub const THERMAL_MEASURES: [(&str, &str, &str); 9] = {
+    let mut m = [("", "", ""); 9];
+    let mut k = 0;
+    while k < m.len() {
+        let o = &THERMAL[k];
+        let pure = o.unit.len() == 1 && o.unit.as_bytes()[0] == b'1';
+        m[k] = (o.name, if pure { "" } else { o.unit }, o.description);
+        k += 1;
+    }
+    m
+};
+
+/// A scalar in every scene and every front end.
+const fn scalar(
+    group: &'static str,
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+    read: fn(&Sample<'_>) -> Real,
+) -> Output {
+    Output {
+        name,
+        group,
+        unit,
+        description,
+        when: When::Always,
+        shown: Shown::EVERYWHERE,
+        read: Read::Scalar(read),
+    }
+}
+
+/// A value per tool in every scene and every front end.
+const fn tool(
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+    read: fn(&Sample<'_>, usize) -> Real,
+) -> Output {
+    Output {
+        name,
+        group: "",
+        unit,
+        description,
+        when: When::Always,
+        shown: Shown::EVERYWHERE,
+        read: Read::Tool(read),
+    }
+}
+
+/// A length per followed face, in every front end.
+const fn face(
+    name: &'static str,
+    description: &'static str,
+    read: fn(&Sample<'_>, Edge) -> Real,
+) -> Output {
+    Output {
+        name,
+        group: "workpiece",
+        unit: "m",
+        description,
+        when: When::Always,
+        shown: Shown::EVERYWHERE,
+        read: Read::Face(read),
+    }
+}
+
+/// A thermal measure, in a scene with `[thermal]`.
+const fn thermal(
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+    read: fn(&Sample<'_>) -> Real,
+) -> Output {
+    scalar("thermal", name, unit, description, read).present(When::Thermal)
+}
+
+/// Thermal measure `k` now (NaN in an isothermal scene, which has none).
+fn measure(s: &Sample<'_>, k: usize) -> Real {
+    s.thermal_values().map_or(Real::NAN, |v| v[k])
+}
+
+/// A field per particle.
+const fn particles(
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+    read: fn(&Sample<'_>) -> Vec<Real>,
+) -> Output {
+    Output {
+        name,
+        group: "particles",
+        unit,
+        description,
+        when: When::Always,
+        shown: Shown::FIELD,
+        read: Read::Particles(read),
+    }
+}
+
+/// A field per integration point.
+const fn points(
+    name: &'static str,
+    unit: &'static str,
+    description: &'static str,
+    read: fn(&Sample<'_>) -> Vec<Real>,
+) -> Output {
+    Output {
+        name,
+        group: "points",
+        unit,
+        description,
+        when: When::Always,
+        shown: Shown::FIELD,
+        read: Read::Points(read),
+    }
+}
+
+impl Output {
+    /// Shown as `shown` says.
+    const fn showing(mut self, shown: Shown) -> Output {
+        self.shown = shown;
+        self
+    }
+
+    /// Present only `when`.
+    const fn present(mut self, when: When) -> Output {
+        self.when = when;
+        self
+    }
+
+    /// In group `group`.
+    const fn in_group(mut self, group: &'static str) -> Output {
+        self.group = group;
+        self
+    }
+}
