@@ -31,6 +31,6 @@ for _ in range(n):
     fmu_t.append(time.perf_counter() - t0)
 r, f = statistics.median(run_t), statistics.median(fmu_t)
 print(f"rkforge run: median {r:.2f} s {run_t}")
-print(f"FMU (fmpy, 1 us steps, {len(res)} rows, radius {res[-1]['workpiece.radius'] * 1e3:.3f} mm): "
+print(f"FMU (fmpy, 1 us steps, {len(res)} rows, radius {res[-1]['workpiece.radius_m'] * 1e3:.3f} mm): "
       f"median {f:.2f} s {[round(x, 2) for x in fmu_t]}")
 print(f"FMU / run: {f / r:.3f}")

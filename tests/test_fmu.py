@@ -63,7 +63,7 @@ def test_every_shipped_scene_validates(fmus):
         tools = {"taylor_bar": ["wall"], "block_forging": ["top", "bottom"], "wheel_forging": ["die", "punch"],
                  "closed_die_hub": ["die", "punch"], "hot_upsetting": ["anvil", "ram"]}[s]
         for t in tools:
-            assert f"{t}.force" in names and f"{t}.stroke" in names and f"{t}.contact_fraction" in names
+            assert f"{t}.force_N" in names and f"{t}.stroke_m" in names and f"{t}.contact_fraction" in names
         if s == "closed_die_hub":
             assert {"die.flange_corner.filled", "punch.hub_top_corner.filled", "punch.land_end.filled"} <= names
         assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
@@ -77,15 +77,15 @@ def test_input_table_drives_the_block_like_rkforge_run(fmus, rkforge_bin, tmp_pa
     with open(tmp_path / "history.csv") as f:
         rows = list(csv.DictReader(f))
     inp = np.array([(0.0, 10.0, 10.0), (0.015, 10.0, 10.0)],
-                   dtype=[("time", float), ("top.velocity", float), ("bottom.velocity", float)])
+                   dtype=[("time", float), ("top.velocity_m_per_s", float), ("bottom.velocity_m_per_s", float)])
     res = simulate_fmu(fmus["block_forging"], stop_time=0.015, output_interval=0.15e-3, input=inp,
-                       output=["top.force", "top.stroke", "bottom.force", "workpiece.width"])
+                       output=["top.force_N", "top.stroke_m", "bottom.force_N", "workpiece.width_m"])
     assert len(res) == len(rows)
     for r, row in zip(res, rows):
-        assert r["top.force"] == float(row["top.force_N"])
-        assert r["bottom.force"] == float(row["bottom.force_N"])
-        assert r["workpiece.width"] == float(row["workpiece.width_m"])
-        assert r["top.stroke"] == pytest.approx(10.0 * r["time"], rel=1e-9, abs=1e-15)
+        assert r["top.force_N"] == float(row["top.force_N"])
+        assert r["bottom.force_N"] == float(row["bottom.force_N"])
+        assert r["workpiece.width_m"] == float(row["workpiece.width_m"])
+        assert r["top.stroke_m"] == pytest.approx(10.0 * r["time"], rel=1e-9, abs=1e-15)
 
 
 def test_stroke_follows_a_changing_velocity_input(adaptive_fmus):
@@ -94,11 +94,11 @@ def test_stroke_follows_a_changing_velocity_input(adaptive_fmus):
     stroke = 0.0
     for k in range(40):
         v = 10.0 * math.sin(0.2 * k) + 2.0
-        s.set("top.velocity", v)
+        s.set("top.velocity_m_per_s", v)
         s.step(20e-6)
         stroke += v * 20e-6
-        assert s.get("top.stroke")[0] == pytest.approx(stroke, rel=1e-9, abs=1e-12)
-        assert s.get("top.velocity")[0] == v
+        assert s.get("top.stroke_m")[0] == pytest.approx(stroke, rel=1e-9, abs=1e-12)
+        assert s.get("top.velocity_m_per_s")[0] == v
     s.close()
 
 
@@ -111,7 +111,7 @@ def force_limited_press(path, set_point, t_end, h):
     kp, ki, v_min, v_max, alpha = 15.0, 500.0, -5.0, 10.0, 0.5
     integral, filtered, history = 0.0, None, []
     while s.t < t_end - 1e-12:
-        force = -s.get("punch.force")[0]  # the force resisting the stroke
+        force = -s.get("punch.force_N")[0]  # the force resisting the stroke
         filtered = force if filtered is None else alpha * force + (1 - alpha) * filtered
         e = (set_point - filtered) / set_point
         integral += e * h
@@ -119,9 +119,9 @@ def force_limited_press(path, set_point, t_end, h):
         if not v_min <= v <= v_max:
             integral -= e * h  # anti-windup
             v = min(max(v, v_min), v_max)
-        s.set("punch.velocity", v)
+        s.set("punch.velocity_m_per_s", v)
         s.step(h)
-        history.append((s.t, -s.get("punch.force")[0], v, s.get("punch.stroke")[0]))
+        history.append((s.t, -s.get("punch.force_N")[0], v, s.get("punch.stroke_m")[0]))
     s.close()
     return history
 
@@ -145,27 +145,27 @@ def test_hydraulic_press_slows_with_load(adaptive_fmus):
     v_max, f_max, h, tau = 10.0, 0.3e9, 20e-6, 0.5e-3
     v, stroke, speeds = v_max, 0.0, []
     for _ in range(750):
-        f = -s.get("top.force")[0]
+        f = -s.get("top.force_N")[0]
         v += (v_max * max(0.0, 1.0 - f / f_max) - v) * h / tau
-        s.set("top.velocity", v)
-        s.set("bottom.velocity", v)
+        s.set("top.velocity_m_per_s", v)
+        s.set("bottom.velocity_m_per_s", v)
         s.step(h)
         stroke += v * h
         speeds.append(v)
-        assert s.get("top.stroke")[0] == pytest.approx(stroke, rel=1e-9, abs=1e-12)
-    f = -s.get("top.force")[0]
+        assert s.get("top.stroke_m")[0] == pytest.approx(stroke, rel=1e-9, abs=1e-12)
+    f = -s.get("top.force_N")[0]
     target = v_max * max(0.0, 1.0 - f / f_max)
     assert abs(v - target) < 0.05 * v_max, "the speed follows the load law"
     assert v < 0.2 * v_max and f > 0.9 * f_max, (v, f)
     windows = [sum(speeds[k:k + 100]) / 100 for k in range(50, 750, 100)]
     assert all(b < a for a, b in zip(windows, windows[1:])), ("the press keeps slowing", windows)
-    assert s.get("bottom.force")[0] == pytest.approx(s.get("top.force")[0], rel=0.02)
+    assert s.get("bottom.force_N")[0] == pytest.approx(s.get("top.force_N")[0], rel=0.02)
     s.close()
 
 
 def test_rollback_and_serialization_continue_identically(fmus):
     a = Slave(fmus["taylor_bar"], params=grid(7, 15))
-    out = ["wall.force", "workpiece.radius", "workpiece.height", "energy.plastic"]
+    out = ["wall.force_N", "workpiece.radius_m", "workpiece.height_m", "energy.plastic_J"]
     h = 2e-6
     for _ in range(3):
         a.step(h)
@@ -206,22 +206,22 @@ def raises(slave, call, *words):
 def test_bad_inputs_are_refused_with_a_message_and_the_instance_lives_on(adaptive_fmus):
     s = Slave(adaptive_fmus["block_forging"], params=COARSE)
     fmu, vr = s.fmu, s.vr
-    raises(s, lambda: s.set("top.velocity", float("nan")), "top.velocity", "not finite")
-    raises(s, lambda: s.set("top.velocity", float("inf")), "not finite")
+    raises(s, lambda: s.set("top.velocity_m_per_s", float("nan")), "top.velocity_m_per_s", "not finite")
+    raises(s, lambda: s.set("top.velocity_m_per_s", float("inf")), "not finite")
     raises(s, lambda: fmu.doStep(0.0, 0.0), "must be positive")
     raises(s, lambda: fmu.doStep(0.0, -1e-6), "must be positive")
     raises(s, lambda: fmu.doStep(1.0, 1e-6), "does not match")
     raises(s, lambda: fmu.getReal([9999]), "unknown value reference 9999")
     raises(s, lambda: fmu.setInteger([vr["workpiece.particles[0]"]], [31]), "workpiece.particles[0]",
            "cannot be set")
-    raises(s, lambda: fmu.setReal([vr["top.force"]], [1.0]), "output")
+    raises(s, lambda: fmu.setReal([vr["top.force_N"]], [1.0]), "output")
     raises(s, lambda: fmu.enterInitializationMode(), "not allowed")
     raises(s, lambda: fmu.fmi2GetReal(fmu.component, None, 1, None), "null pointer")
     raises(s, lambda: fmu.fmi2SetReal(fmu.component, None, 2, None), "null pointer")
     # Still usable: a normal step after all of the above.
-    s.set("top.velocity", 10.0)
+    s.set("top.velocity_m_per_s", 10.0)
     s.step(20e-6)
-    assert s.get("top.stroke")[0] == pytest.approx(10.0 * 20e-6)
+    assert s.get("top.stroke_m")[0] == pytest.approx(10.0 * 20e-6)
     s.close()
 
 
@@ -259,7 +259,7 @@ def run_block(path, name, out):
     s = Slave(path, name=name, params=COARSE)
     for _ in range(30):
         s.step(50e-6)
-    out[name] = s.get("top.force", "workpiece.width", "energy.plastic")
+    out[name] = s.get("top.force_N", "workpiece.width_m", "energy.plastic_J")
     s.close()
 
 
@@ -279,7 +279,7 @@ def test_two_instances_on_two_threads_match_sequential_runs(adaptive_fmus):
 def test_a_velocity_that_would_pass_particles_in_one_step_is_refused_naming_the_tool(adaptive_fmus):
     # 1e300 m/s used to take the top tool through the block with a force of 0.
     s = Slave(adaptive_fmus["block_forging"], params=COARSE)
-    s.set("top.velocity", 1e300)
+    s.set("top.velocity_m_per_s", 1e300)
     raises(s, lambda: s.step(20e-6), "tool `top`", "1.0000e300 m/s", "commanded")
     s.close()
 
@@ -355,7 +355,7 @@ def test_a_shear_factor_set_through_the_fmu_gives_the_bits_of_the_scene_file(rkf
         paths[name] = str(tmp_path / f"{name}.fmu")
         subprocess.run([rkforge_bin, "fmu", str(tmp_path / f"{name}.toml"), "--out", paths[name]],
                        check=True, capture_output=True)
-    outputs = ["punch.force", "punch.stroke", "die.force", "workpiece.height", "energy.plastic"]
+    outputs = ["punch.force_N", "punch.stroke_m", "die.force_N", "workpiece.height_m", "energy.plastic_J"]
     coarse = {**grid(9, 13), "time.end_s": 0.02}
     set_through_fmu = simulate_fmu(paths["shipped"], stop_time=0.02, output_interval=2.0e-3,
                                    start_values={**coarse, "tools.punch.friction.m": 0.3},
@@ -376,9 +376,9 @@ def test_a_hot_forging_fmu_reports_temperatures_and_heat(fmus):
     path = fmus["hot_upsetting"]
     md = read_model_description(path)
     variables = {v.name: v for v in md.modelVariables}
-    for name, unit in [("thermal.temperature_min", "degC"), ("thermal.temperature_max", "degC"),
-                       ("thermal.plastic_heat", "J"), ("thermal.heat_to_tools", "J"),
-                       ("ram.heat_flow", "W"), ("anvil.heat_flow", "W")]:
+    for name, unit in [("thermal.temperature_min_c", "degC"), ("thermal.temperature_max_c", "degC"),
+                       ("thermal.plastic_heat_J", "J"), ("thermal.heat_to_tools_J", "J"),
+                       ("thermal.ram.heat_flow_W", "W"), ("thermal.anvil.heat_flow_W", "W")]:
         assert variables[name].causality == "output" and variables[name].unit == unit, name
     for name, unit in [("thermal.initial_temperature_c", "degC"),
                        ("tools.ram.temperature_c", "degC"),
@@ -391,9 +391,9 @@ def test_a_hot_forging_fmu_reports_temperatures_and_heat(fmus):
                                      "thermal.initial_temperature_c": 1100.0,
                                      "tools.ram.temperature_c": 300.0,
                                      "tools.anvil.temperature_c": 300.0},
-                       output=["thermal.temperature_min", "thermal.temperature_max",
-                               "thermal.heat_to_tools", "ram.heat_flow", "anvil.heat_flow"])
-    assert res["thermal.temperature_max"][0] == 1100.0
+                       output=["thermal.temperature_min_c", "thermal.temperature_max_c",
+                               "thermal.heat_to_tools_J", "thermal.ram.heat_flow_W", "thermal.anvil.heat_flow_W"])
+    assert res["thermal.temperature_max_c"][0] == 1100.0
     # The anvil chills the billet's foot from the start; the ram's face once it arrives.
-    assert res["thermal.temperature_min"][-1] < 1090.0
-    assert res["anvil.heat_flow"][-1] > 0.0 and res["thermal.heat_to_tools"][-1] > 0.0
+    assert res["thermal.temperature_min_c"][-1] < 1090.0
+    assert res["thermal.anvil.heat_flow_W"][-1] > 0.0 and res["thermal.heat_to_tools_J"][-1] > 0.0

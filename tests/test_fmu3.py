@@ -56,14 +56,14 @@ def test_fmi2_and_fmi3_give_the_same_bits(rkforge_bin, tmp_path):
     assert outputs == [v.name for v in read_model_description(three).modelVariables
                        if v.causality == "output"]
     inp = np.array([(0.0, 10.0, 10.0), (2e-3, 6.0, 12.0), (4e-3, 6.0, 12.0)],
-                   dtype=[("time", float), ("top.velocity", float), ("bottom.velocity", float)])
+                   dtype=[("time", float), ("top.velocity_m_per_s", float), ("bottom.velocity_m_per_s", float)])
     runs = [simulate_fmu(p, stop_time=4e-3, output_interval=1e-4, input=inp,
                          start_values={**COARSE, "discretization.integration": "q4"},
                          output=outputs) for p in (two, three)]
     assert len(runs[0]) == len(runs[1]) == 41
     for name in outputs:
         assert runs[0][name].tobytes() == runs[1][name].tobytes(), name
-    assert runs[1]["top.force"][-1] < 0.0
+    assert runs[1]["top.force_N"][-1] < 0.0
 
 
 class Slave3:
@@ -105,18 +105,18 @@ class Slave3:
 
 def test_rollback_and_serialization_continue_with_the_same_bits(fmus):
     s = Slave3(fmus["block_forging"], COARSE)
-    names = ["top.force", "top.stroke", "workpiece.width", "energy.plastic", "time"]
+    names = ["top.force_N", "top.stroke_m", "workpiece.width_m", "energy.plastic_J", "time"]
     for _ in range(5):
         s.step(1e-4)
     state = s.fmu.getFMUState()
     saved = s.fmu.serializeFMUState(state)
-    s.fmu.setFloat64([s.vr["top.velocity"]], [4.0])
+    s.fmu.setFloat64([s.vr["top.velocity_m_per_s"]], [4.0])
     s.step(5e-4)
     first = s.get(*names)
     s.fmu.setFMUState(state)
     s.t = 5e-4
     assert s.get("time") == [pytest.approx(5e-4)]
-    s.fmu.setFloat64([s.vr["top.velocity"]], [4.0])
+    s.fmu.setFloat64([s.vr["top.velocity_m_per_s"]], [4.0])
     s.step(5e-4)
     assert s.get(*names) == first
     # A serialized state restored into a fresh instance continues the same way.
@@ -124,7 +124,7 @@ def test_rollback_and_serialization_continue_with_the_same_bits(fmus):
     restored = t.fmu.deserializeFMUState(saved)
     t.fmu.setFMUState(restored)
     t.t = 5e-4
-    t.fmu.setFloat64([t.vr["top.velocity"]], [4.0])
+    t.fmu.setFloat64([t.vr["top.velocity_m_per_s"]], [4.0])
     t.step(5e-4)
     assert t.get(*names) == first
     for x in (s, t):
@@ -141,7 +141,7 @@ def test_bad_calls_are_refused_with_a_message(fmus):
         s.fmu.setFloat64([s.vr["time.end_s"]], [1.0])
     assert "`time.end_s`" in s.messages[-1] and "cannot be set" in s.messages[-1]
     with pytest.raises(FMICallException):
-        s.fmu.getBoolean([s.vr["wall.force"]])
+        s.fmu.getBoolean([s.vr["wall.force_N"]])
     assert "not a Boolean variable" in s.messages[-1]
     with pytest.raises(FMICallException):
         s.fmu.doStep(currentCommunicationPoint=1.0, communicationStepSize=1e-6)
@@ -190,7 +190,7 @@ def test_early_return_stops_at_the_first_contact_step(rkforge_bin, tmp_path):
     assert last == expected and 0.09 < last < 0.11, (last, expected)
     assert s.get("time") == [last]
     assert s.get("ram.contact_fraction")[0] > 0.0
-    assert s.get("ram.stroke")[0] == pytest.approx(0.020 * last, rel=1e-9)
+    assert s.get("ram.stroke_m")[0] == pytest.approx(0.020 * last, rel=1e-9)
     early, last = s.step(0.05)
     assert not early and last == pytest.approx(expected + 0.05)
     s.fmu.terminate()
@@ -211,7 +211,7 @@ def test_early_return_when_the_force_reaches_a_level(rkforge_bin, tmp_path):
     assert early
     expected = first_step_where(scene, 1.0, lambda row: abs(row["ram.force_N"]) >= 2.0e5)
     assert last == expected, (last, expected)
-    assert abs(s.get("ram.force")[0]) >= 2.0e5
+    assert abs(s.get("ram.force_N")[0]) >= 2.0e5
     s.fmu.freeInstance()
 
 
@@ -228,9 +228,9 @@ def test_intermediate_updates_follow_every_solver_step(rkforge_bin, tmp_path):
     def update(env, time, set_requested, get_allowed, finished, can_return, early, when):
         s = holder["s"]
         assert get_allowed and finished and not set_requested
-        seen.append((time, *s.fmu.getFloat64([s.vr["time"], s.vr["top.force"]])))
+        seen.append((time, *s.fmu.getFloat64([s.vr["time"], s.vr["top.force_N"]])))
         try:
-            s.fmu.setFloat64([s.vr["top.velocity"]], [1.0])
+            s.fmu.setFloat64([s.vr["top.velocity_m_per_s"]], [1.0])
         except FMICallException:
             refused.append(time)
         if stop_at[0] is not None and len(seen) == stop_at[0] and can_return:
@@ -248,7 +248,7 @@ def test_intermediate_updates_follow_every_solver_step(rkforge_bin, tmp_path):
         expected.append((sim.time, sim.time, sim.tool_forces()["top"]))
     assert len(seen) == len(expected) > 10
     assert seen == expected
-    assert seen[-1][2] == s.get("top.force")[0]
+    assert seen[-1][2] == s.get("top.force_N")[0]
     assert refused == [t for t, _, _ in seen]
     s.fmu.freeInstance()
 
@@ -261,7 +261,7 @@ def test_intermediate_updates_follow_every_solver_step(rkforge_bin, tmp_path):
 
 
 def test_contact_pressure_is_an_array_output(rkforge_bin, tmp_path):
-    """The block with `output.pressure_stations = 40`: `top.contact_pressure` is a Float64
+    """The block with `output.pressure_stations = 40`: `top.contact_pressure_Pa` is a Float64
     array of 40 values (2 m of tool in 5 cm stations); its pressures times the stations'
     areas add up to the force on the tool, the stations beyond the block carry none."""
     text = (ROOT / "scenes" / "block_forging.toml").read_text().replace(
@@ -271,21 +271,21 @@ def test_contact_pressure_is_an_array_output(rkforge_bin, tmp_path):
     fmu = pack(rkforge_bin, scene, tmp_path / "block3.fmu", "3")
     assert validate_fmu(fmu) == []
     md = read_model_description(fmu)
-    pressure = next(v for v in md.modelVariables if v.name == "top.contact_pressure")
+    pressure = next(v for v in md.modelVariables if v.name == "top.contact_pressure_Pa")
     assert pressure.type == "Float64" and pressure.causality == "output"
     assert [int(d.start) for d in pressure.dimensions] == [40]
     s = Slave3(fmu, COARSE)
     s.step(2e-3)
-    p = np.array(s.fmu.getFloat64([s.vr["top.contact_pressure"]], nValues=40))
-    force = s.get("top.force")[0]
+    p = np.array(s.fmu.getFloat64([s.vr["top.contact_pressure_Pa"]], nValues=40))
+    force = s.get("top.force_N")[0]
     assert p.max() > 1e8
     assert np.sum(p) * 0.05 == pytest.approx(abs(force), rel=1e-9)
     # The block is 0.5 m wide (a little wider now) in the middle of the 2 m tool.
     assert np.all(p[:12] == 0.0) and np.all(p[-12:] == 0.0)
-    both = s.fmu.getFloat64([s.vr["top.force"], s.vr["top.contact_pressure"]], nValues=41)
+    both = s.fmu.getFloat64([s.vr["top.force_N"], s.vr["top.contact_pressure_Pa"]], nValues=41)
     assert both[0] == force and list(both[1:]) == list(p)
     with pytest.raises(FMICallException):
-        s.fmu.getFloat64([s.vr["top.contact_pressure"]], nValues=1)
+        s.fmu.getFloat64([s.vr["top.contact_pressure_Pa"]], nValues=1)
     assert "holding 40 values" in s.messages[-1]
     s.fmu.freeInstance()
 
@@ -302,9 +302,9 @@ def test_an_fmi3_container_of_the_fmu_gives_the_same_bits(rkforge_bin, tmp_path)
     (tmp_path / "c.json").write_text(json.dumps({
         "name": "container3.fmu", "step_size": 1e-4, "auto_input": False,
         "auto_output": False, "auto_link": False, "fmu": ["block3.fmu"],
-        "input": [["top_velocity", "block3.fmu", "top.velocity"]],
-        "output": [["block3.fmu", "top.force", "top_force"],
-                   ["block3.fmu", "top.stroke", "top_stroke"]]}))
+        "input": [["top_velocity", "block3.fmu", "top.velocity_m_per_s"]],
+        "output": [["block3.fmu", "top.force_N", "top_force"],
+                   ["block3.fmu", "top.stroke_m", "top_stroke"]]}))
     made = subprocess.run([sys.executable, "-m", "fmu_manipulation_toolbox.cli.fmucontainer",
                            "-container", "c.json", "-fmu-directory", str(tmp_path), "-fmi", "3"],
                           cwd=tmp_path, capture_output=True, text=True)
@@ -319,8 +319,8 @@ def test_an_fmi3_container_of_the_fmu_gives_the_same_bits(rkforge_bin, tmp_path)
     a = simulate_fmu(str(container), stop_time=3e-3, step_size=1e-4, output_interval=1e-4,
                      input=table("top_velocity"), output=["top_force", "top_stroke"])
     b = simulate_fmu(str(tmp_path / "block3.fmu"), stop_time=3e-3, step_size=1e-4,
-                     output_interval=1e-4, input=table("top.velocity"),
-                     output=["top.force", "top.stroke"])
-    assert len(a) == len(b) == 31 and b["top.force"][-1] < 0.0
-    assert a["top_force"].tobytes() == b["top.force"].tobytes()
-    assert a["top_stroke"].tobytes() == b["top.stroke"].tobytes()
+                     output_interval=1e-4, input=table("top.velocity_m_per_s"),
+                     output=["top.force_N", "top.stroke_m"])
+    assert len(a) == len(b) == 31 and b["top.force_N"][-1] < 0.0
+    assert a["top_force"].tobytes() == b["top.force_N"].tobytes()
+    assert a["top_stroke"].tobytes() == b["top.stroke_m"].tobytes()

@@ -40,19 +40,19 @@ def forging(rkforge_bin, tmp_path_factory):
 
 def coupled(press_fmu, forging_fmu, h, t_max, target_dt):
     """The press FMU driving the forging FMU until the press is finished or `t_max`: per
-    step of `h`, the press's ram.velocity to the forging FMU, the forging step, its force,
+    step of `h`, the press's ram.velocity_m_per_s to the forging FMU, the forging step, its force,
     stroke, tool work and height to the press, the press step. Rows (t, v, force, stroke)."""
     f = Slave(forging_fmu, params=fmu_params(NX, NY, target_dt))
     p = Slave(press_fmu)
     rows, n = [], 0
     while p.get("finished")[0] == 0.0 and (n + 1) * h <= t_max * (1 + 1e-12):
-        v = p.get("ram.velocity")[0]
-        f.set("ram.velocity", v)
+        v = p.get("ram.velocity_m_per_s")[0]
+        f.set("ram.velocity_m_per_s", v)
         f.step(h)
-        force, stroke, work, height = f.get("ram.force", "ram.stroke", "energy.tool_work",
-                                            "workpiece.height")
-        for name, x in [("ram.force", force), ("ram.stroke", stroke), ("ram.tool_work", work),
-                        ("workpiece.height", height)]:
+        force, stroke, work, height = f.get("ram.force_N", "ram.stroke_m", "energy.tool_work_J",
+                                            "workpiece.height_m")
+        for name, x in [("ram.force_N", force), ("ram.stroke_m", stroke), ("ram.tool_work_J", work),
+                        ("workpiece.height_m", height)]:
             p.set(name, x)
         p.step(h)
         n += 1

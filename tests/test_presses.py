@@ -1,7 +1,7 @@
 """The four press plants of examples/presses driving the FMU of scenes/press_upsetting.toml
 (an aluminium billet, 40 x 60 mm, upset by a ram on a fixed anvil): each test checks the
 plant's physics against what the FMU's solver did (its force, stroke, billet height and its
-own integral of the ram's work, `energy.tool_work`).
+own integral of the ram's work, `energy.tool_work_J`).
 
 The billet is coarse (6 x 16 particles, 4 mm spacing): these tests check the presses and the
 coupling, not the forging's accuracy. The slow presses run with selective mass scaling (the

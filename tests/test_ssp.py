@@ -56,7 +56,7 @@ def test_the_ssp_gives_the_force_stroke_curve_of_the_python_example(
                   target_dt=target_dt)
     r = simulate_ssp(ssp, stop_time=py["t"][-1] - h / 2, step_size=h)
     assert len(r) == len(py["t"]) - 1
-    stroke, force = r["press.ram.stroke"], -r["press.ram.force"]
+    stroke, force = r["press.ram.stroke_m"], -r["press.ram.force_N"]
     # The pressing part of the stroke, up to its deepest point (the crank turns back past
     # bottom dead centre), the Python curve interpolated at the system's strokes.
     deepest = int(np.argmax(stroke))
@@ -83,8 +83,8 @@ def test_the_crank_ssp_follows_the_python_example_within_a_step(rkforge_bin, tmp
     r = simulate_ssp(ssp, stop_time=py["t"][-1] - h / 2, step_size=h)
     assert len(r) == len(py["t"]) - 1
     travel = np.max(np.abs(py["v"])) * h
-    lag = np.max(np.abs(r["press.ram.stroke"] - py["stroke"][1:]))
-    peak = -r["press.ram.force"].min()
+    lag = np.max(np.abs(r["press.ram.stroke_m"] - py["stroke"][1:]))
+    peak = -r["press.ram.force_N"].min()
     print(f"crank: stroke within {lag / travel:.3f} steps of travel, peak force "
           f"{peak / py['force'].max() - 1:+.2e}")
     assert lag <= travel
@@ -102,7 +102,7 @@ def test_the_hammer_ssp_forges_the_python_examples_blows(rkforge_bin, tmp_path):
     assert r["press.finished"][-1] == 1.0
     assert r["press.blow"][-1] == len(hammer.blows)
     drop = 0.060 - py["height"][-1]
-    assert abs(r["press.workpiece.height"][-1] - py["height"][-1]) <= 0.01 * drop
+    assert abs(r["press.workpiece.height_m"][-1] - py["height"][-1]) <= 0.01 * drop
 
 
 def test_the_fmu_manipulation_toolbox_builds_and_runs_a_container_from_the_ssp(rkforge_bin,
@@ -127,7 +127,7 @@ def test_the_fmu_manipulation_toolbox_builds_and_runs_a_container_from_the_ssp(r
     py = simulate(build_fmu(text, tmp_path / "f.fmu", rkforge_bin), HydraulicPress(), h, 1.6,
                   NX, NY, target_dt=2e-5)
     r = simulate_fmu(str(container), stop_time=1.6, step_size=h, output_interval=h)
-    stroke, force = r["forging.ram.stroke"], -r["forging.ram.force"]
+    stroke, force = r["forging.ram.stroke_m"], -r["forging.ram.force_N"]
     deepest = int(np.argmax(stroke))
     pk = int(np.argmax(py["stroke"]))
     s, f = stroke[:deepest + 1], force[:deepest + 1]
@@ -163,4 +163,4 @@ def test_the_parameters_are_bound_in_the_system(rkforge_bin, tmp_path):
         if p.name == "press.relief_pressure":
             p.value = "10.0e6"
     r = simulate_ssp(ssp, stop_time=1.6, step_size=2e-4, parameter_set=relief)
-    assert -r["press.ram.force"][-1] == pytest.approx(10.0e6 * 0.05, rel=0.01)
+    assert -r["press.ram.force_N"][-1] == pytest.approx(10.0e6 * 0.05, rel=0.01)

@@ -1,10 +1,10 @@
 //! `rkforge ssp SCENE --press NAME --out FILE.ssp`: a press and a forging as one system any
 //! SSP (System Structure and Parameterization 1.0) tool opens: the press FMU
 //! (`rkforge fmu --press`) and the scene's forging FMU in `resources/`, and
-//! `SystemStructure.ssd` connecting them: the press's `ram.velocity` to the forging's
-//! `<tool>.velocity`; the forging's `<tool>.force`, `<tool>.stroke`, `energy.tool_work` and
-//! `workpiece.height` to the press's `ram.force`, `ram.stroke`, `ram.tool_work` and
-//! `workpiece.height`. Each component's parameters are bound inline at their start values
+//! `SystemStructure.ssd` connecting them: the press's `ram.velocity_m_per_s` to the forging's
+//! `<tool>.velocity_m_per_s`; the forging's `<tool>.force_N`, `<tool>.stroke_m`, `energy.tool_work_J` and
+//! `workpiece.height_m` to the press's `ram.force_N`, `ram.stroke_m`, `ram.tool_work_J` and
+//! `workpiece.height_m`. Each component's parameters are bound inline at their start values
 //! (the press's defaults, the scene's own keys with the scene's values).
 
 use crate::fmu;
@@ -21,33 +21,33 @@ fn connections(tool: &str) -> Vec<(String, String, String, String)> {
     vec![
         c(
             "press",
-            "ram.velocity".into(),
+            "ram.velocity_m_per_s".into(),
             "forging",
-            format!("{tool}.velocity"),
+            format!("{tool}.velocity_m_per_s"),
         ),
         c(
             "forging",
-            format!("{tool}.force"),
+            format!("{tool}.force_N"),
             "press",
-            "ram.force".into(),
+            "ram.force_N".into(),
         ),
         c(
             "forging",
-            format!("{tool}.stroke"),
+            format!("{tool}.stroke_m"),
             "press",
-            "ram.stroke".into(),
+            "ram.stroke_m".into(),
         ),
         c(
             "forging",
-            "energy.tool_work".into(),
+            "energy.tool_work_J".into(),
             "press",
-            "ram.tool_work".into(),
+            "ram.tool_work_J".into(),
         ),
         c(
             "forging",
-            "workpiece.height".into(),
+            "workpiece.height_m".into(),
             "press",
-            "workpiece.height".into(),
+            "workpiece.height_m".into(),
         ),
     ]
 }
@@ -223,8 +223,17 @@ pub fn pack(scene_path: &Path, name: &str, tool: &str, out: &Path) -> Result<(),
     let scene = Scene::from_str_named(&text, &scene_path.display().to_string())
         .map_err(|e| e.to_string())?;
     let table = variable_table(&scene);
-    for needed in ["velocity", "force", "stroke"].map(|v| format!("{tool}.{v}")) {
-        if !table.iter().any(|v| v.name == needed) {
+    // The velocity an input (a moving tool), the force and stroke outputs.
+    let needed = [
+        ("velocity_m_per_s", Causality::Input),
+        ("force_N", Causality::Output),
+        ("stroke_m", Causality::Output),
+    ];
+    for (needed, causality) in needed.map(|(v, c)| (format!("{tool}.{v}"), c)) {
+        if !table
+            .iter()
+            .any(|v| v.name == needed && v.causality == causality)
+        {
             return Err(format!(
                 "--tool {tool}: the scene's FMU has no variable `{needed}` (the press drives a tool of the scene that is not fixed)"
             ));

@@ -4,16 +4,16 @@
 Coupling (one communication step of length h, press time t_k -> t_k + h):
 
 1. the plant gives the ram velocity v_k, held over the step (zero-order hold): the FMU moves
-   its tool by exactly v_k h (`ram.stroke` is the ram's position);
+   its tool by exactly v_k h (`ram.stroke_m` is the ram's position);
 2. the FMU sub-cycles its explicit solver over the step and returns the force F at t_k + h
-   (`-ram.force`, the force resisting the stroke, N) and the work its tool delivered over the
-   step (`energy.tool_work`, the solver's own integral of F v dt);
+   (`-ram.force_N`, the force resisting the stroke, N) and the work its tool delivered over the
+   step (`energy.tool_work_J`, the solver's own integral of F v dt);
 3. the plant integrates its equations over the step with F held at that value.
 
 The plant sees the force only at the communication points, one value per step, while the
 workpiece received the solver's work. The difference, the coupling error, grows with
 h |dF/dt| / F; the tests measure it as the mismatch between the plant's energy balance and
-`energy.tool_work` (for the hammer's 3 ms blows: 1.4-1.9 % per blow at h = 100 us, below
+`energy.tool_work_J` (for the hammer's 3 ms blows: 1.4-1.9 % per blow at h = 100 us, below
 0.4 % at 40 us and less).
 """
 import argparse
@@ -130,7 +130,7 @@ def build_fmu(scene_text, out, rkforge=None):
 @dataclass
 class Outputs:
     """What the plant reads from the FMU after a step."""
-    force: float      # force resisting the stroke, -ram.force (N)
+    force: float      # force resisting the stroke, -ram.force_N (N)
     stroke: float     # ram displacement, downward positive (m)
     tool_work: float  # work the ram delivered since the start (J)
     height: float     # billet height (m)
@@ -150,7 +150,7 @@ def co_simulate(slave, plant, h, t_max):
     n = 0
     while not plant.finished() and (n + 1) * h <= t_max * (1 + 1e-12):
         v = plant.velocity(h)
-        slave.set("ram.velocity", v)
+        slave.set("ram.velocity_m_per_s", v)
         slave.step(h)
         n += 1
         out = read_outputs(slave)
@@ -161,8 +161,8 @@ def co_simulate(slave, plant, h, t_max):
 
 def read_outputs(slave):
     """The FMU outputs a plant needs."""
-    f, s, w, height, ratio = slave.get("ram.force", "ram.stroke", "energy.tool_work",
-                                       "workpiece.height", "energy.kinetic_to_internal_max")
+    f, s, w, height, ratio = slave.get("ram.force_N", "ram.stroke_m", "energy.tool_work_J",
+                                       "workpiece.height_m", "energy.kinetic_to_internal_max")
     return Outputs(force=-f, stroke=s, tool_work=w, height=height, kinetic_to_internal_max=ratio)
 
 

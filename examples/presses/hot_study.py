@@ -71,8 +71,8 @@ class TemperatureReader:
 
     def step(self, h):
         self.slave.step(h)
-        f, s, t_min, t_mean = self.slave.get("ram.force", "ram.stroke", "thermal.temperature_min",
-                                             "thermal.temperature_mean")
+        f, s, t_min, t_mean = self.slave.get("ram.force_N", "ram.stroke_m", "thermal.temperature_min_c",
+                                             "thermal.temperature_mean_c")
         for k, v in zip(self.rows, [self.slave.t, s, -f, t_min, t_mean]):
             self.rows[k].append(v)
 

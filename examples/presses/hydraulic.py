@@ -49,7 +49,7 @@ class HydraulicPress:
         return self.v
 
     def advance(self, out, h):
-        """Semi-implicit Euler over the step with the forging force held at `out.force`."""
+        """Semi-implicit Euler over the step with the forging force held at `out.force_N`."""
         dt = h / self.substeps
         stiff = self.bulk_modulus / self.oil_volume
         for _ in range(self.substeps):

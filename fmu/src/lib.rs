@@ -22,9 +22,12 @@ mod values;
 pub use slave::{Saved, Slave};
 pub use stepping::Observer;
 
+use rkforge_core::outputs::{Column, Sample};
 use rkforge_core::scene_parameters::{parameters, Parameter};
 use rkforge_core::{Error, Result, Scene, SceneSource, Simulation, State};
-use rkforge_model_description::{variable_table3, xml, Binding, Causality, Kind, Variable};
+use rkforge_model_description::{
+    fmu_columns, variable_table3, xml, Binding, Causality, Kind, Variable,
+};
 use serde::{Deserialize, Serialize};
 use stepping::{EarlyReturn, Stepper};
 
@@ -48,31 +51,19 @@ pub enum Phase {
 pub type Params = Vec<Option<toml::Value>>;
 
 /// The value of a Real variable that the simulation answers (an input's current value, an
-/// output), `None` for the other bindings.
-fn output_value(binding: Binding, sim: &Simulation, commands: &[Option<f64>]) -> Option<f64> {
-    let tools = sim.tools();
+/// output of the register, `columns` the FMU's [`fmu_columns`]), `None` for the other
+/// bindings.
+fn output_value(
+    binding: Binding,
+    sample: &Sample<'_>,
+    columns: &[Column],
+    commands: &[Option<f64>],
+) -> Option<f64> {
     Some(match binding {
-        Binding::ToolVelocity(k) => commands[k].unwrap_or_else(|| tools[k].velocity_at(sim.time())),
-        Binding::ToolForce(k) => tools[k].axial_force(),
-        Binding::ToolStroke(k) => tools[k].state.stroke,
-        Binding::ToolContactFraction(k) => sim.contact_fraction(k),
-        Binding::FillPoint(k) => match sim.fill_points()[k].filled {
-            Some(_) => 1.0,
-            None => 0.0,
-        },
-        Binding::WorkpieceLateral => sim.extents().lateral(sim.scene().model.kinematics).1,
-        Binding::WorkpieceHeight => {
-            let e = sim.extents();
-            e.y[1] - e.y[0]
+        Binding::ToolVelocity(k) => {
+            commands[k].unwrap_or_else(|| sample.tools()[k].velocity_at(sample.time()))
         }
-        Binding::MaxPlasticStrain => sim.max_plastic_strain(),
-        Binding::KineticEnergy => sim.energy().kinetic,
-        Binding::PlasticEnergy => sim.energy().plastic,
-        Binding::ToolWork => sim.energy().tool_work,
-        Binding::KineticToInternalMax => sim.kinetic_to_internal_max(),
-        Binding::Laps => sim.lap_count() as f64,
-        Binding::Thermal(k) => sim.thermal_values()?[k],
-        Binding::ToolHeatFlow(k) => sim.tool_heat_flows()?[k],
+        Binding::Output(k) => columns[k].value(sample),
         Binding::Parameter(_)
         | Binding::ContactPressure(_)
         | Binding::Press(_)
@@ -83,11 +74,20 @@ fn output_value(binding: Binding, sim: &Simulation, commands: &[Option<f64>]) ->
 }
 
 /// The Float64 outputs of `table` now, by value reference (FMI 3.0 intermediate updates).
-fn outputs_of(table: &[Variable], sim: &Simulation, commands: &[Option<f64>]) -> Vec<(u32, f64)> {
+fn outputs_of(
+    table: &[Variable],
+    sim: &Simulation,
+    columns: &[Column],
+    commands: &[Option<f64>],
+) -> Vec<(u32, f64)> {
+    let sample = Sample::new(sim);
     table
         .iter()
         .filter(|v| v.causality == Causality::Output)
-        .filter_map(|v| Some((v.value_reference, output_value(v.binding, sim, commands)?)))
+        .filter_map(|v| {
+            let value = output_value(v.binding, &sample, columns, commands)?;
+            Some((v.value_reference, value))
+        })
         .collect()
 }
 
@@ -112,6 +112,8 @@ pub struct Instance {
     guid: String,
     /// The FMI 3.0 table (the 2.0 table and, after `time`, the early-return switches).
     table: Vec<Variable>,
+    /// The register's columns the outputs read ([`Binding::Output`]).
+    columns: Vec<Column>,
     early: Vec<EarlyReturn>,
     params: Params,
     commands: Vec<Option<f64>>,
@@ -134,6 +136,7 @@ impl Instance {
             text: scene_text.to_string(),
             label: label.to_string(),
             table: variable_table3(&scene),
+            columns: fmu_columns(&scene),
             early: vec![EarlyReturn::default(); scene.tools.len()],
             guid: xml::guid(scene_text),
             commands: vec![None; scene.tools.len()],
@@ -313,9 +316,11 @@ impl Instance {
                 ))),
             };
         }
-        let commands = self.commands.clone();
-        let sim = self.readable_sim()?;
-        output_value(binding, sim, &commands)
+        self.readable_sim()?;
+        let sim = self
+            .simulation()
+            .ok_or_else(|| request("no simulation".into()))?;
+        output_value(binding, &Sample::new(sim), &self.columns, &self.commands)
             .ok_or_else(|| request(format!("value reference {vr} is not a Real variable")))
     }
 
@@ -476,13 +481,19 @@ impl Instance {
         }
         let target = now - self.start_time + h;
         let armed: Vec<EarlyReturn> = self.early.iter().map(|e| e.armed(early)).collect();
-        let (table, commands, start) = (&self.table, &self.commands, self.start_time);
+        let (table, columns, commands) = (&self.table, &self.columns, &self.commands);
+        let start = self.start_time;
         let stepper = self
             .sim
             .as_mut()
             .ok_or_else(|| request("not initialised".into()))?;
         let mut report = observe.map(|o| {
-            move |sim: &Simulation| o(start + sim.time(), &outputs_of(table, sim, commands))
+            move |sim: &Simulation| {
+                o(
+                    start + sim.time(),
+                    &outputs_of(table, sim, columns, commands),
+                )
+            }
         });
         let report = report
             .as_mut()
@@ -622,9 +633,9 @@ mod tests {
     fn stroke_follows_the_velocity_input_and_force_appears() {
         let mut inst = ready();
         let (vel, stroke, force) = (
-            vr(&inst, "wall.velocity"),
-            vr(&inst, "wall.stroke"),
-            vr(&inst, "wall.force"),
+            vr(&inst, "wall.velocity_m_per_s"),
+            vr(&inst, "wall.stroke_m"),
+            vr(&inst, "wall.force_N"),
         );
         inst.set_real(vel, 2.0).unwrap();
         let h = 1e-6;
@@ -636,7 +647,7 @@ mod tests {
         assert!(f > 1e4, "the bar pushes the wall");
         // The wall backs away from the bar that pushes it: it takes work from the bar, at
         // most the largest force over the stroke (the force rises as the bar arrives).
-        let work = inst.get_real(vr(&inst, "energy.tool_work")).unwrap();
+        let work = inst.get_real(vr(&inst, "energy.tool_work_J")).unwrap();
         assert!(work < 0.0 && -work <= f * 2.0 * 5e-6, "{work} J");
     }
 
@@ -666,9 +677,9 @@ mod tests {
         assert!(inst.do_step(0.0, 0.0).is_err());
         assert!(inst.do_step(1.0, 1e-6).is_err());
         assert!(inst.get_real(9999).is_err());
-        let vel = vr(&inst, "wall.velocity");
+        let vel = vr(&inst, "wall.velocity_m_per_s");
         assert!(inst.set_real(vel, f64::NAN).is_err());
-        assert!(inst.set_real(vr(&inst, "wall.force"), 1.0).is_err());
+        assert!(inst.set_real(vr(&inst, "wall.force_N"), 1.0).is_err());
         assert!(
             inst.set_integer(vr(&inst, "workpiece.particles[0]"), 9)
                 .is_err(),

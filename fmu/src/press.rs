@@ -3,9 +3,9 @@
 //! screw press (energy-limited), with the equations, parameters and defaults of the Python
 //! examples (their variable tables in `modelDescription/src/press.rs`).
 //!
-//! Each press has the inputs `ram.force` (N: the force of the workpiece on the ram along the
-//! ram's axis, the forging FMU's `<tool>.force`, negative while pressing), `ram.stroke` (m),
-//! `ram.tool_work` (J) and `workpiece.height` (m), and the output `ram.velocity` (m/s along the
+//! Each press has the inputs `ram.force_N` (N: the force of the workpiece on the ram along the
+//! ram's axis, the forging FMU's `<tool>.force`, negative while pressing), `ram.stroke_m` (m),
+//! `ram.tool_work_J` (J) and `workpiece.height_m` (m), and the output `ram.velocity_m_per_s` (m/s along the
 //! axis, the forging FMU's `<tool>.velocity` input), so the two connect name to name in an
 //! SSP. Stepped as the Python examples' `co_simulate` steps its plant (the forging FMU
 //! first, then the press with the forging outputs at the end of the step), a press FMU gives
@@ -216,13 +216,13 @@ impl Press {
     }
 
     /// One communication step of `h` (s) with the inputs held: the equations of the Python
-    /// examples (`advance`), the force resisting the stroke `F = -ram.force`.
+    /// examples (`advance`), the force resisting the stroke `F = -ram.force_N`.
     fn advance(&mut self, h: f64) {
         if self.state.finished {
             self.state.v = 0.0;
             return;
         }
-        let force = -self.value("ram.force");
+        let force = -self.value("ram.force_N");
         match self.kind {
             PressKind::Hydraulic => {
                 // Semi-implicit Euler in `substeps` steps, the pressure capped by the valve.
@@ -266,11 +266,11 @@ impl Press {
             }
             PressKind::Hammer => {
                 // m dv/dt = -F until the ram rebounds; lifted by `gap`, then the next blow.
-                let stroke = self.value("ram.stroke");
+                let stroke = self.value("ram.stroke_m");
                 let (mass, v0) = (self.value("ram_mass"), self.value("impact_speed"));
                 let (gap, lift) = (self.value("gap"), self.value("lift_speed"));
                 let (target, most) = (self.value("target_height"), self.value("max_blows"));
-                let height = self.value("workpiece.height");
+                let height = self.value("workpiece.height_m");
                 let st = &mut self.state;
                 if let Some(to) = st.lifting_to {
                     if stroke <= to {
@@ -309,7 +309,7 @@ impl Press {
         let st = &self.state;
         let energy = |i: f64, w: f64| i * w * w / 2.0;
         Some(match name {
-            "ram.velocity" => st.v,
+            "ram.velocity_m_per_s" => st.v,
             "finished" => f64::from(u8::from(st.finished)),
             "pressure" => st.p,
             "crank_angle" => st.theta,

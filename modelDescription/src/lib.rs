@@ -1,22 +1,24 @@
 //! The FMU's variable table, derived from a scene.
 //!
-//! Variables are named after the scene's tools: `<tool>.velocity` (input, m/s, for every
-//! tool that is not fixed), `<tool>.force` and `<tool>.stroke` (outputs); the workpiece's
-//! extents, largest plastic strain and energies are outputs; the parameters are the scene's
-//! own keys under their dotted names (`discretization.integration`, `workpiece.particles[0]`,
+//! The inputs are named after the scene's tools, `<tool>.velocity_m_per_s` (for every tool
+//! that is not fixed); the outputs are the register's ([`rkforge_core::outputs::REGISTER`],
+//! the columns it shows in the FMU, [`fmu_columns`]) under the names `history.csv` gives
+//! them, the unit in the name and in the `unit` attribute (`<tool>.force_N`,
+//! `workpiece.height_m`, `energy.kinetic_J`); the parameters are the scene's own keys under
+//! their dotted names (`discretization.integration`, `workpiece.particles[0]`,
 //! `tools.top.friction`), as the scene's schema lists them
-//! ([`rkforge_core::scene_parameters`]). Value references are assigned in table order, so the same scene always gives
-//! the same table. The same table is meant to drive `modelDescription.xml` and the FMU's
-//! getters and setters, so the two cannot drift.
+//! ([`rkforge_core::scene_parameters`]). Value references are assigned in table order, so
+//! the same scene always gives the same table. The same table drives `modelDescription.xml`
+//! and the FMU's getters and setters, so the two cannot drift.
 
 mod document;
 pub mod press;
 pub mod xml;
 pub mod xml3;
 
-use rkforge_core::scene::{Kinematics, Motion, Scene};
+use rkforge_core::outputs::{columns, Column};
+use rkforge_core::scene::{Motion, Scene};
 use rkforge_core::scene_parameters::{parameters, ParameterKind};
-use rkforge_core::THERMAL_MEASURES;
 
 /// FMI 2.0 causality.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -59,36 +61,8 @@ pub enum Kind {
 pub enum Binding {
     /// Velocity along the axis of tool `k` (m/s).
     ToolVelocity(usize),
-    /// Force of the workpiece on tool `k` along its axis (N).
-    ToolForce(usize),
-    /// Displacement of tool `k` along its axis (m).
-    ToolStroke(usize),
-    /// Share of tool `k`'s polyline length that the workpiece touches (-).
-    ToolContactFraction(usize),
-    /// Whether the material has reached fill point `k` (the scene's fill points, tool by
-    /// tool): 0 or 1.
-    FillPoint(usize),
-    /// Lateral size: largest r (axisymmetric) or x extent (plane strain) (m).
-    WorkpieceLateral,
-    /// Axial extent (m).
-    WorkpieceHeight,
-    /// Largest equivalent plastic strain (-).
-    MaxPlasticStrain,
-    /// Kinetic energy (J).
-    KineticEnergy,
-    /// Plastic dissipation (J).
-    PlasticEnergy,
-    /// Work delivered by the tools' motion since the start, `int F . v_tool dt` summed over
-    /// the tools (J): what a press delivers to the workpiece.
-    ToolWork,
-    /// Largest kinetic-to-internal energy ratio after the start-up (-).
-    KineticToInternalMax,
-    /// How many laps (folds of the surface onto itself) formed so far (-).
-    Laps,
-    /// Thermal measure `k` of [`rkforge_core::THERMAL_MEASURES`] (a scene with `[thermal]`).
-    Thermal(usize),
-    /// Heat flow from the workpiece into tool `k` (W).
-    ToolHeatFlow(usize),
+    /// Column `k` of [`fmu_columns`]: an output of the register.
+    Output(usize),
     /// Parameter `k` of the scene ([`rkforge_core::scene_parameters::parameters`]): a
     /// scene key under its dotted name.
     Parameter(usize),
@@ -140,6 +114,12 @@ impl Variable {
 
 /// The variable table of a scene.
 pub fn variable_table(scene: &Scene) -> Vec<Variable> {
+    let inputs: Vec<String> = scene
+        .tools
+        .iter()
+        .filter(|tool| tool.motion != Motion::Fixed)
+        .map(|tool| format!("{}.velocity_m_per_s", tool.name))
+        .collect();
     let mut t = Vec::new();
     let mut push =
         |name: String, causality, variability, kind, unit, description: String, binding| {
@@ -168,7 +148,7 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
         };
         if let Some(v) = start {
             push(
-                format!("{}.velocity", tool.name),
+                format!("{}.velocity_m_per_s", tool.name),
                 Input,
                 Continuous,
                 Kind::Real(Some(v)),
@@ -177,149 +157,21 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
                 Binding::ToolVelocity(k),
             );
         }
-        push(
-            format!("{}.force", tool.name),
-            Output,
-            Continuous,
-            Kind::Real(None),
-            Some("N"),
-            format!(
-                "force of the workpiece on tool {} along its axis",
-                tool.name
-            ),
-            Binding::ToolForce(k),
-        );
-        push(
-            format!("{}.stroke", tool.name),
-            Output,
-            Continuous,
-            Kind::Real(None),
-            Some("m"),
-            format!("displacement of tool {} along its axis", tool.name),
-            Binding::ToolStroke(k),
-        );
-        push(
-            format!("{}.contact_fraction", tool.name),
-            Output,
-            Continuous,
-            Kind::Real(None),
-            None,
-            format!(
-                "share of tool {}'s length that the workpiece touches",
-                tool.name
-            ),
-            Binding::ToolContactFraction(k),
-        );
     }
-    let fill_points = scene.tools.iter().flat_map(|t| {
-        t.fill_points
-            .iter()
-            .map(move |p| (t.name.clone(), p.name.clone()))
-    });
-    for (k, (tool, point)) in fill_points.enumerate() {
-        push(
-            format!("{tool}.{point}.filled"),
-            Output,
-            Continuous,
-            Kind::Real(None),
-            None,
-            format!(
-                "1 once the material has reached point {point} of tool {tool} (die fill), else 0"
-            ),
-            Binding::FillPoint(k),
-        );
-    }
-    let lateral = match scene.model.kinematics {
-        Kinematics::Axisymmetric => ("workpiece.radius", "largest radius of the workpiece"),
-        Kinematics::PlaneStrain => ("workpiece.width", "width of the workpiece"),
-    };
-    let outputs = [
-        (lateral.0, Some("m"), lateral.1, Binding::WorkpieceLateral),
-        (
-            "workpiece.height",
-            Some("m"),
-            "height of the workpiece",
-            Binding::WorkpieceHeight,
-        ),
-        (
-            "workpiece.max_plastic_strain",
-            None,
-            "largest equivalent plastic strain",
-            Binding::MaxPlasticStrain,
-        ),
-        (
-            "energy.kinetic",
-            Some("J"),
-            "kinetic energy of the workpiece",
-            Binding::KineticEnergy,
-        ),
-        (
-            "energy.plastic",
-            Some("J"),
-            "plastic dissipation in the workpiece",
-            Binding::PlasticEnergy,
-        ),
-        (
-            "energy.tool_work",
-            Some("J"),
-            "work delivered by the tools' motion since the start, summed over the tools",
-            Binding::ToolWork,
-        ),
-        (
-            "energy.kinetic_to_internal_max",
-            None,
-            "largest ratio of kinetic to internal energy after the start-up (quasi-static check)",
-            Binding::KineticToInternalMax,
-        ),
-        (
-            "workpiece.laps",
-            None,
-            "how many laps (folds of the surface onto itself between points apart along it) formed so far",
-            Binding::Laps,
-        ),
-    ];
-    for (name, unit, d, b) in outputs {
-        push(
-            name.into(),
-            Output,
-            Continuous,
-            Kind::Real(None),
-            unit,
-            d.into(),
-            b,
-        );
-    }
-    if scene.thermal.is_some() {
-        for (k, (key, unit, d)) in THERMAL_MEASURES.iter().enumerate() {
-            // `temperature_min_c` is `thermal.temperature_min` in degC, as `workpiece.height`
-            // carries its unit in the declaration rather than the name.
-            let name = key.rsplit_once('_').map_or(*key, |(n, _)| n);
-            push(
-                format!("thermal.{name}"),
-                Output,
-                Continuous,
-                Kind::Real(None),
-                (!unit.is_empty()).then_some(*unit),
-                d.to_string(),
-                Binding::Thermal(k),
-            );
+    for (k, c) in fmu_columns(scene).iter().enumerate() {
+        // A moving tool's velocity is its input, which reads back as the velocity now.
+        if inputs.contains(&c.name) {
+            continue;
         }
-        for (k, tool) in scene.tools.iter().enumerate() {
-            if tool.heat_transfer_w_per_m2_k > 0.0 {
-                push(
-                    format!("{}.heat_flow", tool.name),
-                    Output,
-                    Continuous,
-                    Kind::Real(None),
-                    Some("W"),
-                    format!(
-                        "heat flow from the workpiece into tool {} at the last heat stage",
-                        tool.name
-                    ),
-                    Binding::ToolHeatFlow(k),
-                );
-            }
-        }
+        push(
+            c.name.clone(),
+            Output,
+            Continuous,
+            Kind::Real(None),
+            (c.unit() != "1").then(|| c.unit()),
+            c.description(scene),
+            Binding::Output(k),
+        );
     }
     for (k, p) in parameters(scene).into_iter().enumerate() {
         if writes_files_only(&p.key) {
@@ -351,6 +203,15 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
         );
     }
     t
+}
+
+/// The register's columns of `scene` that the FMU shows ([`rkforge_core::outputs::Shown::fmu`]),
+/// in register order: what [`Binding::Output`] indexes.
+pub fn fmu_columns(scene: &Scene) -> Vec<Column> {
+    columns(scene)
+        .into_iter()
+        .filter(|c| c.output.shown.fmu)
+        .collect()
 }
 
 /// Value reference of FMI 3.0's independent variable `time`: the one after the 2.0 table's.
@@ -409,7 +270,7 @@ pub fn variable_table3(scene: &Scene) -> Vec<Variable> {
         for (k, tool) in scene.tools.iter().enumerate() {
             vr += 1;
             t.push(Variable {
-                name: format!("{}.contact_pressure", tool.name),
+                name: format!("{}.contact_pressure_Pa", tool.name),
                 value_reference: vr,
                 causality: Causality::Output,
                 variability: Variability::Continuous,
@@ -461,15 +322,20 @@ mod tests {
     fn fixed_tools_have_no_velocity_input_and_moving_tools_do() {
         let mut s = scene();
         let t = variable_table(&s);
-        assert!(!t.iter().any(|v| v.name == "wall.velocity"));
-        assert!(t.iter().any(|v| v.name == "wall.force"
+        assert!(!t
+            .iter()
+            .any(|v| v.name == "wall.velocity_m_per_s" && v.causality == Causality::Input));
+        assert!(t.iter().any(|v| v.name == "wall.force_N"
             && v.causality == Causality::Output
             && v.unit == Some("N")));
         s.tools[0].motion = Motion::Constant {
             velocity_m_per_s: 10.0,
         };
         let t = variable_table(&s);
-        let v = t.iter().find(|v| v.name == "wall.velocity").unwrap();
+        let v = t
+            .iter()
+            .find(|v| v.name == "wall.velocity_m_per_s")
+            .unwrap();
         assert_eq!(
             (v.causality, v.kind.clone()),
             (Causality::Input, Kind::Real(Some(10.0)))
@@ -538,7 +404,7 @@ mod tests {
             .iter()
             .filter(|v| v.causality == Causality::Parameter)
             .all(|v| v.variability == Variability::Fixed));
-        assert!(t.iter().any(|v| v.name == "workpiece.radius"));
+        assert!(t.iter().any(|v| v.name == "workpiece.radius_m"));
         assert!(t.iter().any(|v| v.name == "time.end_s"));
         assert!(!t.iter().any(|v| v.name == "output.frames"));
     }

@@ -1,5 +1,5 @@
 //! The variable tables of the press plants (`fmu/src/press.rs`): inputs read from a forging
-//! FMU, `ram.velocity` written to it, the press's own outputs and its parameters with the
+//! FMU, `ram.velocity_m_per_s` written to it, the press's own outputs and its parameters with the
 //! defaults of `examples/presses`.
 
 use crate::{xml, Binding, Causality, Kind, Variability, Variable};
@@ -145,7 +145,7 @@ pub fn parameters(kind: PressKind) -> &'static [Param] {
     }
 }
 
-/// The outputs of each press besides `ram.velocity`: name, unit, description.
+/// The outputs of each press besides `ram.velocity_m_per_s`: name, unit, description.
 pub fn outputs(kind: PressKind) -> &'static [(&'static str, Option<&'static str>, &'static str)] {
     match kind {
         PressKind::Hydraulic => &[("pressure", Some("Pa"), "cylinder pressure")],
@@ -186,13 +186,13 @@ pub fn outputs(kind: PressKind) -> &'static [(&'static str, Option<&'static str>
 
 /// The forging outputs a press reads.
 const INPUTS: [(&str, &str, &str); 4] = [
-    ("ram.force", "N", "force of the workpiece on the ram along the ram's axis (the forging FMU's ram.force; negative while pressing)"),
-    ("ram.stroke", "m", "ram displacement along its axis (the forging FMU's ram.stroke)"),
-    ("ram.tool_work", "J", "work the ram delivered to the workpiece (the forging FMU's energy.tool_work)"),
-    ("workpiece.height", "m", "workpiece height (the forging FMU's workpiece.height)"),
+    ("ram.force_N", "N", "force of the workpiece on the ram along the ram's axis (the forging FMU's ram.force_N; negative while pressing)"),
+    ("ram.stroke_m", "m", "ram displacement along its axis (the forging FMU's ram.stroke_m)"),
+    ("ram.tool_work_J", "J", "work the ram delivered to the workpiece (the forging FMU's energy.tool_work)"),
+    ("workpiece.height_m", "m", "workpiece height (the forging FMU's workpiece.height_m)"),
 ];
 
-/// The variable table of a press: inputs, `ram.velocity`, its outputs, its parameters.
+/// The variable table of a press: inputs, `ram.velocity_m_per_s`, its outputs, its parameters.
 pub fn variable_table(kind: PressKind) -> Vec<Variable> {
     let mut t = Vec::new();
     let mut push = |name: String, causality, variability, kind, unit, description: String| {
@@ -219,12 +219,12 @@ pub fn variable_table(kind: PressKind) -> Vec<Variable> {
         );
     }
     push(
-        "ram.velocity".into(),
+        "ram.velocity_m_per_s".into(),
         Causality::Output,
         Variability::Continuous,
         Kind::Real(None),
         Some("m/s"),
-        "ram velocity along the ram's axis (the forging FMU's ram.velocity input)".into(),
+        "ram velocity along the ram's axis (the forging FMU's ram.velocity_m_per_s input)".into(),
     );
     push(
         "finished".into(),
