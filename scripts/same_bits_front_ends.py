@@ -9,6 +9,10 @@ For each case (a coarse shipped scene and rule) and each build, with this interp
 - ROS: DIR/rkforge-ros --record, uncompressed: every message's topic, log time and bytes;
   and, apart, the embedded summary (less the wall times and the node's own figures).
 Prints one line per case and front end; exit status 1 when any differs.
+
+IGNORE_OUTPUTS="name ..." (as for scripts/same_bits.sh): the register's outputs of those names
+that the new build adds are left out of the Python history and summaries, and the recordings'
+`outputs` topic (which carries every output of the register) is left out of the messages.
 """
 import hashlib
 import json
@@ -19,6 +23,16 @@ import sys
 import tempfile
 
 VOLATILE = ("wall_s", "stage_seconds", "ros")
+IGNORED = set(os.environ.get("IGNORE_OUTPUTS", "").split())
+
+
+def drop(v):
+    """A summary less the IGNORED keys, at any depth."""
+    if isinstance(v, dict):
+        return {k: drop(x) for k, x in v.items() if k not in IGNORED}
+    if isinstance(v, list):
+        return [drop(x) for x in v]
+    return v
 
 
 def digest(*parts):
@@ -33,13 +47,15 @@ def python_run(build, scene, rule):
         "import json, sys, rkforge\n"
         "s, h = rkforge.run(rkforge.Scene.from_file(sys.argv[1]), integration=sys.argv[2], check=False)\n"
         f"s = {{k: v for k, v in s.items() if k not in {VOLATILE!r}}}\n"
+        f"h = h[[c for c in h.columns if c.rsplit('.', 1)[-1] not in {sorted(IGNORED)!r}]]\n"
         "sys.stdout.write(json.dumps(s, sort_keys=True) + '\\n')\n"
         "sys.stdout.write(','.join(h.columns) + '\\n' + h.to_numpy().tobytes().hex())\n"
     )
     env = dict(os.environ, PYTHONPATH=str(pathlib.Path(build) / "same_bits_python"))
     out = subprocess.run([sys.executable, "-c", code, str(scene), rule], env=env,
                          capture_output=True, text=True, check=True).stdout
-    return digest(out)
+    summary, history = out.split("\n", 1)
+    return digest(json.dumps(drop(json.loads(summary)), sort_keys=True) + "\n" + history)
 
 
 def fmu_run(build, scene, rule, work):
@@ -75,11 +91,12 @@ def ros_run(build, scene, rule, work, domain):
                    env=env, check=True, capture_output=True, timeout=600)
     with open(rec, "rb") as f:
         messages = [(c.topic, m.log_time, bytes(m.data))
-                    for _, c, m in make_reader(f).iter_messages()]
+                    for _, c, m in make_reader(f).iter_messages()
+                    if not (IGNORED and c.topic.endswith("/outputs"))]
     with open(rec, "rb") as f:
         meta = {m.name: dict(m.metadata) for m in make_reader(f).iter_metadata()}
     summary = json.loads(meta["rkforge_summary"]["summary_json"])
-    summary = {k: v for k, v in summary.items() if k not in VOLATILE}
+    summary = drop({k: v for k, v in summary.items() if k not in VOLATILE})
     return (digest(*[t.encode() + str(lt).encode() + d for t, lt, d in messages])
             + f" ({len(messages)} messages)", digest(json.dumps(summary, sort_keys=True)))
 

@@ -19,11 +19,14 @@
 //! Who reads it: `history.csv` (the columns [`Shown::history`], in register order),
 //! `summary.json` (the columns [`Shown::summary`], at the path the column's name gives: the
 //! groups as objects, per tool under `tools[k]`, per fill point under its
-//! `tools[k].fill_points[i]`), the FMU's variables (the columns [`Shown::fmu`]), the ROS
-//! node's and the recordings' `outputs` topic and Python's `Simulation.outputs()` (every
-//! column and field). Every read goes through a [`Sample`] of the simulation: the public
-//! methods of [`Simulation`], with the measures several outputs share (the workpiece's
-//! extents, the penetration, the particle fields, the thermal measures) taken once.
+//! `tools[k].fill_points[i]`), the ROS node's and the recordings' `outputs` topic and
+//! Python's `Simulation.outputs()` (every column and field). The FMU's output variables are
+//! to be the columns [`Shown::fmu`], named and read as here; its table still lists its own
+//! until it is generated from [`columns`].
+//!
+//! Every read goes through a [`Sample`] of the simulation: the public methods of
+//! [`Simulation`], with the measures several outputs share (the workpiece's extents, the
+//! penetration, the particle fields, the thermal measures) taken once.
 //!
 //! Adding an output is one entry in its section of `register.rs` plus its computation (a
 //! public method of [`Simulation`] or a function here, as [`mean_contact_pressure`]).
@@ -177,6 +180,13 @@ impl Shown {
         history: false,
         summary: true,
         fmu: true,
+    };
+    /// In the history and the summary; the FMU has the figure as an input of the same name
+    /// (a tool's velocity, which an importer commands and reads back).
+    pub const NOT_IN_FMU: Shown = Shown {
+        history: true,
+        summary: true,
+        fmu: false,
     };
     /// In the history only (the time, which the FMU has as its own).
     pub const HISTORY_ONLY: Shown = Shown {

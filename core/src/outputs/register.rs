@@ -46,7 +46,8 @@ const TOOLS: [Output; 9] = [
         "m/s",
         "velocity of tool {tool} along its axis during the last step",
         |s, k| s.tools()[k].state.velocity,
-    ),
+    )
+    .showing(Shown::NOT_IN_FMU),
     tool(
         "force_N",
         "N",
