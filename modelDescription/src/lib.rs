@@ -114,12 +114,6 @@ impl Variable {
 
 /// The variable table of a scene.
 pub fn variable_table(scene: &Scene) -> Vec<Variable> {
-    let inputs: Vec<String> = scene
-        .tools
-        .iter()
-        .filter(|tool| tool.motion != Motion::Fixed)
-        .map(|tool| format!("{}.velocity_m_per_s", tool.name))
-        .collect();
     let mut t = Vec::new();
     let mut push =
         |name: String, causality, variability, kind, unit, description: String, binding| {
@@ -159,10 +153,6 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
         }
     }
     for (k, c) in fmu_columns(scene).iter().enumerate() {
-        // A moving tool's velocity is its input, which reads back as the velocity now.
-        if inputs.contains(&c.name) {
-            continue;
-        }
         push(
             c.name.clone(),
             Output,
