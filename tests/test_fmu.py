@@ -305,6 +305,33 @@ def test_die_fill_and_contact_outputs_match_rkforge_run(fmus, rkforge_bin, tmp_p
     s.close()
 
 
+def test_every_output_is_the_history_column_of_its_name(fmus, rkforge_bin, tmp_path):
+    """The FMU's outputs come from the register of outputs: each that `history.csv` has is its
+    column of the same name and unit, the same bits at every sample of the coarse block, among them
+    the mean contact pressure, which on the flat dies is the axial force over the contact
+    area (`contact_length_m` times the depth, 1 m)."""
+    grid = ["--set", "workpiece.particles=[11,11]", "--set", "time.end_s=4.0e-3"]
+    subprocess.run([rkforge_bin, "run", str(ROOT / "scenes/block_forging.toml"), "--out", str(tmp_path),
+                    "--quiet", "--no-frames", *grid], check=True)
+    with open(tmp_path / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    md = read_model_description(fmus["block_forging"])
+    outputs = {v.name: v.unit for v in md.modelVariables if v.causality == "output"}
+    assert outputs["top.pressure_mean_Pa"] == "Pa" and outputs["top.force_N"] == "N"
+    assert outputs["energy.kinetic_J"] == "J" and outputs["workpiece.width_m"] == "m"
+    # The register keeps a few out of the history (a tool's peak force and contact length,
+    # the initial energy, the interface's and the quasi-static largest: summary figures).
+    names = sorted(n for n in outputs if n in rows[0])
+    assert len(names) >= len(outputs) - 7 and "top.pressure_mean_Pa" in names
+    s = Slave(fmus["block_forging"], params=COARSE)
+    for before, row in zip(rows, rows[1:]):
+        s.step(float(row["time_s"]) - float(before["time_s"]))
+        assert s.get(*names) == [float(row[n]) for n in names], row["time_s"]
+    p, f, length = s.get("top.pressure_mean_Pa", "top.force_N", "top.contact_length_m")
+    assert p > 0.0 and abs(p * length * 1.0 + f) <= 1e-9 * abs(f), (p, f, length)
+    s.close()
+
+
 def parameters(md):
     """The parameters of a model description: {name: (type, start)}."""
     return {v.name: (v.type, v.start) for v in md.modelVariables if v.causality == "parameter"}

@@ -64,6 +64,7 @@ def test_fmi2_and_fmi3_give_the_same_bits(rkforge_bin, tmp_path):
     for name in outputs:
         assert runs[0][name].tobytes() == runs[1][name].tobytes(), name
     assert runs[1]["top.force_N"][-1] < 0.0
+    assert runs[1]["top.pressure_mean_Pa"][-1] > 0.0
 
 
 class Slave3:
