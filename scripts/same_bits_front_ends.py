@@ -5,7 +5,10 @@ For each case (a coarse shipped scene and rule) and each build, with this interp
 - Python: rkforge.run(scene) from DIR/same_bits_python (a `pip install --target` of the
   build's wheel): the summary (less the wall and stage times) and the history's bytes;
 - FMU: the scene packed by DIR/rkforge fmu, simulated by fmpy over the scene's end time at
-  its history interval with the rule set through the FMU's parameter: every output's bytes;
+  its history interval with the rule set through the FMU's parameter: every output of the old
+  build's bytes against the new build's output of that name, or of its new name (the FMU's
+  variables took the register's names in issue 34: `RENAMED`, the README's table); outputs
+  only the new build has are counted, not compared;
 - ROS: DIR/rkforge-ros --record, uncompressed: every message's topic, log time and bytes;
   and, apart, the embedded summary (less the wall times and the node's own figures).
 Prints one line per case and front end; exit status 1 when any differs.
@@ -35,6 +38,30 @@ def drop(v):
     return v
 
 
+# The FMU's earlier output names and their names now (README, "earlier name | name now").
+RENAMED = [
+    (r"(?<!early_return)\.force$", ".force_N"),
+    (r"\.stroke$", ".stroke_m"),
+    (r"^workpiece\.(radius|width|height)$", r"workpiece.\1_m"),
+    (r"^energy\.(kinetic|plastic|tool_work)$", r"energy.\1_J"),
+    (r"^thermal\.temperature_(min|max|mean)$", r"thermal.temperature_\1_c"),
+    (r"^thermal\.(plastic_heat|friction_heat|heat_content|heat_to_tools|heat_to_surroundings)$",
+     r"thermal.\1_J"),
+    (r"^thermal\.heat_balance$", "thermal.heat_balance_rel"),
+    (r"^(\w+)\.heat_flow$", r"thermal.\1.heat_flow_W"),
+]
+
+
+def new_name(old):
+    """The name an FMU output of the old build has in the new one."""
+    import re
+    for pattern, replacement in RENAMED:
+        name = re.sub(pattern, replacement, old)
+        if name != old:
+            return name
+    return old
+
+
 def digest(*parts):
     h = hashlib.sha256()
     for p in parts:
@@ -59,6 +86,7 @@ def python_run(build, scene, rule):
 
 
 def fmu_run(build, scene, rule, work):
+    """Each output's bytes, by name."""
     from fmpy import simulate_fmu
     import tomllib
     fmu = work / f"{pathlib.Path(build).name}-{scene.stem}.fmu"
@@ -67,12 +95,21 @@ def fmu_run(build, scene, rule, work):
     spec = tomllib.loads(scene.read_text())
     end = spec["time"]["end_s"]
     step = spec.get("output", {}).get("history_interval_s", end / 200)
-    names = [v for v in fmu_variables(fmu) if v[1] == "output"]
+    names = [n for n, c in fmu_variables(fmu) if c == "output"]
     rule_key = next(n for n, c in fmu_variables(fmu) if c == "parameter" and
                     n in ("integration", "discretization.integration"))
     result = simulate_fmu(str(fmu), stop_time=end, output_interval=step, step_size=step,
-                          start_values={rule_key: rule}, output=[n for n, _ in names])
-    return digest(result.tobytes())
+                          start_values={rule_key: rule}, output=names)
+    return {n: result[n].tobytes() for n in names}
+
+
+def fmu_compare(old, new):
+    """Every old output against the new build's output of its new name: a digest of the
+    pairs, and the names whose bytes differ or that the new build lacks."""
+    pairs = [(n, new_name(n)) for n in old]
+    differ = [f"{a} -> {b}" for a, b in pairs if new.get(b) != old[a]]
+    added = len(set(new) - {b for _, b in pairs})
+    return digest(*[old[a] for a, _ in pairs]) + f" ({len(pairs)} outputs, {added} new)", differ
 
 
 def fmu_variables(fmu):
@@ -108,13 +145,20 @@ def main(old, new, cases):
         domain = 180
         for scene, rule in cases:
             scene = pathlib.Path(scene)
-            results = {}
+            results, fmus = {}, {}
             for b in (old, new):
                 ros = ros_run(b, scene, rule, work, domain)
-                results[b] = {"fmu": fmu_run(b, scene, rule, work), "ros messages": ros[0],
-                              "ros summary": ros[1]}
+                results[b] = {"ros messages": ros[0], "ros summary": ros[1]}
+                fmus[b] = fmu_run(b, scene, rule, work)
                 if all((pathlib.Path(d) / "same_bits_python").is_dir() for d in (old, new)):
                     results[b]["python"] = python_run(b, scene, rule)
+            tag = f"fmu {scene.stem} {rule}"
+            summary, differ = fmu_compare(fmus[old], fmus[new])
+            if differ:
+                print(f"DIFFERENT: {tag}: {', '.join(differ)}")
+                failed = True
+            else:
+                print(f"same bits: {tag} {summary}")
             for name in results[new]:
                 a, b = results[old][name], results[new][name]
                 tag = f"{name} {scene.stem} {rule}"
