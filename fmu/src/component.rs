@@ -6,7 +6,7 @@
 
 use crate::host::{self, Host, OK};
 use crate::logging::{self, Callback, Env, Log};
-use crate::Slave;
+use crate::slave::Slave;
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -112,7 +112,7 @@ pub unsafe fn free<M: Model>(c: *mut c_void) {
 pub fn call<M: Model>(
     c: *mut c_void,
     what: &str,
-    body: impl FnOnce(&mut dyn Slave) -> crate::Result<()>,
+    body: impl FnOnce(&mut dyn Slave) -> rkforge_core::Result<()>,
 ) -> c_int {
     with::<M>(c, what, |comp| {
         body(comp.model.slave_mut())

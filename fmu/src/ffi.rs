@@ -11,8 +11,10 @@
 
 use crate::component::{self, Component};
 use crate::host::{slice_mut, text, DISCARD, OK};
+use crate::instance::Phase;
 use crate::logging::{Callback, Env, Fmi2Logger, Log};
-use crate::{fmu_state, resources, values, Phase, Slave};
+use crate::slave::Slave;
+use crate::{fmu_state, resources, values};
 use std::ffi::{c_char, c_int, c_uint, c_void};
 
 /// `fmi2Status` (the same codes as `fmi3Status`, [`crate::host`]).

@@ -21,8 +21,10 @@
 
 use crate::component::{self, Component};
 use crate::host::{self, slice, slice_mut, text, ERROR, OK};
+use crate::instance::Instance;
 use crate::logging::{self, Callback, Env, Fmi3LogMessage, Log};
-use crate::{fmu_state, resources, values, Instance, Slave};
+use crate::slave::Slave;
+use crate::{fmu_state, resources, values};
 use rkforge_core::Error;
 use std::ffi::{c_char, c_int, c_void};
 use std::panic::{catch_unwind, AssertUnwindSafe};

@@ -4,7 +4,7 @@
 
 use crate::component::{with, Model};
 use crate::host::{slice, slice_mut, OK};
-use crate::Saved;
+use crate::slave::Saved;
 use std::ffi::{c_int, c_void};
 
 /// The saved state behind a handle.

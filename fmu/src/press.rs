@@ -15,8 +15,10 @@
 //! the first step it cannot know the step and gives `s'(theta0) omega0`, which moves the
 //! force history by 3.5e-5 of its peak (tests/test_press_fmus.py).
 
-use crate::{Phase, Result, Saved};
+use crate::instance::Phase;
+use crate::slave::Saved;
 use rkforge_core::Error;
+use rkforge_core::Result;
 pub use rkforge_model_description::press::{header, parse, variable_table, PressKind};
 use rkforge_model_description::{Causality, Kind, Variable};
 use serde::{Deserialize, Serialize};
@@ -330,7 +332,7 @@ impl Press {
     }
 }
 
-impl crate::Slave for Press {
+impl crate::slave::Slave for Press {
     fn guid(&self) -> &str {
         &self.guid
     }

@@ -2,7 +2,9 @@
 //! scene (`scene.toml`) or, FMI 2.0 only, a press plant (`press.toml`); the folder from FMI
 //! 2.0's `file:` URI; the check of the host's GUID or instantiation token against it.
 
-use crate::{press, Instance, Slave};
+use crate::instance::Instance;
+use crate::press;
+use crate::slave::Slave;
 use std::path::{Path, PathBuf};
 
 /// The forging instance of the scene in `folder` (`scene.toml`).

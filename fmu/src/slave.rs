@@ -2,8 +2,9 @@
 //! [`Instance`] or a press plant ([`crate::press::Press`]), with its FMU states kept as the
 //! slave's own type until the host asks for bytes.
 
-use crate::{Instance, Phase, Result, Snapshot};
+use crate::instance::{Instance, Phase, Snapshot};
 use rkforge_core::Error;
+use rkforge_core::Result;
 
 /// A saved FMU state of a [`Slave`], kept as it is (serialized only when the host asks).
 pub type Saved = Box<dyn std::any::Any>;

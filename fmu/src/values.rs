@@ -52,7 +52,7 @@ pub unsafe fn get<M: Model, T>(
     c: *mut c_void,
     (what, label): (&str, &str),
     (vr, (values, n_values)): Arrays<*mut T>,
-    mut get: impl FnMut(&mut M, u32) -> crate::Result<T>,
+    mut get: impl FnMut(&mut M, u32) -> rkforge_core::Result<T>,
 ) -> c_int {
     with::<M>(c, what, |comp| {
         // SAFETY: as the caller promises.
@@ -74,7 +74,7 @@ pub unsafe fn set<M: Model, T: Copy>(
     c: *mut c_void,
     (what, label): (&str, &str),
     (vr, (values, n_values)): Arrays<*const T>,
-    mut set: impl FnMut(&mut M, u32, T) -> crate::Result<()>,
+    mut set: impl FnMut(&mut M, u32, T) -> rkforge_core::Result<()>,
 ) -> c_int {
     with::<M>(c, what, |comp| {
         // SAFETY: as the caller promises.
@@ -97,7 +97,7 @@ pub unsafe fn get_strings<M: Model>(
     c: *mut c_void,
     (what, label): (&str, &str),
     (vr, (values, n_values)): Arrays<*mut *const c_char>,
-    mut get: impl FnMut(&mut M, u32) -> crate::Result<String>,
+    mut get: impl FnMut(&mut M, u32) -> rkforge_core::Result<String>,
 ) -> c_int {
     with::<M>(c, what, |comp: &mut Component<M>| {
         // SAFETY: as the caller promises.
@@ -124,7 +124,7 @@ pub unsafe fn set_strings<M: Model>(
     c: *mut c_void,
     call: (&str, &str),
     arrays: Arrays<*const *const c_char>,
-    mut set: impl FnMut(&mut M, u32, &str) -> crate::Result<()>,
+    mut set: impl FnMut(&mut M, u32, &str) -> rkforge_core::Result<()>,
 ) -> c_int {
     // SAFETY: as the caller promises.
     unsafe {

@@ -4,10 +4,36 @@
 //! experiment, the attributes every variable has, and the `ModelVariables` and
 //! `ModelStructure` elements around each version's own entries.
 
-use crate::xml::{Header, LOG_CATEGORIES};
 use crate::{Causality, Variability, Variable};
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
+
+/// Facts about the FMU besides its variables.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Header {
+    /// `modelName`.
+    pub model_name: String,
+    /// `modelIdentifier`: the shared library's file name without extension.
+    pub model_identifier: String,
+    /// `guid`, a digest of the scene text.
+    pub guid: String,
+    /// `description`.
+    pub description: String,
+    /// Default experiment: stop time (s).
+    pub stop_time: f64,
+    /// Default experiment: communication step (s).
+    pub step_size: f64,
+}
+
+/// The log categories the FMU reports under.
+pub const LOG_CATEGORIES: [(&str, &str); 3] = [
+    ("logStatusWarning", "warnings: ignored or adjusted inputs"),
+    (
+        "logStatusError",
+        "errors: refused calls and inputs, failed steps",
+    ),
+    ("logAll", "everything, including progress"),
+];
 
 /// What sets one version's document apart in the parts both share.
 pub(crate) struct Version<'a> {

@@ -4,36 +4,10 @@
 //! versions use.
 
 use crate::document::{self, Doc, Version};
+pub use crate::document::{Header, LOG_CATEGORIES};
 use crate::{Causality, Kind, Variable};
 use quick_xml::events::{BytesStart, Event};
 use quick_xml::Reader;
-
-/// Facts about the FMU besides its variables.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Header {
-    /// `modelName`.
-    pub model_name: String,
-    /// `modelIdentifier`: the shared library's file name without extension.
-    pub model_identifier: String,
-    /// `guid`, a digest of the scene text.
-    pub guid: String,
-    /// `description`.
-    pub description: String,
-    /// Default experiment: stop time (s).
-    pub stop_time: f64,
-    /// Default experiment: communication step (s).
-    pub step_size: f64,
-}
-
-/// The log categories the FMU reports under.
-pub const LOG_CATEGORIES: [(&str, &str); 3] = [
-    ("logStatusWarning", "warnings: ignored or adjusted inputs"),
-    (
-        "logStatusError",
-        "errors: refused calls and inputs, failed steps",
-    ),
-    ("logAll", "everything, including progress"),
-];
 
 /// `{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}` from two FNV-1a 64-bit digests of `text`: the same
 /// scene always gives the same GUID, any change to it a different one.

@@ -1,6 +1,6 @@
 //! `rkforge.Scene`: a scene file or text with dotted-key overrides, validated like a file.
 
-use crate::{guarded, to_py};
+use crate::errors::{guarded, to_py};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};

@@ -3,8 +3,8 @@
 //! `run_scene`, the whole run of `rkforge run --no-frames` (the history and summary of
 //! [`rkforge_runner`], so the same bits as the command line).
 
+use crate::errors::{guarded, to_py, StateError};
 use crate::scene::Scene;
-use crate::{guarded, to_py, StateError};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -232,7 +232,7 @@ impl Simulation {
     fn sample<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let (columns, row) = self.with(py, |s| {
             let mut history = rkforge_runner::History::new(&s.sim);
-            history.record(&mut s.sim).map_err(crate::to_py)?;
+            history.record(&mut s.sim).map_err(to_py)?;
             Ok((history.columns().to_vec(), history.rows()[0].clone()))
         })?;
         let d = PyDict::new(py);

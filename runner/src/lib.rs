@@ -13,7 +13,7 @@ pub mod history;
 pub mod summary;
 
 pub use history::History;
-pub use summary::{laps_json, reference_table, summary, tool_json};
+pub use summary::{laps_json, reference_table, summary, tool_json, Ending};
 
 impl Outcome {
     /// How the run ended, for [`summary`].
@@ -224,17 +224,6 @@ pub trait Observer {
 pub struct Quiet;
 
 impl Observer for Quiet {}
-
-/// How a run ended, as its summary says it (`status` `ok`, `stopped` or `error`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Ending<'a> {
-    /// It ran to its end time (or to the caller's last order).
-    Finished,
-    /// A signal or a request stopped it early, for this reason.
-    Stopped(&'a str),
-    /// It failed with this error.
-    Failed(&'a str),
-}
 
 /// What a run produced.
 pub struct Outcome {

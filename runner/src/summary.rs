@@ -9,11 +9,21 @@
 //! largest penetrations, each tool's force vector and fill times, the laps, mass scaling,
 //! re-referencing and the stage times.
 
-use crate::Ending;
 use rkforge_core::outputs::{columns, At, Column, Sample};
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
+
+/// How a run ended, as its summary says it (`status` `ok`, `stopped` or `error`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ending<'a> {
+    /// It ran to its end time (or to the caller's last order).
+    Finished,
+    /// A signal or a request stopped it early, for this reason.
+    Stopped(&'a str),
+    /// It failed with this error.
+    Failed(&'a str),
+}
 
 /// The summary (summary.json): how the run ended (`status` `ok`, `stopped` or `error`, with
 /// the reason or error), scene, discretisation, run, workpiece, energy, tools, contact, and
