@@ -148,21 +148,21 @@ pub fn parameters(kind: PressKind) -> &'static [Param] {
 /// The outputs of each press besides `ram.velocity_m_per_s`: name, unit, description.
 pub fn outputs(kind: PressKind) -> &'static [(&'static str, Option<&'static str>, &'static str)] {
     match kind {
-        PressKind::Hydraulic => &[("pressure", Some("Pa"), "cylinder pressure")],
+        PressKind::Hydraulic => &[("pressure_Pa", Some("Pa"), "cylinder pressure")],
         PressKind::Crank => &[
             (
-                "crank_angle",
+                "crank_angle_rad",
                 None,
                 "crank angle from top dead centre (rad)",
             ),
-            ("crank_speed", None, "crank speed (rad/s)"),
+            ("crank_speed_rad_per_s", None, "crank speed (rad/s)"),
             (
-                "flywheel_energy",
+                "flywheel_energy_J",
                 Some("J"),
                 "kinetic energy of the flywheel",
             ),
             (
-                "allowed_force",
+                "allowed_force_N",
                 Some("N"),
                 "the press's load limit at the crank angle",
             ),
@@ -174,9 +174,9 @@ pub fn outputs(kind: PressKind) -> &'static [(&'static str, Option<&'static str>
         ],
         PressKind::Hammer => &[("blow", None, "number of the blow under way (-)")],
         PressKind::Screw => &[
-            ("flywheel_speed", None, "flywheel speed (rad/s)"),
+            ("flywheel_speed_rad_per_s", None, "flywheel speed (rad/s)"),
             (
-                "flywheel_energy",
+                "flywheel_energy_J",
                 Some("J"),
                 "kinetic energy of the flywheel",
             ),
