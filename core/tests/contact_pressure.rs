@@ -6,22 +6,30 @@
 //! pressure of the register (`<tool>.pressure_mean_Pa`) against the same flow stress, and
 //! against the uniaxial flow stress in frictionless axisymmetric upsetting.
 
-use rkforge_core::{SceneSource, Simulation};
+use rkforge_core::{Scene, SceneSource, Simulation};
+
+/// The shipped scene `name` with the overrides `args` (`key=value`).
+fn shipped(name: &str, args: &[&str]) -> Scene {
+    let path = format!("{}/../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+    let mut source = SceneSource::from_file(std::path::Path::new(&path)).unwrap();
+    for arg in args {
+        source.set_arg(arg).unwrap();
+    }
+    source.scene().clone()
+}
 
 #[test]
 fn frictionless_upsetting_presses_at_the_plane_strain_flow_stress() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/block_forging.toml");
-    let mut source = SceneSource::from_file(std::path::Path::new(path)).unwrap();
-    for arg in [
-        "workpiece.particles=[15,15]",
-        "tools.top.friction=0.0",
-        "tools.bottom.friction=0.0",
-        "output.pressure_stations=40",
-        "time.end_s=5.0e-3",
-    ] {
-        source.set_arg(arg).unwrap();
-    }
-    let scene = source.scene().clone();
+    let scene = shipped(
+        "block_forging",
+        &[
+            "workpiece.particles=[15,15]",
+            "tools.top.friction=0.0",
+            "tools.bottom.friction=0.0",
+            "output.pressure_stations=40",
+            "time.end_s=5.0e-3",
+        ],
+    );
     let mut sim = Simulation::new(&scene).unwrap();
     assert_eq!(sim.contact_pressure(0), vec![0.0; 40]);
     sim.run_to(scene.time.end_s, |_| {}).unwrap();
@@ -82,17 +90,15 @@ fn mean_pressure(sim: &Simulation, tool: &str) -> f64 {
 /// h))`, and the contact length is the block's width.
 #[test]
 fn the_mean_pressure_of_frictionless_plane_strain_upsetting_is_the_flow_stress() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/block_forging.toml");
-    let mut source = SceneSource::from_file(std::path::Path::new(path)).unwrap();
-    for arg in [
-        "workpiece.particles=[15,15]",
-        "tools.top.friction=0.0",
-        "tools.bottom.friction=0.0",
-        "time.end_s=5.0e-3",
-    ] {
-        source.set_arg(arg).unwrap();
-    }
-    let scene = source.scene().clone();
+    let scene = shipped(
+        "block_forging",
+        &[
+            "workpiece.particles=[15,15]",
+            "tools.top.friction=0.0",
+            "tools.bottom.friction=0.0",
+            "time.end_s=5.0e-3",
+        ],
+    );
     let mut sim = Simulation::new(&scene).unwrap();
     assert_eq!(mean_pressure(&sim, "top"), 0.0, "no contact, no pressure");
     sim.run_to(scene.time.end_s, |_| {}).unwrap();
@@ -129,19 +135,14 @@ fn the_mean_pressure_of_frictionless_plane_strain_upsetting_is_the_flow_stress()
 /// radius.
 #[test]
 fn the_mean_pressure_of_frictionless_axisymmetric_upsetting_is_the_flow_stress() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../scenes/press_upsetting.toml"
+    let scene = shipped(
+        "press_upsetting",
+        &[
+            "tools.anvil.friction=0.0",
+            "tools.ram.friction=0.0",
+            "time.end_s=0.6",
+        ],
     );
-    let mut source = SceneSource::from_file(std::path::Path::new(path)).unwrap();
-    for arg in [
-        "tools.anvil.friction=0.0",
-        "tools.ram.friction=0.0",
-        "time.end_s=0.6",
-    ] {
-        source.set_arg(arg).unwrap();
-    }
-    let scene = source.scene().clone();
     let mut sim = Simulation::new(&scene).unwrap();
     sim.run_to(scene.time.end_s, |_| {}).unwrap();
     let e = sim.extents();
