@@ -128,6 +128,10 @@ def test_table_is_printed_beside_the_references(coarse_run):
     _, stdout = coarse_run
     assert "Sidibe et al. 2009, Table 3, RKPM Q2" in stdout
     assert "radius (mm)" in stdout and "height (mm)" in stdout
+    # Every row named in full: Table 5's two rows differ only after the 39th character.
+    for source in ("Sidibe et al. 2009, Table 5 CPU (Pentium 4), Q4",
+                   "Sidibe et al. 2009, Table 5 CPU (Pentium 4), Q2"):
+        assert sum(line.startswith(source) for line in stdout.splitlines()) == 1, stdout
 
 
 @pytest.mark.parametrize(
@@ -171,6 +175,12 @@ def test_compare_prints_table_5_beside_ours(rkforge_bin, tmp_path):
     # Wall times are printed to 1 ms: the ratio agrees within that rounding.
     assert q4 > 0 and q2 > 0 and abs(ratio - q2 / q4) < 0.0011 / q4 + 0.001
     assert cells[4] == "1238" and cells[5] == "644" and cells[6] == "0.520"
+    # Costs per point-step and particle-step, each from its run's stage times.
+    costs = [float(c) for c in cells[7:11]]
+    assert all(c > 0 for c in costs), costs
+    s = json.loads((out / "taylor_bar" / "q2" / "summary.json").read_text())
+    per_point = s["stage_seconds"]["stress"] * 1e9 / (s["integration_points"] * s["steps"])
+    assert costs[1] == pytest.approx(per_point, abs=0.051)
     for rule in ("q4", "q2"):
         s = json.loads((out / "taylor_bar" / rule / "summary.json").read_text())
         assert s["integration"] == rule and s["status"] == "ok"

@@ -9,6 +9,11 @@ use std::path::{Path, PathBuf};
 /// What one run of one rule gave.
 struct Outcome {
     wall: Vec<f64>,
+    /// Stress stage wall time per integration point and step (ns), one per run.
+    per_point: Vec<f64>,
+    /// Wall time of the per-particle stages (force gather and predictor, contact,
+    /// integration, output) per particle and step (ns), one per run.
+    per_particle: Vec<f64>,
     lateral: f64,
     height: f64,
     peak_force: f64,
@@ -48,8 +53,18 @@ fn outcome(summary: &Value) -> Outcome {
                 .fold(0.0, f64::max)
         })
         .unwrap_or(0.0);
+    let number = |v: &Value| v.as_f64().unwrap_or(f64::NAN);
+    let stage = |k: &str| number(&summary["stage_seconds"][k]);
+    let steps = number(&summary["steps"]);
+    let per_step = |seconds: f64, count: &str| seconds * 1e9 / (steps * number(&summary[count]));
+    let particle_stages = ["internal_force", "contact", "integration", "output"]
+        .map(stage)
+        .iter()
+        .sum();
     Outcome {
-        wall: vec![summary["wall_s"].as_f64().unwrap_or(f64::NAN)],
+        wall: vec![number(&summary["wall_s"])],
+        per_point: vec![per_step(stage("stress"), "integration_points")],
+        per_particle: vec![per_step(particle_stages, "particles")],
         lateral,
         height: w["height_m"].as_f64().unwrap_or(f64::NAN),
         peak_force,
@@ -57,14 +72,19 @@ fn outcome(summary: &Value) -> Outcome {
 }
 
 /// Run every scene `repeat` times with each rule (alternating), write `compare.md` into
-/// `out`, and return the table.
+/// `out`, and return the table: wall times and their ratio beside the paper's Table 5, the
+/// stress stage's cost per integration point and step and the per-particle stages' cost
+/// per particle and step (medians, ns), and how far the two rules' results differ.
 pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, String> {
     let mut table = String::new();
     let _ = writeln!(
         table,
-        "| scene | q4 wall (s) | q2 wall (s) | q2 / q4 | paper q4 | paper q2 | paper q2 / q4 | lateral q2 - q4 | height q2 - q4 | peak force q2 / q4 - 1 |"
+        "| scene | q4 wall (s) | q2 wall (s) | q2 / q4 | paper q4 | paper q2 | paper q2 / q4 | q4 ns / point-step | q2 ns / point-step | q4 ns / particle-step | q2 ns / particle-step | lateral q2 - q4 | height q2 - q4 | peak force q2 / q4 - 1 |"
     );
-    let _ = writeln!(table, "|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        table,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
     for path in scenes {
         let scene = Scene::from_file(path).map_err(|e| e.to_string())?;
         let mut results: Vec<Option<Outcome>> = vec![None, None];
@@ -84,7 +104,11 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
                     .map_err(|e| format!("{} ({}): {e}", scene.name, rule.name()))?;
                 let o = outcome(&report.summary);
                 match &mut results[k] {
-                    Some(prev) => prev.wall.extend(o.wall),
+                    Some(prev) => {
+                        prev.wall.extend(o.wall);
+                        prev.per_point.extend(o.per_point);
+                        prev.per_particle.extend(o.per_particle);
+                    }
                     slot => *slot = Some(o),
                 }
             }
@@ -103,18 +127,24 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
         };
         let _ = writeln!(
             table,
-            "| {} | {w4:.3} | {w2:.3} | {:.3} | {} | {} | {paper_ratio} | {:+.3} mm | {:+.3} mm | {:+.2} % |",
+            "| {} | {w4:.3} | {w2:.3} | {:.3} | {} | {} | {paper_ratio} | {:.1} | {:.1} | {:.1} | {:.1} | {:+.3} mm | {:+.3} mm | {:+.2} % |",
             scene.name,
             w2 / w4,
             paper(IntegrationRule::Q4),
             paper(IntegrationRule::Q2),
+            median(&q4.per_point),
+            median(&q2.per_point),
+            median(&q4.per_particle),
+            median(&q2.per_particle),
             (q2.lateral - q4.lateral) * 1e3,
             (q2.height - q4.height) * 1e3,
             (q2.peak_force / q4.peak_force - 1.0) * 100.0,
         );
     }
     let note = format!(
-        "\nWall times are medians of {repeat} run(s) per rule on {} thread(s); the paper's are CPU times on a Pentium 4 (3.2 GHz).\n",
+        "\nWall times are medians of {repeat} run(s) per rule on {} thread(s); the paper's are CPU times on a Pentium 4 (3.2 GHz). \
+         Per point-step: the stress stage (deformation gradient, material update, scatter of the internal force) over integration points x steps; \
+         per particle-step: the force gather and predictor, contact, integration and output stages over particles x steps (wall time, ns).\n",
         rayon::current_num_threads()
     );
     table.push_str(&note);

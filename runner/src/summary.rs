@@ -173,7 +173,17 @@ pub fn reference_table(scene: &Scene, summary: &Value) -> String {
             ("", 1.0)
         }
     };
-    let _ = write!(s, "{:<40}", "");
+    let ours = format!("rkforge {}", summary["integration"].as_str().unwrap_or("?"));
+    // The label column fits the longest source in full (two sources may share a prefix).
+    let width = scene
+        .reference
+        .iter()
+        .map(|r| r.source.chars().count())
+        .chain([ours.chars().count()])
+        .max()
+        .unwrap_or(0)
+        + 2;
+    let _ = write!(s, "{:<width$}", "");
     for k in &keys {
         let (u, _) = unit(k);
         let name = k.rsplit('.').next().unwrap_or(k).trim_end_matches("_m");
@@ -188,8 +198,7 @@ pub fn reference_table(scene: &Scene, summary: &Value) -> String {
         );
     }
     s.push('\n');
-    let ours = format!("rkforge {}", summary["integration"].as_str().unwrap_or("?"));
-    let _ = write!(s, "{ours:<40}");
+    let _ = write!(s, "{ours:<width$}");
     for k in &keys {
         let (_, f) = unit(k);
         match lookup(summary, k) {
@@ -203,7 +212,7 @@ pub fn reference_table(scene: &Scene, summary: &Value) -> String {
     }
     s.push('\n');
     for r in &scene.reference {
-        let _ = write!(s, "{:<40}", r.source.chars().take(39).collect::<String>());
+        let _ = write!(s, "{:<width$}", r.source);
         for k in &keys {
             let (_, f) = unit(k);
             match r.values.get(*k) {
