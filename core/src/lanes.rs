@@ -13,8 +13,13 @@
 
 use crate::math::Real;
 
-/// Points per batch: four `f64` fill one AVX2 register (two SSE2 registers).
-pub const LANES: usize = 4;
+/// Points per batch: eight `f64`, two AVX2 registers (four SSE2 registers) per quantity.
+/// Two independent registers per quantity let the core overlap the latency chains of the
+/// update (divisions, square roots, the polynomials of `ln` and `exp`), which one register
+/// left idle: on the Taylor bar (q2, 2 threads) the stress stage took 0.70 s against
+/// 0.79 s with four lanes; sixteen lanes spill registers and were 6 % slower than eight
+/// (issue 35, docs/performance.md). The bits do not depend on it.
+pub const LANES: usize = 8;
 
 /// One value per lane.
 pub type Lanes = [Real; LANES];

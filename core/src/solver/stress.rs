@@ -7,8 +7,8 @@
 //! - the scatter of `w_p (P grad N_I + e_r P_33 N_I / R_p)` (N) into the chunk's buffer of
 //!   [`Scatter`], which the force gather of [`super::update`] sums in a fixed order.
 //!
-//! Points are processed per group over one particle list ([`super::layout`]), four points
-//! per batch in SIMD lanes; the AVX2+FMA build ([`avx2`]) is chosen at run time and gives
+//! Points are processed per group over one particle list ([`super::layout`]), whole groups
+//! filling up to [`LANES`] (eight) points per batch in SIMD lanes; the AVX2+FMA build ([`avx2`]) is chosen at run time and gives
 //! the generic build's bits. Chunks of points run on the team in parallel.
 
 use super::discretization::Discretization;
