@@ -119,6 +119,12 @@ pub struct Contact {
     nearest_point: Vec<u32>,
     /// The pairs with friction in contact at this step, for [`Contact::carry`].
     touched: Vec<Touched>,
+    /// The candidates this stage interpolated, ascending: the ring when it is needed
+    /// whole, and every other candidate whose clearance ran out.
+    evaluated: Vec<u32>,
+    /// The candidates the last stage found within reach of a tool or a plane, ascending:
+    /// the only ones that can hold a friction state ([`Stick`]).
+    in_reach: Vec<u32>,
     /// The pairs with a contact force this step ([`Contact::near`]).
     near: Vec<Near>,
     /// The workpiece's surface against itself, unless the scene turns it off.
@@ -294,7 +300,9 @@ impl Contact {
     /// when a tool has convex corners or fill points, and when the self-contact search is
     /// due; any other particle only when it may reach a tool or a plane: its clearance,
     /// measured when last interpolated, shrinks each step by `sqrt 2 S_J du + tool_move`
-    /// and while it stays positive the particle is skipped. `pairs` holds what each
+    /// and while it stays positive the particle is skipped: a skipped particle costs that
+    /// subtraction, as the stage lists the candidates it interpolates and walks only those
+    /// (and the last stage's in reach, to drop their friction states). `pairs` holds what each
     /// candidate keeps on each tool and plane from step to step. Fills [`Contact::force`]
     /// and each tool's force (N).
     #[allow(clippy::too_many_arguments)]
@@ -348,7 +356,7 @@ impl Contact {
             spacing,
             ..
         } = *body;
-        let (np, nc, ring) = (reference.len(), self.candidates.len(), self.ring);
+        let (np, ring) = (reference.len(), self.ring);
         let du = std::f64::consts::SQRT_2
             * (self.update_move + self.predicted_moves[0] + self.predicted_moves[1]);
         // What the self-contact has to do: two points of the surface move at most 2 S du
@@ -374,26 +382,35 @@ impl Contact {
         let (ntools, nplanes) = (tools.len(), planes.len());
         let held_now: &[bool] = pairs.held;
         let plane_held_now: &[bool] = pairs.plane_held;
+        // The clearances shrink by the move bound; the ring when needed whole and every
+        // particle whose clearance ran out are evaluated (ascending).
+        self.evaluated.clear();
+        self.evaluated.extend(0..always as u32);
+        for (k, (c, s)) in self.clearance[always..]
+            .iter_mut()
+            .zip(&sum_abs[always..])
+            .enumerate()
+        {
+            *c -= s * du + tool_move;
+            if !(skip && *c > 0.0) {
+                self.evaluated.push((always + k) as u32);
+            }
+        }
+        let evaluated = &self.evaluated;
         let (motion_parts, clearance_parts) = (
             Parts::new(&mut self.motion),
             Parts::new(&mut self.clearance),
         );
-        particle_phase(team, np, nc.div_ceil(CANDIDATE_BLOCK), &|b| {
-            let range = part(b, CANDIDATE_BLOCK, nc);
-            // SAFETY: block `b` alone takes these candidates.
-            let (out, clear) = unsafe {
-                (
-                    motion_parts.get(range.clone()),
-                    clearance_parts.get(range.clone()),
-                )
-            };
-            for (k, (m, c)) in range.zip(out.iter_mut().zip(clear.iter_mut())) {
-                if k >= always {
-                    *c -= sum_abs[k] * du + tool_move;
-                    if skip && *c > 0.0 {
-                        continue;
-                    }
-                }
+        particle_phase(team, np, evaluated.len().div_ceil(CANDIDATE_BLOCK), &|b| {
+            for &k in &evaluated[part(b, CANDIDATE_BLOCK, evaluated.len())] {
+                let k = k as usize;
+                // SAFETY: candidate `k` appears once in `evaluated`, in one block.
+                let (m, c) = unsafe {
+                    (
+                        &mut motion_parts.get(k..k + 1)[0],
+                        &mut clearance_parts.get(k..k + 1)[0],
+                    )
+                };
                 *m = body.predicted(candidates[k] as usize, dt);
                 if k < always {
                     *c = Real::NEG_INFINITY;
@@ -432,22 +449,37 @@ impl Contact {
         } = pairs;
         pressure.fill(0.0);
         self.touched.clear();
-        for (k, ((&j, &[x, vj]), &c)) in self
-            .candidates
-            .iter()
-            .zip(&self.motion)
-            .zip(&self.clearance)
-            .enumerate()
-        {
+        // Friction states live only on the candidates the last stage kept in reach: those
+        // out of reach now drop theirs (written only when there is one to drop).
+        let drop_stick = |stick: &mut [Option<Stick>], k: usize| {
             let stick = &mut stick[k * ntools..(k + 1) * ntools];
-            if k >= always && self.skip && c > 0.0 {
-                // Out of reach of every tool: no friction state (written only when there is
-                // one to drop, as most skipped particles never had any).
-                if stick.iter().any(Option::is_some) {
-                    stick.fill(None);
-                }
+            if stick.iter().any(Option::is_some) {
+                stick.fill(None);
+            }
+        };
+        let in_reach = |k: usize| {
+            let c = self.clearance[k];
+            k < always || !self.skip || c <= 0.0 || c.is_nan()
+        };
+        let mut now = self.evaluated.iter().map(|&k| k as usize).peekable();
+        for &k in &self.in_reach {
+            let k = k as usize;
+            while now.next_if(|&e| e < k).is_some() {}
+            if now.peek() != Some(&k) {
+                drop_stick(stick, k);
+            }
+        }
+        let mut kept = std::mem::take(&mut self.in_reach);
+        kept.clear();
+        for &k in &self.evaluated {
+            let k = k as usize;
+            if !in_reach(k) {
+                drop_stick(stick, k);
                 continue;
             }
+            kept.push(k as u32);
+            let (j, [x, vj]) = (self.candidates[k], self.motion[k]);
+            let stick = &mut stick[k * ntools..(k + 1) * ntools];
             let j = j as usize;
             for (t, tool) in tools.iter_mut().enumerate() {
                 let b = &bounds[t];
@@ -551,6 +583,7 @@ impl Contact {
                 touch.any = true;
             }
         }
+        self.in_reach = kept;
         touch.any |= touch.tools;
         let corners = tools.iter().any(|t| !t.convex.is_empty());
         let positions: Vec<[Real; 2]> = match corners {
