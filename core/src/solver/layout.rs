@@ -39,6 +39,12 @@ pub struct Scatter {
     /// list; two neighbouring q2 cells, or four neighbouring SCNI points, are grouped over
     /// the union of their lists when it is shorter than the lists together ([`GroupPlan`]).
     pub(super) group: Vec<u8>,
+    /// Whether the group starting at a point is a strip: two neighbouring q2 cells whose
+    /// particle lists are the same offsets from first particles one apart, so points 0, 1
+    /// read particle `base + i` and points 2, 3 `base + 1 + i` for each offset `i` of the
+    /// list; its block holds each point's own entries, and the gather and scatter run over
+    /// 16 offsets for 4 points (a q4 cell's count) instead of a union of 20.
+    pub(super) strip: Vec<bool>,
     /// The groups' particle lists (ascending) as offsets from the group's first particle
     /// `base[p]`: `lists[list_range[p].0..list_range[p].1]` for the first point `p` of a
     /// group. Groups with the same offsets share one stored list.
@@ -67,10 +73,13 @@ pub const MAX_GROUP: usize = 4;
 struct GroupPlan {
     size: usize,
     list: Vec<u32>,
+    /// A strip ([`Scatter::strip`]): `list` is the first cell's.
+    strip: bool,
 }
 
 impl GroupPlan {
-    /// The group starting at point `p`, within points `..end`: the consecutive points
+    /// The group starting at point `p`, within points `..end`: two q2 cells forming a
+    /// strip ([`Scatter::strip`]); else the consecutive points
     /// sharing `p`'s list (up to `max_group`), or, where those are a single point or a
     /// pair, the group of 4 (or else 2) formed with the next singles or pair when the union
     /// of their lists is shorter than the lists together. A group of 2 or 4 runs the AVX2
@@ -86,6 +95,16 @@ impl GroupPlan {
             n
         };
         let same = run(p);
+        if same == 2 && max_group >= 4 && p + 4 <= end && run(p + 2) == 2 {
+            let (a, b) = (list(p), list(p + 2));
+            if a.len() == b.len() && a.iter().zip(b).all(|(&i, &j)| j == i + 1) {
+                return GroupPlan {
+                    size: 4,
+                    list: a.to_vec(),
+                    strip: true,
+                };
+            }
+        }
         for size in [4, 2] {
             if size > max_group || size <= same || size % same != 0 || p + size > end {
                 continue;
@@ -99,12 +118,17 @@ impl GroupPlan {
             union.sort_unstable();
             union.dedup();
             if union.len() < separate {
-                return GroupPlan { size, list: union };
+                return GroupPlan {
+                    size,
+                    list: union,
+                    strip: false,
+                };
             }
         }
         GroupPlan {
             size: same,
             list: list(p).to_vec(),
+            strip: false,
         }
     }
 }
@@ -143,6 +167,7 @@ impl Scatter {
             block_offsets.push(block_chunks.len() as u32);
         }
         let mut group = vec![0u8; pt.rows()];
+        let mut strip = vec![false; pt.rows()];
         let (mut lists, mut list_range) = (Vec::new(), vec![[0u32; 2]; pt.rows()]);
         let mut base = vec![0u32; pt.rows()];
         let mut table = Vec::new();
@@ -155,6 +180,7 @@ impl Scatter {
             let end = ((p / chunk + 1) * chunk).min(pt.rows());
             let plan = GroupPlan::at(pt, p, end, max_group);
             group[p] = plan.size as u8;
+            strip[p] = plan.strip;
             base[p] = plan.list[0];
             let offsets: Vec<u32> = plan.list.iter().map(|&i| i - base[p]).collect();
             let start = *stored_lists.entry(offsets.clone()).or_insert_with(|| {
@@ -162,13 +188,15 @@ impl Scatter {
                 (lists.len() - offsets.len()) as u32
             });
             list_range[p] = [start, start + offsets.len() as u32];
-            // Each point's entries in list order, matched against the union.
+            // Each point's entries in list order, matched against the union (in a strip,
+            // each point's own k-th entry for the k-th offset).
             block.clear();
             let mut next: Vec<usize> = (p..p + plan.size).map(|q| pt.row(q).start).collect();
             for &i in &plan.list {
                 let mut hit = [None; MAX_GROUP];
                 for (q, e) in next.iter_mut().enumerate() {
-                    if *e < pt.row(p + q).end && pt.index[*e] == i {
+                    let shift = u32::from(plan.strip && q >= 2);
+                    if *e < pt.row(p + q).end && pt.index[*e] == i + shift {
                         hit[q] = Some(*e);
                         *e += 1;
                     }
@@ -190,6 +218,7 @@ impl Scatter {
         }
         Scatter {
             group,
+            strip,
             lists,
             list_range,
             base,
@@ -210,7 +239,7 @@ impl Scatter {
         let (g, q) = (self.group[first] as usize, p - first);
         let [a, b] = self.list_range[first];
         let block = &self.table[self.table_start[first] as usize..];
-        let base = self.base[first] as usize;
+        let base = self.base[first] as usize + usize::from(self.strip[first] && q >= 2);
         self.lists[a as usize..b as usize]
             .iter()
             .enumerate()
@@ -233,7 +262,7 @@ impl Scatter {
                 + self.base.len()
                 + self.lists.len()
                 + 2 * self.list_range.len()
-                + self.group.len() / 4)
+                + self.group.len() / 2)
                 * 4
             + (self.block_chunks.len() + self.block_offsets.len() + self.lo.len()) * 4
     }

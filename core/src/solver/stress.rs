@@ -63,6 +63,8 @@ struct StressContext<'a> {
     base: &'a [u32],
     /// Group sizes per point ([`Scatter::group`]).
     groups: &'a [u8],
+    /// Which groups are strips ([`Scatter::strip`]).
+    strips: &'a [bool],
     table: &'a [Real],
     table_start: &'a [u32],
     d: &'a [[Real; 2]],
@@ -159,6 +161,89 @@ impl StressContext<'_> {
         }
     }
 
+    /// [`StressContext::gather`] for the strip starting at `p0` ([`Scatter::strip`]): lanes
+    /// `l0, l0 + 1` read particle `base + i`, lanes `l0 + 2, l0 + 3` particle `base + i + 1`
+    /// for each offset `i` of the list, each lane in its own list's order.
+    #[inline(always)]
+    fn gather_strip(&self, p0: usize, f: &mut [Lanes; 5], l0: usize) {
+        let (base, index, table) = self.neighbours(p0, 4);
+        let d = &self.d[base..];
+        let mut xy = [[0.0; 8]; 2];
+        xy[0][..4].fill(1.0);
+        xy[1][4..].fill(1.0);
+        let mut ur = [0.0; 4];
+        for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
+            let pair = [d[i as usize], d[i as usize + 1]];
+            for q in 0..8 {
+                let di = pair[(q % 4) / 2];
+                xy[0][q] = di[0].mul_add(e[4 + q], xy[0][q]);
+                xy[1][q] = di[1].mul_add(e[4 + q], xy[1][q]);
+            }
+            for j in 0..4 {
+                ur[j] = pair[j / 2][0].mul_add(e[j], ur[j]);
+            }
+        }
+        for j in 0..4 {
+            let l = l0 + j;
+            f[0][l] = xy[0][j];
+            f[1][l] = xy[0][4 + j];
+            f[2][l] = xy[1][j];
+            f[3][l] = xy[1][4 + j];
+            f[4][l] = ur[j];
+        }
+    }
+
+    /// [`StressContext::scatter`] for the strip starting at `p0`: each particle takes the
+    /// first cell's two points at its offset and then the second cell's at the offset one
+    /// below, so its entry adds the four points in point order, as a one-point loop does.
+    #[inline(always)]
+    fn scatter_strip(
+        &self,
+        p0: usize,
+        pw: &[Lanes; 3],
+        px: &[Lanes; 2],
+        l0: usize,
+        buf: &mut [[Real; 2]],
+        lo: usize,
+    ) {
+        let (base, index, table) = self.neighbours(p0, 4);
+        let buf = &mut buf[base - lo..];
+        let term = |e: &[Real], j: usize| {
+            let l = l0 + j;
+            let (n, nx, ny) = (e[j], e[4 + j], e[8 + j]);
+            [
+                pw[0][l].mul_add(nx, pw[1][l].mul_add(ny, pw[2][l] * n)),
+                px[0][l].mul_add(nx, px[1][l] * ny),
+            ]
+        };
+        let add = |b: &mut [Real; 2], terms: &[[Real; 2]]| {
+            for t in terms {
+                b[0] += t[0];
+                b[1] += t[1];
+            }
+        };
+        // The second cell's terms at the last offset, for the particle above it.
+        let mut pending: Option<(usize, [[Real; 2]; 2])> = None;
+        for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
+            let i = i as usize;
+            let first = [term(e, 0), term(e, 1)];
+            match pending {
+                Some((j, second)) if j == i => {
+                    add(&mut buf[i], &[first[0], first[1], second[0], second[1]])
+                }
+                Some((j, second)) => {
+                    add(&mut buf[j], &second);
+                    add(&mut buf[i], &first);
+                }
+                None => add(&mut buf[i], &first),
+            }
+            pending = Some((i + 1, [term(e, 2), term(e, 3)]));
+        }
+        if let Some((j, second)) = pending {
+            add(&mut buf[j], &second);
+        }
+    }
+
     /// Gather (`SCATTER` false) or scatter a group of `g` points, `g` in `1..=MAX_GROUP`;
     /// pairs and quads through [`avx2`] in the AVX2 build (`AVX2`, only from
     /// `chunk_avx2`).
@@ -180,6 +265,26 @@ impl StressContext<'_> {
                     self.gather::<$g>(p0, &mut lanes.f, l0)
                 }
             };
+        }
+        if self.strips[p0] {
+            #[cfg(target_arch = "x86_64")]
+            if AVX2 {
+                let (base, index, table) = self.neighbours(p0, 4);
+                let (d, buf) = (&self.d[base..], &mut buf[base - lo..]);
+                // SAFETY: `AVX2` is true only inside `chunk_avx2`, called where the CPU has AVX2.
+                unsafe {
+                    match SCATTER {
+                        false => avx2::gather_strip(index, table, d, &mut lanes.f, l0),
+                        true => avx2::scatter_strip(index, table, &lanes.pw, &lanes.px, l0, buf),
+                    }
+                }
+                return;
+            }
+            match SCATTER {
+                false => self.gather_strip(p0, &mut lanes.f, l0),
+                true => self.scatter_strip(p0, &lanes.pw, &lanes.px, l0, buf, lo),
+            }
+            return;
         }
         #[cfg(target_arch = "x86_64")]
         if AVX2 && (g == 2 || g == 4) {
@@ -590,6 +695,7 @@ pub(super) fn stage(
         lo,
         offsets,
         group,
+        strip,
         lists,
         list_range,
         base,
@@ -602,6 +708,7 @@ pub(super) fn stage(
         list_range,
         base,
         groups: group,
+        strips: strip,
         table,
         table_start,
         d: input.d,

@@ -35,8 +35,9 @@ fn point_table(sim: &Simulation) -> ShapeTable {
 }
 
 /// The stress stage processes points in groups: the 4 points of a q4 cell over their
-/// shared list, two q2 cells (2 + 2 points) and four SCNI points over the union of
-/// their lists, zero-padded. The bits must equal a point-by-point loop.
+/// shared list; two q2 cells (2 + 2 points) as a strip where their lists are the same
+/// offsets one particle apart, else over the union of their lists, zero-padded, as four
+/// SCNI points are. The bits must equal a point-by-point loop.
 #[test]
 fn grouped_points_give_the_bits_of_single_points() {
     for rule in RULES {
@@ -49,7 +50,16 @@ fn grouped_points_give_the_bits_of_single_points() {
             "{rule:?}: {in_quads} of {} points in groups of 4",
             sc.group.len()
         );
-        // Merged groups run over a union longer than one point's own list.
+        // On 10 cells a row, three pairs of the five are strips (not the edge cells).
+        let in_strips = sc.strip.iter().filter(|&&s| s).count() * 4;
+        assert_eq!(
+            in_strips * 5 >= sc.group.len() * 3,
+            rule == IntegrationRule::Q2,
+            "{rule:?}: {in_strips} of {} points in strips",
+            sc.group.len()
+        );
+        // Merged SCNI groups run over a union longer than one point's own list (a q2
+        // pair that is not a strip has an edge cell, whose list the other's holds).
         let longest_union = (0..sc.group.len())
             .filter(|&p| sc.group[p] == 4)
             .map(|p| (sc.list_range[p][1] - sc.list_range[p][0]) as usize)
@@ -58,7 +68,7 @@ fn grouped_points_give_the_bits_of_single_points() {
         let longest_own = (0..pt.rows()).map(|p| pt.row(p).len()).max();
         assert_eq!(
             longest_union > longest_own,
-            rule != IntegrationRule::Q4,
+            rule == IntegrationRule::Scni,
             "{rule:?}: unions {longest_union:?}, own lists {longest_own:?}"
         );
         let mut single = grouped.clone();

@@ -167,3 +167,79 @@ pub(super) fn scatter4(
         );
     }
 }
+
+/// [`gather4`] for a strip ([`crate::solver::layout::Scatter::strip`]): lanes `l0, l0 + 1`
+/// read particle `i`, lanes `l0 + 2, l0 + 3` particle `i + 1`, both loaded as one vector
+/// `[x_i, y_i, x_i+1, y_i+1]` and spread to `[x_i, x_i, x_i+1, x_i+1]` and the `y` likewise.
+#[target_feature(enable = "avx2,fma")]
+pub(super) fn gather_strip(
+    index: &[u32],
+    table: &[Real],
+    d: &[[Real; 2]],
+    f: &mut [Lanes; 5],
+    l0: usize,
+) {
+    let one = _mm256_set1_pd(1.0);
+    let zero = _mm256_setzero_pd();
+    let (mut fxx, mut fxy, mut fyx, mut fyy, mut ur) = (one, zero, zero, one, zero);
+    for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
+        let i = i as usize;
+        let pair = load4(d[i..i + 2].as_flattened());
+        let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
+        let (d0, d1) = (_mm256_movedup_pd(pair), _mm256_permute_pd::<0b1111>(pair));
+        fxx = _mm256_fmadd_pd(d0, x, fxx);
+        fxy = _mm256_fmadd_pd(d0, y, fxy);
+        fyx = _mm256_fmadd_pd(d1, x, fyx);
+        fyy = _mm256_fmadd_pd(d1, y, fyy);
+        ur = _mm256_fmadd_pd(d0, v, ur);
+    }
+    for (c, x) in [fxx, fxy, fyx, fyy, ur].into_iter().enumerate() {
+        f[c][l0..l0 + 4].copy_from_slice(&store4(x));
+    }
+}
+
+/// [`scatter4`] for a strip: particle `i` takes lanes `l0, l0 + 1` at its offset and then
+/// lanes `l0 + 2, l0 + 3` at the offset one below (held from the last offset when the
+/// offsets run on), in that order.
+#[target_feature(enable = "avx2,fma")]
+pub(super) fn scatter_strip(
+    index: &[u32],
+    table: &[Real],
+    pw: &[Lanes; 3],
+    px: &[Lanes; 2],
+    l0: usize,
+    buf: &mut [[Real; 2]],
+) {
+    let w = |x: &Lanes| load4(&x[l0..]);
+    let (wxx, wxy, wv, wyx, wyy) = (w(&pw[0]), w(&pw[1]), w(&pw[2]), w(&px[0]), w(&px[1]));
+    let mut pending: Option<(usize, [__m128d; 2])> = None;
+    for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
+        let i = i as usize;
+        let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
+        let sx = _mm256_fmadd_pd(wxx, x, _mm256_fmadd_pd(wxy, y, _mm256_mul_pd(wv, v)));
+        let sy = _mm256_fmadd_pd(wyx, x, _mm256_mul_pd(wyy, y));
+        let (x01, y01) = (_mm256_castpd256_pd128(sx), _mm256_castpd256_pd128(sy));
+        let (x23, y23) = (
+            _mm256_extractf128_pd::<1>(sx),
+            _mm256_extractf128_pd::<1>(sy),
+        );
+        let first = [_mm_unpacklo_pd(x01, y01), _mm_unpackhi_pd(x01, y01)];
+        match pending {
+            Some((j, second)) if j == i => {
+                add_to(&mut buf[i], &[first[0], first[1], second[0], second[1]])
+            }
+            Some((j, second)) => {
+                add_to(&mut buf[j], &second);
+                add_to(&mut buf[i], &first);
+            }
+            None => add_to(&mut buf[i], &first),
+        }
+        pending = Some((
+            i + 1,
+            [_mm_unpacklo_pd(x23, y23), _mm_unpackhi_pd(x23, y23)],
+        ));
+    }
+    if let Some((j, second)) = pending {
+        add_to(&mut buf[j], &second);
+    }
+}
