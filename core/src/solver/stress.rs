@@ -100,11 +100,13 @@ impl StressContext<'_> {
     /// Gathers `F = I + sum_I d_I (x) grad N_I` and `u_r = sum_I N_I d_I,r` of the `G`
     /// consecutive points `p0..p0 + G`, which share one particle list (each particle's
     /// displacement is loaded once for the `G` points), into lanes `l0..l0 + G` of `f`
-    /// (`[F_xX, F_xY, F_yX, F_yY, u_r]`).
+    /// (`[F_xX, F_xY, F_yX, F_yY, u_r]`). In a `strip` ([`Scatter::strip`]) lanes `l0 + 2`,
+    /// `l0 + 3` read the particle one above each offset's.
     #[inline(always)]
-    fn gather<const G: usize>(&self, p0: usize, f: &mut [Lanes; 5], l0: usize) {
+    fn gather<const G: usize>(&self, p0: usize, f: &mut [Lanes; 5], l0: usize, strip: bool) {
         let (base, index, table) = self.neighbours(p0, G);
         let d = &self.d[base..];
+        let second = |lane: usize| usize::from(strip && lane >= 2);
         // xy holds F_xX, F_xY (from d_x) then F_yX, F_yY (from d_y) of the G points in the
         // order of a neighbour's `[N_x.., N_y..]` entries, so each neighbour adds two
         // vectors of 2G products, each a fused multiply-add.
@@ -113,13 +115,14 @@ impl StressContext<'_> {
         xy[1][G..2 * G].fill(1.0);
         let mut ur = [0.0; MAX_GROUP];
         for (&i, e) in index.iter().zip(table.chunks_exact(3 * G)) {
-            let di = d[i as usize];
+            let pair = [d[i as usize], d[i as usize + usize::from(strip)]];
             for q in 0..2 * G {
+                let di = pair[second(q % G)];
                 xy[0][q] = di[0].mul_add(e[G + q], xy[0][q]);
                 xy[1][q] = di[1].mul_add(e[G + q], xy[1][q]);
             }
             for j in 0..G {
-                ur[j] = di[0].mul_add(e[j], ur[j]);
+                ur[j] = pair[second(j)][0].mul_add(e[j], ur[j]);
             }
         }
         for j in 0..G {
@@ -158,38 +161,6 @@ impl StressContext<'_> {
                 b[0] += pw[0][l].mul_add(nx, pw[1][l].mul_add(ny, pw[2][l] * n));
                 b[1] += px[0][l].mul_add(nx, px[1][l] * ny);
             }
-        }
-    }
-
-    /// [`StressContext::gather`] for the strip starting at `p0` ([`Scatter::strip`]): lanes
-    /// `l0, l0 + 1` read particle `base + i`, lanes `l0 + 2, l0 + 3` particle `base + i + 1`
-    /// for each offset `i` of the list, each lane in its own list's order.
-    #[inline(always)]
-    fn gather_strip(&self, p0: usize, f: &mut [Lanes; 5], l0: usize) {
-        let (base, index, table) = self.neighbours(p0, 4);
-        let d = &self.d[base..];
-        let mut xy = [[0.0; 8]; 2];
-        xy[0][..4].fill(1.0);
-        xy[1][4..].fill(1.0);
-        let mut ur = [0.0; 4];
-        for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
-            let pair = [d[i as usize], d[i as usize + 1]];
-            for q in 0..8 {
-                let di = pair[(q % 4) / 2];
-                xy[0][q] = di[0].mul_add(e[4 + q], xy[0][q]);
-                xy[1][q] = di[1].mul_add(e[4 + q], xy[1][q]);
-            }
-            for j in 0..4 {
-                ur[j] = pair[j / 2][0].mul_add(e[j], ur[j]);
-            }
-        }
-        for j in 0..4 {
-            let l = l0 + j;
-            f[0][l] = xy[0][j];
-            f[1][l] = xy[0][4 + j];
-            f[2][l] = xy[1][j];
-            f[3][l] = xy[1][4 + j];
-            f[4][l] = ur[j];
         }
     }
 
@@ -262,7 +233,7 @@ impl StressContext<'_> {
                 if SCATTER {
                     self.scatter::<$g>(p0, &lanes.pw, &lanes.px, l0, buf, lo)
                 } else {
-                    self.gather::<$g>(p0, &mut lanes.f, l0)
+                    self.gather::<$g>(p0, &mut lanes.f, l0, false)
                 }
             };
         }
@@ -281,7 +252,7 @@ impl StressContext<'_> {
                 return;
             }
             match SCATTER {
-                false => self.gather_strip(p0, &mut lanes.f, l0),
+                false => self.gather::<4>(p0, &mut lanes.f, l0, true),
                 true => self.scatter_strip(p0, &lanes.pw, &lanes.px, l0, buf, lo),
             }
             return;

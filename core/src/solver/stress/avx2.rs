@@ -116,13 +116,29 @@ pub(super) fn gather4(
     f: &mut [Lanes; 5],
     l0: usize,
 ) {
+    gather_quad(index, table, f, l0, |i| {
+        let di = d[i];
+        (_mm256_set1_pd(di[0]), _mm256_set1_pd(di[1]))
+    });
+}
+
+/// The quad gather with each neighbour offset's `d_x` and `d_y` in the lanes from
+/// `spread(i)`.
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn gather_quad(
+    index: &[u32],
+    table: &[Real],
+    f: &mut [Lanes; 5],
+    l0: usize,
+    spread: impl Fn(usize) -> (__m256d, __m256d),
+) {
     let one = _mm256_set1_pd(1.0);
     let zero = _mm256_setzero_pd();
     let (mut fxx, mut fxy, mut fyx, mut fyy, mut ur) = (one, zero, zero, one, zero);
     for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
-        let di = d[i as usize];
+        let (d0, d1) = spread(i as usize);
         let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
-        let (d0, d1) = (_mm256_set1_pd(di[0]), _mm256_set1_pd(di[1]));
         fxx = _mm256_fmadd_pd(d0, x, fxx);
         fxy = _mm256_fmadd_pd(d0, y, fxy);
         fyx = _mm256_fmadd_pd(d1, x, fyx);
@@ -179,23 +195,10 @@ pub(super) fn gather_strip(
     f: &mut [Lanes; 5],
     l0: usize,
 ) {
-    let one = _mm256_set1_pd(1.0);
-    let zero = _mm256_setzero_pd();
-    let (mut fxx, mut fxy, mut fyx, mut fyy, mut ur) = (one, zero, zero, one, zero);
-    for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
-        let i = i as usize;
+    gather_quad(index, table, f, l0, |i| {
         let pair = load4(d[i..i + 2].as_flattened());
-        let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
-        let (d0, d1) = (_mm256_movedup_pd(pair), _mm256_permute_pd::<0b1111>(pair));
-        fxx = _mm256_fmadd_pd(d0, x, fxx);
-        fxy = _mm256_fmadd_pd(d0, y, fxy);
-        fyx = _mm256_fmadd_pd(d1, x, fyx);
-        fyy = _mm256_fmadd_pd(d1, y, fyy);
-        ur = _mm256_fmadd_pd(d0, v, ur);
-    }
-    for (c, x) in [fxx, fxy, fyx, fyy, ur].into_iter().enumerate() {
-        f[c][l0..l0 + 4].copy_from_slice(&store4(x));
-    }
+        (_mm256_movedup_pd(pair), _mm256_permute_pd::<0b1111>(pair))
+    });
 }
 
 /// [`scatter4`] for a strip: particle `i` takes lanes `l0, l0 + 1` at its offset and then
