@@ -81,6 +81,25 @@ struct StressContext<'a> {
     heating: Option<Heating<'a>>,
 }
 
+/// Point `j`'s contribution `[f_x, f_y]` (N) of a group of `G` to the particle of a
+/// neighbour entry `e` (`[N.., N_x.., N_y..]`), from lane `l0 + j` of the weighted stresses:
+/// `fma(P_xX, N_x, fma(P_xY, N_y, P_33 N / R))`, `fma(P_yX, N_x, P_yY N_y)`.
+#[inline(always)]
+fn term<const G: usize>(
+    pw: &[Lanes; 3],
+    px: &[Lanes; 2],
+    l0: usize,
+    e: &[Real],
+    j: usize,
+) -> [Real; 2] {
+    let l = l0 + j;
+    let (n, nx, ny) = (e[j], e[G + j], e[2 * G + j]);
+    [
+        pw[0][l].mul_add(nx, pw[1][l].mul_add(ny, pw[2][l] * n)),
+        px[0][l].mul_add(nx, px[1][l] * ny),
+    ]
+}
+
 impl StressContext<'_> {
     /// The first particle of the group of `g` points starting at `p0`, the group's
     /// particles as offsets from it, and the group's interleaved shape-function entries
@@ -156,10 +175,9 @@ impl StressContext<'_> {
         for (&i, e) in index.iter().zip(table.chunks_exact(3 * G)) {
             let b = &mut buf[i as usize];
             for j in 0..G {
-                let l = l0 + j;
-                let (n, nx, ny) = (e[j], e[G + j], e[2 * G + j]);
-                b[0] += pw[0][l].mul_add(nx, pw[1][l].mul_add(ny, pw[2][l] * n));
-                b[1] += px[0][l].mul_add(nx, px[1][l] * ny);
+                let t = term::<G>(pw, px, l0, e, j);
+                b[0] += t[0];
+                b[1] += t[1];
             }
         }
     }
@@ -179,14 +197,7 @@ impl StressContext<'_> {
     ) {
         let (base, index, table) = self.neighbours(p0, 4);
         let buf = &mut buf[base - lo..];
-        let term = |e: &[Real], j: usize| {
-            let l = l0 + j;
-            let (n, nx, ny) = (e[j], e[4 + j], e[8 + j]);
-            [
-                pw[0][l].mul_add(nx, pw[1][l].mul_add(ny, pw[2][l] * n)),
-                px[0][l].mul_add(nx, px[1][l] * ny),
-            ]
-        };
+        let term = |e: &[Real], j: usize| term::<4>(pw, px, l0, e, j);
         let add = |b: &mut [Real; 2], terms: &[[Real; 2]]| {
             for t in terms {
                 b[0] += t[0];

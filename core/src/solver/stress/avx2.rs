@@ -150,6 +150,37 @@ fn gather_quad(
     }
 }
 
+/// The weighted stresses `[w P_xX, w P_xY, w P_33 / R, w P_yX, w P_yY]` of lanes
+/// `l0..l0 + 4`.
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn quad_weights(pw: &[Lanes; 3], px: &[Lanes; 2], l0: usize) -> [__m256d; 5] {
+    let w = |x: &Lanes| load4(&x[l0..]);
+    [w(&pw[0]), w(&pw[1]), w(&pw[2]), w(&px[0]), w(&px[1])]
+}
+
+/// A quad's four contributions `[f_x, f_y]` for a neighbour's entries `e`, point by point:
+/// `fma(P_xX, N_x, fma(P_xY, N_y, P_33 N / R))`, `fma(P_yX, N_x, P_yY N_y)`.
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn quad_terms(w: &[__m256d; 5], e: &[Real]) -> [__m128d; 4] {
+    let [wxx, wxy, wv, wyx, wyy] = *w;
+    let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
+    let sx = _mm256_fmadd_pd(wxx, x, _mm256_fmadd_pd(wxy, y, _mm256_mul_pd(wv, v)));
+    let sy = _mm256_fmadd_pd(wyx, x, _mm256_mul_pd(wyy, y));
+    let (x01, y01) = (_mm256_castpd256_pd128(sx), _mm256_castpd256_pd128(sy));
+    let (x23, y23) = (
+        _mm256_extractf128_pd::<1>(sx),
+        _mm256_extractf128_pd::<1>(sy),
+    );
+    [
+        _mm_unpacklo_pd(x01, y01),
+        _mm_unpackhi_pd(x01, y01),
+        _mm_unpacklo_pd(x23, y23),
+        _mm_unpackhi_pd(x23, y23),
+    ]
+}
+
 /// `w_p (P grad N_I + e_r P_33 N_I / R_p)` of lanes `l0..l0 + 4` into `buf`.
 #[target_feature(enable = "avx2,fma")]
 pub(super) fn scatter4(
@@ -160,27 +191,9 @@ pub(super) fn scatter4(
     l0: usize,
     buf: &mut [[Real; 2]],
 ) {
-    let w = |x: &Lanes| load4(&x[l0..]);
-    let (wxx, wxy, wv, wyx, wyy) = (w(&pw[0]), w(&pw[1]), w(&pw[2]), w(&px[0]), w(&px[1]));
+    let w = quad_weights(pw, px, l0);
     for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
-        let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
-        // Per point j: fma(P_xX, N_x, fma(P_xY, N_y, P_33 N / R)), fma(P_yX, N_x, P_yY N_y).
-        let sx = _mm256_fmadd_pd(wxx, x, _mm256_fmadd_pd(wxy, y, _mm256_mul_pd(wv, v)));
-        let sy = _mm256_fmadd_pd(wyx, x, _mm256_mul_pd(wyy, y));
-        let (x01, y01) = (_mm256_castpd256_pd128(sx), _mm256_castpd256_pd128(sy));
-        let (x23, y23) = (
-            _mm256_extractf128_pd::<1>(sx),
-            _mm256_extractf128_pd::<1>(sy),
-        );
-        add_to(
-            &mut buf[i as usize],
-            &[
-                _mm_unpacklo_pd(x01, y01),
-                _mm_unpackhi_pd(x01, y01),
-                _mm_unpacklo_pd(x23, y23),
-                _mm_unpackhi_pd(x23, y23),
-            ],
-        );
+        add_to(&mut buf[i as usize], &quad_terms(&w, e));
     }
 }
 
@@ -213,20 +226,12 @@ pub(super) fn scatter_strip(
     l0: usize,
     buf: &mut [[Real; 2]],
 ) {
-    let w = |x: &Lanes| load4(&x[l0..]);
-    let (wxx, wxy, wv, wyx, wyy) = (w(&pw[0]), w(&pw[1]), w(&pw[2]), w(&px[0]), w(&px[1]));
+    let w = quad_weights(pw, px, l0);
     let mut pending: Option<(usize, [__m128d; 2])> = None;
     for (&i, e) in index.iter().zip(table.chunks_exact(12)) {
         let i = i as usize;
-        let (v, x, y) = (load4(e), load4(&e[4..]), load4(&e[8..]));
-        let sx = _mm256_fmadd_pd(wxx, x, _mm256_fmadd_pd(wxy, y, _mm256_mul_pd(wv, v)));
-        let sy = _mm256_fmadd_pd(wyx, x, _mm256_mul_pd(wyy, y));
-        let (x01, y01) = (_mm256_castpd256_pd128(sx), _mm256_castpd256_pd128(sy));
-        let (x23, y23) = (
-            _mm256_extractf128_pd::<1>(sx),
-            _mm256_extractf128_pd::<1>(sy),
-        );
-        let first = [_mm_unpacklo_pd(x01, y01), _mm_unpackhi_pd(x01, y01)];
+        let [a, b, c, d] = quad_terms(&w, e);
+        let first = [a, b];
         match pending {
             Some((j, second)) if j == i => {
                 add_to(&mut buf[i], &[first[0], first[1], second[0], second[1]])
@@ -237,10 +242,7 @@ pub(super) fn scatter_strip(
             }
             None => add_to(&mut buf[i], &first),
         }
-        pending = Some((
-            i + 1,
-            [_mm_unpacklo_pd(x23, y23), _mm_unpackhi_pd(x23, y23)],
-        ));
+        pending = Some((i + 1, [c, d]));
     }
     if let Some((j, second)) = pending {
         add_to(&mut buf[j], &second);
