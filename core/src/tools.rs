@@ -109,7 +109,10 @@ impl Tool {
         let to_segment = |a: [Real; 2], t: [Real; 2], hi: Real| {
             let u = [local[0] - a[0], local[1] - a[1]];
             let s = ((u[0] * t[0] + u[1] * t[1]) / (t[0] * t[0] + t[1] * t[1])).clamp(0.0, hi);
-            (u[0] - s * t[0]).hypot(u[1] - s * t[1])
+            // `sqrt` of the squares, not `hypot`: within an ulp of it, far inside the
+            // stage's margin of 1e-9 spacings, at a fraction of its cost.
+            let (a, b) = (u[0] - s * t[0], u[1] - s * t[1]);
+            (a * a + b * b).sqrt()
         };
         let mut d = p
             .windows(2)

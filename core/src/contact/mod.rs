@@ -84,8 +84,9 @@ struct Touched {
 /// a restore does) only makes the next step evaluate every particle and search.
 #[derive(Debug, Clone, Default)]
 pub struct Contact {
-    /// Contact force on each RK coefficient (N), eq. 7; zero where no particle touches.
-    pub force: Vec<[Real; 2]>,
+    /// Contact force on each RK coefficient (N), eq. 7, with the list of the coefficients
+    /// it reached: zero elsewhere.
+    pub force: Forces,
     /// The contact candidates: the boundary ring (counter-clockwise), then every other
     /// particle by index.
     candidates: Vec<u32>,
@@ -209,7 +210,7 @@ impl Contact {
             .collect();
         Contact {
             nearest_point,
-            force: vec![[0.0; 2]; particles],
+            force: Forces::new(particles),
             ring_sum_abs: sum_abs[..boundary.len()]
                 .iter()
                 .copied()
@@ -329,7 +330,7 @@ impl Contact {
             return Touch::default();
         }
         let mut touch = Touch::default();
-        self.force.iter_mut().for_each(|f| *f = [0.0; 2]);
+        self.force.clear();
         let bounds: Vec<Extents> = tools
             .iter()
             .map(|t| bounds_of(&t.vertices(), t.depth))
@@ -542,7 +543,7 @@ impl Contact {
                     *i += normal.abs() * dt_avg;
                 }
                 touch.tool_work += dt_avg * (f[0] * vt[0] + f[1] * vt[1]);
-                spread(&mut self.force, nodal, j, f);
+                self.force.spread(nodal, j, f);
                 self.near.push(Near {
                     k: k as u32,
                     surface: Surface::Tool(t),
@@ -574,7 +575,7 @@ impl Contact {
                 };
                 let f = penalty_force(slave, pen, &FRICTIONLESS, Interface::default(), dt, dt_avg)
                     .force;
-                spread(&mut self.force, nodal, j, f);
+                self.force.spread(nodal, j, f);
                 self.near.push(Near {
                     k: k as u32,
                     surface: Surface::Plane(p),
@@ -608,7 +609,7 @@ impl Contact {
                 ] {
                     let fk = [w * f[0], w * f[1]];
                     let j = self.candidates[k] as usize;
-                    spread(&mut self.force, nodal, j, fk);
+                    self.force.spread(nodal, j, fk);
                     if let Some(i) = impulse.get_mut(j) {
                         *i += w * f[0].hypot(f[1]) * dt_avg;
                     }
@@ -639,6 +640,7 @@ impl Contact {
         }
         self.strokes.clear();
         self.strokes.extend(tools.iter().map(|t| t.state.stroke));
+        self.force.reached.sort_unstable();
         touch
     }
 
@@ -726,14 +728,10 @@ impl Contact {
         for (pair, (k, f)) in pairs.iter().zip(forces) {
             let (a, t) = (pair.segment as usize, pair.along);
             let b = (a + 1) % ring;
-            spread(&mut self.force, body.nodal, particles[k] as usize, f);
+            self.force.spread(body.nodal, particles[k] as usize, f);
             for (i, w) in [(a, 1.0 - t), (b, t)] {
-                spread(
-                    &mut self.force,
-                    body.nodal,
-                    particles[i] as usize,
-                    [-w * f[0], -w * f[1]],
-                );
+                self.force
+                    .spread(body.nodal, particles[i] as usize, [-w * f[0], -w * f[1]]);
             }
         }
         true
@@ -836,14 +834,56 @@ impl Contact {
     }
 }
 
-/// Eq. 7: the force `f` (N) on particle `j` spread to the coefficients,
-/// `f_I += N_I(X_j) f`.
-fn spread(force: &mut [[Real; 2]], nodal: &ShapeTable, j: usize, f: [Real; 2]) {
-    for e in nodal.row(j) {
-        let i = nodal.index[e] as usize;
-        let n = nodal.n[e];
-        force[i][0] += n * f[0];
-        force[i][1] += n * f[1];
+/// The contact forces on the RK coefficients (N), eq. 7, and the coefficients they reached:
+/// a stage clears and corrects only those, not every particle.
+#[derive(Debug, Clone, Default)]
+pub struct Forces {
+    /// Contact force on each coefficient (N); zero where no particle's force reached it.
+    pub at: Vec<[Real; 2]>,
+    /// The coefficients a force reached in the last stage, ascending once it ended.
+    reached: Vec<u32>,
+    /// Whether each coefficient is in `reached`.
+    marked: Vec<bool>,
+}
+
+impl Forces {
+    /// No force on any of `particles` coefficients.
+    fn new(particles: usize) -> Forces {
+        Forces {
+            at: vec![[0.0; 2]; particles],
+            reached: Vec::new(),
+            marked: vec![false; particles],
+        }
+    }
+
+    /// Zero again the coefficients the last stage reached.
+    fn clear(&mut self) {
+        for &i in &self.reached {
+            self.at[i as usize] = [0.0; 2];
+            self.marked[i as usize] = false;
+        }
+        self.reached.clear();
+    }
+
+    /// Eq. 7: spreads particle `j`'s contact force `f` (N) to the coefficients,
+    /// `f_I += N_I(X_J) f_J` over `j`'s row of `nodal`.
+    fn spread(&mut self, nodal: &ShapeTable, j: usize, f: [Real; 2]) {
+        for e in nodal.row(j) {
+            let i = nodal.index[e] as usize;
+            let n = nodal.n[e];
+            self.at[i][0] += n * f[0];
+            self.at[i][1] += n * f[1];
+            if !self.marked[i] {
+                self.marked[i] = true;
+                self.reached.push(i as u32);
+            }
+        }
+    }
+
+    /// The coefficients a contact force reached in the last stage, ascending: every other
+    /// coefficient's force is zero.
+    pub fn reached(&self) -> &[u32] {
+        &self.reached
     }
 }
 

@@ -17,7 +17,7 @@ use super::stable_step::StepLength;
 use super::state::State;
 use super::workspace::Workspace;
 use crate::constraints::Constraints;
-use crate::contact::Slip;
+use crate::contact::{Forces, Slip};
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::team::{part, particle_phase, Parts, Team};
@@ -139,27 +139,45 @@ pub(super) fn gather_forces(
 }
 
 /// Corrector: `v += dt_avg f_c / m` (m/s) with the contact forces `f_con` (N) and the inverse
-/// masses `inv_mass` (1/kg).
-fn correct_velocities(v: &mut [[Real; 2]], f_con: &[[Real; 2]], inv_mass: &[Real], dt_avg: Real) {
-    for ((v, f), im) in v.iter_mut().zip(f_con).zip(inv_mass) {
-        let a = dt_avg * im;
+/// masses `inv_mass` (1/kg), on the coefficients a contact force reached (`f_con.reached()`;
+/// every other coefficient's force is zero and its velocity unchanged).
+fn correct_velocities(v: &mut [[Real; 2]], f_con: &Forces, inv_mass: &[Real], dt_avg: Real) {
+    for &i in f_con.reached() {
+        let (v, f) = (&mut v[i as usize], f_con.at[i as usize]);
+        let a = dt_avg * inv_mass[i as usize];
         v[0] += a * f[0];
         v[1] += a * f[1];
     }
 }
 
-/// What the update reads: the velocities of the step and the forces that acted.
+/// Contact work of the step `sum_I dt_avg f_c,I . (v_{n+1/2} + v_{n-1/2}) / 2` (J), the exact
+/// discrete identity of the corrector, over the coefficients a contact force reached: in
+/// [`BLOCK`]s of particles, each particle into running sum `I mod 4` of its block, the sums
+/// added pairwise and the blocks in order, the order of a pass over every particle (the
+/// others' terms are zeros, which leave the sums' bits as they are).
+fn contact_work(v: &[[Real; 2]], v_prev: &[[Real; 2]], f_con: &Forces, dt_avg: Real) -> Real {
+    let sum4 = |x: [Real; 4]| (x[0] + x[1]) + (x[2] + x[3]);
+    let (mut total, mut block, mut sums) = (0.0, usize::MAX, [0.0; 4]);
+    for &i in f_con.reached() {
+        let i = i as usize;
+        if i / BLOCK != block {
+            total += sum4(sums);
+            (block, sums) = (i / BLOCK, [0.0; 4]);
+        }
+        let (f, v, vp) = (f_con.at[i], v[i], v_prev[i]);
+        sums[i % 4] += 0.5 * dt_avg * (f[0] * (v[0] + vp[0]) + f[1] * (v[1] + vp[1]));
+    }
+    total + sum4(sums)
+}
+
+/// What the update reads: the velocities of the step and the internal forces.
 struct Motion<'a> {
     /// `v_{n+1/2}` (m/s).
     pub v: &'a [[Real; 2]],
-    /// `v_{n-1/2}` (m/s).
-    pub v_prev: &'a [[Real; 2]],
     /// Lumped masses (kg).
     pub mass: &'a [Real],
     /// Internal forces (N).
     pub f_int: &'a [[Real; 2]],
-    /// Contact forces (N), read when `contact` forces act.
-    pub f_con: &'a [[Real; 2]],
 }
 
 /// The step's sums from [`update`] (and [`advance`]).
@@ -175,69 +193,45 @@ pub(super) struct Sums {
 }
 
 /// Displacement update `d_{n+1} = d_n + dt v_{n+1/2}` (m) over fixed blocks of particles on
-/// `team`, with the energy sums of the step ([`Update`]), each summed per block (four
-/// interleaved running sums, added pairwise) and the blocks in order. The contact work is
-/// the exact discrete identity of the corrector, summed when `contact` forces act; the
-/// largest speed is found when `track` is set.
-fn update(
-    team: &Team,
-    d: &mut [[Real; 2]],
-    m: &Motion<'_>,
-    dt: Real,
-    dt_avg: Real,
-    contact: bool,
-    track: bool,
-) -> Sums {
+/// `team`, with the kinetic energy and the internal half-step work of the step ([`Sums`]),
+/// each summed per block (four interleaved running sums, added pairwise) and the blocks in
+/// order (the contact work is [`contact_work`]'s); the largest speed is found when `track`
+/// is set.
+fn update(team: &Team, d: &mut [[Real; 2]], m: &Motion<'_>, dt: Real, track: bool) -> Sums {
     let np = m.v.len();
     let blocks = np.div_ceil(BLOCK);
-    let mut sums = vec![[0.0; 4]; blocks];
-    let Motion {
-        v,
-        v_prev,
-        mass,
-        f_int,
-        f_con,
-    } = *m;
+    let mut sums = vec![[0.0; 3]; blocks];
+    let Motion { v, mass, f_int } = *m;
     let (d, slots) = (Parts::new(d), Parts::new(&mut sums));
     particle_phase(team, np, blocks, &|b| {
         let range = part(b, BLOCK, np);
         // SAFETY: block `b` alone takes these particles and its slot.
         let (ds, slot) = unsafe { (d.get(range.clone()), &mut slots.get(b..b + 1)[0]) };
         let n = ds.len();
-        let (vs, vps, ms) = (
-            &v[range.clone()],
-            &v_prev[range.clone()],
-            &mass[range.clone()],
-        );
-        let (fis, fcs) = (&f_int[range.clone()], &f_con[range]);
+        let (vs, ms, fis) = (&v[range.clone()], &mass[range.clone()], &f_int[range]);
         let speed = if track { largest_component(vs) } else { 0.0 };
         // Four running sums per quantity (particle i into sum i mod 4), added pairwise at
         // the end: independent chains instead of one long dependent one.
-        let (mut ke, mut wk, mut hs) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+        let (mut ke, mut hs) = ([0.0; 4], [0.0; 4]);
         for j in (0..n).step_by(4) {
             for k in 0..4.min(n - j) {
                 let i = j + k;
-                let (v, vp, fi) = (vs[i], vps[i], fis[i]);
+                let (v, fi) = (vs[i], fis[i]);
                 ke[k] += 0.5 * ms[i] * (v[0] * v[0] + v[1] * v[1]);
                 hs[k] += 0.5 * dt * (fi[0] * v[0] + fi[1] * v[1]);
-                if contact {
-                    let f = fcs[i];
-                    wk[k] += 0.5 * dt_avg * (f[0] * (v[0] + vp[0]) + f[1] * (v[1] + vp[1]));
-                }
                 ds[i][0] += dt * v[0];
                 ds[i][1] += dt * v[1];
             }
         }
         let sum4 = |x: [Real; 4]| (x[0] + x[1]) + (x[2] + x[3]);
-        let (kinetic, work, half_step) = (sum4(ke), sum4(wk), sum4(hs));
-        *slot = [kinetic, work, half_step, speed];
+        *slot = [sum4(ke), sum4(hs), speed];
     });
-    let [kinetic, contact_work, half_step, largest_speed] = sums.iter().fold([0.0; 4], |a, s| {
-        [a[0] + s[0], a[1] + s[1], a[2] + s[2], a[3].max(s[3])]
-    });
+    let [kinetic, half_step, largest_speed] = sums
+        .iter()
+        .fold([0.0; 3], |a, s| [a[0] + s[0], a[1] + s[1], a[2].max(s[2])]);
     Sums {
         kinetic,
-        contact_work,
+        contact_work: 0.0,
         half_step,
         largest_speed,
     }
@@ -326,15 +320,14 @@ pub(super) fn advance(
 ) -> Result<Sums> {
     let motion = Motion {
         v: &st.v,
-        v_prev: &ws.v_prev,
         mass: &disc.mass,
         f_int: &ws.f_int,
-        f_con: &ws.contact.force,
     };
     let track = contacts_anything(disc, tools, ws);
-    let u = update(
-        &ws.team, &mut st.d, &motion, step.dt, step.avg, contact, track,
-    );
+    let mut u = update(&ws.team, &mut st.d, &motion, step.dt, track);
+    if contact {
+        u.contact_work = contact_work(&st.v, &ws.v_prev, &ws.contact.force, step.avg);
+    }
     ws.contact.updated_move(step.dt * u.largest_speed);
     if !u.kinetic.is_finite() {
         let i =
