@@ -13,6 +13,7 @@
 
 pub mod constraints;
 pub mod contact;
+pub mod cylinder_grid;
 pub mod error;
 pub mod friction;
 pub mod geometry;

@@ -1,0 +1,453 @@
+//! The particles of a cylinder: an O-grid that follows its round surface (a square core
+//! and a ring of cells from the core's edges to the circle), extruded along the axis, with
+//! each particle's volume from the mapping. A Cartesian lattice clipped by a circle would
+//! leave a staircase surface, wrong for contact and for the measured radius.
+//!
+//! Cross-section of radius `R` (m): the core is the square `[-a, a]^2`, `a = c R`, with `n`
+//! cells per side (`n` even, so that lines of particles lie on the planes `x = 0` and
+//! `y = 0`). Its boundary, walked counter-clockwise from the corner `(a, -a)`, is `4 n`
+//! points `s_p` at angles `theta_p = -pi/4 + (pi/2) p / n`; the ring's layer `k = 0..m` has
+//! the points `x_kp = (1 - t_k) s_p + t_k R (cos theta_p, sin theta_p)`, `t_k = k / m`, so its
+//! last layer lies on the circle. Between nodes the map is the same formula with `p` and
+//! `t` continuous (the ring) or bilinear (the core), so the cells' outer faces are the arc
+//! itself, not its chords: cell volumes `int |det dx/dxi| dxi` by Gauss quadrature of the
+//! map add up to `pi R^2 L` to round-off. Along the axis, `l` cells of equal length.
+//!
+//! A half (`x >= 0`) or quarter (`x, y >= 0`) cross-section keeps the cells on that side of
+//! the symmetry planes; the particles on a plane lie on it exactly.
+
+use crate::math::Real;
+use std::f64::consts::FRAC_PI_2;
+
+/// Which part of the cross-section is modelled, the rest by symmetry planes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sector {
+    /// The whole circle.
+    Full,
+    /// `x >= 0`: the plane `x = 0` is a symmetry plane.
+    Half,
+    /// `x >= 0`, `y >= 0`: the planes `x = 0` and `y = 0` are symmetry planes.
+    Quarter,
+}
+
+/// A cell of the cross-section: the core's cell `(i, j)` or the ring's cell between layers
+/// `k` and `k + 1` (its `xi`) and boundary points `p` and `p + 1` (its `eta`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Section {
+    Core { i: usize, j: usize },
+    Ring { k: usize, p: usize },
+}
+
+/// The particles and hexahedral cells of an O-grid cylinder.
+#[derive(Debug, Clone)]
+pub struct CylinderGrid {
+    /// Particle positions (m).
+    pub positions: Vec<[Real; 3]>,
+    /// Particle volumes (m^3): `int N_a |det J| dxi` over the cells around each particle,
+    /// `N_a` the trilinear function of its corner of the cell.
+    pub volumes: Vec<Real>,
+    /// Each cell's 8 particles: `(xi, eta, zeta)` corners `(-,-,-), (+,-,-), (+,+,-),
+    /// (-,+,-)`, then the same at `zeta = +1`.
+    pub cells: Vec<[u32; 8]>,
+    radius: Real,
+    core: Real,
+    n: usize,
+    m: usize,
+    length: Real,
+    layers: usize,
+    sections: Vec<Section>,
+}
+
+/// Gauss-Legendre points and weights on `[-1, 1]`, 4 points: exact for the map's
+/// polynomial part, and to round-off on cells of a few degrees of arc.
+const GAUSS4: [(Real, Real); 4] = [
+    (-0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
+    (-0.339_981_043_584_856_25, 0.652_145_154_862_546_1),
+    (0.339_981_043_584_856_25, 0.652_145_154_862_546_1),
+    (0.861_136_311_594_052_6, 0.347_854_845_137_453_85),
+];
+
+impl CylinderGrid {
+    /// The cylinder of radius `radius` and length `length` (m) along `z` from `z = 0`, with
+    /// `n` core cells per side (even, at least 2), `m` ring layers (at least 1), `layers`
+    /// cells along the axis, the core's half side `core_ratio R` (`0 < core_ratio < 1/sqrt 2`)
+    /// and the part `sector`.
+    ///
+    /// # Errors
+    ///
+    /// A count or ratio out of range, named.
+    pub fn new(
+        radius: Real,
+        length: Real,
+        [n, m, layers]: [usize; 3],
+        core_ratio: Real,
+        sector: Sector,
+    ) -> Result<CylinderGrid, String> {
+        if n < 2 || n % 2 != 0 {
+            return Err(format!(
+                "core cells per side must be even and at least 2, not {n}"
+            ));
+        }
+        if m < 1 || layers < 1 {
+            return Err(format!(
+                "ring layers ({m}) and axial cells ({layers}) must be at least 1"
+            ));
+        }
+        if !(core_ratio > 0.0 && core_ratio < std::f64::consts::FRAC_1_SQRT_2) {
+            return Err(format!(
+                "the core's half side must be between 0 and R / sqrt 2, not {core_ratio} R"
+            ));
+        }
+        if !(radius > 0.0 && length > 0.0) {
+            return Err(format!(
+                "radius ({radius} m) and length ({length} m) must be positive"
+            ));
+        }
+        let mut grid = CylinderGrid {
+            positions: Vec::new(),
+            volumes: Vec::new(),
+            cells: Vec::new(),
+            radius,
+            core: core_ratio * radius,
+            n,
+            m,
+            length,
+            layers,
+            sections: Vec::new(),
+        };
+        grid.build(sector);
+        Ok(grid)
+    }
+
+    /// Particles, cells and volumes of the cells of `sector`.
+    fn build(&mut self, sector: Sector) {
+        let (n, m) = (self.n, self.m);
+        let keep = |x: [Real; 2]| match sector {
+            Sector::Full => true,
+            Sector::Half => x[0] > 0.0,
+            Sector::Quarter => x[0] > 0.0 && x[1] > 0.0,
+        };
+        let mut sections = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                sections.push(Section::Core { i, j });
+            }
+        }
+        for k in 0..m {
+            for p in 0..4 * n {
+                sections.push(Section::Ring { k, p });
+            }
+        }
+        sections.retain(|&s| keep(self.section_point(s, [0.0, 0.0]).0));
+        // The cross-section's nodes, numbered as the kept cells first reach them.
+        let mut number = std::collections::HashMap::new();
+        let mut nodes: Vec<[Real; 2]> = Vec::new();
+        let corners: Vec<[u32; 4]> = sections
+            .iter()
+            .map(|&s| {
+                self.section_nodes(s).map(|key| {
+                    *number.entry(key).or_insert_with(|| {
+                        nodes.push(self.node(key));
+                        (nodes.len() - 1) as u32
+                    })
+                })
+            })
+            .collect();
+        let per_layer = nodes.len() as u32;
+        let hz = self.length / self.layers as Real;
+        for l in 0..=self.layers {
+            let z = l as Real * hz;
+            self.positions.extend(nodes.iter().map(|x| [x[0], x[1], z]));
+        }
+        self.volumes = vec![0.0; self.positions.len()];
+        for l in 0..self.layers as u32 {
+            for (c, &q) in corners.iter().enumerate() {
+                let below = q.map(|v| v + l * per_layer);
+                let above = q.map(|v| v + (l + 1) * per_layer);
+                let cell = [
+                    below[0], below[1], below[2], below[3], above[0], above[1], above[2], above[3],
+                ];
+                // int N_a |det J| over the cell: the section's 2D weights times hz / 2 per
+                // half of the trilinear function along the axis.
+                let weights = self.section_weights(sections[c]);
+                for (a, &v) in cell.iter().enumerate() {
+                    self.volumes[v as usize] += weights[a % 4] * 0.5 * hz;
+                }
+                self.cells.push(cell);
+            }
+        }
+        self.sections = sections;
+    }
+
+    /// The four nodes of a section cell, counter-clockwise from `(xi, eta) = (-1, -1)`, as
+    /// keys: `(layer, boundary point)` in the ring (layer 0 is the core's boundary) and
+    /// `(i, j)` of the core offset past the ring's keys.
+    fn section_nodes(&self, s: Section) -> [(usize, usize); 4] {
+        let n = self.n;
+        let core = |i: usize, j: usize| match self.boundary_index(i, j) {
+            Some(p) => (0, p),
+            None => (self.m + 1 + j, i),
+        };
+        match s {
+            Section::Core { i, j } => [
+                core(i, j),
+                core(i + 1, j),
+                core(i + 1, j + 1),
+                core(i, j + 1),
+            ],
+            Section::Ring { k, p } => {
+                // xi outward, eta counter-clockwise: a positive Jacobian.
+                let q = (p + 1) % (4 * n);
+                [(k, p), (k + 1, p), (k + 1, q), (k, q)]
+            }
+        }
+    }
+
+    /// The boundary point `p` of the core's node `(i, j)`, if it lies on the boundary
+    /// (counter-clockwise from the corner `(a, -a)`).
+    fn boundary_index(&self, i: usize, j: usize) -> Option<usize> {
+        let n = self.n;
+        match (i, j) {
+            (_, 0) => Some((3 * n + i) % (4 * n)),
+            (i, j) if i == n => Some(j),
+            (i, j) if j == n => Some(2 * n - i),
+            (0, j) => Some(3 * n - j),
+            _ => None,
+        }
+    }
+
+    /// The position of a node key (m).
+    fn node(&self, (k, p): (usize, usize)) -> [Real; 2] {
+        let x = if k <= self.m {
+            self.ring_point(p as Real, k as Real / self.m as Real).0
+        } else {
+            let (i, j) = (p, k - self.m - 1);
+            let h = 2.0 * self.core / self.n as Real;
+            [-self.core + i as Real * h, -self.core + j as Real * h]
+        };
+        // Nodes on the planes x = 0 and y = 0 lie on them exactly.
+        x.map(|c| {
+            if c.abs() < 1e-12 * self.radius {
+                0.0
+            } else {
+                c
+            }
+        })
+    }
+
+    /// The ring's map at boundary parameter `p` (continuous, `0..4n`) and layer fraction
+    /// `t` (`0..1`): the point (m) and its derivatives with respect to `p` and `t` (m).
+    fn ring_point(&self, p: Real, t: Real) -> ([Real; 2], [Real; 2], [Real; 2]) {
+        let (n, a, r) = (self.n as Real, self.core, self.radius);
+        let side = (p / n).floor().clamp(0.0, 3.0);
+        let u = p - side * n;
+        // The core's boundary: side 0 east (y up), 1 north (x down), 2 west (y down), 3
+        // south (x up), each from its corner, 2a / n per unit of p.
+        let h = 2.0 * a / n;
+        let (s, ds) = match side as usize {
+            0 => ([a, -a + u * h], [0.0, h]),
+            1 => ([a - u * h, a], [-h, 0.0]),
+            2 => ([-a, a - u * h], [0.0, -h]),
+            _ => ([-a + u * h, -a], [h, 0.0]),
+        };
+        let theta = -std::f64::consts::FRAC_PI_4 + FRAC_PI_2 * p / n;
+        let dtheta = FRAC_PI_2 / n;
+        let (sin, cos) = theta.sin_cos();
+        let arc = [r * cos, r * sin];
+        let darc = [-r * sin * dtheta, r * cos * dtheta];
+        (
+            [0, 1].map(|c| (1.0 - t) * s[c] + t * arc[c]),
+            [0, 1].map(|c| (1.0 - t) * ds[c] + t * darc[c]),
+            [0, 1].map(|c| arc[c] - s[c]),
+        )
+    }
+
+    /// A section cell's map at `(xi, eta)` in `[-1, 1]^2`: the point (m) and `det dx/dxi`
+    /// (m^2).
+    fn section_point(&self, s: Section, [xi, eta]: [Real; 2]) -> ([Real; 2], Real) {
+        match s {
+            Section::Core { i, j } => {
+                let h = 2.0 * self.core / self.n as Real;
+                let x = [
+                    -self.core + (i as Real + 0.5 * (1.0 + xi)) * h,
+                    -self.core + (j as Real + 0.5 * (1.0 + eta)) * h,
+                ];
+                (x, 0.25 * h * h)
+            }
+            Section::Ring { k, p } => {
+                let m = self.m as Real;
+                let t = (k as Real + 0.5 * (1.0 + xi)) / m;
+                let pc = p as Real + 0.5 * (1.0 + eta);
+                let (x, dp, dt) = self.ring_point(pc, t);
+                // d/dxi = dt / (2 m), d/deta = dp / 2.
+                let det = (dt[0] * dp[1] - dt[1] * dp[0]) * 0.25 / m;
+                (x, det)
+            }
+        }
+    }
+
+    /// `int N_a |det J| dxi deta` over a section cell for its four corners (m^2), `N_a` the
+    /// bilinear functions, by 4 x 4 Gauss points.
+    fn section_weights(&self, s: Section) -> [Real; 4] {
+        let mut w = [0.0; 4];
+        for &(xi, wx) in &GAUSS4 {
+            for &(eta, wy) in &GAUSS4 {
+                let det = self.section_point(s, [xi, eta]).1 * wx * wy;
+                let n = [
+                    0.25 * (1.0 - xi) * (1.0 - eta),
+                    0.25 * (1.0 + xi) * (1.0 - eta),
+                    0.25 * (1.0 + xi) * (1.0 + eta),
+                    0.25 * (1.0 - xi) * (1.0 + eta),
+                ];
+                for (wa, na) in w.iter_mut().zip(n) {
+                    *wa += na * det;
+                }
+            }
+        }
+        w
+    }
+
+    /// Cell `c`'s map at `xi` in `[-1, 1]^3`: the point (m) and `det dx/dxi` (m^3), the
+    /// section's map times the axial half length. An integration rule on the reference cube
+    /// places its points and weights with it.
+    pub fn cell_point(&self, c: usize, xi: [Real; 3]) -> ([Real; 3], Real) {
+        let per_layer = self.sections.len();
+        let (l, s) = (c / per_layer, self.sections[c % per_layer]);
+        let hz = self.length / self.layers as Real;
+        let (x, det) = self.section_point(s, [xi[0], xi[1]]);
+        let z = (l as Real + 0.5 * (1.0 + xi[2])) * hz;
+        ([x[0], x[1], z], det * 0.5 * hz)
+    }
+
+    /// Radius of the cylinder (m).
+    pub fn radius(&self) -> Real {
+        self.radius
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    fn grid(sector: Sector) -> CylinderGrid {
+        CylinderGrid::new(3.2e-3, 32.4e-3, [8, 4, 20], 0.55, sector).unwrap()
+    }
+
+    /// The particles' volumes and the cells' mapped volumes add up to the cylinder's (the
+    /// outer faces are the arc, not chords), for the whole, half and quarter.
+    #[test]
+    fn volumes_add_up_to_the_cylinder() {
+        let (r, l) = (3.2e-3, 32.4e-3);
+        for (sector, part) in [
+            (Sector::Full, 1.0),
+            (Sector::Half, 0.5),
+            (Sector::Quarter, 0.25),
+        ] {
+            let g = grid(sector);
+            let exact = part * PI * r * r * l;
+            let particles: Real = g.volumes.iter().sum();
+            assert!(
+                ((particles - exact) / exact).abs() < 1e-12,
+                "{sector:?}: {particles} against {exact}"
+            );
+            let mut cells = 0.0;
+            for c in 0..g.cells.len() {
+                for &(a, wa) in &GAUSS4 {
+                    for &(b, wb) in &GAUSS4 {
+                        for &(e, we) in &GAUSS4 {
+                            cells += g.cell_point(c, [a, b, e]).1 * wa * wb * we;
+                        }
+                    }
+                }
+            }
+            assert!(
+                ((cells - exact) / exact).abs() < 1e-12,
+                "{sector:?}: {cells}"
+            );
+        }
+    }
+
+    /// The outer layer lies on the circle, the particles of a symmetry plane on it exactly,
+    /// none beyond, and each cell's map keeps a positive Jacobian.
+    #[test]
+    fn surface_on_the_circle_and_planes_exact() {
+        let g = grid(Sector::Quarter);
+        let r = g.radius();
+        let on_circle = g
+            .positions
+            .iter()
+            .filter(|x| ((x[0].hypot(x[1]) - r) / r).abs() < 1e-14)
+            .count();
+        // The quarter arc has n + 1 particles per layer (a quarter of the ring's 4n).
+        assert_eq!(on_circle, (8 + 1) * 21);
+        assert!(g.positions.iter().all(|x| x[0] >= 0.0 && x[1] >= 0.0));
+        let on_x0 = g.positions.iter().filter(|x| x[0] == 0.0).count();
+        let on_y0 = g.positions.iter().filter(|x| x[1] == 0.0).count();
+        // n / 2 core particles, m ring particles and the axis on each plane, per layer.
+        assert_eq!(on_x0, (8 / 2 + 4 + 1) * 21);
+        assert_eq!(on_y0, on_x0);
+        for c in 0..g.cells.len() {
+            for xi in [
+                [-1.0, -1.0, -1.0],
+                [1.0, 1.0, 1.0],
+                [1.0, -1.0, 0.0],
+                [-1.0, 1.0, 0.0],
+            ] {
+                assert!(g.cell_point(c, xi).1 > 0.0, "cell {c} at {xi:?}");
+            }
+        }
+    }
+
+    /// Each cell's corners are its particles: the map at the reference corners gives their
+    /// positions.
+    #[test]
+    fn cells_map_their_corners_to_their_particles() {
+        let g = grid(Sector::Half);
+        let corners = [
+            [-1.0, -1.0, -1.0],
+            [1.0, -1.0, -1.0],
+            [1.0, 1.0, -1.0],
+            [-1.0, 1.0, -1.0],
+            [-1.0, -1.0, 1.0],
+            [1.0, -1.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [-1.0, 1.0, 1.0],
+        ];
+        for (c, cell) in g.cells.iter().enumerate() {
+            for (xi, &v) in corners.iter().zip(cell) {
+                let (x, _) = g.cell_point(c, *xi);
+                let p = g.positions[v as usize];
+                for k in 0..3 {
+                    assert!((x[k] - p[k]).abs() < 1e-15, "cell {c} corner {xi:?}");
+                }
+            }
+        }
+    }
+
+    /// The cells of a layer stay within a factor 4 of each other in volume (the ring's
+    /// cells at the core's corners are the smallest) from coarse to fine grids.
+    #[test]
+    fn cells_stay_within_a_factor_four_in_volume() {
+        for (n, m) in [(8, 4), (16, 8), (32, 14)] {
+            let g = CylinderGrid::new(3.2e-3, 1e-3, [n, m, 1], 0.55, Sector::Quarter).unwrap();
+            let v: Vec<Real> = (0..g.cells.len())
+                .map(|c| g.cell_point(c, [0.0; 3]).1)
+                .collect();
+            let (lo, hi) = v
+                .iter()
+                .fold((Real::INFINITY, 0.0), |(a, b): (Real, Real), &x| {
+                    (a.min(x), b.max(x))
+                });
+            assert!(hi / lo < 4.0, "n {n} m {m}: {}", hi / lo);
+        }
+    }
+
+    #[test]
+    fn bad_counts_are_named() {
+        let e = CylinderGrid::new(1.0, 1.0, [3, 2, 2], 0.5, Sector::Full).unwrap_err();
+        assert!(e.contains("even"), "{e}");
+        let e = CylinderGrid::new(1.0, 1.0, [4, 2, 2], 0.8, Sector::Full).unwrap_err();
+        assert!(e.contains("half side"), "{e}");
+    }
+}
