@@ -675,6 +675,7 @@ impl HenckyJ2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::thermal::properties::Expansion;
 
     fn copper() -> HenckyJ2 {
         HenckyJ2::new(
@@ -879,6 +880,111 @@ mod tests {
                 assert_eq!(u.elastic_energy[l].to_bits(), want.elastic_energy.to_bits());
             }
         }
+    }
+
+    /// A Johnson-Cook law (OFHC copper, Johnson and Cook 1983, Table 1) with a modulus and
+    /// a thermal expansion over temperature: the rate-consistent return map and the
+    /// thermoelastic terms.
+    pub(crate) fn hot_copper() -> HenckyJ2 {
+        let mut m = HenckyJ2::new(
+            117e9,
+            0.35,
+            Hardening::JohnsonCook {
+                a_pa: 90e6,
+                b_pa: 292e6,
+                n: 0.31,
+                c: 0.025,
+                reference_strain_rate_per_s: 1.0,
+                m: 1.09,
+                reference_temperature_c: 20.0,
+                melting_temperature_c: 1356.0 - 273.15,
+            },
+        );
+        m.thermoelastic = Some(Thermoelastic {
+            modulus_factor: vec![[20.0, 1.0], [800.0, 0.6]],
+            expansion: Expansion::Coefficient {
+                per_k: 17e-6,
+                from_c: 20.0,
+            },
+        });
+        m
+    }
+
+    /// A digest (FNV-1a over the bits) of every output and history of batches of the 2D
+    /// update: eight points, yielding and elastic, over six steps of a history (loading, unloading), for the
+    /// linear, power and Johnson-Cook laws (the last with elasticity over temperature).
+    fn plane_digest() -> u64 {
+        let mut h: u64 = 0xCBF2_9CE4_8422_2325;
+        let mut eat = |x: Real| {
+            for b in x.to_bits().to_le_bytes() {
+                h = (h ^ b as u64).wrapping_mul(0x0100_0000_01B3);
+            }
+        };
+        for m in [copper(), aluminium(), hot_copper()] {
+            let (mut elastic, mut plastic, mut heated) = (0, 0, 0);
+            let mut p = PointLanes::unstressed();
+            for l in 0..LANES {
+                p.set_history(l, &PointState::default(), m.hardening.flow_stress(0.0));
+                p.temperature[l] = 20.0 + 60.0 * l as Real;
+                p.elastic_prev[1][l] = 1e-4 * l as Real;
+            }
+            p.inv_dt = 1e5;
+            // Loading, then unloading a little (elastic steps for every law).
+            for s in [0.1, 1.0, 2.0, 3.0, 2.95, 2.9] {
+                for l in 0..LANES {
+                    let a = 0.01 * s * (l as Real + 1.0) / LANES as Real;
+                    let (c, sn) = ((0.3 * l as Real).cos(), (0.3 * l as Real).sin());
+                    let u = [1.0 + a, 0.4 * a, -0.1 * a, 1.0 - 0.6 * a];
+                    // F = R U: a rotation of each lane times a stretch and shear.
+                    p.f[0][l] = c * u[0] - sn * u[2];
+                    p.f[1][l] = c * u[1] - sn * u[3];
+                    p.f[2][l] = sn * u[0] + c * u[2];
+                    p.f[3][l] = sn * u[1] + c * u[3];
+                    p.f33[l] = 1.0 + 0.3 * a;
+                    p.temperature[l] += 5.0;
+                }
+                let before = p.eps_p;
+                let u = m.update_lanes(&mut p).unwrap();
+                p.elastic_prev = u.elastic_now;
+                for l in 0..LANES {
+                    if p.eps_p[l] > before[l] {
+                        plastic += 1;
+                    } else {
+                        elastic += 1;
+                    }
+                    heated += (u.thermoelastic[l] != 0.0) as usize;
+                    p.guess[l] = 0.5 * p.eps_p[l].min(1e-3);
+                    for c in 0..5 {
+                        eat(u.piola[c][l]);
+                    }
+                    for c in 0..4 {
+                        eat(u.kirchhoff[c][l]);
+                        eat(u.elastic_now[c][l]);
+                        eat(p.cp_inv[c][l]);
+                    }
+                    eat(u.jacobian[l]);
+                    eat(u.von_mises[l]);
+                    eat(u.elastic_energy[l]);
+                    eat(u.thermoelastic[l]);
+                    eat(p.eps_p[l]);
+                    eat(p.flow_stress[l]);
+                    eat(p.plastic_work[l]);
+                }
+            }
+            assert!(
+                elastic > 0 && plastic > 0,
+                "{elastic} elastic, {plastic} plastic"
+            );
+            assert_eq!(heated > 0, m.thermoelastic.is_some());
+        }
+        h
+    }
+
+    /// The 2D update gives the bits it gave before the 3D update shared its steps
+    /// (the digest of commit d62fe70's code).
+    #[test]
+    fn plane_update_keeps_its_bits() {
+        assert_eq!(plane_digest(), 7_139_988_511_618_323_398);
     }
 
     #[test]
