@@ -20,6 +20,9 @@
 //!
 //! Kinematics are 2D with an out-of-plane stretch `F_33`: 1 in plane strain, the hoop
 //! stretch `r / R` in axisymmetry; `b_e` stays block diagonal (in-plane 2x2 and `33`).
+//! The 3D kinematics (a full `F`) are [`super::simo1992_hencky_j2_3d`]. Only steps 1, 5
+//! and 6 depend on the dimension (`Kinematics`); steps 2-4, the energy and the
+//! thermoelastic terms are `HenckyJ2::update_batch`, one source for both.
 
 use super::Hardening;
 use crate::lanes::{self, Lanes, LANES};
@@ -313,6 +316,7 @@ pub(super) struct PlaneStress {
     kirchhoff: [Lanes; 4],
 }
 
+#[allow(clippy::needless_range_loop)] // component loops index several component-major arrays
 impl Kinematics for PointLanes {
     type Trial = PlaneTrial;
     type Stress = PlaneStress;
@@ -587,8 +591,8 @@ impl HenckyJ2 {
             }
             for l in 0..LANES {
                 plastic.eps_p[l] += dgamma[l];
-                plastic.flow_stress[l] = flow[l];
             }
+            *plastic.flow_stress = flow;
             // b_e = sum exp(2 eps_i) n_i n_i^T, then C_p^{-1} = F^{-1} b_e F^{-T}.
             for l in 0..LANES {
                 let (mean, sc) = (t.mean[l], scale[l]);
@@ -839,11 +843,11 @@ impl HenckyJ2 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::thermal::properties::Expansion;
 
-    fn copper() -> HenckyJ2 {
+    pub(crate) fn copper() -> HenckyJ2 {
         HenckyJ2::new(
             117e9,
             0.35,
@@ -854,7 +858,7 @@ mod tests {
         )
     }
 
-    fn aluminium() -> HenckyJ2 {
+    pub(crate) fn aluminium() -> HenckyJ2 {
         HenckyJ2::new(
             71e9,
             0.3,
@@ -1079,6 +1083,7 @@ mod tests {
     /// A digest (FNV-1a over the bits) of every output and history of batches of the 2D
     /// update: eight points, yielding and elastic, over six steps of a history (loading, unloading), for the
     /// linear, power and Johnson-Cook laws (the last with elasticity over temperature).
+    #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
     fn plane_digest() -> u64 {
         let mut h: u64 = 0xCBF2_9CE4_8422_2325;
         let mut eat = |x: Real| {
