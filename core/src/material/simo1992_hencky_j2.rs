@@ -255,9 +255,9 @@ pub(super) trait Kinematics {
     /// Step 1 for lane `l`: the principal values of the trial `b_e`; keeps in `t` what the
     /// other steps need.
     fn trial(&self, l: usize, t: &mut Self::Trial) -> Principal;
-    /// Why lane `l`'s deformation gradient is not admissible (inverted or non-finite), if it
-    /// is not: the message of its error.
-    fn inverted(&self, l: usize, t: &Self::Trial) -> Option<String>;
+    /// Why lane `l`'s deformation gradient, of determinant `jac`, is not admissible
+    /// (inverted or non-finite), if it is not: the message of its error.
+    fn inverted(&self, l: usize, jac: Real) -> Option<String>;
     /// Step 5 for lane `l`: `C_p^{-1} = F^{-1} b_e F^{-T}` with `b_e = sum be_i n_i n_i^T`,
     /// stored if the lane `yields` (else the history is kept).
     fn flow(&mut self, l: usize, t: &Self::Trial, be: [Real; 3], yields: bool);
@@ -305,8 +305,6 @@ pub(super) struct PlaneTrial {
     inv: [Lanes; 4],
     /// Eigenprojector of the larger in-plane eigenvalue of `b_e`, `[11, 12, 22]`.
     proj: [Lanes; 3],
-    /// `J = det F`, for the error message.
-    jac: Lanes,
 }
 
 /// The 2D stress tensors of a batch.
@@ -366,7 +364,6 @@ impl Kinematics for PointLanes {
         for c in 0..3 {
             t.proj[c][l] = proj[c];
         }
-        t.jac[l] = jac;
         Principal {
             b: [l1, l2, b33],
             jac,
@@ -379,9 +376,9 @@ impl Kinematics for PointLanes {
         }
     }
 
-    fn inverted(&self, l: usize, t: &PlaneTrial) -> Option<String> {
+    fn inverted(&self, l: usize, jac: Real) -> Option<String> {
         let f = [self.f[0][l], self.f[1][l], self.f[2][l], self.f[3][l]];
-        let (jac, f33) = (t.jac[l], self.f33[l]);
+        let f33 = self.f33[l];
         (!(jac > 0.0 && f33 > 0.0 && jac.is_finite())).then(|| {
             format!("deformation gradient inverted or non-finite (det F = {jac:.3e}, F33 = {f33:.3e}, F = {f:?})")
         })
@@ -559,7 +556,7 @@ impl HenckyJ2 {
             t.b[l] = b;
         }
         if let Some(l) = t.ok.iter().position(|ok| !ok) {
-            let reason = p.inverted(l, &t.kin).unwrap_or_else(|| {
+            let reason = p.inverted(l, t.jac[l]).unwrap_or_else(|| {
                 let [l1, l2, l3] = t.b[l];
                 format!(
                     "elastic stretch not positive (b_e eigenvalues {l1:.3e}, {l2:.3e}, {l3:.3e})"

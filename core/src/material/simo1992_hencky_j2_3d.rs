@@ -196,8 +196,6 @@ pub(super) struct SolidTrial {
     inv: [Lanes; 9],
     /// Principal directions of `b_e`, row-major, column `k` the direction `n_k`.
     dir: [Lanes; 9],
-    /// `J = det F`, for the error message.
-    jac: Lanes,
 }
 
 /// The 3D stress tensors of a batch.
@@ -265,7 +263,6 @@ impl Kinematics for PointLanes3 {
             t.inv[c][l] = adj[c] * inv_det;
             t.dir[c][l] = dir[c / 3][c % 3];
         }
-        t.jac[l] = jac;
         let positive = |x: Real| x >= Real::MIN_POSITIVE && x.is_finite();
         Principal {
             b,
@@ -274,9 +271,8 @@ impl Kinematics for PointLanes3 {
         }
     }
 
-    fn inverted(&self, l: usize, t: &SolidTrial) -> Option<String> {
+    fn inverted(&self, l: usize, jac: Real) -> Option<String> {
         let f: [Real; 9] = std::array::from_fn(|c| self.f[c][l]);
-        let jac = t.jac[l];
         (!(jac > 0.0 && jac.is_finite())).then(|| {
             format!("deformation gradient inverted or non-finite (det F = {jac:.3e}, F = {f:?})")
         })
