@@ -20,6 +20,9 @@
 //!
 //! Kinematics are 2D with an out-of-plane stretch `F_33`: 1 in plane strain, the hoop
 //! stretch `r / R` in axisymmetry; `b_e` stays block diagonal (in-plane 2x2 and `33`).
+//! The 3D kinematics (a full `F`) are [`super::simo1992_hencky_j2_3d`]. Only steps 1, 5
+//! and 6 depend on the dimension (`Kinematics`); steps 2-4, the energy and the
+//! thermoelastic terms are `HenckyJ2::update_batch`, one source for both.
 
 use super::Hardening;
 use crate::lanes::{self, Lanes, LANES};
@@ -207,17 +210,83 @@ pub struct StressLanes {
     pub elastic_now: [Lanes; 4],
 }
 
+/// The fields of a batch that do not depend on the dimension (those of [`PointLanes`]
+/// bar the kinematics), borrowed for the steps the 2D and the 3D update share.
+pub(super) struct Plastic<'a> {
+    /// Equivalent plastic strain (-).
+    pub eps_p: &'a mut Lanes,
+    /// Flow stress `sigma_y(eps_p)` (Pa).
+    pub flow_stress: &'a mut Lanes,
+    /// Temperature (degrees C).
+    pub temperature: &'a Lanes,
+    /// The last update's `[E(T) / E, ln lambda_th(T), ln J, |e|^2]` (-).
+    pub elastic_prev: &'a [Lanes; 4],
+    /// `1 / dt` (1/s).
+    pub inv_dt: Real,
+    /// A first guess of each lane's `dgamma` (-).
+    pub guess: &'a Lanes,
+    /// Plastic work density of the update (J/m^3).
+    pub plastic_work: &'a mut Lanes,
+}
+
+/// What the principal-axes steps of a lane need from its kinematics (step 1).
+pub(super) struct Principal {
+    /// The principal values `lambda_i^2` of the trial `b_e` (-).
+    pub b: [Real; 3],
+    /// `J = det F` (-).
+    pub jac: Real,
+    /// Whether the deformation is admissible: `F` finite and not inverted, every `lambda_i^2`
+    /// positive and normal, finite.
+    pub ok: bool,
+}
+
+/// The kinematics of a batch of points, all that differs between the 2D update
+/// ([`PointLanes`]) and the 3D one ([`super::simo1992_hencky_j2_3d::PointLanes3`]): the trial
+/// `b_e` and its principal values (step 1), and back from principal values to tensors:
+/// `C_p^{-1}` (step 5), `P` and `tau` (step 6). [`HenckyJ2::update_batch`] does the rest,
+/// once for both.
+pub(super) trait Kinematics {
+    /// What the kinematics keep of each lane from the trial to the stress, component-major.
+    type Trial: Default;
+    /// The stress tensors of a batch, `P` and `tau`, component-major.
+    type Stress: Default;
+    /// The fields that do not depend on the dimension.
+    fn plastic(&mut self) -> Plastic<'_>;
+    /// Step 1 for lane `l`: the principal values of the trial `b_e`; keeps in `t` what the
+    /// other steps need.
+    fn trial(&self, l: usize, t: &mut Self::Trial) -> Principal;
+    /// Why lane `l`'s deformation gradient, of determinant `jac`, is not admissible
+    /// (inverted or non-finite), if it is not: the message of its error.
+    fn inverted(&self, l: usize, jac: Real) -> Option<String>;
+    /// Step 5 for lane `l`: `C_p^{-1} = F^{-1} b_e F^{-T}` with `b_e = sum be_i n_i n_i^T`,
+    /// stored if the lane `yields` (else the history is kept).
+    fn flow(&mut self, l: usize, t: &Self::Trial, be: [Real; 3], yields: bool);
+    /// Step 6 for lane `l`: `tau = sum tau_i n_i n_i^T` and `P = tau F^{-T}` from the
+    /// principal Kirchhoff stresses `tau_i` (Pa).
+    fn stress(t: &Self::Trial, l: usize, tau: [Real; 3], out: &mut Self::Stress);
+    /// `x / J` for lane `l`.
+    fn per_volume(t: &Self::Trial, l: usize, x: Real) -> Real;
+}
+
+/// What [`HenckyJ2::update_batch`] returns: the stress tensors of the kinematics and the
+/// values that do not depend on the dimension, as [`StressLanes`] documents them.
+#[derive(Default)]
+pub(super) struct Update<S> {
+    pub stress: S,
+    pub jacobian: Lanes,
+    pub von_mises: Lanes,
+    pub elastic_energy: Lanes,
+    pub thermoelastic: Lanes,
+    pub elastic_now: [Lanes; 4],
+}
+
 /// Trial state of each lane (steps 1-3), kept for the return mapping and the stress.
 #[derive(Default)]
-struct Trial {
+struct Trial<K> {
     ok: [bool; LANES],
     jac: Lanes,
-    inv_det2: Lanes,
-    inv33: Lanes,
-    /// `F^{-1}` as `[11, 12, 21, 22]`.
-    inv: [Lanes; 4],
-    /// Eigenprojector of the larger in-plane eigenvalue of `b_e`, `[11, 12, 22]`.
-    proj: [Lanes; 3],
+    /// What the kinematics keep.
+    kin: K,
     /// Deviatoric logarithmic strains.
     e: [Lanes; 3],
     mean: Lanes,
@@ -225,6 +294,147 @@ struct Trial {
     q_trial: Lanes,
     /// Eigenvalues of `b_e` (for the error message).
     b: [[Real; 3]; LANES],
+}
+
+/// What the 2D kinematics keep of each lane from the trial to the stress.
+#[derive(Default)]
+pub(super) struct PlaneTrial {
+    inv_det2: Lanes,
+    inv33: Lanes,
+    /// `F^{-1}` as `[11, 12, 21, 22]`.
+    inv: [Lanes; 4],
+    /// Eigenprojector of the larger in-plane eigenvalue of `b_e`, `[11, 12, 22]`.
+    proj: [Lanes; 3],
+}
+
+/// The 2D stress tensors of a batch.
+#[derive(Default)]
+pub(super) struct PlaneStress {
+    piola: [Lanes; 5],
+    kirchhoff: [Lanes; 4],
+}
+
+#[allow(clippy::needless_range_loop)] // component loops index several component-major arrays
+impl Kinematics for PointLanes {
+    type Trial = PlaneTrial;
+    type Stress = PlaneStress;
+
+    #[inline(always)]
+    fn plastic(&mut self) -> Plastic<'_> {
+        Plastic {
+            eps_p: &mut self.eps_p,
+            flow_stress: &mut self.flow_stress,
+            temperature: &self.temperature,
+            elastic_prev: &self.elastic_prev,
+            inv_dt: self.inv_dt,
+            guess: &self.guess,
+            plastic_work: &mut self.plastic_work,
+        }
+    }
+
+    /// `b_e` block diagonal: its in-plane block by [`sym_spectral2`], `b_33 = F_33^2 C_p^{-1}_33`.
+    #[inline(always)]
+    fn trial(&self, l: usize, t: &mut PlaneTrial) -> Principal {
+        let f = [self.f[0][l], self.f[1][l], self.f[2][l], self.f[3][l]];
+        let f33 = self.f33[l];
+        let det2 = f[0] * f[3] - f[1] * f[2];
+        let inv_det2 = 1.0 / det2;
+        let inv33 = 1.0 / f33;
+        // F^{-1} = [[F22, -F12], [-F21, F11]] / det2.
+        let inv = [
+            f[3] * inv_det2,
+            -f[1] * inv_det2,
+            -f[2] * inv_det2,
+            f[0] * inv_det2,
+        ];
+        let [c11, c12, c22, c33] = [
+            self.cp_inv[0][l],
+            self.cp_inv[1][l],
+            self.cp_inv[2][l],
+            self.cp_inv[3][l],
+        ];
+        let [b11, b12, b22, b33] = elastic_left_cauchy_green(f, f33, [c11, c12, c22, c33]);
+        let (l1, l2, proj) = sym_spectral2(b11, b12, b22);
+        let jac = det2 * f33;
+        t.inv_det2[l] = inv_det2;
+        t.inv33[l] = inv33;
+        for c in 0..4 {
+            t.inv[c][l] = inv[c];
+        }
+        for c in 0..3 {
+            t.proj[c][l] = proj[c];
+        }
+        Principal {
+            b: [l1, l2, b33],
+            jac,
+            ok: jac > 0.0
+                && f33 > 0.0
+                && jac.is_finite()
+                && l2 >= Real::MIN_POSITIVE
+                && b33 >= Real::MIN_POSITIVE
+                && b33.is_finite(),
+        }
+    }
+
+    fn inverted(&self, l: usize, jac: Real) -> Option<String> {
+        let f = [self.f[0][l], self.f[1][l], self.f[2][l], self.f[3][l]];
+        let f33 = self.f33[l];
+        (!(jac > 0.0 && f33 > 0.0 && jac.is_finite())).then(|| {
+            format!("deformation gradient inverted or non-finite (det F = {jac:.3e}, F33 = {f33:.3e}, F = {f:?})")
+        })
+    }
+
+    #[inline(always)]
+    fn flow(&mut self, l: usize, t: &PlaneTrial, be: [Real; 3], yields: bool) {
+        let [p11, p12, p22] = [t.proj[0][l], t.proj[1][l], t.proj[2][l]];
+        let [i11, i12, i21, i22] = [t.inv[0][l], t.inv[1][l], t.inv[2][l], t.inv[3][l]];
+        let n11 = be[0] * p11 + be[1] * p22;
+        let n12 = (be[0] - be[1]) * p12;
+        let n22 = be[0] * p22 + be[1] * p11;
+        let a11 = i11 * n11 + i12 * n12;
+        let a12 = i11 * n12 + i12 * n22;
+        let a21 = i21 * n11 + i22 * n12;
+        let a22 = i21 * n12 + i22 * n22;
+        let cp = [
+            a11 * i11 + a12 * i12,
+            a11 * i21 + a12 * i22,
+            a21 * i21 + a22 * i22,
+            be[2] * t.inv33[l] * t.inv33[l],
+        ];
+        for c in 0..4 {
+            self.cp_inv[c][l] = if yields { cp[c] } else { self.cp_inv[c][l] };
+        }
+    }
+
+    #[inline(always)]
+    fn stress(t: &PlaneTrial, l: usize, tau: [Real; 3], out: &mut PlaneStress) {
+        let [tau1, tau2, tau33] = tau;
+        let [p11, p12, p22] = [t.proj[0][l], t.proj[1][l], t.proj[2][l]];
+        let [i11, i12, i21, i22] = [t.inv[0][l], t.inv[1][l], t.inv[2][l], t.inv[3][l]];
+        let t11 = tau1 * p11 + tau2 * p22;
+        let t12 = (tau1 - tau2) * p12;
+        let t22 = tau1 * p22 + tau2 * p11;
+        // P = tau F^{-T}, F^{-T} = (F^{-1})^T.
+        let piola = [
+            t11 * i11 + t12 * i12,
+            t11 * i21 + t12 * i22,
+            t12 * i11 + t22 * i12,
+            t12 * i21 + t22 * i22,
+            tau33 * t.inv33[l],
+        ];
+        for c in 0..5 {
+            out.piola[c][l] = piola[c];
+        }
+        for (c, v) in [t11, t12, t22, tau33].into_iter().enumerate() {
+            out.kirchhoff[c][l] = v;
+        }
+    }
+
+    /// `x / det_2 / F_33`, as the reciprocals multiply.
+    #[inline(always)]
+    fn per_volume(t: &PlaneTrial, l: usize, x: Real) -> Real {
+        x * t.inv_det2[l] * t.inv33[l]
+    }
 }
 
 impl HenckyJ2 {
@@ -293,101 +503,93 @@ impl HenckyJ2 {
     /// `Hardening::flow_stress` at the new `eps_p`); on an inverted or non-finite deformation returns the
     /// first failing lane and the reason, with `p` unchanged.
     #[inline(always)]
-    #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
     pub fn update_lanes(&self, p: &mut PointLanes) -> Result<StressLanes, (usize, String)> {
-        let [factor, th] = self.elastic_lanes(&p.temperature);
+        let u = self.update_batch(p)?;
+        Ok(StressLanes {
+            piola: u.stress.piola,
+            kirchhoff: u.stress.kirchhoff,
+            jacobian: u.jacobian,
+            von_mises: u.von_mises,
+            elastic_energy: u.elastic_energy,
+            thermoelastic: u.thermoelastic,
+            elastic_now: u.elastic_now,
+        })
+    }
+
+    /// Steps 1-6 of the module doc for a batch of either dimension: the kinematics `B` give
+    /// the principal values of the trial `b_e` and turn principal values back into tensors;
+    /// the logarithmic strains, the trial stress, the return map, the energy and the
+    /// thermoelastic terms are the same in 2D and 3D. What [`HenckyJ2::update_lanes`]
+    /// documents, for `B`'s tensors.
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
+    pub(super) fn update_batch<B: Kinematics>(
+        &self,
+        p: &mut B,
+    ) -> Result<Update<B::Stress>, (usize, String)> {
+        let [factor, th] = self.elastic_lanes(p.plastic().temperature);
         let (k, g) = (
             factor.map(|f| f * self.bulk),
             factor.map(|f| f * self.shear),
         );
-        let mut t = Trial::default();
+        let mut t = Trial::<B::Trial>::default();
         for l in 0..LANES {
-            let f = [p.f[0][l], p.f[1][l], p.f[2][l], p.f[3][l]];
-            let f33 = p.f33[l];
-            let det2 = f[0] * f[3] - f[1] * f[2];
-            let inv_det2 = 1.0 / det2;
-            let inv33 = 1.0 / f33;
-            // F^{-1} = [[F22, -F12], [-F21, F11]] / det2.
-            let inv = [
-                f[3] * inv_det2,
-                -f[1] * inv_det2,
-                -f[2] * inv_det2,
-                f[0] * inv_det2,
-            ];
-            let [c11, c12, c22, c33] = [
-                p.cp_inv[0][l],
-                p.cp_inv[1][l],
-                p.cp_inv[2][l],
-                p.cp_inv[3][l],
-            ];
-            let [b11, b12, b22, b33] = elastic_left_cauchy_green(f, f33, [c11, c12, c22, c33]);
-            let (l1, l2, proj) = sym_spectral2(b11, b12, b22);
+            let Principal { b, jac, ok } = p.trial(l, &mut t.kin);
             let eps = [
-                0.5 * lanes::ln(l1),
-                0.5 * lanes::ln(l2),
-                0.5 * lanes::ln(b33),
+                0.5 * lanes::ln(b[0]),
+                0.5 * lanes::ln(b[1]),
+                0.5 * lanes::ln(b[2]),
             ];
             let theta = eps[0] + eps[1] + eps[2];
             let mean = theta * (1.0 / 3.0);
             let e = [eps[0] - mean, eps[1] - mean, eps[2] - mean];
             let e2 = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
-            let jac = det2 * f33;
-            t.ok[l] = jac > 0.0
-                && f33 > 0.0
-                && jac.is_finite()
-                && l2 >= Real::MIN_POSITIVE
-                && b33 >= Real::MIN_POSITIVE
-                && b33.is_finite();
+            t.ok[l] = ok;
             t.jac[l] = jac;
-            t.inv_det2[l] = inv_det2;
-            t.inv33[l] = inv33;
-            for c in 0..4 {
-                t.inv[c][l] = inv[c];
-            }
             for c in 0..3 {
-                t.proj[c][l] = proj[c];
                 t.e[c][l] = e[c];
             }
             t.mean[l] = mean;
             // The elastic volumetric strain: the thermal stretch taken out.
             t.theta[l] = theta - 3.0 * th[l];
             t.q_trial[l] = SQRT_6 * g[l] * e2.sqrt();
-            t.b[l] = [l1, l2, b33];
+            t.b[l] = b;
         }
         if let Some(l) = t.ok.iter().position(|ok| !ok) {
-            let f = [p.f[0][l], p.f[1][l], p.f[2][l], p.f[3][l]];
-            let (jac, f33) = (t.jac[l], p.f33[l]);
-            let reason = if !(jac > 0.0 && f33 > 0.0 && jac.is_finite()) {
-                format!("deformation gradient inverted or non-finite (det F = {jac:.3e}, F33 = {f33:.3e}, F = {f:?})")
-            } else {
-                let [l1, l2, b33] = t.b[l];
+            let reason = p.inverted(l, t.jac[l]).unwrap_or_else(|| {
+                let [l1, l2, l3] = t.b[l];
                 format!(
-                    "elastic stretch not positive (b_e eigenvalues {l1:.3e}, {l2:.3e}, {b33:.3e})"
+                    "elastic stretch not positive (b_e eigenvalues {l1:.3e}, {l2:.3e}, {l3:.3e})"
                 )
-            };
+            });
             return Err((l, reason));
         }
         // Radial return (step 4), lanes that yield only.
         let mut scale = [1.0; LANES];
         let mut yields = [false; LANES];
+        let mut plastic = p.plastic();
         for l in 0..LANES {
-            yields[l] = t.q_trial[l] > p.flow_stress[l];
+            yields[l] = t.q_trial[l] > plastic.flow_stress[l];
         }
         let thermal = self.hardening.is_thermal();
         if thermal {
-            p.plastic_work = [0.0; LANES];
+            *plastic.plastic_work = [0.0; LANES];
         }
         if yields.iter().any(|&y| y) {
             let (dgamma, flow) = if thermal {
-                self.return_map_rate(&t.q_trial, &g, p, &yields)?
+                self.return_map_rate(&t.q_trial, &g, &mut plastic, &yields)?
             } else {
-                self.return_map(&t.q_trial, &g, &p.eps_p, &p.flow_stress, &yields)?
+                self.return_map(&t.q_trial, &g, plastic.eps_p, plastic.flow_stress, &yields)?
             };
             for l in 0..LANES {
                 if yields[l] {
                     scale[l] = 1.0 - 3.0 * g[l] * dgamma[l] / t.q_trial[l];
                 }
             }
+            for l in 0..LANES {
+                plastic.eps_p[l] += dgamma[l];
+            }
+            *plastic.flow_stress = flow;
             // b_e = sum exp(2 eps_i) n_i n_i^T, then C_p^{-1} = F^{-1} b_e F^{-T}.
             for l in 0..LANES {
                 let (mean, sc) = (t.mean[l], scale[l]);
@@ -396,61 +598,26 @@ impl HenckyJ2 {
                     lanes::exp(2.0 * (mean + t.e[1][l] * sc)),
                     lanes::exp(2.0 * (mean + t.e[2][l] * sc)),
                 ];
-                let [p11, p12, p22] = [t.proj[0][l], t.proj[1][l], t.proj[2][l]];
-                let [i11, i12, i21, i22] = [t.inv[0][l], t.inv[1][l], t.inv[2][l], t.inv[3][l]];
-                let n11 = be[0] * p11 + be[1] * p22;
-                let n12 = (be[0] - be[1]) * p12;
-                let n22 = be[0] * p22 + be[1] * p11;
-                let a11 = i11 * n11 + i12 * n12;
-                let a12 = i11 * n12 + i12 * n22;
-                let a21 = i21 * n11 + i22 * n12;
-                let a22 = i21 * n12 + i22 * n22;
-                let cp = [
-                    a11 * i11 + a12 * i12,
-                    a11 * i21 + a12 * i22,
-                    a21 * i21 + a22 * i22,
-                    be[2] * t.inv33[l] * t.inv33[l],
-                ];
-                for c in 0..4 {
-                    p.cp_inv[c][l] = if yields[l] { cp[c] } else { p.cp_inv[c][l] };
-                }
-                p.eps_p[l] += dgamma[l];
-                p.flow_stress[l] = flow[l];
+                p.flow(l, &t.kin, be, yields[l]);
             }
         }
-        let mut out = StressLanes::default();
+        let mut out = Update::<B::Stress>::default();
         for l in 0..LANES {
             let e = [
                 t.e[0][l] * scale[l],
                 t.e[1][l] * scale[l],
                 t.e[2][l] * scale[l],
             ];
-            let [p11, p12, p22] = [t.proj[0][l], t.proj[1][l], t.proj[2][l]];
-            let [i11, i12, i21, i22] = [t.inv[0][l], t.inv[1][l], t.inv[2][l], t.inv[3][l]];
             let (k, g) = (k[l], g[l]);
             let kt = k * t.theta[l];
-            let tau1 = kt + 2.0 * g * e[0];
-            let tau2 = kt + 2.0 * g * e[1];
-            let tau33 = kt + 2.0 * g * e[2];
-            let t11 = tau1 * p11 + tau2 * p22;
-            let t12 = (tau1 - tau2) * p12;
-            let t22 = tau1 * p22 + tau2 * p11;
-            // P = tau F^{-T}, F^{-T} = (F^{-1})^T.
-            let piola = [
-                t11 * i11 + t12 * i12,
-                t11 * i21 + t12 * i22,
-                t12 * i11 + t22 * i12,
-                t12 * i21 + t22 * i22,
-                tau33 * t.inv33[l],
+            let tau = [
+                kt + 2.0 * g * e[0],
+                kt + 2.0 * g * e[1],
+                kt + 2.0 * g * e[2],
             ];
-            for c in 0..5 {
-                out.piola[c][l] = piola[c];
-            }
-            for (c, v) in [t11, t12, t22, tau33].into_iter().enumerate() {
-                out.kirchhoff[c][l] = v;
-            }
+            B::stress(&t.kin, l, tau, &mut out.stress);
             out.jacobian[l] = t.jac[l];
-            out.von_mises[l] = t.q_trial[l] * scale[l] * t.inv_det2[l] * t.inv33[l];
+            out.von_mises[l] = B::per_volume(&t.kin, l, t.q_trial[l] * scale[l]);
             out.elastic_energy[l] =
                 0.5 * kt * t.theta[l] + g * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
         }
@@ -460,7 +627,7 @@ impl HenckyJ2 {
             // averaged (second order: a first-order booking at the trial strain alone missed
             // a fifth of the energy of a die's first chill), with the modulus and the
             // thermal strain of each temperature.
-            let [fp, thp, jp, e2p] = p.elastic_prev;
+            let [fp, thp, jp, e2p] = *p.plastic().elastic_prev;
             let w = |f: Real, th: Real, ln_j: Real, e2: Real| {
                 let theta = ln_j - 3.0 * th;
                 f * (0.5 * self.bulk * theta * theta + self.shear * e2)
@@ -601,11 +768,11 @@ impl HenckyJ2 {
         &self,
         q_trial: &Lanes,
         shear: &Lanes,
-        p: &mut PointLanes,
+        p: &mut Plastic<'_>,
         yields: &[bool; LANES],
     ) -> Result<(Lanes, Lanes), (usize, String)> {
         let mut x = [0.0; LANES];
-        let mut flow_at = p.flow_stress;
+        let mut flow_at = *p.flow_stress;
         for l in 0..LANES {
             if !yields[l] {
                 continue;
@@ -673,10 +840,11 @@ impl HenckyJ2 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
+    use crate::thermal::properties::Expansion;
 
-    fn copper() -> HenckyJ2 {
+    pub(crate) fn copper() -> HenckyJ2 {
         HenckyJ2::new(
             117e9,
             0.35,
@@ -687,7 +855,7 @@ mod tests {
         )
     }
 
-    fn aluminium() -> HenckyJ2 {
+    pub(crate) fn aluminium() -> HenckyJ2 {
         HenckyJ2::new(
             71e9,
             0.3,
@@ -879,6 +1047,112 @@ mod tests {
                 assert_eq!(u.elastic_energy[l].to_bits(), want.elastic_energy.to_bits());
             }
         }
+    }
+
+    /// A Johnson-Cook law (OFHC copper, Johnson and Cook 1983, Table 1) with a modulus and
+    /// a thermal expansion over temperature: the rate-consistent return map and the
+    /// thermoelastic terms.
+    pub(crate) fn hot_copper() -> HenckyJ2 {
+        let mut m = HenckyJ2::new(
+            117e9,
+            0.35,
+            Hardening::JohnsonCook {
+                a_pa: 90e6,
+                b_pa: 292e6,
+                n: 0.31,
+                c: 0.025,
+                reference_strain_rate_per_s: 1.0,
+                m: 1.09,
+                reference_temperature_c: 20.0,
+                melting_temperature_c: 1356.0 - 273.15,
+            },
+        );
+        m.thermoelastic = Some(Thermoelastic {
+            modulus_factor: vec![[20.0, 1.0], [800.0, 0.6]],
+            expansion: Expansion::Coefficient {
+                per_k: 17e-6,
+                from_c: 20.0,
+            },
+        });
+        m
+    }
+
+    /// A digest (FNV-1a over the bits) of every output and history of batches of the 2D
+    /// update: eight points, yielding and elastic, over six steps of a history (loading, unloading), for the
+    /// linear, power and Johnson-Cook laws (the last with elasticity over temperature).
+    #[allow(clippy::needless_range_loop)] // lane loops index several component-major arrays
+    fn plane_digest() -> u64 {
+        let mut h: u64 = 0xCBF2_9CE4_8422_2325;
+        let mut eat = |x: Real| {
+            for b in x.to_bits().to_le_bytes() {
+                h = (h ^ b as u64).wrapping_mul(0x0100_0000_01B3);
+            }
+        };
+        for m in [copper(), aluminium(), hot_copper()] {
+            let (mut elastic, mut plastic, mut heated) = (0, 0, 0);
+            let mut p = PointLanes::unstressed();
+            for l in 0..LANES {
+                p.set_history(l, &PointState::default(), m.hardening.flow_stress(0.0));
+                p.temperature[l] = 20.0 + 60.0 * l as Real;
+                p.elastic_prev[1][l] = 1e-4 * l as Real;
+            }
+            p.inv_dt = 1e5;
+            // Loading, then unloading a little (elastic steps for every law).
+            for s in [0.1, 1.0, 2.0, 3.0, 2.95, 2.9] {
+                for l in 0..LANES {
+                    let a = 0.01 * s * (l as Real + 1.0) / LANES as Real;
+                    let (c, sn) = ((0.3 * l as Real).cos(), (0.3 * l as Real).sin());
+                    let u = [1.0 + a, 0.4 * a, -0.1 * a, 1.0 - 0.6 * a];
+                    // F = R U: a rotation of each lane times a stretch and shear.
+                    p.f[0][l] = c * u[0] - sn * u[2];
+                    p.f[1][l] = c * u[1] - sn * u[3];
+                    p.f[2][l] = sn * u[0] + c * u[2];
+                    p.f[3][l] = sn * u[1] + c * u[3];
+                    p.f33[l] = 1.0 + 0.3 * a;
+                    p.temperature[l] += 5.0;
+                }
+                let before = p.eps_p;
+                let u = m.update_lanes(&mut p).unwrap();
+                p.elastic_prev = u.elastic_now;
+                for l in 0..LANES {
+                    if p.eps_p[l] > before[l] {
+                        plastic += 1;
+                    } else {
+                        elastic += 1;
+                    }
+                    heated += (u.thermoelastic[l] != 0.0) as usize;
+                    p.guess[l] = 0.5 * p.eps_p[l].min(1e-3);
+                    for c in 0..5 {
+                        eat(u.piola[c][l]);
+                    }
+                    for c in 0..4 {
+                        eat(u.kirchhoff[c][l]);
+                        eat(u.elastic_now[c][l]);
+                        eat(p.cp_inv[c][l]);
+                    }
+                    eat(u.jacobian[l]);
+                    eat(u.von_mises[l]);
+                    eat(u.elastic_energy[l]);
+                    eat(u.thermoelastic[l]);
+                    eat(p.eps_p[l]);
+                    eat(p.flow_stress[l]);
+                    eat(p.plastic_work[l]);
+                }
+            }
+            assert!(
+                elastic > 0 && plastic > 0,
+                "{elastic} elastic, {plastic} plastic"
+            );
+            assert_eq!(heated > 0, m.thermoelastic.is_some());
+        }
+        h
+    }
+
+    /// The 2D update gives the bits it gave before the 3D update shared its steps
+    /// (the digest of commit d62fe70's code).
+    #[test]
+    fn plane_update_keeps_its_bits() {
+        assert_eq!(plane_digest(), 7_139_988_511_618_323_398);
     }
 
     #[test]
