@@ -1,12 +1,19 @@
-//! Background-cell integration over the quadrilaterals of the particle grid.
+//! Background-cell integration over the cells of the particle lattice: quadrilaterals in
+//! 2D, hexahedra in 3D (the cell rules are generic over the dimension `D`).
 //!
-//! - `q4`: the 2x2 Gauss rule, points at `(+-1/sqrt3, +-1/sqrt3)`, weight 1 each.
+//! - `q4`: the 2x2 Gauss rule, points at `(+-1/sqrt3, +-1/sqrt3)`, weight 1 each; in 3D the
+//!   2x2x2 Gauss rule, points at `(+-1/sqrt3, +-1/sqrt3, +-1/sqrt3)`, weight 1 each.
 //! - `q2`: the paper's two-point rule (Sidibe et al. 2009, Figure 1-c; Sidibe, Li, Ouane,
 //!   Sanogo 2009). The figure is not in the text; we read it as the two points on one cell
 //!   diagonal at `+-(1/sqrt3, 1/sqrt3)` with weight 2 each, which integrates `1, xi, eta, xi^2,
 //!   eta^2` exactly (the bilinear `xi eta` term is not: it is the price of the rule). Because
 //!   RK shape functions span several cells, the assembled stiffness keeps full rank; the
-//!   spurious-mode test in `tests/` checks that.
+//!   spurious-mode test in `tests/` checks that. In 3D the same choice, the Gauss points
+//!   with an even number of negative coordinates, is the alternate half of the 2x2x2 rule:
+//!   `(a, a, a)`, `(a, -a, -a)`, `(-a, a, -a)`, `(-a, -a, a)`, `a = 1/sqrt3`, weight 2 each.
+//!   It integrates every monomial of degree <= 2 exactly (`xi eta` too, unlike in 2D) and of
+//!   degree 3 misses only `xi eta zeta`; the stiffness of a free 3D patch keeps only the six
+//!   rigid-body zero modes (tested below).
 //! - `scni`: stabilized conforming nodal integration (Chen, Wu, Yoon, You 2001, IJNME 50):
 //!   one point per particle over its domain (the rectangle of half spacings around it, cut at
 //!   the workpiece edges); the gradient is smoothed over the domain,
@@ -15,24 +22,36 @@
 
 use crate::error::Result;
 use crate::math::Real;
-use crate::rk_shape::{Lattice, ShapeTable, Site};
+use crate::rk_shape::{for_each_index, linear_index, Lattice, ShapeTable, Site};
 use crate::scene::IntegrationRule;
 
 /// Integration points: reference positions and cell-local data.
-#[derive(Debug, Clone, Default)]
-pub struct PointSet {
+#[derive(Debug, Clone)]
+pub struct PointSet<const D: usize = 2> {
     /// Each point as a particle of the lattice and the offset from it.
-    pub sites: Vec<Site>,
+    pub sites: Vec<Site<D>>,
     /// Reference positions (m).
-    pub positions: Vec<[Real; 2]>,
-    /// Planar area weights (m^2): Gauss weight times the cell Jacobian.
+    pub positions: Vec<[Real; D]>,
+    /// Weights (m^D; planar areas in 2D): Gauss weight times the cell Jacobian.
     pub areas: Vec<Real>,
-    /// Cell index `j * (nx - 1) + i` of each point.
+    /// Cell index `i_0 + (n_0 - 1) (i_1 + (n_1 - 1) i_2)` of each point (the lattice has
+    /// `n_k` particles per direction).
     pub cells: Vec<u32>,
 }
 
-impl PointSet {
-    fn push(&mut self, lattice: &Lattice, site: Site, area: Real, cell: usize) {
+impl<const D: usize> Default for PointSet<D> {
+    fn default() -> Self {
+        PointSet {
+            sites: Vec::new(),
+            positions: Vec::new(),
+            areas: Vec::new(),
+            cells: Vec::new(),
+        }
+    }
+}
+
+impl<const D: usize> PointSet<D> {
+    fn push(&mut self, lattice: &Lattice<D>, site: Site<D>, area: Real, cell: usize) {
         self.sites.push(site);
         self.positions.push(lattice.position(site));
         self.areas.push(area);
@@ -40,13 +59,26 @@ impl PointSet {
     }
 }
 
-/// Gauss points `(xi, eta, weight)` of a cell rule on the reference square `[-1, 1]^2`
-/// (none for the nodal rule).
-pub fn rule_points(rule: IntegrationRule) -> Vec<(Real, Real, Real)> {
+/// Gauss points `(xi, weight)` of a cell rule on the reference cube `[-1, 1]^D` (none for
+/// the nodal rule). `q4` takes every point of the 2^D Gauss rule, counter-clockwise in
+/// `(xi, eta)`, layer after layer in `zeta` in 3D; `q2` the ones among them with an even
+/// number of negative coordinates, in the same order, with weight 2.
+pub fn rule_points<const D: usize>(rule: IntegrationRule) -> Vec<([Real; D], Real)> {
     let a = 1.0 / 3.0_f64.sqrt();
+    let gauss = (0..1usize << D).map(|m| {
+        let negative: [bool; D] = std::array::from_fn(|k| match k {
+            0 => m & 1 == (m >> 1) & 1,
+            k => (m >> k) & 1 == 0,
+        });
+        let xi = negative.map(|neg| if neg { -a } else { a });
+        (xi, negative.iter().filter(|&&neg| neg).count())
+    });
     match rule {
-        IntegrationRule::Q4 => vec![(-a, -a, 1.0), (a, -a, 1.0), (a, a, 1.0), (-a, a, 1.0)],
-        IntegrationRule::Q2 => vec![(-a, -a, 2.0), (a, a, 2.0)],
+        IntegrationRule::Q4 => gauss.map(|(xi, _)| (xi, 1.0)).collect(),
+        IntegrationRule::Q2 => gauss
+            .filter(|&(_, negatives)| negatives % 2 == 0)
+            .map(|(xi, _)| (xi, 2.0))
+            .collect(),
         IntegrationRule::Scni => vec![],
     }
 }
@@ -165,31 +197,33 @@ fn smoothing_cells<const K: usize>(
     (s, edge_sites, edge_nw)
 }
 
-/// Points of `rule` in every cell of the lattice, as offsets from the cell's lower-left
-/// particle.
-pub fn grid_points(rule: IntegrationRule, lattice: &Lattice) -> PointSet {
-    let (h, [nx, ny]) = (lattice.spacing(), lattice.dims());
-    let local: Vec<([Real; 2], Real)> = rule_points(rule)
+/// Points of `rule` in every cell of the lattice, as offsets from the cell's lowest
+/// particle, with weight `w prod_k (h_k / 2)` (m^D).
+pub fn grid_points<const D: usize>(rule: IntegrationRule, lattice: &Lattice<D>) -> PointSet<D> {
+    let (h, n) = (lattice.spacing(), lattice.dims());
+    let jacobian = (0.5 as Real).powi(D as i32);
+    let local: Vec<([Real; D], Real)> = rule_points::<D>(rule)
         .into_iter()
-        .map(|(xi, eta, w)| {
-            (
-                [(0.5 + 0.5 * xi) * h[0], (0.5 + 0.5 * eta) * h[1]],
-                w * 0.25 * h[0] * h[1],
-            )
+        .map(|(xi, w)| {
+            let mut weight = w * jacobian;
+            for hk in h {
+                weight *= hk;
+            }
+            (std::array::from_fn(|k| (0.5 + 0.5 * xi[k]) * h[k]), weight)
         })
         .collect();
+    let cells = n.map(|nk| nk - 1);
     let mut s = PointSet::default();
-    for j in 0..ny - 1 {
-        for i in 0..nx - 1 {
-            for &(offset, area) in &local {
-                let site = Site {
-                    node: [i, j],
-                    offset,
-                };
-                s.push(lattice, site, area, j * (nx - 1) + i);
-            }
+    for_each_index([0; D], cells, |node| {
+        for &(offset, area) in &local {
+            s.push(
+                lattice,
+                Site { node, offset },
+                area,
+                linear_index(node, cells),
+            );
         }
-    }
+    });
     s
 }
 
@@ -271,8 +305,8 @@ fn smoothed(
             if at_centre.is_some() {
                 t.n.push(v[0]);
             }
-            t.dx.push(v[1]);
-            t.dy.push(v[2]);
+            t.grad[0].push(v[1]);
+            t.grad[1].push(v[2]);
         }
         t.offsets.push(t.index.len() as u32);
     }
@@ -285,7 +319,10 @@ mod tests {
 
     /// Integrate a monomial over [-1,1]^2 with a rule.
     fn integrate(rule: IntegrationRule, f: impl Fn(Real, Real) -> Real) -> Real {
-        rule_points(rule).iter().map(|&(x, y, w)| w * f(x, y)).sum()
+        rule_points(rule)
+            .iter()
+            .map(|&([x, y], w)| w * f(x, y))
+            .sum()
     }
 
     #[test]
