@@ -788,4 +788,199 @@ mod tests {
             .unwrap_err();
         assert!(err.to_string().contains("point 0"), "{err}");
     }
+
+    /// A box lattice with anisotropic spacings for the 3D tests: 6 x 7 x 5 particles.
+    const H3: [Real; 3] = [0.16e-3, 0.648e-3, 0.3e-3];
+    const N3: [usize; 3] = [6, 7, 5];
+
+    fn lattice3(s: Real) -> Lattice<3> {
+        Lattice::new([1.3e-3, -0.7e-3, 0.2e-3], H3, N3, H3.map(|h| s * h))
+    }
+
+    /// Sites of the 3D box: per direction, the first and last particle with no offset (on
+    /// the boundary) and five points inside, so that the product has interior, face, edge
+    /// and corner points; with the number of directions in which each lies on the boundary.
+    fn sites3() -> Vec<(Site<3>, usize)> {
+        let along = |k: usize| {
+            let (n, h) = (N3[k], H3[k]);
+            [
+                (0, 0.0),
+                (0, 0.3 * h),
+                (1, 0.5 * h),
+                (n / 2, -0.21 * h),
+                (n / 2, 0.0),
+                (n - 2, 0.7 * h),
+                (n - 1, 0.0),
+            ]
+        };
+        let mut sites = Vec::new();
+        for (k, &z) in along(2).iter().enumerate() {
+            for (j, &y) in along(1).iter().enumerate() {
+                for (i, &x) in along(0).iter().enumerate() {
+                    let on_boundary = [i, j, k].iter().filter(|&&c| c == 0 || c == 6).count();
+                    let site = Site {
+                        node: [x.0, y.0, z.0],
+                        offset: [x.1, y.1, z.1],
+                    };
+                    sites.push((site, on_boundary));
+                }
+            }
+        }
+        sites
+    }
+
+    /// 3D reproducing conditions (Liu, Jun, Zhang 1995; Chen, Pan, Wu, Liu 1996) at
+    /// interior, face, edge and corner points of a box with anisotropic spacings, for
+    /// supports of 1.5, 2 and 2.5 spacings: `sum N_I = 1`, `sum N_I X_I = x`,
+    /// `sum grad N_I = 0`, `sum grad N_I (x) X_I = I`, to round-off (lengths against 1 mm,
+    /// gradients against `1 / h_k`).
+    #[test]
+    fn reproduces_linear_fields_with_gradients_in_three_dimensions() {
+        let sites = sites3();
+        let mut kinds = [0; 4];
+        for &(_, b) in &sites {
+            kinds[b] += 1;
+        }
+        assert_eq!(
+            kinds,
+            [125, 150, 60, 8],
+            "interior, face, edge, corner points"
+        );
+        for s in [1.5, 2.0, 2.5] {
+            let l = lattice3(s);
+            let only: Vec<Site<3>> = sites.iter().map(|&(site, _)| site).collect();
+            let t = l.shape_table(&only, &|p| format!("site {p}")).unwrap();
+            let (mut worst_x, mut worst_g): (Real, Real) = (0.0, 0.0);
+            for (p, &(site, b)) in sites.iter().enumerate() {
+                let x = l.position(site);
+                let (mut s0, mut sx, mut g0, mut gx) = (0.0, [0.0; 3], [0.0; 3], [[0.0; 3]; 3]);
+                for e in t.row(p) {
+                    let xi = l.cloud().positions[t.index[e] as usize];
+                    s0 += t.n[e];
+                    for a in 0..3 {
+                        sx[a] += t.n[e] * xi[a];
+                        g0[a] += t.grad[a][e];
+                        for c in 0..3 {
+                            gx[c][a] += t.grad[a][e] * xi[c];
+                        }
+                    }
+                }
+                assert!(
+                    (s0 - 1.0).abs() < 1e-10,
+                    "s {s}, kind {b}, {x:?}: sum N = {s0}"
+                );
+                for a in 0..3 {
+                    worst_x = worst_x.max((sx[a] - x[a]).abs() / 1e-3);
+                    worst_g = worst_g.max(g0[a].abs() * H3[a]);
+                    for c in 0..3 {
+                        let i = if a == c { 1.0 } else { 0.0 };
+                        worst_g = worst_g.max((gx[c][a] - i).abs());
+                    }
+                }
+            }
+            println!("support {s}: linear field {worst_x:.1e}, gradients {worst_g:.1e}");
+            assert!(worst_x < 1e-10 && worst_g < 1e-10, "support {s}");
+        }
+    }
+
+    /// In 3D the lattice path finds the cloud's neighbours and values (to round-off), and
+    /// two interior sites with the same offset get the same bits wherever they lie.
+    #[test]
+    fn lattice_sites_match_the_cloud_and_repeat_their_bits_inside_in_three_dimensions() {
+        let l = Lattice::new([0.0; 3], H3, [9, 9, 9], H3.map(|h| 2.0 * h));
+        let offset = [0.3e-4, -0.2e-3, 0.1e-3];
+        let sites: Vec<Site<3>> = [[0, 0, 0], [4, 4, 4], [5, 4, 4], [4, 5, 3], [8, 2, 8]]
+            .map(|node| Site { node, offset })
+            .to_vec();
+        let t = l.shape_table(&sites, &|p| format!("site {p}")).unwrap();
+        let x: Vec<[Real; 3]> = sites.iter().map(|&s| l.position(s)).collect();
+        let c = l
+            .cloud()
+            .shape_table(&x, &|p| format!("point {p}"))
+            .unwrap();
+        let value = |t: &ShapeTable<3>, p: usize, i: u32| {
+            t.row(p).find(|&e| t.index[e] == i).map_or([0.0; 4], |e| {
+                [
+                    t.n[e],
+                    t.grad[0][e] * H3[0],
+                    t.grad[1][e] * H3[1],
+                    t.grad[2][e] * H3[2],
+                ]
+            })
+        };
+        for p in 0..sites.len() {
+            for &i in &c.index[c.row(p)] {
+                let (a, b) = (value(&t, p, i), value(&c, p, i));
+                assert!(
+                    (0..4).all(|k| (a[k] - b[k]).abs() < 1e-12),
+                    "site {p}, particle {i}"
+                );
+            }
+            assert!(t.row(p).all(|e| c.index[c.row(p)].contains(&t.index[e])));
+        }
+        let bits = |v: &[Real], r: std::ops::Range<usize>| -> Vec<u64> {
+            v[r].iter().map(|x| x.to_bits()).collect()
+        };
+        for q in 2..4 {
+            for v in [&t.n, &t.grad[0], &t.grad[1], &t.grad[2]] {
+                assert_eq!(bits(v, t.row(1)), bits(v, t.row(q)), "site {q}");
+            }
+        }
+    }
+
+    /// 3D gradients are the derivatives of the values: central differences at interior,
+    /// face, edge and corner sites.
+    #[test]
+    fn gradients_match_finite_differences_in_three_dimensions() {
+        let l = lattice3(2.0);
+        let fd = 1e-9;
+        let mut pts = Vec::new();
+        for &(site, _) in sites3().iter().step_by(7) {
+            let x = l.position(site);
+            pts.push(x);
+            for k in 0..3 {
+                let (mut p, mut m) = (x, x);
+                p[k] += fd;
+                m[k] -= fd;
+                pts.extend([p, m]);
+            }
+        }
+        let t = l
+            .cloud()
+            .shape_table(&pts, &|p| format!("point {p}"))
+            .unwrap();
+        let value = |p: usize, i: u32| t.row(p).find(|&e| t.index[e] == i).map_or(0.0, |e| t.n[e]);
+        let mut worst: Real = 0.0;
+        for p in (0..pts.len()).step_by(7) {
+            for e in t.row(p) {
+                let i = t.index[e];
+                for k in 0..3 {
+                    let d = (value(p + 1 + 2 * k, i) - value(p + 2 + 2 * k, i)) / (2.0 * fd);
+                    worst = worst.max((d - t.grad[k][e]).abs() * H3[k]);
+                }
+            }
+        }
+        println!("largest |finite difference - dN/dx_k| h_k: {worst:.1e}");
+        assert!(worst < 1e-5, "{worst}");
+    }
+
+    /// In 3D too, a support too small for the linear basis is an error naming the point:
+    /// a particle alone in its support, and a site whose neighbours all lie in one plane.
+    #[test]
+    fn too_small_support_in_three_dimensions_is_an_error_not_a_panic() {
+        let l = Lattice::new([0.0; 3], [1.0; 3], [4, 4, 4], [0.6; 3]);
+        let alone = Site {
+            node: [1, 1, 1],
+            offset: [0.0; 3],
+        };
+        let flat = Site {
+            node: [1, 1, 1],
+            offset: [0.5, 0.5, 0.0],
+        };
+        for (site, why) in [(alone, "only 1 particles"), (flat, "moment matrix")] {
+            let err = l.shape_table(&[site], &|_| "site 0".into()).unwrap_err();
+            let text = err.to_string();
+            assert!(text.contains("site 0") && text.contains(why), "{text}");
+        }
+    }
 }
