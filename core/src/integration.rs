@@ -367,4 +367,200 @@ mod tests {
             assert!(sx.abs() < 1e-15 && sy.abs() < 1e-15);
         }
     }
+
+    /// `(monomial exponents, q4 result, q2 result, exact)` for every `xi^p eta^q zeta^r`
+    /// with `p, q, r <= 3` on `[-1, 1]^3`.
+    fn monomials3() -> Vec<([i32; 3], Real, Real, Real)> {
+        let exact1 = |p: i32| {
+            if p % 2 == 1 {
+                0.0
+            } else {
+                2.0 / (p as Real + 1.0)
+            }
+        };
+        let integrate = |rule, e: [i32; 3]| -> Real {
+            rule_points::<3>(rule)
+                .iter()
+                .map(|&(x, w)| w * (0..3).map(|k| x[k].powi(e[k])).product::<Real>())
+                .sum()
+        };
+        let mut out = Vec::new();
+        for p in 0..=3 {
+            for q in 0..=3 {
+                for r in 0..=3 {
+                    let e = [p, q, r];
+                    let exact = e.iter().map(|&k| exact1(k)).product();
+                    out.push((
+                        e,
+                        integrate(IntegrationRule::Q4, e),
+                        integrate(IntegrationRule::Q2, e),
+                        exact,
+                    ));
+                }
+            }
+        }
+        out
+    }
+
+    /// 3D cell rules on the reference cube: q4 (2x2x2 Gauss, 8 points) integrates every
+    /// `xi^p eta^q zeta^r` with `p, q, r <= 3` exactly; q2 (the alternate four, weight 2)
+    /// every monomial of degree <= 2 and, of degree 3, all but `xi eta zeta` (which it
+    /// integrates to `8 / 3^(3/2)` instead of 0).
+    #[test]
+    fn q4_and_q2_in_three_dimensions_integrate_the_monomials_they_should() {
+        assert_eq!(rule_points::<3>(IntegrationRule::Q4).len(), 8);
+        let q2 = rule_points::<3>(IntegrationRule::Q2);
+        let a = 1.0 / 3.0_f64.sqrt();
+        let expected = [[a, -a, -a], [-a, a, -a], [-a, -a, a], [a, a, a]];
+        assert_eq!(q2.iter().map(|&(x, _)| x).collect::<Vec<_>>(), expected);
+        assert!(q2.iter().all(|&(_, w)| w == 2.0));
+        let mut missed = Vec::new();
+        for (e, q4, q2, exact) in monomials3() {
+            assert!((q4 - exact).abs() < 1e-14, "q4 {e:?}");
+            let degree: i32 = e.iter().sum();
+            if (q2 - exact).abs() > 1e-14 {
+                assert!(degree > 2, "q2 misses {e:?} of degree {degree}");
+                if degree == 3 {
+                    missed.push(e);
+                }
+            }
+        }
+        assert_eq!(missed, [[1, 1, 1]], "the degree-3 monomials q2 misses");
+        let (_, _, xyz, _) = monomials3().into_iter().find(|m| m.0 == [1, 1, 1]).unwrap();
+        assert!((xyz - 8.0 / 27.0_f64.sqrt()).abs() < 1e-14, "{xyz}");
+    }
+
+    #[test]
+    fn weights_sum_to_the_volume_in_three_dimensions() {
+        let lattice = Lattice::new([0.0; 3], [0.5, 0.25, 0.4], [5, 9, 4], [1.0, 0.5, 0.8]);
+        let cells = 4 * 8 * 3;
+        let volumes: Real = lattice.cloud().volumes.iter().sum();
+        assert!((volumes - 2.0 * 2.0 * 1.2).abs() < 1e-12, "{volumes}");
+        for (rule, per_cell) in [(IntegrationRule::Q4, 8), (IntegrationRule::Q2, 4)] {
+            let s = grid_points(rule, &lattice);
+            assert_eq!(s.areas.len(), cells * per_cell);
+            let v: Real = s.areas.iter().sum();
+            assert!((v - 2.0 * 2.0 * 1.2).abs() < 1e-12, "{rule:?}: {v}");
+            assert_eq!(*s.cells.last().unwrap() as usize, cells - 1);
+        }
+    }
+
+    /// A box lattice of `n` particles with spacings `h` and supports of `s` spacings, its
+    /// points of `rule` and their shape functions.
+    fn patch3(
+        n: [usize; 3],
+        h: [Real; 3],
+        s: Real,
+        rule: IntegrationRule,
+    ) -> (Lattice<3>, PointSet<3>, ShapeTable<3>) {
+        let lattice = Lattice::new([0.0; 3], h, n, h.map(|hk| s * hk));
+        let points = grid_points(rule, &lattice);
+        let table = lattice
+            .shape_table(&points.sites, &|p| format!("point {p}"))
+            .unwrap();
+        (lattice, points, table)
+    }
+
+    /// 3D linear patch test: the displacement `u = A X` (any `A`) gives at every point of
+    /// each rule `u(x) = A x` and the gradient `sum_I u_I (x) grad N_I = A`, so
+    /// `F = I + A` everywhere, to round-off, on a box with anisotropic spacings.
+    #[test]
+    fn linear_patch_in_three_dimensions_gives_the_field_and_its_gradient_at_every_point() {
+        let a = [
+            [1e-4, 2e-4, -3e-4],
+            [-0.5e-4, 3e-4, 1e-4],
+            [2e-4, -1e-4, 0.7e-4],
+        ];
+        let displacement = |x: [Real; 3]| -> [Real; 3] {
+            std::array::from_fn(|i| (0..3).map(|j| a[i][j] * x[j]).sum())
+        };
+        for rule in [IntegrationRule::Q4, IntegrationRule::Q2] {
+            for s in [1.5, 2.0] {
+                let (lattice, points, t) = patch3([5, 6, 4], [1e-3, 0.7e-3, 1.3e-3], s, rule);
+                let d: Vec<[Real; 3]> = lattice
+                    .cloud()
+                    .positions
+                    .iter()
+                    .map(|&x| displacement(x))
+                    .collect();
+                let mut worst: Real = 0.0;
+                for (p, &x) in points.positions.iter().enumerate() {
+                    let u = t.interpolate(p, &d);
+                    let exact = displacement(x);
+                    for i in 0..3 {
+                        worst = worst.max((u[i] - exact[i]).abs() / 1e-3 / 1e-4);
+                        for j in 0..3 {
+                            let g: Real = t
+                                .row(p)
+                                .map(|e| d[t.index[e] as usize][i] * t.grad[j][e])
+                                .sum();
+                            worst = worst.max((g - a[i][j]).abs() / 1e-4);
+                        }
+                    }
+                }
+                println!("{rule:?}, support {s}: largest relative error {worst:.1e}");
+                assert!(worst < 1e-10, "{rule:?}, support {s}: {worst}");
+            }
+        }
+    }
+
+    /// Small-strain stiffness (Pa m, with `E` in Pa and lengths in m) of a free patch,
+    /// isotropic linear elasticity `sigma = lambda tr(eps) I + 2 mu eps`:
+    /// `K_{Ia,Jb} = sum_p w_p (lambda N_{I,a} N_{J,b} + mu (N_{I,b} N_{J,a} +
+    /// delta_ab grad N_I . grad N_J))`, dofs `3 I + a`.
+    fn stiffness3(
+        points: &PointSet<3>,
+        t: &ShapeTable<3>,
+        particles: usize,
+    ) -> nalgebra::DMatrix<Real> {
+        let (e, nu) = (1.0, 0.3);
+        let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let mu = e / (2.0 * (1.0 + nu));
+        let mut k = nalgebra::DMatrix::zeros(3 * particles, 3 * particles);
+        for (p, &w) in points.areas.iter().enumerate() {
+            for e1 in t.row(p) {
+                let (i, gi) = (t.index[e1] as usize, [0, 1, 2].map(|c| t.grad[c][e1]));
+                for e2 in t.row(p) {
+                    let (j, gj) = (t.index[e2] as usize, [0, 1, 2].map(|c| t.grad[c][e2]));
+                    let dot = gi[0] * gj[0] + gi[1] * gj[1] + gi[2] * gj[2];
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            let diagonal = if a == b { dot } else { 0.0 };
+                            k[(3 * i + a, 3 * j + b)] +=
+                                w * (lambda * gi[a] * gj[b] + mu * (gi[b] * gj[a] + diagonal));
+                        }
+                    }
+                }
+            }
+        }
+        k
+    }
+
+    /// Spurious modes in 3D: the small-strain stiffness of a free box patch (5 x 5 x 5 and
+    /// 4 x 5 x 6 particles, supports of 1.5 and 2 spacings) integrated with q4 or q2 from
+    /// the RK gradients has exactly the six rigid-body zero eigenvalues (below `1e-8` of
+    /// the largest), and the next one is clearly positive.
+    #[test]
+    fn no_spurious_zero_energy_modes_in_three_dimensions() {
+        for rule in [IntegrationRule::Q4, IntegrationRule::Q2] {
+            for (n, h) in [([5, 5, 5], [1.0; 3]), ([4, 5, 6], [1.0, 0.8, 1.25])] {
+                for s in [1.5, 2.0] {
+                    let (lattice, points, t) = patch3(n, h, s, rule);
+                    let k = stiffness3(&points, &t, lattice.cloud().positions.len());
+                    let mut ev: Vec<Real> = k.symmetric_eigenvalues().iter().copied().collect();
+                    ev.sort_by(Real::total_cmp);
+                    let max = ev[ev.len() - 1];
+                    let zeros = ev.iter().filter(|e| e.abs() < 1e-8 * max).count();
+                    let first = ev[6] / max;
+                    println!("{rule:?} {n:?} support {s}: {zeros} zero eigenvalues, smallest deformation mode {first:.3e} of the largest");
+                    assert_eq!(zeros, 6, "{rule:?} {n:?} support {s}: {:?}", &ev[..8]);
+                    assert!(
+                        first > 1e-4,
+                        "{rule:?} {n:?} support {s}: near-zero mode {first:e}"
+                    );
+                    assert!(ev[0] > -1e-8 * max, "negative eigenvalue {}", ev[0]);
+                }
+            }
+        }
+    }
 }
