@@ -361,8 +361,8 @@ fn smoothed<const D: usize>(
         for (q, w) in nw.iter().enumerate().skip(first).take(per_domain) {
             for e in on_edges.row(q) {
                 let (_, g) = row.entry(on_edges.index[e]).or_insert((0.0, [0.0; D]));
-                for k in 0..D {
-                    g[k] += on_edges.n[e] * w[k] / area;
+                for (gk, &wk) in g.iter_mut().zip(w) {
+                    *gk += on_edges.n[e] * wk / area;
                 }
             }
         }
@@ -371,8 +371,8 @@ fn smoothed<const D: usize>(
             if at_centre.is_some() {
                 t.n.push(*n);
             }
-            for k in 0..D {
-                t.grad[k].push(g[k]);
+            for (column, &gk) in t.grad.iter_mut().zip(g) {
+                column.push(gk);
             }
         }
         t.offsets.push(t.index.len() as u32);
@@ -556,12 +556,10 @@ mod tests {
                     let exact = displacement(x);
                     for i in 0..3 {
                         worst = worst.max((u[i] - exact[i]).abs() / 1e-3 / 1e-4);
-                        for j in 0..3 {
-                            let g: Real = t
-                                .row(p)
-                                .map(|e| d[t.index[e] as usize][i] * t.grad[j][e])
-                                .sum();
-                            worst = worst.max((g - a[i][j]).abs() / 1e-4);
+                        for (aij, grad) in a[i].iter().zip(&t.grad) {
+                            let g: Real =
+                                t.row(p).map(|e| d[t.index[e] as usize][i] * grad[e]).sum();
+                            worst = worst.max((g - aij).abs() / 1e-4);
                         }
                     }
                 }
@@ -679,12 +677,9 @@ mod tests {
             for i in 0..3 {
                 let exact: Real = (0..3).map(|j| a[i][j] * xp[j]).sum();
                 worst = worst.max((u[i] - exact).abs() / 1e-3 / 1e-4);
-                for j in 0..3 {
-                    let g: Real = t
-                        .row(p)
-                        .map(|e| d[t.index[e] as usize][i] * t.grad[j][e])
-                        .sum();
-                    worst = worst.max((g - a[i][j]).abs() / 1e-4);
+                for (aij, grad) in a[i].iter().zip(&t.grad) {
+                    let g: Real = t.row(p).map(|e| d[t.index[e] as usize][i] * grad[e]).sum();
+                    worst = worst.max((g - aij).abs() / 1e-4);
                 }
             }
         }
@@ -726,8 +721,8 @@ mod tests {
             let mut sum = vec![[0.0; 3]; x.len()];
             for (p, &v) in points.areas.iter().enumerate() {
                 for e in t.row(p) {
-                    for k in 0..3 {
-                        sum[t.index[e] as usize][k] += t.grad[k][e] * v;
+                    for (sk, grad) in sum[t.index[e] as usize].iter_mut().zip(&t.grad) {
+                        *sk += grad[e] * v;
                     }
                 }
             }

@@ -221,8 +221,8 @@ impl<const D: usize> ShapeTable<D> {
         for (&i, (n, g)) in nb.iter().zip(vals) {
             self.index.push(i);
             self.n.push(*n);
-            for k in 0..D {
-                self.grad[k].push(g[k]);
+            for (column, &gk) in self.grad.iter_mut().zip(g) {
+                column.push(gk);
             }
         }
         self.offsets.push(self.index.len() as u32);
@@ -872,9 +872,9 @@ mod tests {
                 for a in 0..3 {
                     worst_x = worst_x.max((sx[a] - x[a]).abs() / 1e-3);
                     worst_g = worst_g.max(g0[a].abs() * H3[a]);
-                    for c in 0..3 {
+                    for (c, row) in gx.iter().enumerate() {
                         let i = if a == c { 1.0 } else { 0.0 };
-                        worst_g = worst_g.max((gx[c][a] - i).abs());
+                        worst_g = worst_g.max((row[a] - i).abs());
                     }
                 }
             }
@@ -954,9 +954,9 @@ mod tests {
         for p in (0..pts.len()).step_by(7) {
             for e in t.row(p) {
                 let i = t.index[e];
-                for k in 0..3 {
+                for (k, hk) in H3.iter().enumerate() {
                     let d = (value(p + 1 + 2 * k, i) - value(p + 2 + 2 * k, i)) / (2.0 * fd);
-                    worst = worst.max((d - t.grad[k][e]).abs() * H3[k]);
+                    worst = worst.max((d - t.grad[k][e]).abs() * hk);
                 }
             }
         }
