@@ -15,10 +15,12 @@
 //!   degree 3 misses only `xi eta zeta`; the stiffness of a free 3D patch keeps only the six
 //!   rigid-body zero modes (tested below).
 //! - `scni`: stabilized conforming nodal integration (Chen, Wu, Yoon, You 2001, IJNME 50):
-//!   one point per particle over its domain (the rectangle of half spacings around it, cut at
-//!   the workpiece edges); the gradient is smoothed over the domain,
-//!   `B_I = (1 / A_L) int_{dA_L} N_I n dG`, which satisfies the integration constraint exactly
-//!   (the linear patch test passes to round-off, also next to the boundary).
+//!   one point per particle over its domain (the rectangle, in 3D the box, of half spacings
+//!   around it, cut at the workpiece's boundary); the gradient is smoothed over the domain,
+//!   `B_I = (1 / A_L) int_{dA_L} N_I n dG` (3-point Gauss per edge, 3x3 per face in 3D),
+//!   which satisfies the integration constraint exactly (the linear patch test passes to
+//!   round-off, also next to the boundary; tested in 3D below). The quadrants of the nodal
+//!   stabilization ([`nodal_quadrants`]) are 2D only.
 
 use crate::error::Result;
 use crate::math::Real;

@@ -528,7 +528,7 @@ fn moments<const D: usize, const N: usize>(
         }
     }
     // Conditioning check before inversion: a (near-)singular moment matrix means the
-    // neighbours are collinear (coplanar) or too few.
+    // neighbours are collinear (in 3D coplanar) or too few.
     let chol = m.cholesky().ok_or_else(|| {
         format!(
             "moment matrix is singular at {} m ({} neighbours); increase the support",
