@@ -94,4 +94,30 @@ mod tests {
             }
         }
     }
+
+    /// In 2D the generic window gives the bits of the planar formula it replaced:
+    /// `phi = w_x w_y`, `dphi/dx = w'_x sign(dx) / a_x * w_y`,
+    /// `dphi/dy = w_x w'_y sign(dy) / a_y`, evaluated left to right.
+    #[test]
+    fn window_in_two_dimensions_keeps_the_bits_of_the_planar_formula() {
+        let (ax, ay) = (0.32e-3, 1.296e-3);
+        for i in -40..=40 {
+            for j in -40..=40 {
+                let (dx, dy) = (i as Real * 0.0091e-3, j as Real * 0.0333e-3);
+                let (wx, dwx) = cubic_spline(dx.abs() / ax);
+                let (wy, dwy) = cubic_spline(dy.abs() / ay);
+                let planar = [
+                    wx * wy,
+                    dwx * dx.signum() / ax * wy,
+                    wx * dwy * dy.signum() / ay,
+                ];
+                let (phi, [gx, gy]) = window([dx, dy], [ax, ay]);
+                assert_eq!(
+                    [phi, gx, gy].map(Real::to_bits),
+                    planar.map(Real::to_bits),
+                    "({dx}, {dy})"
+                );
+            }
+        }
+    }
 }
