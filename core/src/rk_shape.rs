@@ -1,60 +1,104 @@
 //! Reproducing kernel shape functions with a linear basis (Liu, Jun, Zhang 1995;
-//! Chen, Pan, Wu, Liu 1996), paper eqs. (2)-(3):
+//! Chen, Pan, Wu, Liu 1996), paper eqs. (2)-(3), in `D` = 2 or 3 dimensions:
 //!
 //! `N_I(x) = H(0)^T M(x)^{-1} H(X_I - x) phi_a(x - X_I) V_I`,
 //! `M(x) = sum_I H(X_I - x) H(X_I - x)^T phi_a(x - X_I) V_I`,
-//! `H(z) = [1, z_x / a_x, z_y / a_y]` (scaled for conditioning).
+//! `H(z) = [1, z_1 / a_1, ..., z_D / a_D]` (scaled for conditioning), so `M` is
+//! `(D + 1) x (D + 1)`.
 //!
 //! The approximation reproduces constants and linear fields exactly, with gradients,
 //! wherever `M` is invertible. Lagrangian kernel: everything is evaluated once in the
-//! reference configuration and stored in compressed rows.
+//! reference configuration and stored in compressed rows. One source serves both
+//! dimensions through the const parameter `D` (default 2, so 2D code names the types
+//! without it); the 2D results are the bits of the former 2D-only code.
 
 use crate::error::{Error, Result};
 use crate::kernel::window;
 use crate::math::Real;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{SMatrix, SVector};
 
 /// The particles that carry the RK approximation, in the reference configuration.
 #[derive(Debug, Clone)]
-pub struct KernelCloud {
+pub struct KernelCloud<const D: usize = 2> {
     /// Reference positions `X_I` (m).
-    pub positions: Vec<[Real; 2]>,
-    /// Planar particle volumes `V_I` (m^2) used as kernel weights.
+    pub positions: Vec<[Real; D]>,
+    /// Particle volumes `V_I` (m^D: planar areas in 2D) used as kernel weights.
     pub volumes: Vec<Real>,
-    /// Support radii `(a_x, a_y)` (m), the largest of `supports` where those are given.
-    pub support: [Real; 2],
-    /// Each particle's own support radii `(a_x, a_y)` (m), or `None` when all share
-    /// `support`.
-    pub supports: Option<Vec<[Real; 2]>>,
-    grid: BinGrid,
+    /// Support radius per direction `a_k` (m), the largest of `supports` where those are
+    /// given.
+    pub support: [Real; D],
+    /// Each particle's own support radii (m), or `None` when all share `support`.
+    pub supports: Option<Vec<[Real; D]>>,
+    grid: BinGrid<D>,
 }
 
 /// Uniform bins for the neighbour search (bin size = support radius).
 #[derive(Debug, Clone)]
-struct BinGrid {
-    origin: [Real; 2],
-    size: [Real; 2],
-    dims: [usize; 2],
+struct BinGrid<const D: usize> {
+    origin: [Real; D],
+    size: [Real; D],
+    dims: [usize; D],
     offsets: Vec<u32>,
     items: Vec<u32>,
 }
 
-impl BinGrid {
-    fn new(points: &[[Real; 2]], size: [Real; 2]) -> Self {
-        let mut lo = [Real::INFINITY; 2];
-        let mut hi = [Real::NEG_INFINITY; 2];
+/// Calls `f` with every multi-index of the box `lo[k] <= i_k < hi[k]`, the first index
+/// running fastest (the order of particles numbered `i_0 + n_0 (i_1 + n_1 i_2)`).
+pub(crate) fn for_each_index<const D: usize>(
+    lo: [usize; D],
+    hi: [usize; D],
+    mut f: impl FnMut([usize; D]),
+) {
+    if (0..D).any(|k| lo[k] >= hi[k]) {
+        return;
+    }
+    let mut i = lo;
+    loop {
+        f(i);
+        let mut k = 0;
+        loop {
+            i[k] += 1;
+            if i[k] < hi[k] {
+                break;
+            }
+            i[k] = lo[k];
+            k += 1;
+            if k == D {
+                return;
+            }
+        }
+    }
+}
+
+/// The linear number `i_0 + n_0 (i_1 + n_1 (i_2 + ...))` of the multi-index `i` in a box
+/// of `n` per direction.
+#[inline]
+pub(crate) fn linear_index<const D: usize>(i: [usize; D], n: [usize; D]) -> usize {
+    (0..D).rev().fold(0, |b, k| b * n[k] + i[k])
+}
+
+/// `(x_1, ..., x_D)` with six significant digits, for messages.
+fn coordinates<const D: usize>(x: [Real; D]) -> String {
+    let parts: Vec<String> = x.iter().map(|c| format!("{c:.6e}")).collect();
+    format!("({})", parts.join(", "))
+}
+
+impl<const D: usize> BinGrid<D> {
+    fn new(points: &[[Real; D]], size: [Real; D]) -> Self {
+        let mut lo = [Real::INFINITY; D];
+        let mut hi = [Real::NEG_INFINITY; D];
         for p in points {
-            for k in 0..2 {
+            for k in 0..D {
                 lo[k] = lo[k].min(p[k]);
                 hi[k] = hi[k].max(p[k]);
             }
         }
-        let dims = [0, 1].map(|k| (((hi[k] - lo[k]) / size[k]).floor() as usize + 1).max(1));
-        let mut counts = vec![0u32; dims[0] * dims[1] + 1];
-        let bin_of = |p: &[Real; 2]| {
-            let i = (((p[0] - lo[0]) / size[0]) as usize).min(dims[0] - 1);
-            let j = (((p[1] - lo[1]) / size[1]) as usize).min(dims[1] - 1);
-            j * dims[0] + i
+        let dims: [usize; D] =
+            std::array::from_fn(|k| (((hi[k] - lo[k]) / size[k]).floor() as usize + 1).max(1));
+        let mut counts = vec![0u32; dims.iter().product::<usize>() + 1];
+        let bin_of = |p: &[Real; D]| {
+            let i = std::array::from_fn(|k| (((p[k] - lo[k]) / size[k]) as usize).min(dims[k] - 1));
+            linear_index(i, dims)
         };
         for p in points {
             counts[bin_of(p) + 1] += 1;
@@ -80,56 +124,57 @@ impl BinGrid {
 
     /// Indices of points strictly inside the open box `|x - p| < r` per direction, in
     /// ascending index order (deterministic).
-    fn query(&self, points: &[[Real; 2]], x: [Real; 2], r: [Real; 2], out: &mut Vec<u32>) {
+    fn query(&self, points: &[[Real; D]], x: [Real; D], r: [Real; D], out: &mut Vec<u32>) {
         out.clear();
-        let range = |k: usize| {
-            let lo = ((x[k] - r[k] - self.origin[k]) / self.size[k]).floor();
-            let hi = ((x[k] + r[k] - self.origin[k]) / self.size[k]).floor();
-            let lo = lo.max(0.0) as usize;
-            let hi = if hi < 0.0 {
-                None
-            } else {
-                Some((hi as usize).min(self.dims[k] - 1))
-            };
-            (lo, hi)
-        };
-        let (i0, i1) = range(0);
-        let (j0, j1) = range(1);
-        let (Some(i1), Some(j1)) = (i1, j1) else {
-            return;
-        };
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                let b = j * self.dims[0] + i;
-                for &p in &self.items[self.offsets[b] as usize..self.offsets[b + 1] as usize] {
-                    let q = points[p as usize];
-                    if (x[0] - q[0]).abs() < r[0] && (x[1] - q[1]).abs() < r[1] {
-                        out.push(p);
-                    }
+        let (mut lo, mut hi) = ([0; D], [0; D]);
+        for k in 0..D {
+            let first = ((x[k] - r[k] - self.origin[k]) / self.size[k]).floor();
+            let last = ((x[k] + r[k] - self.origin[k]) / self.size[k]).floor();
+            if last < 0.0 {
+                return;
+            }
+            lo[k] = first.max(0.0) as usize;
+            hi[k] = (last as usize).min(self.dims[k] - 1) + 1;
+        }
+        for_each_index(lo, hi, |i| {
+            let b = linear_index(i, self.dims);
+            for &p in &self.items[self.offsets[b] as usize..self.offsets[b + 1] as usize] {
+                let q = points[p as usize];
+                if (0..D).all(|k| (x[k] - q[k]).abs() < r[k]) {
+                    out.push(p);
                 }
             }
-        }
+        });
         out.sort_unstable();
     }
 }
 
 /// Shape functions of many evaluation points, compressed by rows: row `p` holds the
 /// neighbours `I` of point `p` with `N_I(x_p)` and `grad N_I(x_p)` (1/m).
-#[derive(Debug, Clone, Default)]
-pub struct ShapeTable {
+#[derive(Debug, Clone)]
+pub struct ShapeTable<const D: usize = 2> {
     /// Row start offsets, `rows + 1` entries.
     pub offsets: Vec<u32>,
     /// Particle index of each entry.
     pub index: Vec<u32>,
     /// `N_I(x_p)`.
     pub n: Vec<Real>,
-    /// `dN_I/dX(x_p)`.
-    pub dx: Vec<Real>,
-    /// `dN_I/dY(x_p)`.
-    pub dy: Vec<Real>,
+    /// `dN_I/dX_k(x_p)` for each direction `k` (1/m).
+    pub grad: [Vec<Real>; D],
 }
 
-impl ShapeTable {
+impl<const D: usize> Default for ShapeTable<D> {
+    fn default() -> Self {
+        ShapeTable {
+            offsets: Vec::new(),
+            index: Vec::new(),
+            n: Vec::new(),
+            grad: std::array::from_fn(|_| Vec::new()),
+        }
+    }
+}
+
+impl<const D: usize> ShapeTable<D> {
     /// Number of rows (evaluation points).
     pub fn rows(&self) -> usize {
         self.offsets.len() - 1
@@ -141,12 +186,13 @@ impl ShapeTable {
     }
     /// `u(x_p) = sum_I N_I(x_p) d_I`: interpolate a nodal vector field at row `p`.
     #[inline]
-    pub fn interpolate(&self, p: usize, d: &[[Real; 2]]) -> [Real; 2] {
-        let mut u = [0.0; 2];
+    pub fn interpolate(&self, p: usize, d: &[[Real; D]]) -> [Real; D] {
+        let mut u = [0.0; D];
         for e in self.row(p) {
             let di = d[self.index[e] as usize];
-            u[0] += self.n[e] * di[0];
-            u[1] += self.n[e] * di[1];
+            for k in 0..D {
+                u[k] += self.n[e] * di[k];
+            }
         }
         u
     }
@@ -154,15 +200,14 @@ impl ShapeTable {
     pub fn entries(&self) -> usize {
         self.index.len()
     }
-    /// Frees the gradients of a table that is only interpolated: `dx` and `dy` become
-    /// empty, `n` and the rows stay.
+    /// Frees the gradients of a table that is only interpolated: `grad` becomes empty,
+    /// `n` and the rows stay.
     pub fn drop_gradients(&mut self) {
-        self.dx = Vec::new();
-        self.dy = Vec::new();
+        self.grad = std::array::from_fn(|_| Vec::new());
     }
 
     /// An empty table with room for `rows` rows.
-    fn with_rows(rows: usize) -> ShapeTable {
+    fn with_rows(rows: usize) -> ShapeTable<D> {
         let mut offsets = Vec::with_capacity(rows + 1);
         offsets.push(0);
         ShapeTable {
@@ -171,21 +216,22 @@ impl ShapeTable {
         }
     }
 
-    /// Appends a row: the neighbours `nb` with their `[N, N_x, N_y]`.
-    fn push_row(&mut self, nb: &[u32], vals: &[[Real; 3]]) {
-        for (&i, v) in nb.iter().zip(vals) {
+    /// Appends a row: the neighbours `nb` with their `(N, grad N)`.
+    fn push_row(&mut self, nb: &[u32], vals: &[(Real, [Real; D])]) {
+        for (&i, (n, g)) in nb.iter().zip(vals) {
             self.index.push(i);
-            self.n.push(v[0]);
-            self.dx.push(v[1]);
-            self.dy.push(v[2]);
+            self.n.push(*n);
+            for (column, &gk) in self.grad.iter_mut().zip(g) {
+                column.push(gk);
+            }
         }
         self.offsets.push(self.index.len() as u32);
     }
 }
 
-impl KernelCloud {
-    /// A cloud of particles with planar volumes and per-direction support radii.
-    pub fn new(positions: Vec<[Real; 2]>, volumes: Vec<Real>, support: [Real; 2]) -> Self {
+impl<const D: usize> KernelCloud<D> {
+    /// A cloud of particles with volumes (m^D) and per-direction support radii (m).
+    pub fn new(positions: Vec<[Real; D]>, volumes: Vec<Real>, support: [Real; D]) -> Self {
         let grid = BinGrid::new(&positions, support);
         KernelCloud {
             positions,
@@ -201,13 +247,13 @@ impl KernelCloud {
     /// support covers it (the variable-support RK approximation of Chen, Pan, Wu, Liu 1996;
     /// the reproducing conditions hold for any supports that leave `M(x)` invertible).
     pub fn with_supports(
-        positions: Vec<[Real; 2]>,
+        positions: Vec<[Real; D]>,
         volumes: Vec<Real>,
-        supports: Vec<[Real; 2]>,
+        supports: Vec<[Real; D]>,
     ) -> Self {
-        let largest = supports
-            .iter()
-            .fold([0.0 as Real; 2], |m, a| [m[0].max(a[0]), m[1].max(a[1])]);
+        let largest = supports.iter().fold([0.0 as Real; D], |m, a| {
+            std::array::from_fn(|k| m[k].max(a[k]))
+        });
         let grid = BinGrid::new(&positions, largest);
         KernelCloud {
             positions,
@@ -221,9 +267,9 @@ impl KernelCloud {
     /// Evaluate `N_I` and `grad N_I` at each of `points`; `label` names a point in errors.
     pub fn shape_table(
         &self,
-        points: &[[Real; 2]],
+        points: &[[Real; D]],
         label: &dyn Fn(usize) -> String,
-    ) -> Result<ShapeTable> {
+    ) -> Result<ShapeTable<D>> {
         let mut t = ShapeTable::with_rows(points.len());
         let (mut nb, mut offsets, mut vals) = (Vec::new(), Vec::new(), Vec::new());
         for (p, &x) in points.iter().enumerate() {
@@ -231,13 +277,13 @@ impl KernelCloud {
             if let Some(a) = &self.supports {
                 nb.retain(|&i| {
                     let (xi, ai) = (self.positions[i as usize], a[i as usize]);
-                    (x[0] - xi[0]).abs() < ai[0] && (x[1] - xi[1]).abs() < ai[1]
+                    (0..D).all(|k| (x[k] - xi[k]).abs() < ai[k])
                 });
             }
             offsets.clear();
             offsets.extend(nb.iter().map(|&i| {
                 let xi = self.positions[i as usize];
-                [x[0] - xi[0], x[1] - xi[1]]
+                std::array::from_fn(|k| x[k] - xi[k])
             }));
             let result = match &self.supports {
                 None => evaluate(
@@ -252,9 +298,9 @@ impl KernelCloud {
                 Some(a) => {
                     // The basis is scaled by the neighbours' mean support (conditioning only).
                     let n = nb.len().max(1) as Real;
-                    let scale = nb.iter().fold([0.0; 2], |s, &i| {
+                    let scale = nb.iter().fold([0.0; D], |s, &i| {
                         let ai = a[i as usize];
-                        [s[0] + ai[0] / n, s[1] + ai[1] / n]
+                        std::array::from_fn(|k| s[k] + ai[k] / n)
                     });
                     evaluate(
                         x,
@@ -277,41 +323,50 @@ impl KernelCloud {
 /// A point of a [`Lattice`] given by a particle and its offset from it: the position is
 /// `X_node + offset` (m). Shape functions at a site depend only on the offsets to the
 /// neighbours, which are formed from whole multiples of the spacing, so two sites with
-/// the same offset and the same neighbourhood (any two away from the edges) get the same
-/// bits wherever they lie: their stored blocks can be shared.
+/// the same offset and the same neighbourhood (any two away from the boundary) get the
+/// same bits wherever they lie: their stored blocks can be shared.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Site {
-    /// Lattice indices `(i, j)` of the particle.
-    pub node: [usize; 2],
+pub struct Site<const D: usize = 2> {
+    /// Lattice indices `(i, j[, k])` of the particle.
+    pub node: [usize; D],
     /// Offset from the particle (m).
-    pub offset: [Real; 2],
+    pub offset: [Real; D],
 }
 
-/// The particles of a rectangular workpiece: `n[0] x n[1]` particles at
-/// `X_ij = origin + (i h_x, j h_y)`, numbered `j n[0] + i`, with volumes `h_x h_y`, halved
-/// on each edge (a quarter in the corners), so that they sum to the rectangle's area.
+/// The particles of a box workpiece: `n[0] x n[1] (x n[2])` particles at
+/// `X_i = origin + (i_0 h_0, i_1 h_1, ...)`, numbered `i_0 + n_0 (i_1 + n_1 i_2)`, with
+/// volumes `prod_k h_k` (m^D), halved once per direction in which the particle lies on
+/// the boundary (on a face, edge, corner), so that they sum to the box's measure.
 #[derive(Debug, Clone)]
-pub struct Lattice {
-    cloud: KernelCloud,
-    origin: [Real; 2],
-    h: [Real; 2],
-    n: [usize; 2],
+pub struct Lattice<const D: usize = 2> {
+    cloud: KernelCloud<D>,
+    origin: [Real; D],
+    h: [Real; D],
+    n: [usize; D],
 }
 
-impl Lattice {
-    /// The lattice with lower-left particle at `origin` (m), spacings `h` (m), `n`
-    /// particles per direction and kernel support radii `support` (m).
-    pub fn new(origin: [Real; 2], h: [Real; 2], n: [usize; 2], support: [Real; 2]) -> Self {
-        let mut positions = Vec::with_capacity(n[0] * n[1]);
-        let mut volumes = Vec::with_capacity(n[0] * n[1]);
-        for j in 0..n[1] {
-            for i in 0..n[0] {
-                positions.push([origin[0] + i as Real * h[0], origin[1] + j as Real * h[1]]);
-                let fx = if i == 0 || i == n[0] - 1 { 0.5 } else { 1.0 };
-                let fy = if j == 0 || j == n[1] - 1 { 0.5 } else { 1.0 };
-                volumes.push(h[0] * h[1] * fx * fy);
+impl<const D: usize> Lattice<D> {
+    /// The lattice with lowest particle at `origin` (m), spacings `h` (m), `n` particles
+    /// per direction and kernel support radii `support` (m).
+    pub fn new(origin: [Real; D], h: [Real; D], n: [usize; D], support: [Real; D]) -> Self {
+        let count = n.iter().product();
+        let mut positions = Vec::with_capacity(count);
+        let mut volumes = Vec::with_capacity(count);
+        for_each_index([0; D], n, |i| {
+            positions.push(std::array::from_fn(|k| origin[k] + i[k] as Real * h[k]));
+            let mut v = h[0];
+            for &hk in &h[1..] {
+                v *= hk;
             }
-        }
+            for k in 0..D {
+                v *= if i[k] == 0 || i[k] == n[k] - 1 {
+                    0.5
+                } else {
+                    1.0
+                };
+            }
+            volumes.push(v);
+        });
         Lattice {
             cloud: KernelCloud::new(positions, volumes, support),
             origin,
@@ -321,23 +376,23 @@ impl Lattice {
     }
 
     /// The particles as a general cloud.
-    pub fn cloud(&self) -> &KernelCloud {
+    pub fn cloud(&self) -> &KernelCloud<D> {
         &self.cloud
     }
 
-    /// Particle spacings `(h_x, h_y)` (m).
-    pub fn spacing(&self) -> [Real; 2] {
+    /// Particle spacings `h_k` (m).
+    pub fn spacing(&self) -> [Real; D] {
         self.h
     }
 
     /// Particles per direction.
-    pub fn dims(&self) -> [usize; 2] {
+    pub fn dims(&self) -> [usize; D] {
         self.n
     }
 
     /// Position of a site (m).
-    pub fn position(&self, s: Site) -> [Real; 2] {
-        [0, 1].map(|k| self.origin[k] + s.node[k] as Real * self.h[k] + s.offset[k])
+    pub fn position(&self, s: Site<D>) -> [Real; D] {
+        std::array::from_fn(|k| self.origin[k] + s.node[k] as Real * self.h[k] + s.offset[k])
     }
 
     /// Evaluate `N_I` and `grad N_I` at each site, with the neighbour offsets
@@ -346,36 +401,31 @@ impl Lattice {
     /// ascending index order, as for [`KernelCloud::shape_table`].
     pub fn shape_table(
         &self,
-        sites: &[Site],
+        sites: &[Site<D>],
         label: &dyn Fn(usize) -> String,
-    ) -> Result<ShapeTable> {
+    ) -> Result<ShapeTable<D>> {
         let mut t = ShapeTable::with_rows(sites.len());
         let (mut nb, mut offsets, mut vals) = (Vec::new(), Vec::new(), Vec::new());
         let a = self.cloud.support;
         for (p, s) in sites.iter().enumerate() {
             // Index range per direction that can lie within the support.
-            let range = |k: usize| {
+            let (mut lo, mut hi) = ([0; D], [0; D]);
+            for k in 0..D {
                 let reach = ((a[k] + s.offset[k].abs()) / self.h[k]).ceil() as usize + 1;
-                s.node[k].saturating_sub(reach)..(s.node[k] + reach + 1).min(self.n[k])
-            };
-            let near =
-                |k: usize, i: usize| (s.node[k] as Real - i as Real) * self.h[k] + s.offset[k];
+                lo[k] = s.node[k].saturating_sub(reach);
+                hi[k] = (s.node[k] + reach + 1).min(self.n[k]);
+            }
             nb.clear();
             offsets.clear();
-            let (ri, rj) = (range(0), range(1));
-            for j in rj {
-                let dy = near(1, j);
-                if dy.abs() >= a[1] {
-                    continue;
+            for_each_index(lo, hi, |i| {
+                let d: [Real; D] = std::array::from_fn(|k| {
+                    (s.node[k] as Real - i[k] as Real) * self.h[k] + s.offset[k]
+                });
+                if (0..D).all(|k| d[k].abs() < a[k]) {
+                    nb.push(linear_index(i, self.n) as u32);
+                    offsets.push(d);
                 }
-                for i in ri.clone() {
-                    let dx = near(0, i);
-                    if dx.abs() < a[0] {
-                        nb.push((j * self.n[0] + i) as u32);
-                        offsets.push([dx, dy]);
-                    }
-                }
-            }
+            });
             evaluate(
                 self.position(*s),
                 &offsets,
@@ -392,78 +442,120 @@ impl Lattice {
     }
 }
 
-/// `[N_I, dN_I/dx, dN_I/dy]` at `x` (m, named in errors) for the neighbours `nb` with
-/// offsets `d_I = x - X_I` (m), volumes `volumes[I]` (m^2) and support radii `support(I)`
+/// `(N_I, grad N_I)` (-, 1/m) at `x` (m, named in errors) for the neighbours `nb` with
+/// offsets `d_I = x - X_I` (m), volumes `volumes[I]` (m^D) and support radii `support(I)`
 /// (m), paper eqs. (2)-(3), the basis `H` scaled by `scale` (m).
-fn evaluate(
-    x: [Real; 2],
-    d: &[[Real; 2]],
+///
+/// Stable Rust cannot name the basis size `D + 1` from `D` in a generic context, so this
+/// dispatches once to [`moments`] with it; the conditioning check takes the eigenvalues of
+/// the `3 x 3` (2D) or `4 x 4` (3D) moment matrix with nalgebra's
+/// `symmetric_eigenvalues`.
+fn evaluate<const D: usize>(
+    x: [Real; D],
+    d: &[[Real; D]],
     nb: &[u32],
     volumes: &[Real],
-    scale: [Real; 2],
-    support: impl Fn(u32) -> [Real; 2],
-    out: &mut Vec<[Real; 3]>,
+    scale: [Real; D],
+    support: impl Fn(u32) -> [Real; D],
+    out: &mut Vec<(Real, [Real; D])>,
 ) -> std::result::Result<(), String> {
-    let [ax, ay] = scale;
+    match D {
+        2 => moments::<D, 3>(x, d, nb, volumes, scale, support, out, |m| {
+            let eig = m.symmetric_eigenvalues();
+            (eig.min(), eig.max())
+        }),
+        3 => moments::<D, 4>(x, d, nb, volumes, scale, support, out, |m| {
+            let eig = m.symmetric_eigenvalues();
+            (eig.min(), eig.max())
+        }),
+        _ => Err(format!(
+            "RK shape functions are built for 2 or 3 dimensions, not {D}"
+        )),
+    }
+}
+
+/// [`evaluate`] with the basis size `N = D + 1`: the moment matrix `M` and its
+/// derivatives `dM/dx_k` summed over the neighbours, `M` factored (Cholesky) after the
+/// conditioning check `lambda_min > 1e-10 lambda_max` on the eigenvalue extremes that
+/// `eigen_extremes` returns, then `b = M^{-1} H(0)`, `db/dx_k = -M^{-1} (dM/dx_k) b` and
+/// `N_I = b . H_I phi_I V_I`, `dN_I/dx_k = (db/dx_k . H_I + b . dH_I/dx_k) phi_I V_I +
+/// b . H_I dphi_I/dx_k V_I`.
+#[allow(clippy::too_many_arguments)]
+fn moments<const D: usize, const N: usize>(
+    x: [Real; D],
+    d: &[[Real; D]],
+    nb: &[u32],
+    volumes: &[Real],
+    scale: [Real; D],
+    support: impl Fn(u32) -> [Real; D],
+    out: &mut Vec<(Real, [Real; D])>,
+    eigen_extremes: impl Fn(&SMatrix<Real, N, N>) -> (Real, Real),
+) -> std::result::Result<(), String> {
+    assert_eq!(N, D + 1, "the linear basis has D + 1 terms");
     out.clear();
-    if nb.len() < 3 {
+    if nb.len() < N {
         return Err(format!(
-            "only {} particles within the kernel support at ({:.6e}, {:.6e}) m; a linear basis needs 3 (increase the support)",
+            "only {} particles within the kernel support at {} m; a linear basis needs {N} (increase the support)",
             nb.len(),
-            x[0],
-            x[1]
+            coordinates(x),
         ));
     }
-    let mut m = Matrix3::zeros();
-    let mut mx = Matrix3::zeros();
-    let mut my = Matrix3::zeros();
-    // Derivatives of H(X_I - x) with respect to x.
-    let hx = Vector3::new(0.0, -1.0 / ax, 0.0);
-    let hy = Vector3::new(0.0, 0.0, -1.0 / ay);
-    let basis = |d: [Real; 2]| Vector3::new(1.0, -d[0] / ax, -d[1] / ay);
+    let mut m = SMatrix::<Real, N, N>::zeros();
+    let mut mg = [SMatrix::<Real, N, N>::zeros(); D];
+    // Derivatives of H(X_I - x) with respect to x_k.
+    let hg: [SVector<Real, N>; D] = std::array::from_fn(|k| {
+        let mut v = SVector::zeros();
+        v[k + 1] = -1.0 / scale[k];
+        v
+    });
+    let basis = |d: [Real; D]| {
+        SVector::<Real, N>::from_fn(|r, _| {
+            if r == 0 {
+                1.0
+            } else {
+                -d[r - 1] / scale[r - 1]
+            }
+        })
+    };
     for (&i, &di) in nb.iter().zip(d) {
         let v = volumes[i as usize];
-        let [wx, wy] = support(i);
-        let (phi, gx, gy) = window(di[0], di[1], wx, wy);
+        let (phi, g) = window(di, support(i));
         let h = basis(di);
         let hh = h * h.transpose();
         m += hh * (phi * v);
-        mx += (hx * h.transpose() + h * hx.transpose()) * (phi * v) + hh * (gx * v);
-        my += (hy * h.transpose() + h * hy.transpose()) * (phi * v) + hh * (gy * v);
+        for k in 0..D {
+            mg[k] += (hg[k] * h.transpose() + h * hg[k].transpose()) * (phi * v) + hh * (g[k] * v);
+        }
     }
     // Conditioning check before inversion: a (near-)singular moment matrix means the
-    // neighbours are collinear or too few.
+    // neighbours are collinear (in 3D coplanar) or too few.
     let chol = m.cholesky().ok_or_else(|| {
         format!(
-            "moment matrix is singular at ({:.6e}, {:.6e}) m ({} neighbours); increase the support",
-            x[0],
-            x[1],
+            "moment matrix is singular at {} m ({} neighbours); increase the support",
+            coordinates(x),
             nb.len()
         )
     })?;
-    let eig = m.symmetric_eigenvalues();
-    let (lmin, lmax) = (eig.min(), eig.max());
+    let (lmin, lmax) = eigen_extremes(&m);
     if lmin <= 1e-10 * lmax {
         return Err(format!(
-            "moment matrix is ill-conditioned (condition {:.1e}) at ({:.6e}, {:.6e}) m; increase the support",
+            "moment matrix is ill-conditioned (condition {:.1e}) at {} m; increase the support",
             lmax / lmin,
-            x[0],
-            x[1]
+            coordinates(x),
         ));
     }
-    let b = chol.solve(&Vector3::new(1.0, 0.0, 0.0));
-    let bx = -chol.solve(&(mx * b));
-    let by = -chol.solve(&(my * b));
+    let mut e0 = SVector::<Real, N>::zeros();
+    e0[0] = 1.0;
+    let b = chol.solve(&e0);
+    let bg: [SVector<Real, N>; D] = std::array::from_fn(|k| -chol.solve(&(mg[k] * b)));
     for (&i, &di) in nb.iter().zip(d) {
         let v = volumes[i as usize];
-        let [wx, wy] = support(i);
-        let (phi, gx, gy) = window(di[0], di[1], wx, wy);
+        let (phi, g) = window(di, support(i));
         let h = basis(di);
         let c = b.dot(&h);
         let n = c * phi * v;
-        let dnx = (bx.dot(&h) + b.dot(&hx)) * phi * v + c * gx * v;
-        let dny = (by.dot(&h) + b.dot(&hy)) * phi * v + c * gy * v;
-        out.push([n, dnx, dny]);
+        let dn = std::array::from_fn(|k| (bg[k].dot(&h) + b.dot(&hg[k])) * phi * v + c * g[k] * v);
+        out.push((n, dn));
     }
     Ok(())
 }
@@ -505,9 +597,9 @@ mod tests {
         // A particle exactly one support radius away has a zero window: the lattice
         // leaves it out, the cloud may keep it from rounding in the absolute offsets.
         let value = |t: &ShapeTable, p: usize, i: u32| {
-            t.row(p)
-                .find(|&e| t.index[e] == i)
-                .map_or([0.0; 3], |e| [t.n[e], t.dx[e] * h[0], t.dy[e] * h[1]])
+            t.row(p).find(|&e| t.index[e] == i).map_or([0.0; 3], |e| {
+                [t.n[e], t.grad[0][e] * h[0], t.grad[1][e] * h[1]]
+            })
         };
         for p in 0..sites.len() {
             for &i in &c.index[c.row(p)] {
@@ -522,7 +614,7 @@ mod tests {
         // Sites 4..8 sit at node (7, 8), sites 8..12 at node (10, 11).
         for k in 0..offsets.len() {
             let (a, b) = (t.row(4 + k), t.row(8 + k));
-            for v in [&t.n, &t.dx, &t.dy] {
+            for v in [&t.n, &t.grad[0], &t.grad[1]] {
                 let bits = |r: std::ops::Range<usize>| -> Vec<u64> {
                     v[r].iter().map(|x| x.to_bits()).collect()
                 };
@@ -556,12 +648,12 @@ mod tests {
                     s0 += t.n[e];
                     sx += t.n[e] * xi[0];
                     sy += t.n[e] * xi[1];
-                    g0x += t.dx[e];
-                    g0y += t.dy[e];
-                    gxx += t.dx[e] * xi[0];
-                    gxy += t.dy[e] * xi[0];
-                    gyx += t.dx[e] * xi[1];
-                    gyy += t.dy[e] * xi[1];
+                    g0x += t.grad[0][e];
+                    g0y += t.grad[1][e];
+                    gxx += t.grad[0][e] * xi[0];
+                    gxy += t.grad[1][e] * xi[0];
+                    gyx += t.grad[0][e] * xi[1];
+                    gyy += t.grad[1][e] * xi[1];
                 }
                 let scale = 1e-3; // lengths relative to 1 mm
                 assert!(
@@ -635,12 +727,20 @@ mod tests {
                 s0 += t.n[e];
                 sx += t.n[e] * xi[0];
                 sy += t.n[e] * xi[1];
-                gxx += t.dx[e] * xi[0];
-                gyy += t.dy[e] * xi[1];
+                gxx += t.grad[0][e] * xi[0];
+                gyy += t.grad[1][e] * xi[1];
                 let dx = (value(p + 1, i) - value(p + 2, i)) / (2.0 * fd);
                 let dy = (value(p + 3, i) - value(p + 4, i)) / (2.0 * fd);
-                assert!((dx - t.dx[e]).abs() * h[0] < 1e-5, "dN/dx at {:?}", pts[p]);
-                assert!((dy - t.dy[e]).abs() * h[1] < 1e-5, "dN/dy at {:?}", pts[p]);
+                assert!(
+                    (dx - t.grad[0][e]).abs() * h[0] < 1e-5,
+                    "dN/dx at {:?}",
+                    pts[p]
+                );
+                assert!(
+                    (dy - t.grad[1][e]).abs() * h[1] < 1e-5,
+                    "dN/dy at {:?}",
+                    pts[p]
+                );
             }
             assert!(
                 (s0 - 1.0).abs() < 1e-10,
@@ -675,8 +775,8 @@ mod tests {
             let i = t.index[e];
             let fdx = (value(1, i) - value(2, i)) / (2.0 * h);
             let fdy = (value(3, i) - value(4, i)) / (2.0 * h);
-            assert!((fdx - t.dx[e]).abs() < 1e-6, "particle {i}");
-            assert!((fdy - t.dy[e]).abs() < 1e-6, "particle {i}");
+            assert!((fdx - t.grad[0][e]).abs() < 1e-6, "particle {i}");
+            assert!((fdy - t.grad[1][e]).abs() < 1e-6, "particle {i}");
         }
     }
 
@@ -687,5 +787,200 @@ mod tests {
             .shape_table(&[[1.0, 1.0]], &|_| "point 0".into())
             .unwrap_err();
         assert!(err.to_string().contains("point 0"), "{err}");
+    }
+
+    /// A box lattice with anisotropic spacings for the 3D tests: 6 x 7 x 5 particles.
+    const H3: [Real; 3] = [0.16e-3, 0.648e-3, 0.3e-3];
+    const N3: [usize; 3] = [6, 7, 5];
+
+    fn lattice3(s: Real) -> Lattice<3> {
+        Lattice::new([1.3e-3, -0.7e-3, 0.2e-3], H3, N3, H3.map(|h| s * h))
+    }
+
+    /// Sites of the 3D box: per direction, the first and last particle with no offset (on
+    /// the boundary) and five points inside, so that the product has interior, face, edge
+    /// and corner points; with the number of directions in which each lies on the boundary.
+    fn sites3() -> Vec<(Site<3>, usize)> {
+        let along = |k: usize| {
+            let (n, h) = (N3[k], H3[k]);
+            [
+                (0, 0.0),
+                (0, 0.3 * h),
+                (1, 0.5 * h),
+                (n / 2, -0.21 * h),
+                (n / 2, 0.0),
+                (n - 2, 0.7 * h),
+                (n - 1, 0.0),
+            ]
+        };
+        let mut sites = Vec::new();
+        for (k, &z) in along(2).iter().enumerate() {
+            for (j, &y) in along(1).iter().enumerate() {
+                for (i, &x) in along(0).iter().enumerate() {
+                    let on_boundary = [i, j, k].iter().filter(|&&c| c == 0 || c == 6).count();
+                    let site = Site {
+                        node: [x.0, y.0, z.0],
+                        offset: [x.1, y.1, z.1],
+                    };
+                    sites.push((site, on_boundary));
+                }
+            }
+        }
+        sites
+    }
+
+    /// 3D reproducing conditions (Liu, Jun, Zhang 1995; Chen, Pan, Wu, Liu 1996) at
+    /// interior, face, edge and corner points of a box with anisotropic spacings, for
+    /// supports of 1.5, 2 and 2.5 spacings: `sum N_I = 1`, `sum N_I X_I = x`,
+    /// `sum grad N_I = 0`, `sum grad N_I (x) X_I = I`, to round-off (lengths against 1 mm,
+    /// gradients against `1 / h_k`).
+    #[test]
+    fn reproduces_linear_fields_with_gradients_in_three_dimensions() {
+        let sites = sites3();
+        let mut kinds = [0; 4];
+        for &(_, b) in &sites {
+            kinds[b] += 1;
+        }
+        assert_eq!(
+            kinds,
+            [125, 150, 60, 8],
+            "interior, face, edge, corner points"
+        );
+        for s in [1.5, 2.0, 2.5] {
+            let l = lattice3(s);
+            let only: Vec<Site<3>> = sites.iter().map(|&(site, _)| site).collect();
+            let t = l.shape_table(&only, &|p| format!("site {p}")).unwrap();
+            let (mut worst_x, mut worst_g): (Real, Real) = (0.0, 0.0);
+            for (p, &(site, b)) in sites.iter().enumerate() {
+                let x = l.position(site);
+                let (mut s0, mut sx, mut g0, mut gx) = (0.0, [0.0; 3], [0.0; 3], [[0.0; 3]; 3]);
+                for e in t.row(p) {
+                    let xi = l.cloud().positions[t.index[e] as usize];
+                    s0 += t.n[e];
+                    for a in 0..3 {
+                        sx[a] += t.n[e] * xi[a];
+                        g0[a] += t.grad[a][e];
+                        for c in 0..3 {
+                            gx[c][a] += t.grad[a][e] * xi[c];
+                        }
+                    }
+                }
+                assert!(
+                    (s0 - 1.0).abs() < 1e-10,
+                    "s {s}, kind {b}, {x:?}: sum N = {s0}"
+                );
+                for a in 0..3 {
+                    worst_x = worst_x.max((sx[a] - x[a]).abs() / 1e-3);
+                    worst_g = worst_g.max(g0[a].abs() * H3[a]);
+                    for (c, row) in gx.iter().enumerate() {
+                        let i = if a == c { 1.0 } else { 0.0 };
+                        worst_g = worst_g.max((row[a] - i).abs());
+                    }
+                }
+            }
+            println!("support {s}: linear field {worst_x:.1e}, gradients {worst_g:.1e}");
+            assert!(worst_x < 1e-10 && worst_g < 1e-10, "support {s}");
+        }
+    }
+
+    /// In 3D the lattice path finds the cloud's neighbours and values (to round-off), and
+    /// two interior sites with the same offset get the same bits wherever they lie.
+    #[test]
+    fn lattice_sites_match_the_cloud_and_repeat_their_bits_inside_in_three_dimensions() {
+        let l = Lattice::new([0.0; 3], H3, [9, 9, 9], H3.map(|h| 2.0 * h));
+        let offset = [0.3e-4, -0.2e-3, 0.1e-3];
+        let sites: Vec<Site<3>> = [[0, 0, 0], [4, 4, 4], [5, 4, 4], [4, 5, 3], [8, 2, 8]]
+            .map(|node| Site { node, offset })
+            .to_vec();
+        let t = l.shape_table(&sites, &|p| format!("site {p}")).unwrap();
+        let x: Vec<[Real; 3]> = sites.iter().map(|&s| l.position(s)).collect();
+        let c = l
+            .cloud()
+            .shape_table(&x, &|p| format!("point {p}"))
+            .unwrap();
+        let value = |t: &ShapeTable<3>, p: usize, i: u32| {
+            t.row(p).find(|&e| t.index[e] == i).map_or([0.0; 4], |e| {
+                [
+                    t.n[e],
+                    t.grad[0][e] * H3[0],
+                    t.grad[1][e] * H3[1],
+                    t.grad[2][e] * H3[2],
+                ]
+            })
+        };
+        for p in 0..sites.len() {
+            for &i in &c.index[c.row(p)] {
+                let (a, b) = (value(&t, p, i), value(&c, p, i));
+                assert!(
+                    (0..4).all(|k| (a[k] - b[k]).abs() < 1e-12),
+                    "site {p}, particle {i}"
+                );
+            }
+            assert!(t.row(p).all(|e| c.index[c.row(p)].contains(&t.index[e])));
+        }
+        let bits = |v: &[Real], r: std::ops::Range<usize>| -> Vec<u64> {
+            v[r].iter().map(|x| x.to_bits()).collect()
+        };
+        for q in 2..4 {
+            for v in [&t.n, &t.grad[0], &t.grad[1], &t.grad[2]] {
+                assert_eq!(bits(v, t.row(1)), bits(v, t.row(q)), "site {q}");
+            }
+        }
+    }
+
+    /// 3D gradients are the derivatives of the values: central differences at interior,
+    /// face, edge and corner sites.
+    #[test]
+    fn gradients_match_finite_differences_in_three_dimensions() {
+        let l = lattice3(2.0);
+        let fd = 1e-9;
+        let mut pts = Vec::new();
+        for &(site, _) in sites3().iter().step_by(7) {
+            let x = l.position(site);
+            pts.push(x);
+            for k in 0..3 {
+                let (mut p, mut m) = (x, x);
+                p[k] += fd;
+                m[k] -= fd;
+                pts.extend([p, m]);
+            }
+        }
+        let t = l
+            .cloud()
+            .shape_table(&pts, &|p| format!("point {p}"))
+            .unwrap();
+        let value = |p: usize, i: u32| t.row(p).find(|&e| t.index[e] == i).map_or(0.0, |e| t.n[e]);
+        let mut worst: Real = 0.0;
+        for p in (0..pts.len()).step_by(7) {
+            for e in t.row(p) {
+                let i = t.index[e];
+                for (k, hk) in H3.iter().enumerate() {
+                    let d = (value(p + 1 + 2 * k, i) - value(p + 2 + 2 * k, i)) / (2.0 * fd);
+                    worst = worst.max((d - t.grad[k][e]).abs() * hk);
+                }
+            }
+        }
+        println!("largest |finite difference - dN/dx_k| h_k: {worst:.1e}");
+        assert!(worst < 1e-5, "{worst}");
+    }
+
+    /// In 3D too, a support too small for the linear basis is an error naming the point:
+    /// a particle alone in its support, and a site whose neighbours all lie in one plane.
+    #[test]
+    fn too_small_support_in_three_dimensions_is_an_error_not_a_panic() {
+        let l = Lattice::new([0.0; 3], [1.0; 3], [4, 4, 4], [0.6; 3]);
+        let alone = Site {
+            node: [1, 1, 1],
+            offset: [0.0; 3],
+        };
+        let flat = Site {
+            node: [1, 1, 1],
+            offset: [0.5, 0.5, 0.0],
+        };
+        for (site, why) in [(alone, "only 1 particles"), (flat, "moment matrix")] {
+            let err = l.shape_table(&[site], &|_| "site 0".into()).unwrap_err();
+            let text = err.to_string();
+            assert!(text.contains("site 0") && text.contains(why), "{text}");
+        }
     }
 }

@@ -201,7 +201,7 @@ impl Scatter {
                         *e += 1;
                     }
                 }
-                for values in [&pt.n, &pt.dx, &pt.dy] {
+                for values in [&pt.n, &pt.grad[0], &pt.grad[1]] {
                     block.extend(
                         hit[..plan.size]
                             .iter()

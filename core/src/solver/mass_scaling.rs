@@ -51,7 +51,7 @@ pub(super) fn stiffness_bounds(
     for (p, w) in weights.iter().enumerate() {
         g.clear();
         g.extend(pt.row(p).map(|e| {
-            let grad = pt.dx[e].hypot(pt.dy[e]);
+            let grad = pt.grad[0][e].hypot(pt.grad[1][e]);
             if axi {
                 grad + (pt.n[e] * inv_radius[p]).abs()
             } else {

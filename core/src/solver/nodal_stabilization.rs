@@ -112,8 +112,8 @@ impl Tables {
             for k in 0..QUADRANTS {
                 for e in quadrants.row(QUADRANTS * l + k) {
                     let b = row.entry(quadrants.index[e]).or_default();
-                    b[2 * k] = quadrants.dx[e];
-                    b[2 * k + 1] = quadrants.dy[e];
+                    b[2 * k] = quadrants.grad[0][e];
+                    b[2 * k + 1] = quadrants.grad[1][e];
                 }
             }
             for (&i, b) in &row {
@@ -335,10 +335,10 @@ mod tests {
             let mut g = [0.0; 4];
             for e in table.row(q) {
                 let ui = u(x[table.index[e] as usize]);
-                g[0] += ui[0] * table.dx[e];
-                g[1] += ui[0] * table.dy[e];
-                g[2] += ui[1] * table.dx[e];
-                g[3] += ui[1] * table.dy[e];
+                g[0] += ui[0] * table.grad[0][e];
+                g[1] += ui[0] * table.grad[1][e];
+                g[2] += ui[1] * table.grad[0][e];
+                g[3] += ui[1] * table.grad[1][e];
             }
             for (a, b) in g.iter().zip([0.3, -0.2, 0.1, 0.4]) {
                 assert!((a - b).abs() < 1e-12, "quadrant {q}: {g:?}");

@@ -402,7 +402,9 @@ impl Simulation {
     /// arrays).
     pub fn memory_bytes(&self) -> usize {
         let table = |t: &ShapeTable| {
-            t.offsets.len() * 4 + t.index.len() * 4 + (t.n.len() + t.dx.len() + t.dy.len()) * 8
+            t.offsets.len() * 4
+                + t.index.len() * 4
+                + (t.n.len() + t.grad.iter().map(Vec::len).sum::<usize>()) * 8
         };
         let r2 = std::mem::size_of::<[Real; 2]>();
         let d = &self.disc;

@@ -126,7 +126,7 @@ fn point_rows_from_the_shared_blocks_are_the_table_rows() {
             let own: Vec<(usize, [u64; 3])> = pt
                 .row(p)
                 .map(|e| {
-                    let v = [pt.n[e], pt.dx[e], pt.dy[e]];
+                    let v = [pt.n[e], pt.grad[0][e], pt.grad[1][e]];
                     (pt.index[e] as usize, v.map(f64::to_bits))
                 })
                 .collect();
