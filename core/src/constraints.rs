@@ -134,10 +134,10 @@ pub const MAX_ROWS: usize = 8000;
 
 impl Constraints {
     /// Build from the constrained (particle, component) pairs, the particle-row shape table
-    /// `nodal` (`N_I(X_J)`) and the lumped masses.
-    pub fn new(
+    /// `nodal` (`N_I(X_J)`, in `D` dimensions; components `c < D`) and the lumped masses.
+    pub fn new<const D: usize>(
         mut rows: Vec<(u32, usize)>,
-        nodal: &ShapeTable,
+        nodal: &ShapeTable<D>,
         mass: &[Real],
     ) -> Result<Option<Self>> {
         rows.sort_unstable();
@@ -168,8 +168,9 @@ impl Constraints {
         }))
     }
 
-    /// Remove the constrained components from a coefficient velocity field `v` (m/s).
-    pub fn project(&self, v: &mut [[Real; 2]], mass: &[Real]) {
+    /// Remove the constrained components from a coefficient velocity field `v` (m/s) of
+    /// `D` components (the rows' components `c < D`) with the lumped masses `mass` (kg).
+    pub fn project<const D: usize>(&self, v: &mut [[Real; D]], mass: &[Real]) {
         let mut lambda: Vec<Real> = self
             .rows
             .iter()
@@ -185,7 +186,7 @@ impl Constraints {
     }
 
     /// Largest `|L v|` over the rows: the physical constrained velocity (m/s).
-    pub fn residual(&self, v: &[[Real; 2]]) -> Real {
+    pub fn residual<const D: usize>(&self, v: &[[Real; D]]) -> Real {
         self.rows
             .iter()
             .zip(&self.entries)

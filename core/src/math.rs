@@ -83,6 +83,26 @@ pub fn sym_spectral3(a: [Real; 6]) -> ([Real; 3], [[Real; 3]; 3]) {
     ([m[0][0], m[1][1], m[2][2]], v)
 }
 
+/// `sum_k term(k)` over the `D >= 1` components, summed from the first term on:
+/// `term(0) + term(1) + ... + term(D - 1)`, the order of the 2D expressions written out
+/// (`a[0] * b[0] + a[1] * b[1]`), so that a sum generic over the dimension keeps their bits
+/// at `D = 2` (a sum started from `0.0` would not: `0.0 + (-0.0)` is `+0.0`).
+#[inline(always)]
+pub fn component_sum<const D: usize>(term: impl Fn(usize) -> Real) -> Real {
+    let mut sum = term(0);
+    for k in 1..D {
+        sum += term(k);
+    }
+    sum
+}
+
+/// Dot product `a . b = a_0 b_0 + a_1 b_1 + ...` of two `D`-vectors, summed from the first
+/// term on ([`component_sum`]).
+#[inline(always)]
+pub fn dot<const D: usize>(a: &[Real; D], b: &[Real; D]) -> Real {
+    component_sum::<D>(|k| a[k] * b[k])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -837,20 +837,20 @@ impl Contact {
 /// The contact forces on the RK coefficients (N), eq. 7, and the coefficients they reached:
 /// a stage clears and corrects only those, not every particle.
 #[derive(Debug, Clone, Default)]
-pub struct Forces {
+pub struct Forces<const D: usize = 2> {
     /// Contact force on each coefficient (N); zero where no particle's force reached it.
-    pub at: Vec<[Real; 2]>,
+    pub at: Vec<[Real; D]>,
     /// The coefficients a force reached in the last stage, ascending once it ended.
     reached: Vec<u32>,
     /// Whether each coefficient is in `reached`.
     marked: Vec<bool>,
 }
 
-impl Forces {
+impl<const D: usize> Forces<D> {
     /// No force on any of `particles` coefficients.
-    fn new(particles: usize) -> Forces {
+    pub(crate) fn new(particles: usize) -> Forces<D> {
         Forces {
-            at: vec![[0.0; 2]; particles],
+            at: vec![[0.0; D]; particles],
             reached: Vec::new(),
             marked: vec![false; particles],
         }
@@ -859,7 +859,7 @@ impl Forces {
     /// Zero again the coefficients the last stage reached.
     fn clear(&mut self) {
         for &i in &self.reached {
-            self.at[i as usize] = [0.0; 2];
+            self.at[i as usize] = [0.0; D];
             self.marked[i as usize] = false;
         }
         self.reached.clear();
@@ -867,12 +867,13 @@ impl Forces {
 
     /// Eq. 7: spreads particle `j`'s contact force `f` (N) to the coefficients,
     /// `f_I += N_I(X_J) f_J` over `j`'s row of `nodal`.
-    fn spread(&mut self, nodal: &ShapeTable, j: usize, f: [Real; 2]) {
+    pub(crate) fn spread(&mut self, nodal: &ShapeTable<D>, j: usize, f: [Real; D]) {
         for e in nodal.row(j) {
             let i = nodal.index[e] as usize;
             let n = nodal.n[e];
-            self.at[i][0] += n * f[0];
-            self.at[i][1] += n * f[1];
+            for (a, f) in self.at[i].iter_mut().zip(f) {
+                *a += n * f;
+            }
             if !self.marked[i] {
                 self.marked[i] = true;
                 self.reached.push(i as u32);

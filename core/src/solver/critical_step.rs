@@ -8,7 +8,7 @@ use super::state::State;
 use super::workspace::Workspace;
 use super::{stress, update};
 use crate::error::{Error, Result};
-use crate::math::Real;
+use crate::math::{dot, Real};
 use crate::scene::Scene;
 
 /// Most Lanczos products for the critical step.
@@ -22,12 +22,13 @@ const LANCZOS_MAX: usize = 300;
 /// of products, where power iteration needs hundreds on large models. `K x` is the
 /// internal force (N) that `internal_force` returns for a displacement `x` (m) scaled to
 /// `amplitude` (m; small enough to stay linear elastic); `inv_sqrt_m` is `1 / sqrt(m_I)`
-/// (kg^-1/2). The estimate depends on the support, the integration rule and the mass
-/// lumping, which `h / c` ignores.
-fn critical_step(
+/// (kg^-1/2); displacements and forces have `D` components, the dot products summed from
+/// the first component on ([`dot`]). The estimate depends on the support, the integration
+/// rule and the mass lumping, which `h / c` ignores.
+fn critical_step<const D: usize>(
     inv_sqrt_m: &[Real],
     amplitude: Real,
-    mut internal_force: impl FnMut(Vec<[Real; 2]>) -> Result<Vec<[Real; 2]>>,
+    mut internal_force: impl FnMut(Vec<[Real; D]>) -> Result<Vec<[Real; D]>>,
 ) -> Result<Real> {
     let np = inv_sqrt_m.len();
     // Deterministic pseudo-random start (xorshift), so no mode is missed by symmetry.
@@ -38,16 +39,12 @@ fn critical_step(
         seed ^= seed << 17;
         (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
     };
-    let mut v: Vec<[Real; 2]> = (0..np).map(|_| [rnd(), rnd()]).collect();
-    let norm = |x: &[[Real; 2]]| {
-        x.iter()
-            .map(|a| a[0] * a[0] + a[1] * a[1])
-            .sum::<Real>()
-            .sqrt()
-    };
+    // The components of each particle drawn in order (`from_fn` calls in index order).
+    let mut v: Vec<[Real; D]> = (0..np).map(|_| std::array::from_fn(|_| rnd())).collect();
+    let norm = |x: &[[Real; D]]| x.iter().map(|a| dot(a, a)).sum::<Real>().sqrt();
     let n0 = norm(&v);
-    v.iter_mut().for_each(|a| *a = [a[0] / n0, a[1] / n0]);
-    let mut v_prev = vec![[0.0; 2]; np];
+    v.iter_mut().for_each(|a| *a = a.map(|x| x / n0));
+    let mut v_prev = vec![[0.0; D]; np];
     let (mut alpha, mut beta) = (Vec::new(), Vec::new());
     let mut lambda = 0.0;
     for it in 0..LANCZOS_MAX {
@@ -55,35 +52,27 @@ fn critical_step(
         let xmax = v
             .iter()
             .zip(inv_sqrt_m)
-            .map(|(a, s)| (a[0].abs().max(a[1].abs())) * s)
+            .map(|(a, s)| a[1..].iter().fold(a[0].abs(), |m, x| m.max(x.abs())) * s)
             .fold(0.0, Real::max);
         let scale = amplitude / xmax;
         let f_int = internal_force(
             v.iter()
                 .zip(inv_sqrt_m)
-                .map(|(a, s)| [a[0] * s * scale, a[1] * s * scale])
+                .map(|(a, s)| a.map(|x| x * s * scale))
                 .collect(),
         )?;
         let b_prev = beta.last().copied().unwrap_or(0.0);
-        let mut w: Vec<[Real; 2]> = f_int
+        let mut w: Vec<[Real; D]> = f_int
             .iter()
             .zip(inv_sqrt_m)
             .zip(&v_prev)
-            .map(|((f, s), vp)| {
-                [
-                    f[0] * s / scale - b_prev * vp[0],
-                    f[1] * s / scale - b_prev * vp[1],
-                ]
-            })
+            .map(|((f, s), vp)| std::array::from_fn(|k| f[k] * s / scale - b_prev * vp[k]))
             .collect();
-        let a: Real = w
-            .iter()
-            .zip(&v)
-            .map(|(x, y)| x[0] * y[0] + x[1] * y[1])
-            .sum();
+        let a: Real = w.iter().zip(&v).map(|(x, y)| dot(x, y)).sum();
         w.iter_mut().zip(&v).for_each(|(x, y)| {
-            x[0] -= a * y[0];
-            x[1] -= a * y[1];
+            for (x, y) in x.iter_mut().zip(y) {
+                *x -= a * y;
+            }
         });
         alpha.push(a);
         let next = tridiagonal_max_eigenvalue(&alpha, &beta);
@@ -94,7 +83,7 @@ fn critical_step(
             break;
         }
         beta.push(b);
-        w.iter_mut().for_each(|x| *x = [x[0] / b, x[1] / b]);
+        w.iter_mut().for_each(|x| *x = x.map(|c| c / b));
         v_prev = std::mem::replace(&mut v, w);
     }
     if !(lambda > 0.0 && lambda.is_finite()) {

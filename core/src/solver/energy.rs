@@ -3,7 +3,7 @@
 //! contact interface generates energy.
 
 use crate::error::{Error, Result};
-use crate::math::Real;
+use crate::math::{dot, Real};
 use serde::{Deserialize, Serialize};
 
 /// Energy account (J), whole ring in axisymmetry, per depth in plane strain.
@@ -45,13 +45,9 @@ pub struct Energy {
 }
 
 /// Kinetic energy `sum m_I |v_I|^2 / 2` (J) of coefficient velocities `v` (m/s) with the
-/// lumped masses `mass` (kg).
-pub(super) fn kinetic_energy(mass: &[Real], v: &[[Real; 2]]) -> Real {
-    0.5 * mass
-        .iter()
-        .zip(v)
-        .map(|(m, v)| m * (v[0] * v[0] + v[1] * v[1]))
-        .sum::<Real>()
+/// lumped masses `mass` (kg), `|v_I|^2` summed from its first component on ([`dot`]).
+pub(super) fn kinetic_energy<const D: usize>(mass: &[Real], v: &[[Real; D]]) -> Real {
+    0.5 * mass.iter().zip(v).map(|(m, v)| m * dot(v, v)).sum::<Real>()
 }
 
 impl Energy {
