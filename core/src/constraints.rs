@@ -205,6 +205,61 @@ mod tests {
     use super::*;
     use crate::rk_shape::{Lattice, Site};
 
+    /// In 3D: conditions on the planes x = 0, y = 0 and z = 0 of a lattice (component `c`
+    /// of the particles with lattice index 0 along `c`, so the edges and the corner carry
+    /// two and three rows), shape functions at the particles' own sites, masses from the
+    /// volumes. After the projection `L v = 0` to round-off; projecting again changes
+    /// nothing beyond round-off; the projection does not raise the kinetic energy (it is
+    /// the M-orthogonal one); coefficients out of every row's reach keep their bits.
+    #[test]
+    fn projection_holds_the_symmetry_planes_of_a_3d_lattice() {
+        let (n, h) = ([5, 6, 7], [1e-3, 1.2e-3, 0.9e-3]);
+        let lattice = Lattice::new([0.0; 3], h, n, h.map(|h| 2.0 * h));
+        let sites: Vec<Site<3>> = (0..n[0] * n[1] * n[2])
+            .map(|p| Site {
+                node: [p % n[0], p / n[0] % n[1], p / (n[0] * n[1])],
+                offset: [0.0; 3],
+            })
+            .collect();
+        let nodal = lattice.shape_table(&sites, &|p| format!("{p}")).unwrap();
+        let mass: Vec<Real> = lattice.cloud().volumes.iter().map(|v| 7800.0 * v).collect();
+        let rows: Vec<(u32, usize)> = sites
+            .iter()
+            .enumerate()
+            .flat_map(|(p, s)| {
+                (0..3)
+                    .filter(|&c| s.node[c] == 0)
+                    .map(move |c| (p as u32, c))
+            })
+            .collect();
+        assert_eq!(rows.len(), n[1] * n[2] + n[0] * n[2] + n[0] * n[1]);
+        let c = Constraints::new(rows, &nodal, &mass).unwrap().unwrap();
+        let v0: Vec<[Real; 3]> = (0..sites.len())
+            .map(|p| std::array::from_fn(|k| 3.0 + (0.71 * (3 * p + k) as Real).sin()))
+            .collect();
+        let mut v = v0.clone();
+        assert!(c.residual(&v) > 1.0);
+        c.project(&mut v, &mass);
+        assert!(c.residual(&v) <= 1e-13, "{}", c.residual(&v));
+        let mut again = v.clone();
+        c.project(&mut again, &mass);
+        for (a, b) in again.iter().flatten().zip(v.iter().flatten()) {
+            assert!((a - b).abs() <= 1e-13, "{a} {b}");
+        }
+        let ke = |v: &[[Real; 3]]| -> Real {
+            v.iter()
+                .zip(&mass)
+                .map(|(v, m)| m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
+                .sum()
+        };
+        assert!(ke(&v) < ke(&v0));
+        for (s, (a, b)) in sites.iter().zip(v.iter().zip(&v0)) {
+            if s.node.iter().all(|&i| i >= 2) {
+                assert_eq!(a, b, "{:?}", s.node);
+            }
+        }
+    }
+
     /// The profile solve gives the bits of nalgebra's dense `Cholesky::solve` for the
     /// conditions of an axis (or plane) at x = 0 and a plane at y = 0 on a lattice,
     /// over right-hand sides of mixed signs and scales.

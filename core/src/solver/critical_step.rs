@@ -179,7 +179,55 @@ pub(super) fn measure_critical_step(
 
 #[cfg(test)]
 mod tests {
-    use super::tridiagonal_max_eigenvalue;
+    use super::{critical_step, tridiagonal_max_eigenvalue};
+    use crate::math::Real;
+    use std::f64::consts::PI;
+
+    /// The critical step of a 3D lattice of `n_0 x n_1 x n_2` equal masses `m` (kg) with
+    /// springs between nearest neighbours, free at every face: along axis `a` the spring
+    /// resists the relative displacement in component `c` with stiffness `k[a][c]` (N/m), so
+    /// component `c` is the product of three free chains, whose largest eigenvalue is
+    /// `omega_c^2 = sum_a k[a][c] (2 - 2 cos((n_a - 1) pi / n_a)) / m`, and `dt_crit = 2 /
+    /// max_c omega_c` to 1e-6.
+    #[test]
+    fn critical_step_of_a_3d_spring_lattice() {
+        let n = [4, 5, 6];
+        let k = [
+            [3.0e6, 1.0e6, 2.0e6],
+            [1.5e6, 2.5e6, 0.5e6],
+            [2.0e6, 1.0e6, 3.0e6],
+        ];
+        let m = 0.02;
+        let np = n[0] * n[1] * n[2];
+        let index = |i: [usize; 3]| i[0] + n[0] * (i[1] + n[1] * i[2]);
+        let force = |x: Vec<[Real; 3]>| -> crate::error::Result<Vec<[Real; 3]>> {
+            let mut f = vec![[0.0; 3]; np];
+            for p in 0..np {
+                let i = [p % n[0], p / n[0] % n[1], p / (n[0] * n[1])];
+                for a in 0..3 {
+                    if i[a] + 1 < n[a] {
+                        let mut j = i;
+                        j[a] += 1;
+                        let q = index(j);
+                        for c in 0..3 {
+                            let t = k[a][c] * (x[p][c] - x[q][c]);
+                            f[p][c] += t;
+                            f[q][c] -= t;
+                        }
+                    }
+                }
+            }
+            Ok(f)
+        };
+        let chain = |a: usize| 2.0 - 2.0 * ((n[a] - 1) as Real * PI / n[a] as Real).cos();
+        let omega2 = (0..3)
+            .map(|c| (0..3).map(|a| k[a][c] * chain(a)).sum::<Real>() / m)
+            .fold(0.0, Real::max);
+        let exact = 2.0 / omega2.sqrt();
+        let inv_sqrt_m = vec![1.0 / m.sqrt(); np];
+        let dt = critical_step(&inv_sqrt_m, 1e-9, force).unwrap();
+        assert!((dt - exact).abs() <= 1e-6 * exact, "{dt} vs {exact}");
+    }
 
     #[test]
     fn tridiagonal_largest_eigenvalue() {
