@@ -447,10 +447,10 @@ mod tests {
             forces.spread(&nodal, j, f);
         }
         let mut expected = vec![[0.0; 3]; NP];
-        for j in 0..3 {
+        for (j, f) in f_j.iter().enumerate() {
             for e in nodal.row(j) {
-                for k in 0..3 {
-                    expected[nodal.index[e] as usize][k] += nodal.n[e] * f_j[j][k];
+                for (x, f) in expected[nodal.index[e] as usize].iter_mut().zip(f) {
+                    *x += nodal.n[e] * f;
                 }
             }
         }
