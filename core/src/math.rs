@@ -83,6 +83,31 @@ pub fn sym_spectral3(a: [Real; 6]) -> ([Real; 3], [[Real; 3]; 3]) {
     ([m[0][0], m[1][1], m[2][2]], v)
 }
 
+/// A rotation from a quaternion `(w, x, y, z)` (normalised here), by rows; for the tests
+/// of the symmetric decompositions and the 3D material.
+#[cfg(test)]
+pub(crate) fn rotation(q: [Real; 4]) -> [[Real; 3]; 3] {
+    let n = q.iter().map(|x| x * x).sum::<Real>().sqrt();
+    let [w, x, y, z] = q.map(|c| c / n);
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - z * w),
+            2.0 * (x * z + y * w),
+        ],
+        [
+            2.0 * (x * y + z * w),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - x * w),
+        ],
+        [
+            2.0 * (x * z - y * w),
+            2.0 * (y * z + x * w),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -108,29 +133,6 @@ mod tests {
             assert!((m[(0, 1)] - b).abs() < 1e-12, "{a} {b} {c}: {m}");
             assert!((m[(1, 1)] - c).abs() < 1e-12, "{a} {b} {c}: {m}");
         }
-    }
-
-    /// A rotation from a unit quaternion `(w, x, y, z)`, row-major.
-    fn rotation(q: [Real; 4]) -> [[Real; 3]; 3] {
-        let n = q.iter().map(|x| x * x).sum::<Real>().sqrt();
-        let [w, x, y, z] = q.map(|c| c / n);
-        [
-            [
-                1.0 - 2.0 * (y * y + z * z),
-                2.0 * (x * y - z * w),
-                2.0 * (x * z + y * w),
-            ],
-            [
-                2.0 * (x * y + z * w),
-                1.0 - 2.0 * (x * x + z * z),
-                2.0 * (y * z - x * w),
-            ],
-            [
-                2.0 * (x * z - y * w),
-                2.0 * (y * z + x * w),
-                1.0 - 2.0 * (x * x + y * y),
-            ],
-        ]
     }
 
     /// Random rotations of eigenvalues spread, nearly repeated (relative gaps 1e-8 and
