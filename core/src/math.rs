@@ -103,6 +103,31 @@ pub fn dot<const D: usize>(a: &[Real; D], b: &[Real; D]) -> Real {
     component_sum::<D>(|k| a[k] * b[k])
 }
 
+/// A rotation from a quaternion `(w, x, y, z)` (normalised here), by rows; for the tests
+/// of the symmetric decompositions and the 3D material.
+#[cfg(test)]
+pub(crate) fn rotation(q: [Real; 4]) -> [[Real; 3]; 3] {
+    let n = q.iter().map(|x| x * x).sum::<Real>().sqrt();
+    let [w, x, y, z] = q.map(|c| c / n);
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - z * w),
+            2.0 * (x * z + y * w),
+        ],
+        [
+            2.0 * (x * y + z * w),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - x * w),
+        ],
+        [
+            2.0 * (x * z - y * w),
+            2.0 * (y * z + x * w),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -128,29 +153,6 @@ mod tests {
             assert!((m[(0, 1)] - b).abs() < 1e-12, "{a} {b} {c}: {m}");
             assert!((m[(1, 1)] - c).abs() < 1e-12, "{a} {b} {c}: {m}");
         }
-    }
-
-    /// A rotation from a unit quaternion `(w, x, y, z)`, row-major.
-    fn rotation(q: [Real; 4]) -> [[Real; 3]; 3] {
-        let n = q.iter().map(|x| x * x).sum::<Real>().sqrt();
-        let [w, x, y, z] = q.map(|c| c / n);
-        [
-            [
-                1.0 - 2.0 * (y * y + z * z),
-                2.0 * (x * y - z * w),
-                2.0 * (x * z + y * w),
-            ],
-            [
-                2.0 * (x * y + z * w),
-                1.0 - 2.0 * (x * x + z * z),
-                2.0 * (y * z - x * w),
-            ],
-            [
-                2.0 * (x * z - y * w),
-                2.0 * (y * z + x * w),
-                1.0 - 2.0 * (x * x + y * y),
-            ],
-        ]
     }
 
     /// Random rotations of eigenvalues spread, nearly repeated (relative gaps 1e-8 and

@@ -384,21 +384,12 @@ mod tests {
             + a[2] * (a[3] * a[7] - a[4] * a[6])
     }
 
-    /// A rotation from a quaternion `(w, x, y, z)` (normalised here), row-major.
+    /// A rotation from a quaternion `(w, x, y, z)`, row-major.
     fn rotation(q: [Real; 4]) -> [Real; 9] {
-        let n = q.iter().map(|x| x * x).sum::<Real>().sqrt();
-        let [w, x, y, z] = q.map(|c| c / n);
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - z * w),
-            2.0 * (x * z + y * w),
-            2.0 * (x * y + z * w),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - x * w),
-            2.0 * (x * z - y * w),
-            2.0 * (y * z + x * w),
-            1.0 - 2.0 * (x * x + y * y),
-        ]
+        crate::math::rotation(q)
+            .as_flattened()
+            .try_into()
+            .expect("3 x 3")
     }
 
     /// Mises stress `sqrt(3/2 s:s)` (Pa) of a Kirchhoff stress `[11, 22, 33, 12, 23, 13]`.
