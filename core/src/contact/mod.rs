@@ -834,8 +834,9 @@ impl Contact {
     }
 }
 
-/// The contact forces on the RK coefficients (N), eq. 7, and the coefficients they reached:
-/// a stage clears and corrects only those, not every particle.
+/// The contact forces on the RK coefficients (N), eq. 7, of `D` components (2 by default),
+/// and the coefficients they reached: a stage clears and corrects only those, not every
+/// particle.
 #[derive(Debug, Clone, Default)]
 pub struct Forces<const D: usize = 2> {
     /// Contact force on each coefficient (N); zero where no particle's force reached it.
