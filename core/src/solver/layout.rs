@@ -5,10 +5,10 @@
 //!
 //! One source for 2 and 3 dimensions (`Scatter<D>`, the solver's 2D at the default `D = 2`).
 //! The internal force `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p` (N; the hoop term in
-//! 2D axisymmetry only) is summed in
-//! two passes so that its bits do not depend on the number of threads: each chunk of points
-//! adds its terms into its own slice of [`Scatter::buf`] ([`super::stress`]), then each block
-//! of [`BLOCK`] particles adds the overlapping slices in chunk order ([`super::update`]).
+//! 2D axisymmetry only) is summed in two passes so that its bits do not depend on the number
+//! of threads: each chunk of points adds its terms into its own slice of the chunk buffers
+//! ([`Scatter::buffers`], [`super::stress`]), then each block of [`BLOCK`] particles adds
+//! the overlapping slices in chunk order ([`super::update`]).
 
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
