@@ -2,7 +2,8 @@
 //! linear displacement `d_I = A X_I` is reproduced as `F = I + A` at every point, and the
 //! homogeneous stress it gives has the internal forces of a constant `P`: zero on the
 //! interior particles, zero in sum, the traction `P n A` on each half of the patch; the
-//! stored energy is `W(F) V`. On this patch (11 x 10 x 9 particles, unequal spacings,
+//! stored energy is `W(F) V`. The bits do not depend on the threads, on AVX2, nor on the
+//! grouping of the points. On this patch (11 x 10 x 9 particles, unequal spacings,
 //! support 2 h) q4 (5760 points), q2 (2880) and SCNI (990) all meet these to round-off:
 //! interior forces at most 2e-12 |P| h_x h_y, tractions and energy within 5e-13.
 
@@ -38,13 +39,17 @@ struct Patch {
     lattice: Lattice<3>,
     weights: Vec<Real>,
     scatter: Scatter<3>,
+    /// The same chunks with every point its own group.
+    single: Scatter<3>,
     d: Vec<[Real; 3]>,
 }
 
 fn patch(rule: IntegrationRule) -> Patch {
     let lattice = Lattice::new([0.0; 3], H, N, H.map(|h| SUPPORT * h));
     let (points, pt) = point_shapes(&lattice, rule).unwrap();
-    let scatter = Scatter::new(&pt, lattice.cloud().positions.len(), 96, MAX_GROUP_3D);
+    let particles = lattice.cloud().positions.len();
+    let scatter = Scatter::new(&pt, particles, 96, MAX_GROUP_3D);
+    let single = Scatter::new(&pt, particles, 96, 1);
     let d = (0..lattice.cloud().positions.len())
         .map(|i| {
             let x = lattice.cloud().positions[i];
@@ -55,6 +60,7 @@ fn patch(rule: IntegrationRule) -> Patch {
         lattice,
         weights: points.areas,
         scatter,
+        single,
         d,
     }
 }
@@ -62,11 +68,12 @@ fn patch(rule: IntegrationRule) -> Patch {
 /// What a run of the stage gives: the sums and the chunk buffers.
 struct Run {
     sums: Sums,
+    states: Vec<PointState3>,
     buf: Vec<[Real; 3]>,
     outs: Vec<PointOut>,
 }
 
-fn run(p: &Patch, material: &HenckyJ2, threads: usize, avx2: bool) -> Run {
+fn run(p: &Patch, sc: &Scatter<3>, material: &HenckyJ2, threads: usize, avx2: bool) -> Run {
     let points = p.weights.len();
     let (inv_radius, reference_jacobian) = (vec![0.0; points], vec![1.0; points]);
     let input = Inputs {
@@ -83,7 +90,7 @@ fn run(p: &Patch, material: &HenckyJ2, threads: usize, avx2: bool) -> Run {
     };
     let mut states = vec![PointState3::default(); points];
     let mut outs = vec![PointOut::initial(material); points];
-    let mut buf = p.scatter.buffers();
+    let mut buf = sc.buffers();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -92,7 +99,7 @@ fn run(p: &Patch, material: &HenckyJ2, threads: usize, avx2: bool) -> Run {
         .install(|| {
             stage(
                 &Team::default(),
-                &p.scatter,
+                sc,
                 &mut buf,
                 &input,
                 &mut states,
@@ -101,7 +108,12 @@ fn run(p: &Patch, material: &HenckyJ2, threads: usize, avx2: bool) -> Run {
             )
         })
         .unwrap();
-    Run { sums, buf, outs }
+    Run {
+        sums,
+        states,
+        buf,
+        outs,
+    }
 }
 
 /// The particle forces (N): the chunk buffers summed per particle in chunk order.
@@ -144,12 +156,18 @@ fn linear_displacements_give_their_gradient_at_every_point() {
         };
         let cx = StressContext::new(&p.scatter, &input);
         let sc = &p.scatter;
-        let largest = sc.group.iter().copied().max().unwrap();
-        let expected = if rule == IntegrationRule::Scni { 4 } else { 8 };
-        assert!(
-            largest as usize >= expected / 2,
-            "{rule:?}: groups of {largest}"
-        );
+        // Points per group size: a q4 cell's 8, a q2 cell's 4; SCNI points singly or
+        // merged over the union of their lists.
+        let mut sizes = [0usize; MAX_GROUP_3D + 1];
+        for &g in &sc.group {
+            sizes[g as usize] += g as usize;
+        }
+        eprintln!("{rule:?}: points in groups of 1..=8: {:?}", &sizes[1..]);
+        match rule {
+            IntegrationRule::Q4 => assert_eq!(sizes[8], sc.group.len()),
+            IntegrationRule::Q2 => assert_eq!(sizes[4], sc.group.len()),
+            _ => assert!(sizes[2] + sizes[4] > 0, "{rule:?}: {sizes:?}"),
+        }
         let (mut lanes, mut buf) = (Dim::<3>::batch(), sc.buffers());
         let mut worst: Real = 0.0;
         for first in (0..sc.group.len()).filter(|&q| sc.group[q] > 0) {
@@ -185,14 +203,16 @@ fn homogeneous_stress_gives_the_forces_and_energy_of_a_constant_stress() {
         IntegrationRule::Scni,
     ] {
         let p = patch(rule);
-        let r = run(&p, &material, 1, true);
+        let r = run(&p, &p.scatter, &material, 1, true);
         let np = p.lattice.cloud().positions.len();
         let forces = forces(&p.scatter, &r.buf, np);
-        // Bits: 2 threads, the generic build.
-        for (threads, avx2) in [(2, true), (1, false)] {
-            let other = run(&p, &material, threads, avx2);
-            assert_eq!(other.buf, r.buf, "{rule:?}: {threads} threads, AVX2 {avx2}");
-            assert_eq!(other.sums.elastic, r.sums.elastic, "{rule:?}");
+        // Bits: 2 threads, the generic build, every point its own group.
+        for (threads, avx2, single) in [(2, true, false), (1, false, false), (1, true, true)] {
+            let sc = if single { &p.single } else { &p.scatter };
+            let other = run(&p, sc, &material, threads, avx2);
+            let what = format!("{rule:?}: {threads} threads, AVX2 {avx2}, single {single}");
+            assert_eq!(other.buf, r.buf, "{what}");
+            assert_eq!(other.sums.elastic, r.sums.elastic, "{what}");
         }
         let force_scale = scale * H[0] * H[1];
         let node = |i: usize| [i % N[0], i / N[0] % N[1], i / (N[0] * N[1])];
@@ -295,5 +315,44 @@ fn homogeneous_stress_gives_the_forces_and_energy_of_a_constant_stress() {
             r.sums.min_altitude,
             r.sums.max_stretch
         );
+    }
+}
+
+/// Plastic flow through the 3D stage under a deformation that varies from point to point
+/// (`d_I = 40 A X_I` plus a wobble of 2 % of a spacing): every point its own group, 2
+/// threads and the generic build give the bits of the grouped AVX2 stage.
+#[test]
+fn plastic_flow_keeps_the_bits_of_single_points_threads_and_builds() {
+    let material = copper();
+    for rule in [
+        IntegrationRule::Q4,
+        IntegrationRule::Q2,
+        IntegrationRule::Scni,
+    ] {
+        let mut p = patch(rule);
+        for (i, d) in p.d.iter_mut().enumerate() {
+            for (r, dr) in d.iter_mut().enumerate() {
+                let wobble = 0.02 * H[r] * ((i * (r + 3)) as Real * 0.7).sin();
+                *dr = 40.0 * *dr + wobble;
+            }
+        }
+        let r = run(&p, &p.scatter, &material, 1, true);
+        assert!(r.sums.plastic > 0.0, "{rule:?}: plastic flow");
+        let yielded = r.states.iter().filter(|s| s.eps_p > 0.0).count();
+        assert!(
+            yielded * 2 > r.states.len(),
+            "{rule:?}: {yielded} points yielded"
+        );
+        for (threads, avx2, single) in [(1, true, true), (2, true, false), (1, false, true)] {
+            let sc = if single { &p.single } else { &p.scatter };
+            let other = run(&p, sc, &material, threads, avx2);
+            let what = format!("{rule:?}: {threads} threads, AVX2 {avx2}, single {single}");
+            assert_eq!(other.buf, r.buf, "{what}");
+            assert_eq!(other.states, r.states, "{what}");
+            assert_eq!(other.sums.elastic, r.sums.elastic, "{what}");
+            assert_eq!(other.sums.plastic, r.sums.plastic, "{what}");
+            assert_eq!(other.sums.min_altitude, r.sums.min_altitude, "{what}");
+            assert_eq!(other.sums.max_stretch, r.sums.max_stretch, "{what}");
+        }
     }
 }
