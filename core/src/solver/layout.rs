@@ -3,10 +3,12 @@
 //! interleaved blocks (bitwise-equal blocks once), and the chunk buffers the internal force
 //! is scattered into and gathered from in a fixed order.
 //!
-//! The internal force `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p` (N) is summed in
-//! two passes so that its bits do not depend on the number of threads: each chunk of points
-//! adds its terms into its own slice of [`Scatter::buf`] ([`super::stress`]), then each block
-//! of [`BLOCK`] particles adds the overlapping slices in chunk order ([`super::update`]).
+//! One source for 2 and 3 dimensions (`Scatter<D>`, the solver's 2D at the default `D = 2`).
+//! The internal force `f_I = sum_p (P grad N_I + e_r P_33 N_I / R) w_p` (N; the hoop term in
+//! 2D axisymmetry only) is summed in two passes so that its bits do not depend on the number
+//! of threads: each chunk of points adds its terms into its own slice of the chunk buffers
+//! ([`Scatter::buffers`], [`super::stress`]), then each block of [`BLOCK`] particles adds
+//! the overlapping slices in chunk order ([`super::update`]).
 
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
@@ -23,9 +25,11 @@ pub const BLOCK: usize = 128;
 /// `offsets[c]..offsets[c + 1]` of the chunk buffers ([`Scatter::buffers`], the workspace's),
 /// and each particle then sums the slices that cover
 /// it in chunk order (a block of [`BLOCK`] particles adds the overlapping part of each
-/// chunk in `block_chunks`). The bits do not depend on the number of threads.
-#[derive(Debug, Clone, Default)]
-pub struct Scatter {
+/// chunk in `block_chunks`). The bits do not depend on the number of threads. `D` is the
+/// dimension: the buffers hold `D` force components per particle, the blocks `D + 1` entries
+/// per point and neighbour.
+#[derive(Debug, Clone)]
+pub struct Scatter<const D: usize = 2> {
     pub(super) chunk: usize,
     pub(super) lo: Vec<u32>,
     pub(super) offsets: Vec<usize>,
@@ -36,14 +40,16 @@ pub struct Scatter {
     /// For each point: the number of consecutive points, starting at it, processed as
     /// one group over one particle list (at most [`MAX_GROUP`], never across a chunk
     /// boundary), or 0 for a point inside a group. The Gauss points of a cell share their
-    /// list; two neighbouring q2 cells, or four neighbouring SCNI points, are grouped over
-    /// the union of their lists when it is shorter than the lists together ([`GroupPlan`]).
+    /// list (at most [`MAX_GROUP`] in 2D, [`MAX_GROUP_3D`] in 3D); two neighbouring q2
+    /// cells (2D), or four neighbouring SCNI points, are grouped over the union of their
+    /// lists when it is shorter than the lists together ([`GroupPlan`]).
     pub(super) group: Vec<u8>,
     /// Whether the group starting at a point is a strip: two neighbouring q2 cells whose
     /// particle lists are the same offsets from first particles one apart, so points 0, 1
     /// read particle `base + i` and points 2, 3 `base + 1 + i` for each offset `i` of the
     /// list; its block holds each point's own entries, and the gather and scatter run over
-    /// 16 offsets for 4 points (a q4 cell's count) instead of a union of 20.
+    /// 16 offsets for 4 points (a q4 cell's count) instead of a union of 20. 2D only (never
+    /// set in 3D).
     pub(super) strip: Vec<bool>,
     /// The groups' particle lists (ascending) as offsets from the group's first particle
     /// `base[p]`: `lists[list_range[p].0..list_range[p].1]` for the first point `p` of a
@@ -53,7 +59,8 @@ pub struct Scatter {
     pub(super) base: Vec<u32>,
     /// Shape function values and gradients of each group, neighbour-major and interleaved
     /// so that a neighbour's values for the group's `g` points are contiguous:
-    /// `[N_1..N_g, N_1,x..N_g,x, N_1,y..N_g,y]` per neighbour (one SIMD load each); zero
+    /// `[N_1..N_g, N_1,x..N_g,x, N_1,y..N_g,y]` per neighbour (one SIMD load each; in 3D
+    /// `N_1,z..N_g,z` follow, `4 g` entries); zero
     /// where a particle of the union is not in a point's own list, which adds exact zeros
     /// and leaves each point's sums as its own list gives them.
     pub(super) table: Vec<Real>,
@@ -65,9 +72,32 @@ pub struct Scatter {
     pub(super) table_start: Vec<u32>,
 }
 
-/// Largest group of points processed together in the stress stage (the 4 points of a q4
-/// cell).
+impl<const D: usize> Default for Scatter<D> {
+    fn default() -> Self {
+        Scatter {
+            chunk: 0,
+            lo: Vec::new(),
+            offsets: Vec::new(),
+            block_offsets: Vec::new(),
+            block_chunks: Vec::new(),
+            group: Vec::new(),
+            strip: Vec::new(),
+            lists: Vec::new(),
+            list_range: Vec::new(),
+            base: Vec::new(),
+            table: Vec::new(),
+            table_start: Vec::new(),
+        }
+    }
+}
+
+/// Largest group of points processed together in the 2D stress stage (the 4 points of a
+/// q4 cell).
 pub const MAX_GROUP: usize = 4;
+
+/// Largest group of points processed together in the 3D stress stage (the 8 points of a
+/// q4 cell).
+pub const MAX_GROUP_3D: usize = 8;
 
 /// The group of points starting at a point and its particle list.
 struct GroupPlan {
@@ -84,8 +114,9 @@ impl GroupPlan {
     /// pair, the group of 4 (or else 2) formed with the next singles or pair when the union
     /// of their lists is shorter than the lists together. A group of 2 or 4 runs the AVX2
     /// gather and scatter with one vector operation per particle of its list, so two q2
-    /// cells over their union of 20 particles cost 20 operations instead of 2 x 16.
-    fn at(pt: &ShapeTable, p: usize, end: usize, max_group: usize) -> GroupPlan {
+    /// cells over their union of 20 particles cost 20 operations instead of 2 x 16. Strips
+    /// are 2D only.
+    fn at<const D: usize>(pt: &ShapeTable<D>, p: usize, end: usize, max_group: usize) -> GroupPlan {
         let list = |q: usize| &pt.index[pt.row(q)];
         let run = |q: usize| {
             let mut n = 1;
@@ -95,7 +126,7 @@ impl GroupPlan {
             n
         };
         let same = run(p);
-        if same == 2 && max_group >= 4 && p + 4 <= end && run(p + 2) == 2 {
+        if D == 2 && same == 2 && max_group >= 4 && p + 4 <= end && run(p + 2) == 2 {
             let (a, b) = (list(p), list(p + 2));
             if a.len() == b.len() && a.iter().zip(b).all(|(&i, &j)| j == i + 1) {
                 return GroupPlan {
@@ -133,15 +164,19 @@ impl GroupPlan {
     }
 }
 
-impl Scatter {
+impl<const D: usize> Scatter<D> {
     /// Chunks of `chunk` points over `particles` particles, groups of at most `max_group`
-    /// points.
+    /// points (at most [`MAX_GROUP_3D`]).
     pub(super) fn new(
-        pt: &ShapeTable,
+        pt: &ShapeTable<D>,
         particles: usize,
         chunk: usize,
         max_group: usize,
-    ) -> Scatter {
+    ) -> Scatter<D> {
+        assert!(
+            max_group <= MAX_GROUP_3D,
+            "groups of at most {MAX_GROUP_3D} points"
+        );
         let chunks = pt.rows().div_ceil(chunk);
         let (mut lo, mut offsets) = (Vec::with_capacity(chunks), vec![0usize]);
         let mut covering: Vec<Vec<u32>> = vec![Vec::new(); particles.div_ceil(BLOCK)];
@@ -193,7 +228,7 @@ impl Scatter {
             block.clear();
             let mut next: Vec<usize> = (p..p + plan.size).map(|q| pt.row(q).start).collect();
             for &i in &plan.list {
-                let mut hit = [None; MAX_GROUP];
+                let mut hit = [None; MAX_GROUP_3D];
                 for (q, e) in next.iter_mut().enumerate() {
                     let shift = u32::from(plan.strip && q >= 2);
                     if *e < pt.row(p + q).end && pt.index[*e] == i + shift {
@@ -201,7 +236,7 @@ impl Scatter {
                         *e += 1;
                     }
                 }
-                for values in [&pt.n, &pt.grad[0], &pt.grad[1]] {
+                for values in std::iter::once(&pt.n).chain(&pt.grad) {
                     block.extend(
                         hit[..plan.size]
                             .iter()
@@ -232,6 +267,26 @@ impl Scatter {
         }
     }
 
+    /// Zeroed chunk buffers for this scatter (N): chunk `c`'s slice is
+    /// `offsets[c]..offsets[c + 1]`.
+    pub(super) fn buffers(&self) -> Vec<[Real; D]> {
+        vec![[0.0; D]; *self.offsets.last().unwrap_or(&0)]
+    }
+
+    /// Bytes held by the groups' lists and the shared blocks.
+    pub(super) fn memory_bytes(&self) -> usize {
+        self.table.len() * 8
+            + (self.table_start.len()
+                + self.base.len()
+                + self.lists.len()
+                + 2 * self.list_range.len()
+                + self.group.len() / 2)
+                * 4
+            + (self.block_chunks.len() + self.block_offsets.len() + self.lo.len()) * 4
+    }
+}
+
+impl Scatter {
     /// Point `p`'s entries in its group's block: each particle of the group's list with
     /// `[N, dN/dX, dN/dY]`, zero where the particle is only in another point's list.
     pub(super) fn point_row(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
@@ -247,23 +302,5 @@ impl Scatter {
                 let v = &block[3 * g * k..3 * g * (k + 1)];
                 (base + i as usize, [v[q], v[g + q], v[2 * g + q]])
             })
-    }
-
-    /// Zeroed chunk buffers for this scatter (N): chunk `c`'s slice is
-    /// `offsets[c]..offsets[c + 1]`.
-    pub(super) fn buffers(&self) -> Vec<[Real; 2]> {
-        vec![[0.0; 2]; *self.offsets.last().unwrap_or(&0)]
-    }
-
-    /// Bytes held by the groups' lists and the shared blocks.
-    pub(super) fn memory_bytes(&self) -> usize {
-        self.table.len() * 8
-            + (self.table_start.len()
-                + self.base.len()
-                + self.lists.len()
-                + 2 * self.list_range.len()
-                + self.group.len() / 2)
-                * 4
-            + (self.block_chunks.len() + self.block_offsets.len() + self.lo.len()) * 4
     }
 }
