@@ -840,7 +840,7 @@ impl HenckyJ2 {
 }
 
 #[cfg(test)]
-pub(super) mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::thermal::properties::Expansion;
 

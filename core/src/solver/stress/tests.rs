@@ -9,7 +9,7 @@
 
 use super::*;
 use crate::integration::point_shapes;
-use crate::material::Hardening;
+use crate::material::simo1992_hencky_j2::tests::copper;
 use crate::rk_shape::Lattice;
 use crate::scene::IntegrationRule;
 
@@ -22,17 +22,6 @@ const SUPPORT: Real = 2.0;
 const A: [Real; 9] = [
     2.0e-4, -1.0e-4, 0.5e-4, 0.7e-4, -1.5e-4, 1.2e-4, -0.3e-4, 0.9e-4, 1.0e-4,
 ];
-
-fn copper() -> HenckyJ2 {
-    HenckyJ2::new(
-        117e9,
-        0.35,
-        Hardening::Linear {
-            yield_stress_pa: 400e6,
-            modulus_pa: 100e6,
-        },
-    )
-}
 
 /// A patch's points of `rule`, its layout (chunks of 96 points) and `d_I = A X_I`.
 struct Patch {
