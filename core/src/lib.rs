@@ -24,6 +24,7 @@ pub mod laps;
 pub mod material;
 pub mod math;
 pub mod outputs;
+pub mod plane_tool;
 pub mod rk_shape;
 pub mod sampling;
 pub mod scene;

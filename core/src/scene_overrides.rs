@@ -9,7 +9,7 @@
 //! its dotted key; errors in the file keep the file's key and line.
 
 use crate::error::{Error, Result};
-use crate::scene::Scene;
+use crate::scene::{Scene, SolidScene};
 use crate::scene_keys::{key_line, syntax_message};
 use toml::{Table, Value};
 
@@ -161,18 +161,69 @@ pub fn split_values(text: &str) -> Vec<&str> {
     parts
 }
 
-/// Deserialise and validate `text` with `overrides` applied.
-fn build(text: &str, file: &str, overrides: &[(String, Value)]) -> Result<Scene> {
-    if overrides.is_empty() {
-        return Scene::from_str_named(text, file);
+/// A scene type the overrides apply to: the 2D [`Scene`] and the 3D [`SolidScene`].
+pub trait Overridable: serde::Serialize + serde::de::DeserializeOwned {
+    /// Every non-physical or inconsistent value, as (key path, message).
+    fn findings(&self) -> Vec<(String, String)>;
+}
+
+impl Overridable for Scene {
+    fn findings(&self) -> Vec<(String, String)> {
+        self.validate()
     }
+}
+
+impl Overridable for SolidScene {
+    fn findings(&self) -> Vec<(String, String)> {
+        self.validate()
+    }
+}
+
+/// A 3D scene's text with the dotted-key `overrides` applied in order, validated as
+/// [`SceneSource::with_overrides`] validates a 2D one.
+///
+/// # Errors
+///
+/// The scene is invalid; an error caused by an override names its dotted key.
+pub fn solid_with_overrides(
+    text: &str,
+    file: &str,
+    overrides: &[(String, Value)],
+) -> Result<SolidScene> {
+    build(text, file, overrides)
+}
+
+/// Deserialise and validate scene text; `file` names it in error messages, a finding is
+/// named with its key and line.
+///
+/// # Errors
+///
+/// A syntax error, a missing, unknown or mistyped key, a non-physical value.
+pub(crate) fn parse<S: Overridable>(text: &str, file: &str) -> Result<S> {
+    build(text, file, &[])
+}
+
+/// Deserialise and validate `text` with `overrides` applied.
+fn build<S: Overridable>(text: &str, file: &str, overrides: &[(String, Value)]) -> Result<S> {
     let syntax = |e: toml::de::Error| Error::SceneSyntax {
         file: file.to_string(),
         message: syntax_message(text, &e),
     };
+    if overrides.is_empty() {
+        let scene: S = toml::from_str(text).map_err(syntax)?;
+        return match scene.findings().into_iter().next() {
+            Some((key, message)) => Err(Error::SceneValue {
+                file: file.to_string(),
+                line: key_line(text, &key).unwrap_or(0),
+                key,
+                message,
+            }),
+            None => Ok(scene),
+        };
+    }
     let original: Table = toml::from_str(text).map_err(syntax)?;
     // The file alone must deserialise: its errors are reported with their lines.
-    let alone = toml::from_str::<Scene>(text).map_err(syntax)?;
+    let alone = toml::from_str::<S>(text).map_err(syntax)?;
     // The file's scene with its defaults written out: an override inside a key the file
     // leaves to its default (`workpiece.initial_velocity_m_per_s[0]`) starts from it.
     let defaults = Table::try_from(&alone).unwrap_or_default();
@@ -183,14 +234,14 @@ fn build(text: &str, file: &str, overrides: &[(String, Value)]) -> Result<Scene>
         paths.push(apply(&mut doc, &defaults, key, value.clone())?);
         // Deserialising after each override names the first one that breaks the scene.
         scene = Some(
-            Scene::deserialize_table(doc.clone()).map_err(|message| Error::Override {
+            S::deserialize(Value::Table(doc.clone())).map_err(|e| Error::Override {
                 key: key.clone(),
-                message,
+                message: e.message().trim().to_string(),
             })?,
         );
     }
     let scene = scene.unwrap_or_else(|| unreachable!("overrides is not empty"));
-    if let Some((key, message)) = scene.validate().into_iter().next() {
+    if let Some((key, message)) = scene.findings().into_iter().next() {
         let culprit = overrides
             .iter()
             .zip(&paths)

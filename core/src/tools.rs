@@ -255,27 +255,7 @@ impl Tool {
     /// Velocity along the axis (m/s) at time `t` (s): the command if one was given, else
     /// the scene motion (tables interpolate linearly and hold their ends).
     pub fn velocity_at(&self, t: Real) -> Real {
-        if let Some(c) = self.state.command {
-            return c;
-        }
-        match &self.motion {
-            Motion::Fixed => 0.0,
-            Motion::Constant { velocity_m_per_s } => *velocity_m_per_s,
-            Motion::External {
-                initial_velocity_m_per_s,
-            } => *initial_velocity_m_per_s,
-            Motion::Table { points } => {
-                let k = points.partition_point(|p| p[0] <= t);
-                if k == 0 {
-                    points[0][1]
-                } else if k == points.len() {
-                    points[k - 1][1]
-                } else {
-                    let (a, b) = (points[k - 1], points[k]);
-                    a[1] + (b[1] - a[1]) * (t - a[0]) / (b[0] - a[0])
-                }
-            }
-        }
+        self.motion.velocity_at(t, self.state.command)
     }
 
     /// Current vertices (m).
@@ -309,12 +289,12 @@ fn convex_vertices(verts: &[[Real; 2]]) -> Vec<u32> {
 /// A particle held on a tool without separation may have a negative gap: the normal
 /// force `m g / dt^2` then pulls it back onto the surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Penetration {
+pub struct Penetration<const D: usize = 2> {
     /// Gap `g` (m): distance from the point to the tool surface, the point being inside.
     pub gap: Real,
     /// Unit direction from the point to the closest surface point (the segment normal on a
-    /// face, the direction to the vertex at a corner).
-    pub normal: [Real; 2],
+    /// face, the direction to the vertex at a corner; the plane's normal in 3D).
+    pub normal: [Real; D],
 }
 
 /// Signed distance from `x` to the polyline `verts` (workpiece on the left of travel) over
@@ -395,6 +375,30 @@ pub fn gap_within(
             [(c[0] - x[0]) / gap, (c[1] - x[1]) / gap]
         },
     })
+}
+
+/// A rigid tool driven along its axis, as the step's speed limit reads it
+/// (`solver/stable_step.rs`): its name, motion and the command from outside; the polyline
+/// tools of 2D and the plane tools of 3D ([`crate::plane_tool`]) both are.
+pub trait Driven {
+    /// Name from the scene.
+    fn name(&self) -> &str;
+    /// The scene's motion.
+    fn motion(&self) -> &Motion;
+    /// Velocity set from outside (m/s), overriding the motion.
+    fn command(&self) -> Option<Real>;
+}
+
+impl Driven for Tool {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn motion(&self) -> &Motion {
+        &self.motion
+    }
+    fn command(&self) -> Option<Real> {
+        self.state.command
+    }
 }
 
 #[cfg(test)]

@@ -858,7 +858,7 @@ impl<const D: usize> Forces<D> {
     }
 
     /// Zero again the coefficients the last stage reached.
-    fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         for &i in &self.reached {
             self.at[i as usize] = [0.0; D];
             self.marked[i as usize] = false;

@@ -17,7 +17,7 @@
 //! ([`crate::contact::self_contact`]); the force on a master is the reaction.
 
 use crate::friction::Friction;
-use crate::math::Real;
+use crate::math::{dot, Real};
 use crate::tools::Penetration;
 
 /// What the shear friction factor needs of a slave particle: its flow stress and contact
@@ -31,25 +31,25 @@ pub struct Interface {
     pub area: Real,
 }
 
-/// The force on one slave particle, with its friction part.
+/// The force on one slave particle, with its friction part, in `D` dimensions.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SlaveForce {
+pub struct SlaveForce<const D: usize = 2> {
     /// Contact force on the slave (N): normal penalty plus friction.
-    pub force: [Real; 2],
+    pub force: [Real; D],
     /// Its tangential part, the friction force (N): the stick force while sticking, the
     /// law's bound while sliding.
-    pub friction: [Real; 2],
+    pub friction: [Real; D],
 }
 
-/// A slave particle as the contact force sees it.
+/// A slave particle as the contact force sees it, in `D` dimensions.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Slave {
+pub struct Slave<const D: usize = 2> {
     /// Mass `m` (kg).
     pub m: Real,
     /// Velocity relative to the tool (m/s).
-    pub v_rel: [Real; 2],
+    pub v_rel: [Real; D],
     /// The friction force the last step left unrealised (N; zero on a new contact).
-    pub carried: [Real; 2],
+    pub carried: [Real; D],
 }
 
 /// Paper eqs. 4-6: contact force on a `slave` of mass `m` (kg) with gap `g` (m) along the
@@ -71,32 +71,36 @@ pub struct Slave {
 ///   particle sticks below the bound and slides at it (the return mapping of elasto-plastic
 ///   friction, Wriggers 2006, *Computational Contact Mechanics*, section 5.2), so the
 ///   tangential force never exceeds `b`.
-pub fn penalty_force(
-    slave: Slave,
-    pen: Penetration,
+///
+/// The same law in 2 and 3 dimensions (`D`): dot products are summed from their first
+/// component on ([`dot`]).
+pub fn penalty_force<const D: usize>(
+    slave: Slave<D>,
+    pen: Penetration<D>,
     law: &Friction,
     at: Interface,
     dt_step: Real,
     dt_avg: Real,
-) -> SlaveForce {
+) -> SlaveForce<D> {
     let Slave { m, v_rel, carried } = slave;
     let n = pen.normal;
     let fn_ = m * pen.gap / (dt_step * dt_avg);
-    let mut force = [fn_ * n[0], fn_ * n[1]];
-    let mut friction = [0.0; 2];
+    let mut force = n.map(|nk| fn_ * nk);
+    let mut friction = [0.0; D];
     if !law.is_frictionless() {
-        let tangential = |a: [Real; 2]| {
-            let an = a[0] * n[0] + a[1] * n[1];
-            [a[0] - an * n[0], a[1] - an * n[1]]
+        let tangential = |a: [Real; D]| {
+            let an = dot(&a, &n);
+            std::array::from_fn::<Real, D, _>(|k| a[k] - an * n[k])
         };
         let (vt, ct) = (tangential(v_rel), tangential(carried));
-        let st = [ct[0] - m * vt[0] / dt_avg, ct[1] - m * vt[1] / dt_avg];
-        let stick = (st[0] * st[0] + st[1] * st[1]).sqrt();
+        let st: [Real; D] = std::array::from_fn(|k| ct[k] - m * vt[k] / dt_avg);
+        let stick = dot(&st, &st).sqrt();
         if stick > 0.0 {
             let ff = law.bound(fn_, at.flow_stress, at.area).min(stick);
-            friction = [ff * st[0] / stick, ff * st[1] / stick];
-            force[0] += friction[0];
-            force[1] += friction[1];
+            friction = st.map(|sk| ff * sk / stick);
+            for (f, r) in force.iter_mut().zip(friction) {
+                *f += r;
+            }
         }
     }
     SlaveForce { force, friction }

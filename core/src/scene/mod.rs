@@ -24,6 +24,7 @@ mod model;
 mod output;
 mod reference;
 mod self_contact;
+pub mod solid;
 mod time;
 mod tools;
 mod workpiece;
@@ -38,13 +39,13 @@ pub use model::{Kinematics, Model};
 pub use output::{OutputSpec, DEFAULT_HISTORY_ROWS};
 pub use reference::Reference;
 pub use self_contact::SelfContactSpec;
+pub use solid::{SceneFile, SolidScene};
 pub use time::{MassScaling, TimeSpec};
 pub use tools::{FillPoint, Motion, ToolSpec};
 pub use workpiece::Workpiece;
 
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::scene_keys::{key_line, syntax_message};
 use crate::validation;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -173,25 +174,7 @@ impl Scene {
 
     /// Parse and validate scene text; `file` names it in error messages.
     pub fn from_str_named(text: &str, file: &str) -> Result<Scene> {
-        let scene: Scene = toml::from_str(text).map_err(|e| Error::SceneSyntax {
-            file: file.to_string(),
-            message: syntax_message(text, &e),
-        })?;
-        if let Some((key, message)) = scene.validate().into_iter().next() {
-            return Err(Error::SceneValue {
-                file: file.to_string(),
-                line: key_line(text, &key).unwrap_or(0),
-                key,
-                message,
-            });
-        }
-        Ok(scene)
-    }
-
-    /// Deserialise a scene from a TOML document (not yet validated); the error is toml's
-    /// message.
-    pub(crate) fn deserialize_table(doc: toml::Table) -> std::result::Result<Scene, String> {
-        Scene::deserialize(toml::Value::Table(doc)).map_err(|e| e.message().trim().to_string())
+        crate::scene_overrides::parse(text, file)
     }
 
     /// The interval between history rows (s): `output.history_interval_s`, or the end time

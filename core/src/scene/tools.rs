@@ -226,9 +226,35 @@ pub(crate) fn check(tools: &[ToolSpec], out: &mut Checks) {
 }
 
 impl Motion {
+    /// Velocity along the axis (m/s) at time `t` (s): `command` if one was given, else the
+    /// motion's (tables interpolate linearly and hold their ends).
+    pub fn velocity_at(&self, t: Real, command: Option<Real>) -> Real {
+        if let Some(c) = command {
+            return c;
+        }
+        match self {
+            Motion::Fixed => 0.0,
+            Motion::Constant { velocity_m_per_s } => *velocity_m_per_s,
+            Motion::External {
+                initial_velocity_m_per_s,
+            } => *initial_velocity_m_per_s,
+            Motion::Table { points } => {
+                let k = points.partition_point(|p| p[0] <= t);
+                if k == 0 {
+                    points[0][1]
+                } else if k == points.len() {
+                    points[k - 1][1]
+                } else {
+                    let (a, b) = (points[k - 1], points[k]);
+                    a[1] + (b[1] - a[1]) * (t - a[0]) / (b[0] - a[0])
+                }
+            }
+        }
+    }
+
     /// What the motion's values must be, under `key("motion.*")`: finite velocities, and a
     /// table of at least one point with its times increasing.
-    fn check(&self, key: &impl Fn(&str) -> String, out: &mut Checks) {
+    pub(crate) fn check(&self, key: &impl Fn(&str) -> String, out: &mut Checks) {
         match self {
             Motion::Fixed => {}
             Motion::Constant { velocity_m_per_s } => out.check(

@@ -25,7 +25,7 @@ const LANCZOS_MAX: usize = 300;
 /// (kg^-1/2); displacements and forces have `D` components, the dot products summed from
 /// the first component on ([`dot`]). The estimate depends on the support, the integration
 /// rule and the mass lumping, which `h / c` ignores.
-fn critical_step<const D: usize>(
+pub(super) fn critical_step<const D: usize>(
     inv_sqrt_m: &[Real],
     amplitude: Real,
     mut internal_force: impl FnMut(Vec<[Real; D]>) -> Result<Vec<[Real; D]>>,

@@ -292,11 +292,11 @@ fn point_weights(points: &PointSet, scene: &Scene) -> (Vec<Real>, Vec<Real>) {
 /// Row-sum lumped masses `m_I = sum_p rho N_I(x_p) w_p` (kg) from the points' rows `pt`,
 /// weights `weights` (m^3) and density `rho` (kg/m^3); a mass that is not positive (too
 /// small a support) is an error naming the particle at `positions` (m).
-fn lumped_masses(
-    pt: &ShapeTable,
+pub(super) fn lumped_masses<const D: usize>(
+    pt: &ShapeTable<D>,
     weights: &[Real],
     rho: Real,
-    positions: &[[Real; 2]],
+    positions: &[[Real; D]],
 ) -> Result<Vec<Real>> {
     let mut mass = vec![0.0; positions.len()];
     for (p, w) in weights.iter().enumerate() {

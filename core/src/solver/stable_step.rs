@@ -5,8 +5,9 @@
 use super::state::State;
 use crate::error::{Error, Result};
 use crate::math::Real;
+use crate::scene::Motion;
 use crate::scene::Scene;
-use crate::tools::Tool;
+use crate::tools::{Driven, Tool};
 
 /// Length of the next step: the full step `dt_full`, or, when `max_dt` (the time left to a
 /// requested instant) is not a whole number of full steps, that time split into equal steps,
@@ -38,31 +39,32 @@ pub const TOOL_STEP_FRACTION: Real = 0.01;
 /// `t + dt` (m/s), `dt` the natural step (infinite when no tool is that fast). A tool that
 /// would shorten the step below [`TOOL_STEP_FRACTION`] of `dt` is an error naming it and its
 /// speed.
-pub(super) fn tool_step_limit(
-    tools: &[Tool],
+pub(super) fn tool_step_limit<T: Driven>(
+    tools: &[T],
     t: Real,
     dt: Real,
     h: Real,
 ) -> std::result::Result<Real, String> {
     let travel = TOOL_TRAVEL_SPACINGS * h;
     let mut limited = Real::INFINITY;
-    for tool in tools.iter().filter(|t| t.is_movable()) {
-        let speed = tool
-            .velocity_at(t)
-            .abs()
-            .max(tool.velocity_at(t + dt).abs());
+    for tool in tools
+        .iter()
+        .filter(|t| !matches!(t.motion(), Motion::Fixed))
+    {
+        let velocity = |t: Real| tool.motion().velocity_at(t, tool.command());
+        let speed = velocity(t).abs().max(velocity(t + dt).abs());
         if speed * dt <= travel {
             continue;
         }
         let short = travel / speed;
         if short < TOOL_STEP_FRACTION * dt {
-            let source = match tool.state.command {
+            let source = match tool.command() {
                 Some(_) => "commanded",
                 None => "in the scene",
             };
             return Err(format!(
                 "tool `{}`: velocity {speed:.4e} m/s ({source}) would move it {:.4e} m in one step of {dt:.4e} s, more than {TOOL_TRAVEL_SPACINGS} particle spacing ({travel:.4e} m), and the step would have to shorten below {TOOL_STEP_FRACTION} of its length; lower the tool's velocity",
-                tool.name,
+                tool.name(),
                 speed * dt,
             ));
         }

@@ -72,7 +72,7 @@ pub(super) struct Predictor<'a, const D: usize> {
 /// 0 when not tracked).
 pub(super) fn gather_forces<const D: usize>(
     team: &Team,
-    sc: &Scatter,
+    sc: &Scatter<D>,
     buf: &[[Real; D]],
     extra: Option<&[[Real; D]]>,
     f_int: &mut [[Real; D]],
@@ -141,7 +141,7 @@ pub(super) fn gather_forces<const D: usize>(
 /// Corrector: `v += dt_avg f_c / m` (m/s) with the contact forces `f_con` (N) and the inverse
 /// masses `inv_mass` (1/kg), on the coefficients a contact force reached (`f_con.reached()`;
 /// every other coefficient's force is zero and its velocity unchanged).
-fn correct_velocities<const D: usize>(
+pub(super) fn correct_velocities<const D: usize>(
     v: &mut [[Real; D]],
     f_con: &Forces<D>,
     inv_mass: &[Real],
@@ -162,7 +162,7 @@ fn correct_velocities<const D: usize>(
 /// added pairwise and the blocks in order, the order of a pass over every particle (the
 /// others' terms are zeros, which leave the sums' bits as they are); each dot product is
 /// summed from its first component on ([`component_sum`]).
-fn contact_work<const D: usize>(
+pub(super) fn contact_work<const D: usize>(
     v: &[[Real; D]],
     v_prev: &[[Real; D]],
     f_con: &Forces<D>,
@@ -191,7 +191,7 @@ fn add_to<const D: usize>(f: &mut [Real; D], g: &[Real; D]) {
 }
 
 /// What the update reads: the velocities of the step and the internal forces.
-struct Motion<'a, const D: usize> {
+pub(super) struct Motion<'a, const D: usize> {
     /// `v_{n+1/2}` (m/s).
     pub v: &'a [[Real; D]],
     /// Lumped masses (kg).
@@ -217,7 +217,7 @@ pub(super) struct Sums {
 /// each summed per block (four interleaved running sums, added pairwise) and the blocks in
 /// order (the contact work is [`contact_work`]'s), each dot product from its first
 /// component on ([`dot`]); the largest speed is found when `track` is set.
-fn update<const D: usize>(
+pub(super) fn update<const D: usize>(
     team: &Team,
     d: &mut [[Real; D]],
     m: &Motion<'_, D>,
@@ -412,7 +412,7 @@ mod tests {
 
     /// Two chunks of the scatter: chunk 0 on particles 0..200, chunk 1 on 100..300, so
     /// blocks 0 and 1 sum both and block 2 the second alone.
-    fn scatter() -> Scatter {
+    fn scatter() -> Scatter<3> {
         Scatter {
             lo: vec![0, 100],
             offsets: vec![0, 200, 400],

@@ -1,0 +1,664 @@
+//! Three-dimensional scenes (`model.kinematics = "3d"`): a box or a cylinder of particles,
+//! rigid plane tools and the symmetry planes of a half, quarter or eighth model, with what
+//! each must be ([`SolidScene::validate`]). The sections a 3D scene shares with a 2D one
+//! (`[material]`, `[time]`, `[checks]`, `[[reference]]`) are the same types with the same
+//! checks; what depends on the dimension (the workpiece, the tools, the discretisation's
+//! support) is here. [`SceneFile::from_file`] reads either kind and says which.
+//!
+//! What the 3D solver does not model yet is refused with the key that asks for it:
+//! `[thermal]`, mass scaling and kernel re-referencing.
+
+use super::{Checks, IntegrationRule, MaterialSpec, Motion, Reference, Scene, TimeSpec};
+use crate::error::{Error, Result};
+use crate::friction::Friction;
+use crate::math::Real;
+use crate::validation::{self, is_name, pos};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// The kinematics of a 3D scene: the one value `"3d"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+pub enum ThreeD {
+    /// Three dimensions.
+    #[serde(rename = "3d")]
+    ThreeD,
+}
+
+/// The `[model]` section of a 3D scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SolidModel {
+    /// `"3d"`.
+    pub kinematics: ThreeD,
+}
+
+/// Which part of a cylinder's cross-section is modelled, the rest held by symmetry planes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum CylinderPart {
+    /// The whole cylinder.
+    Full,
+    /// `x >= 0`, the plane `x = 0` a symmetry plane.
+    Half,
+    /// `x, y >= 0`, the planes `x = 0` and `y = 0` symmetry planes.
+    #[default]
+    Quarter,
+}
+
+/// A face of a box workpiece.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxFace {
+    /// The face at the smallest x.
+    XMin,
+    /// The face at the smallest y.
+    YMin,
+    /// The face at the smallest z.
+    ZMin,
+}
+
+impl BoxFace {
+    /// The coordinate axis normal to the face.
+    pub fn axis(self) -> usize {
+        match self {
+            BoxFace::XMin => 0,
+            BoxFace::YMin => 1,
+            BoxFace::ZMin => 2,
+        }
+    }
+}
+
+/// The shape of a 3D workpiece and its particles, as the solver reads it
+/// ([`SolidWorkpiece::shape`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum SolidShape {
+    /// A cylinder along z from `z = 0`, its axis on `x = y = 0`, with particles on an O-grid
+    /// that follows its round surface ([`crate::cylinder_grid`]).
+    Cylinder {
+        /// Radius (m).
+        radius_m: Real,
+        /// Length along z (m).
+        length_m: Real,
+        /// The part modelled.
+        part: CylinderPart,
+        /// `[core cells per side (even), ring layers, cells along the axis]`.
+        cells: [usize; 3],
+        /// The square core's half side over the radius (-).
+        core_ratio: Real,
+    },
+    /// A box `origin + [0, size]` on a regular lattice of particles.
+    Box {
+        /// The corner of least x, y, z (m).
+        origin_m: [Real; 3],
+        /// Extents along x, y, z (m).
+        size_m: [Real; 3],
+        /// Particles along x, y, z.
+        particles: [usize; 3],
+        /// Faces on symmetry planes.
+        symmetry: Vec<BoxFace>,
+    },
+}
+
+/// Which shape a 3D workpiece has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeKind {
+    /// A cylinder along z (keys `radius_m`, `length_m`, `cells`, `part`, `core_ratio`).
+    Cylinder,
+    /// A box (keys `origin_m`, `size_m`, `particles`, `symmetry`).
+    Box,
+}
+
+/// The `[workpiece]` section of a 3D scene: one table whose keys depend on the `shape`
+/// (each key checked against it, so a wrong or missing one is named with its line).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SolidWorkpiece {
+    /// `cylinder` or `box`.
+    pub shape: ShapeKind,
+    /// Cylinder: radius (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_m: Option<Real>,
+    /// Cylinder: length along z from `z = 0` (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length_m: Option<Real>,
+    /// Cylinder: the part modelled (default `quarter`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub part: Option<CylinderPart>,
+    /// Cylinder: `[core cells per side (even), ring layers, cells along the axis]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cells: Option<[usize; 3]>,
+    /// Cylinder: the square core's half side over the radius (-), default 0.55.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub core_ratio: Option<Real>,
+    /// Box: the corner of least x, y, z (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub origin_m: Option<[Real; 3]>,
+    /// Box: extents along x, y, z (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size_m: Option<[Real; 3]>,
+    /// Box: particles along x, y, z (each at least 2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub particles: Option<[usize; 3]>,
+    /// Box: faces on symmetry planes (`x_min`, `y_min`, `z_min`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub symmetry: Vec<BoxFace>,
+    /// Uniform initial velocity (m/s).
+    #[serde(default)]
+    pub initial_velocity_m_per_s: [Real; 3],
+}
+
+impl SolidWorkpiece {
+    /// The shape with its keys (defaults filled in); `None` when a key the shape needs is
+    /// missing (which the validation reports).
+    pub fn shape(&self) -> Option<SolidShape> {
+        Some(match self.shape {
+            ShapeKind::Cylinder => SolidShape::Cylinder {
+                radius_m: self.radius_m?,
+                length_m: self.length_m?,
+                part: self.part.unwrap_or_default(),
+                cells: self.cells?,
+                core_ratio: self.core_ratio.unwrap_or(0.55),
+            },
+            ShapeKind::Box => SolidShape::Box {
+                origin_m: self.origin_m?,
+                size_m: self.size_m?,
+                particles: self.particles?,
+                symmetry: self.symmetry.clone(),
+            },
+        })
+    }
+}
+
+/// The `[discretization]` section of a 3D scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SolidDiscretization {
+    /// `q4` (2 x 2 x 2 Gauss per cell), `q2` (its four alternate points, weight 2).
+    #[serde(default)]
+    pub integration: IntegrationRule,
+    /// Kernel support radius in particle spacings (-): of the lattice spacing for a box, of
+    /// each particle's own cells' extent for a cylinder.
+    #[serde(default = "default_support")]
+    pub support: Real,
+}
+
+fn default_support() -> Real {
+    2.0
+}
+
+impl Default for SolidDiscretization {
+    fn default() -> Self {
+        SolidDiscretization {
+            integration: IntegrationRule::default(),
+            support: default_support(),
+        }
+    }
+}
+
+/// A rigid plane tool: the half-space behind the plane through `point_m` with the normal
+/// `normal` (pointing to the workpiece's side), moving along `axis`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneToolSpec {
+    /// Name, used in outputs (`<name>.force_N`).
+    pub name: String,
+    /// A point of the plane with the tool at its start (m).
+    pub point_m: [Real; 3],
+    /// Unit normal, pointing out of the tool towards the workpiece.
+    pub normal: [Real; 3],
+    /// Unit direction along which stroke, velocity and force are measured.
+    pub axis: [Real; 3],
+    /// Motion along the axis.
+    pub motion: Motion,
+    /// Friction law of the interface (as in 2D); default frictionless.
+    #[serde(default)]
+    pub friction: Friction,
+    /// Whether a particle may leave the tool again (the default); `false` is the wall of
+    /// the finite-element benchmarks, holding every particle that reached it.
+    #[serde(default = "default_separation")]
+    pub separation: bool,
+}
+
+fn default_separation() -> bool {
+    true
+}
+
+/// The `[output]` section of a 3D scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SolidOutput {
+    /// Interval between rows of the time history (s); default: end time / 200.
+    #[serde(default)]
+    pub history_interval_s: Option<Real>,
+    /// Number of VTK frames over the run (0 for none).
+    #[serde(default = "default_frames")]
+    pub frames: usize,
+}
+
+fn default_frames() -> usize {
+    5
+}
+
+impl Default for SolidOutput {
+    fn default() -> Self {
+        SolidOutput {
+            history_interval_s: None,
+            frames: default_frames(),
+        }
+    }
+}
+
+/// A whole 3D scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SolidScene {
+    /// Short name, used for output folders.
+    pub name: String,
+    /// Free text shown in reports.
+    #[serde(default)]
+    pub description: String,
+    /// `kinematics = "3d"`.
+    pub model: SolidModel,
+    /// The deformable body.
+    pub workpiece: SolidWorkpiece,
+    /// Its material.
+    pub material: MaterialSpec,
+    /// Temperature and heat: not modelled in 3D yet (refused when given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schemars(with = "Option<serde_json::Value>")]
+    pub thermal: Option<toml::Value>,
+    /// Speed/accuracy knobs of the discretisation.
+    #[serde(default)]
+    pub discretization: SolidDiscretization,
+    /// Time span and step.
+    pub time: TimeSpec,
+    /// Rigid plane tools.
+    #[serde(default)]
+    pub tools: Vec<PlaneToolSpec>,
+    /// What to record.
+    #[serde(default)]
+    pub output: SolidOutput,
+    /// Run-time checks.
+    #[serde(default)]
+    pub checks: Checks,
+    /// Published results to print beside ours (not used by the solver).
+    #[serde(default)]
+    pub reference: Vec<Reference>,
+}
+
+/// A workpiece key and whether the scene gives it.
+type Given<'a> = (&'a str, bool);
+
+/// A unit vector: three finite components of length 1 within 1e-9.
+fn unit(v: [Real; 3]) -> bool {
+    v.iter().all(|x| x.is_finite())
+        && ((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() - 1.0).abs() < 1e-9
+}
+
+impl SolidScene {
+    /// Every non-physical or inconsistent value, as (key path, message), in the order of
+    /// the sections.
+    pub fn validate(&self) -> Vec<(String, String)> {
+        let mut out = validation::Checks::default();
+        out.check(
+            !self.name.is_empty()
+                && self
+                    .name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
+            "name",
+            format!(
+                "`{}` must be non-empty and use only letters, digits, `_` and `-`",
+                self.name
+            ),
+        );
+        self.check_workpiece(&mut out);
+        self.material.check(&mut out);
+        out.check(
+            self.thermal.is_none(),
+            "thermal",
+            "the 3D solver does not model heat yet; remove [thermal] or run the scene in 2D".into(),
+        );
+        let d = &self.discretization;
+        out.check(
+            d.integration != IntegrationRule::Scni,
+            "discretization.integration",
+            "the 3D solver integrates with q4 or q2; scni is 2D only for now".into(),
+        );
+        out.check(
+            d.support.is_finite() && (1.05..=4.0).contains(&d.support),
+            "discretization.support",
+            format!(
+                "must lie in [1.05, 4] particle spacings (a linear basis needs more than 1), got {}",
+                d.support
+            ),
+        );
+        self.time.check(&mut out);
+        out.check(
+            self.time.mass_scaling.is_none(),
+            "time.mass_scaling",
+            "mass scaling is not in the 3D solver yet; remove it".into(),
+        );
+        let mut names = std::collections::BTreeSet::new();
+        for (i, t) in self.tools.iter().enumerate() {
+            let key = |k: &str| format!("tools[{i}].{k}");
+            out.check(
+                is_name(&t.name) && names.insert(t.name.clone()),
+                &key("name"),
+                format!(
+                    "`{}` must be a unique name of letters, digits and `_`",
+                    t.name
+                ),
+            );
+            out.check(
+                t.point_m.iter().all(|x| x.is_finite()),
+                &key("point_m"),
+                format!("must be finite, got {:?}", t.point_m),
+            );
+            out.check(
+                unit(t.normal),
+                &key("normal"),
+                format!("must be a unit vector, got {:?}", t.normal),
+            );
+            out.check(
+                unit(t.axis),
+                &key("axis"),
+                format!("must be a unit vector, got {:?}", t.axis),
+            );
+            for (suffix, message) in t.friction.validate() {
+                out.check(false, &key(&format!("friction{suffix}")), message);
+            }
+            t.motion.check(&key, &mut out);
+        }
+        let interval = self
+            .output
+            .history_interval_s
+            .unwrap_or(self.time.end_s / super::DEFAULT_HISTORY_ROWS);
+        out.check(
+            pos(interval) && interval <= self.time.end_s,
+            "output.history_interval_s",
+            format!(
+                "must be positive and at most time.end_s ({}), got {interval}",
+                self.time.end_s
+            ),
+        );
+        self.checks.check(&mut out);
+        out.0
+    }
+
+    fn check_workpiece(&self, out: &mut validation::Checks) {
+        let w = &self.workpiece;
+        let v = w.initial_velocity_m_per_s;
+        out.check(
+            v.iter().all(|x| x.is_finite()),
+            "workpiece.initial_velocity_m_per_s",
+            format!("must be finite, got {v:?}"),
+        );
+        let (shape, needed, foreign): (&str, &[Given], &[Given]) = match w.shape {
+            ShapeKind::Cylinder => (
+                "cylinder",
+                &[
+                    ("radius_m", w.radius_m.is_some()),
+                    ("length_m", w.length_m.is_some()),
+                    ("cells", w.cells.is_some()),
+                ],
+                &[
+                    ("origin_m", w.origin_m.is_some()),
+                    ("size_m", w.size_m.is_some()),
+                    ("particles", w.particles.is_some()),
+                    ("symmetry", !w.symmetry.is_empty()),
+                ],
+            ),
+            ShapeKind::Box => (
+                "box",
+                &[
+                    ("origin_m", w.origin_m.is_some()),
+                    ("size_m", w.size_m.is_some()),
+                    ("particles", w.particles.is_some()),
+                ],
+                &[
+                    ("radius_m", w.radius_m.is_some()),
+                    ("length_m", w.length_m.is_some()),
+                    ("part", w.part.is_some()),
+                    ("cells", w.cells.is_some()),
+                    ("core_ratio", w.core_ratio.is_some()),
+                ],
+            ),
+        };
+        for (key, given) in needed {
+            out.check(
+                *given,
+                &format!("workpiece.{key}"),
+                format!("a {shape} workpiece needs `{key}`"),
+            );
+        }
+        for (key, given) in foreign {
+            out.check(
+                !*given,
+                &format!("workpiece.{key}"),
+                format!("`{key}` is not a key of a {shape} workpiece"),
+            );
+        }
+        match w.shape() {
+            Some(SolidShape::Cylinder {
+                radius_m,
+                length_m,
+                cells,
+                core_ratio,
+                ..
+            }) => {
+                out.check(
+                    pos(radius_m),
+                    "workpiece.radius_m",
+                    format!("must be positive, got {radius_m}"),
+                );
+                out.check(
+                    pos(length_m),
+                    "workpiece.length_m",
+                    format!("must be positive, got {length_m}"),
+                );
+                out.check(
+                    cells[0] >= 2 && cells[0] % 2 == 0 && cells[1] >= 1 && cells[2] >= 1,
+                    "workpiece.cells",
+                    format!(
+                        "must be [core cells per side (even, at least 2), ring layers (at least 1), axial cells (at least 1)], got {cells:?}"
+                    ),
+                );
+                out.check(
+                    core_ratio > 0.0 && core_ratio < std::f64::consts::FRAC_1_SQRT_2,
+                    "workpiece.core_ratio",
+                    format!("must lie between 0 and 1 / sqrt 2, got {core_ratio}"),
+                );
+                let count = (cells[0] + 1 + 2 * cells[1])
+                    .saturating_pow(2)
+                    .saturating_mul(cells[2] + 1);
+                out.check(
+                    count <= 4_000_000,
+                    "workpiece.cells",
+                    format!("{cells:?} is more than 4 million particles"),
+                );
+            }
+            Some(SolidShape::Box {
+                origin_m,
+                size_m,
+                particles,
+                ..
+            }) => {
+                out.check(
+                    origin_m.iter().all(|x| x.is_finite()),
+                    "workpiece.origin_m",
+                    format!("must be finite, got {origin_m:?}"),
+                );
+                out.check(
+                    size_m.iter().all(|&x| pos(x)),
+                    "workpiece.size_m",
+                    format!("every size must be positive, got {size_m:?}"),
+                );
+                out.check(
+                    particles.iter().all(|&n| n >= 2),
+                    "workpiece.particles",
+                    format!("need at least 2 particles in each direction, got {particles:?}"),
+                );
+                out.check(
+                    particles
+                        .iter()
+                        .try_fold(1usize, |a, &n| a.checked_mul(n))
+                        .is_some_and(|n| n <= 4_000_000),
+                    "workpiece.particles",
+                    format!("{particles:?} is more than 4 million particles"),
+                );
+            }
+            None => {}
+        }
+    }
+
+    /// Parse and validate 3D scene text; `file` names it in error messages.
+    pub fn from_str_named(text: &str, file: &str) -> Result<SolidScene> {
+        crate::scene_overrides::parse(text, file)
+    }
+
+    /// The interval between history rows (s): `output.history_interval_s`, or the end time
+    /// over [`super::DEFAULT_HISTORY_ROWS`].
+    pub fn history_interval(&self) -> Real {
+        self.output
+            .history_interval_s
+            .unwrap_or(self.time.end_s / super::DEFAULT_HISTORY_ROWS)
+    }
+}
+
+/// A scene of either kind, as read from a file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SceneFile {
+    /// Plane strain or axisymmetric.
+    Plane(Box<Scene>),
+    /// Three dimensions.
+    Solid(Box<SolidScene>),
+}
+
+impl SceneFile {
+    /// Read and validate a scene of either kind from a file: `model.kinematics = "3d"`
+    /// makes it a [`SolidScene`].
+    pub fn from_file(path: &std::path::Path) -> Result<SceneFile> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::SceneSyntax {
+            file: path.display().to_string(),
+            message: format!("cannot read: {e}"),
+        })?;
+        SceneFile::from_str_named(&text, &path.display().to_string())
+    }
+
+    /// Parse and validate scene text of either kind; `file` names it in error messages.
+    pub fn from_str_named(text: &str, file: &str) -> Result<SceneFile> {
+        if is_solid(text) {
+            SolidScene::from_str_named(text, file).map(|s| SceneFile::Solid(Box::new(s)))
+        } else {
+            Scene::from_str_named(text, file).map(|s| SceneFile::Plane(Box::new(s)))
+        }
+    }
+}
+
+/// Whether scene text asks for three dimensions (`model.kinematics = "3d"`); text that does
+/// not parse is not (the 2D reader then reports its syntax error).
+pub fn is_solid(text: &str) -> bool {
+    toml::from_str::<toml::Table>(text).is_ok_and(|t| {
+        t.get("model")
+            .and_then(|m| m.get("kinematics"))
+            .and_then(|k| k.as_str())
+            == Some("3d")
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    pub(crate) const QUARTER_BAR: &str = r#"
+name = "bar3d"
+[model]
+kinematics = "3d"
+[workpiece]
+shape = "cylinder"
+radius_m = 0.0032
+length_m = 0.0324
+part = "quarter"
+cells = [4, 2, 10]
+initial_velocity_m_per_s = [0.0, 0.0, -227.0]
+[material]
+density_kg_per_m3 = 8930.0
+youngs_modulus_pa = 117e9
+poisson_ratio = 0.35
+hardening = { law = "linear", yield_stress_pa = 400e6, modulus_pa = 100e6 }
+[time]
+end_s = 1e-6
+[[tools]]
+name = "wall"
+point_m = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+axis = [0.0, 0.0, -1.0]
+motion = { kind = "fixed" }
+separation = false
+"#;
+
+    fn err(text: &str) -> String {
+        SceneFile::from_str_named(text, "s.toml")
+            .unwrap_err()
+            .to_string()
+    }
+
+    #[test]
+    fn a_3d_scene_is_read_as_one() {
+        let SceneFile::Solid(s) = SceneFile::from_str_named(QUARTER_BAR, "s.toml").unwrap() else {
+            panic!("not read as 3D")
+        };
+        assert_eq!(s.discretization.support, 2.0);
+        assert!(matches!(
+            s.workpiece.shape().unwrap(),
+            SolidShape::Cylinder {
+                part: CylinderPart::Quarter,
+                cells: [4, 2, 10],
+                ..
+            }
+        ));
+        assert!(!s.tools[0].separation);
+    }
+
+    #[test]
+    fn bad_3d_values_are_named_with_key_and_line() {
+        let cases = [
+            (
+                "cells = [4, 2, 10]",
+                "cells = [3, 2, 10]",
+                "workpiece.cells",
+                10,
+            ),
+            (
+                "normal = [0.0, 0.0, 1.0]",
+                "normal = [0.0, 0.0, 2.0]",
+                "tools[0].normal",
+                22,
+            ),
+            ("[time]", "[thermal]\nx = 1\n[time]", "thermal", 17),
+            (
+                "end_s = 1e-6",
+                "end_s = 1e-6\nmass_scaling = { factor = 4.0 }",
+                "time.mass_scaling",
+                19,
+            ),
+        ];
+        for (from, to, key, line) in cases {
+            let e = err(&QUARTER_BAR.replace(from, to));
+            assert!(e.contains(key) && e.contains(&format!(":{line}:")), "{e}");
+        }
+        let e = err(&QUARTER_BAR.replace("part = \"quarter\"", "part = \"third\""));
+        assert!(e.contains("third") && e.contains("line 9"), "{e}");
+        let e = err(&QUARTER_BAR.replace("radius_m =", "radius_mm ="));
+        assert!(e.contains("radius_mm") && e.contains("line 7"), "{e}");
+        let e = err(&QUARTER_BAR.replace("cells = [4, 2, 10]\n", ""));
+        assert!(e.contains("workpiece.cells") && e.contains("needs"), "{e}");
+        let e = err(&QUARTER_BAR.replace("cells =", "particles = [3, 3, 3]\ncells ="));
+        assert!(
+            e.contains("workpiece.particles") && e.contains(":10:"),
+            "{e}"
+        );
+    }
+}

@@ -1,0 +1,268 @@
+//! The contact stage of the 3D solver: the paper's penalty contact (Sidibe et al. 2009,
+//! section II-3, eqs. 4-7, the force law [`penalty_force`] shared with 2D) of every
+//! particle against the plane tools and the symmetry planes ([`PlaneTool`]).
+//!
+//! For each particle `J` that may reach a plane, the predicted physical position and
+//! velocity are interpolated from the RK coefficients, `x_J = X_J + sum_I N_I(X_J) (d_I +
+//! dt v*_I)` (m) and `v_J = sum_I N_I(X_J) v*_I` (m/s); a particle behind a plane gets the
+//! penalty force `m_J g / dt^2` along the normal plus the friction of eqs. 5-6, spread to
+//! the coefficients by eq. 7 (`f_I += N_I(X_J) f_J`); the tool takes the reaction. A plane
+//! without separation (the FE wall, a symmetry plane) holds a particle once it reached it:
+//! its gap is then taken on either side. After the corrector, the friction force the
+//! corrector did not realise on the particle is carried to the next step's stick force, as
+//! in 2D ([`PlaneContact::carry`]).
+//!
+//! Skipping, as in 2D: between two stages `x_J` moves at most `sqrt 3 S_J du` (`S_J =
+//! sum_I |N_I(X_J)|`, `du` the bound on the change of `d_I + dt v*_I` per component) and a
+//! plane at most its stroke change; a particle whose distance to every plane (its
+//! clearance) stays positive after those moves cannot touch one, and is not interpolated.
+
+use super::{SolidDisc, SolidState};
+use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
+use crate::contact::Forces;
+use crate::math::{dot, Real};
+use crate::plane_tool::PlaneTool;
+use crate::team::{part, particle_phase, Parts, Team};
+
+/// Particles interpolated by one task of the stage.
+const BLOCK: usize = 64;
+
+/// A particle-plane pair with friction in contact at the last stage.
+#[derive(Debug, Clone, Copy)]
+struct Touched {
+    /// Particle `j`.
+    j: u32,
+    /// Plane `t`.
+    t: u32,
+    /// The friction force on the particle (N).
+    friction: [Real; 3],
+}
+
+/// What the contact stage keeps between steps to skip particles, and its forces.
+#[derive(Debug, Clone)]
+pub(crate) struct PlaneContact {
+    /// Contact force on each RK coefficient (N), eq. 7.
+    pub force: Forces<3>,
+    /// Lower bound on how far each particle must move before a plane can act on it (m).
+    clearance: Vec<Real>,
+    /// `dt V*` of the last two predictors and `dt V` of the last update (m).
+    moves: [Real; 3],
+    /// The planes' strokes at the last stage (m).
+    strokes: Vec<Real>,
+    /// The particles interpolated at this stage, ascending.
+    evaluated: Vec<u32>,
+    /// Predicted position (m) and velocity (m/s) of each particle evaluated.
+    motion: Vec<[[Real; 3]; 2]>,
+    /// The pairs with friction in contact at this stage.
+    touched: Vec<Touched>,
+    /// Skip the particles with a positive clearance (false only in the test that compares
+    /// against evaluating all).
+    pub(crate) skip: bool,
+}
+
+/// What a contact stage did.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Touch {
+    /// Some contact force acts.
+    pub any: bool,
+    /// The work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
+    pub tool_work: Real,
+}
+
+impl PlaneContact {
+    /// The stage for `particles` particles and `planes` planes: every particle is
+    /// evaluated at the first step.
+    pub(crate) fn new(particles: usize, planes: usize) -> PlaneContact {
+        PlaneContact {
+            force: Forces::new(particles),
+            clearance: vec![0.0; particles],
+            moves: [Real::INFINITY; 3],
+            strokes: Vec::with_capacity(planes),
+            evaluated: Vec::new(),
+            motion: vec![[[0.0; 3]; 2]; particles],
+            touched: Vec::new(),
+            skip: true,
+        }
+    }
+
+    /// Records the predictor's move bound `dt V*` (m).
+    pub(crate) fn predicted_move(&mut self, bound: Real) {
+        self.moves = [self.moves[1], bound, self.moves[2]];
+    }
+
+    /// Records the update's move bound `dt V` (m).
+    pub(crate) fn updated_move(&mut self, bound: Real) {
+        self.moves[2] = bound;
+    }
+
+    /// The contact of the predicted positions (a natural step `dt` ahead, s) with `planes`
+    /// (paper eqs. 4-7), `dt_avg` the corrector's step (s). Fills [`PlaneContact::force`],
+    /// each plane's force and the held and friction states of `st`.
+    pub(crate) fn stage(
+        &mut self,
+        team: &Team,
+        disc: &SolidDisc,
+        planes: &mut [PlaneTool],
+        st: &mut SolidState,
+        dt: Real,
+        dt_avg: Real,
+    ) -> Touch {
+        for t in planes.iter_mut() {
+            t.state.force = [0.0; 3];
+            t.state.normal_force = 0.0;
+        }
+        self.force.clear();
+        self.touched.clear();
+        if planes.is_empty() {
+            return Touch::default();
+        }
+        let np = disc.ref_pos.len();
+        let nplanes = planes.len();
+        let plane_move = if self.strokes.len() == nplanes {
+            planes
+                .iter()
+                .zip(&self.strokes)
+                .fold(0.0, |m: Real, (t, s)| m.max((t.state.stroke - s).abs()))
+        } else {
+            Real::INFINITY
+        };
+        self.strokes.clear();
+        self.strokes.extend(planes.iter().map(|t| t.state.stroke));
+        let du = (3.0 as Real).sqrt() * (self.moves[0] + self.moves[1] + self.moves[2]);
+        let margin = 1e-9 * disc.h_min;
+        self.evaluated.clear();
+        for (j, (c, s)) in self.clearance.iter_mut().zip(&disc.sum_abs).enumerate() {
+            *c -= s * du + plane_move;
+            if !(self.skip && *c > 0.0) {
+                self.evaluated.push(j as u32);
+            }
+        }
+        let planes_now: &[PlaneTool] = planes;
+        let held_now: &[bool] = &st.held;
+        let (d, v) = (&st.d, &st.v);
+        let evaluated = &self.evaluated;
+        let (motion, clearance) = (
+            Parts::new(&mut self.motion),
+            Parts::new(&mut self.clearance),
+        );
+        particle_phase(team, np, evaluated.len().div_ceil(BLOCK), &|b| {
+            for &j in &evaluated[part(b, BLOCK, evaluated.len())] {
+                let j = j as usize;
+                // SAFETY: particle `j` appears once in `evaluated`, in one block.
+                let (m, c) = unsafe {
+                    (
+                        &mut motion.get(j..j + 1)[0],
+                        &mut clearance.get(j..j + 1)[0],
+                    )
+                };
+                let (mut x, mut vj) = (disc.ref_pos[j], [0.0; 3]);
+                for e in disc.nodal.row(j) {
+                    let (i, n) = (disc.nodal.index[e] as usize, disc.nodal.n[e]);
+                    for k in 0..3 {
+                        x[k] += n * (d[i][k] + dt * v[i][k]);
+                        vj[k] += n * v[i][k];
+                    }
+                }
+                *m = [x, vj];
+                *c = planes_now
+                    .iter()
+                    .enumerate()
+                    .map(|(t, plane)| {
+                        let front = -plane.depth_of(x);
+                        match held_now[j * nplanes + t] {
+                            true => front - plane.depth,
+                            false => front,
+                        }
+                    })
+                    .fold(Real::INFINITY, Real::min)
+                    - margin;
+            }
+        });
+        let mut touch = Touch::default();
+        for &j in &self.evaluated {
+            let j = j as usize;
+            let stick = &mut st.stick[j * nplanes..(j + 1) * nplanes];
+            if self.clearance[j] > 0.0 {
+                stick.fill(None);
+                continue;
+            }
+            let [x, vj] = self.motion[j];
+            for (t, plane) in planes.iter_mut().enumerate() {
+                let held = &mut st.held[j * nplanes + t];
+                let below = match (*held, plane.separation) {
+                    (true, false) => -plane.depth,
+                    _ => 0.0,
+                };
+                let Some(pen) = plane.gap_above(x, below) else {
+                    stick[t] = None;
+                    continue;
+                };
+                if !plane.separation {
+                    *held = true;
+                }
+                let vt = plane.axis.map(|a| a * plane.state.velocity);
+                let slave = Slave {
+                    m: disc.mass[j],
+                    v_rel: std::array::from_fn(|k| vj[k] - vt[k]),
+                    carried: stick[t].unwrap_or([0.0; 3]),
+                };
+                let SlaveForce { force: f, friction } = penalty_force(
+                    slave,
+                    pen,
+                    &plane.friction,
+                    Interface::default(),
+                    dt,
+                    dt_avg,
+                );
+                if plane.friction.is_frictionless() {
+                    stick[t] = None;
+                } else {
+                    self.touched.push(Touched {
+                        j: j as u32,
+                        t: t as u32,
+                        friction,
+                    });
+                }
+                for (a, f) in plane.state.force.iter_mut().zip(f) {
+                    *a -= f;
+                }
+                plane.state.normal_force += dot(&f, &pen.normal);
+                touch.tool_work += dt_avg * dot(&f, &vt);
+                self.force.spread(&disc.nodal, j, f);
+                touch.any = true;
+            }
+        }
+        for t in planes.iter_mut() {
+            let f = t.state.force;
+            t.state.peak_force = t.state.peak_force.max(dot(&f, &f).sqrt());
+        }
+        touch
+    }
+
+    /// After the corrector: what the friction force `f_T` of each pair in contact did not
+    /// realise on its particle, carried to the next step's stick force as `c = f_T + m_J P_T
+    /// (v*_J - v_J) / dt_avg` (N), with `v*_J` the predicted velocity the force was computed
+    /// from and `v_J = sum_I N_I(X_J) v_I` after the corrector (m/s), `P_T` the projection
+    /// on the plane (the 2D law, `crate::contact::Contact::carry`).
+    pub(crate) fn carry(
+        &self,
+        disc: &SolidDisc,
+        planes: &[PlaneTool],
+        st: &mut SolidState,
+        dt_avg: Real,
+    ) {
+        let nplanes = planes.len();
+        for touched in &self.touched {
+            let (j, t) = (touched.j as usize, touched.t as usize);
+            let vj = disc.nodal.interpolate(j, &st.v);
+            let predicted = self.motion[j][1];
+            let dv: [Real; 3] = std::array::from_fn(|k| predicted[k] - vj[k]);
+            let n = planes[t].normal;
+            let dn = dot(&dv, &n);
+            let c = disc.mass[j] / dt_avg;
+            let f = touched.friction;
+            st.stick[j * nplanes + t] =
+                Some(std::array::from_fn(|k| f[k] + c * (dv[k] - dn * n[k])));
+        }
+    }
+}

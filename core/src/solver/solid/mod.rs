@@ -1,0 +1,546 @@
+//! The 3D solver (`model.kinematics = "3d"`): a running simulation of a [`SolidScene`].
+//!
+//! One source with 2D: the stages are the 2D solver's, generic over the dimension, called
+//! with `D = 3`: the stress stage fused with the scatter of the internal force
+//! ([`super::stress::stage`] through [`super::stress::Dim<3>`], the 3D Hencky J2 update),
+//! the force gather fused with the predictor, the corrector and the update with the
+//! step's energy sums ([`super::update`]), the energy account and its check
+//! ([`super::energy`]), the step's length ([`super::stable_step`]) and the Lanczos
+//! critical step ([`super::critical_step`]); shape functions, cell rules and lattices are
+//! [`crate::rk_shape`] and [`crate::integration`] in three dimensions, and the contact law
+//! is [`crate::contact::sidibe2009`]'s. What only 3D has is here: the setup of a box or a
+//! cylinder (`setup.rs`), the contact of the plane tools and symmetry planes
+//! (`contact.rs`) and the readings of a 3D body.
+//!
+//! Not in 3D yet (refused by the scene's validation): heat, mass scaling, kernel
+//! re-referencing, SCNI, self-contact and curved or triangulated tools.
+
+mod contact;
+mod setup;
+#[cfg(test)]
+mod tests;
+
+use super::energy::{Energy, StepEnergy};
+use super::layout::Scatter;
+use super::point_outputs::PointOut;
+use super::simulation::{Ran, StageTimes};
+use super::stable_step::{landing_step, tool_step_limit, StepLength};
+use super::stress::{self, has_avx2, Inputs};
+use super::update::{self, Motion, Predictor};
+use crate::error::{Error, Result};
+use crate::material::{HenckyJ2, PointState3};
+use crate::math::Real;
+use crate::plane_tool::{PlaneTool, PlaneToolState};
+use crate::rk_shape::ShapeTable;
+use crate::scene::solid::SolidScene;
+use crate::team::Team;
+use contact::PlaneContact;
+use serde::{Deserialize, Serialize};
+use std::time::{Duration, Instant};
+
+/// What setup fixes of a 3D simulation; the stages read it.
+#[derive(Debug, Clone)]
+pub(super) struct SolidDisc {
+    material: HenckyJ2,
+    /// Reference particle positions `X_I` (m).
+    ref_pos: Vec<[Real; 3]>,
+    /// Particle volumes (m^3).
+    volumes: Vec<Real>,
+    /// Row-sum lumped masses `m_I` (kg) and their inverses.
+    mass: Vec<Real>,
+    inv_mass: Vec<Real>,
+    /// Integration point positions (m) and weights `w_p` (m^3).
+    point_positions: Vec<[Real; 3]>,
+    weights: Vec<Real>,
+    /// What the stress stage reads of 2D bodies, neutral in 3D: `1 / R_p` (zeros) and
+    /// `J` at the last re-reference (ones).
+    inv_radius: Vec<Real>,
+    reference_jacobian: Vec<Real>,
+    /// The point shape functions in the stress stage's layout.
+    scatter: Scatter<3>,
+    /// `N_I(X_J)` in row `J` (no gradients).
+    nodal: ShapeTable<3>,
+    /// `S_J = sum_I |N_I(X_J)|` (-), the contact's move bound.
+    sum_abs: Vec<Real>,
+    /// Smallest particle spacing (m).
+    h_min: Real,
+    /// Critical step of the undeformed discretisation (s).
+    critical_dt0: Real,
+    /// The particles of the lowest and highest z at the start (the Taylor bar's impact and
+    /// free faces).
+    impact_face: Vec<u32>,
+    top_face: Vec<u32>,
+    /// Hexahedral cells of 8 particles (for the frames).
+    cells: Vec<[u32; 8]>,
+    /// The scene's tools come first among the planes, the symmetry planes after them.
+    scene_tools: usize,
+}
+
+/// Everything that changes during a 3D run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SolidState {
+    /// Steps taken.
+    pub step: u64,
+    /// Time (s).
+    pub time: Real,
+    /// Length of the last step (s), 0 before the first.
+    pub dt_prev: Real,
+    /// RK coefficients of the displacement `d_I` (m).
+    pub d: Vec<[Real; 3]>,
+    /// Coefficient velocities at the last half step (m/s).
+    pub v: Vec<[Real; 3]>,
+    /// Integration point histories.
+    pub points: Vec<PointState3>,
+    /// The planes' states: the scene's tools, then the symmetry planes.
+    pub tools: Vec<PlaneToolState>,
+    /// Energy account (J).
+    pub energy: Energy,
+    /// Which particles are held on which plane without separation (`[particle * planes +
+    /// plane]`).
+    pub held: Vec<bool>,
+    /// The friction force carried for each particle on each plane (N), `None` out of
+    /// contact.
+    pub stick: Vec<Option<[Real; 3]>>,
+    /// Deepest a particle's physical position lay inside a tool at a sample (m).
+    pub max_penetration: Real,
+    /// Deepest a particle's physical position lay beyond a symmetry plane at a sample (m).
+    pub max_beyond_plane: Real,
+    /// Stable step estimate on the deformation (s).
+    pub stable_dt: Real,
+    /// Time (s) and step count at the last step that was not a full fixed step.
+    pub anchor_time: Real,
+    /// Step count at `anchor_time`.
+    pub anchor_step: u64,
+}
+
+/// The stages' working arrays.
+#[derive(Debug, Clone)]
+pub(super) struct SolidWorkspace {
+    out: Vec<PointOut>,
+    buf: Vec<[Real; 3]>,
+    f_int: Vec<[Real; 3]>,
+    v_prev: Vec<[Real; 3]>,
+    contact: PlaneContact,
+    team: Team,
+}
+
+/// A running 3D simulation.
+#[derive(Debug, Clone)]
+pub struct SolidSimulation {
+    scene: SolidScene,
+    disc: SolidDisc,
+    tools: Vec<PlaneTool>,
+    st: SolidState,
+    ws: SolidWorkspace,
+    /// Wall time per stage since setup.
+    pub times: StageTimes,
+}
+
+/// Runs `f`, adding its wall time to `into`.
+fn timed<T>(into: &mut Duration, f: impl FnOnce() -> T) -> T {
+    let t0 = Instant::now();
+    let r = f();
+    *into += t0.elapsed();
+    r
+}
+
+/// Stage 1: the stress stage ([`stress::stage`] with `D = 3`) on the points of `disc` with
+/// the coefficients of `st`, its buffers in `ws`; sets the stable step estimate
+/// `dt_crit0 a_min` from the smallest deformed cell altitude `a_min` of a unit cell (-);
+/// returns the elastic and plastic energy (J). A point whose update fails stops the run
+/// naming it.
+fn stress_stage(
+    disc: &SolidDisc,
+    st: &mut SolidState,
+    ws: &mut SolidWorkspace,
+) -> Result<(Real, Real)> {
+    let input = Inputs {
+        d: &st.d,
+        material: &disc.material,
+        weights: &disc.weights,
+        inv_radius: &disc.inv_radius,
+        reference_jacobian: &disc.reference_jacobian,
+        track_stretch: false,
+        axi: false,
+        spacing: [1.0; 3],
+        avx2: has_avx2(),
+        heating: None,
+    };
+    let sums = stress::stage(
+        &ws.team,
+        &disc.scatter,
+        &mut ws.buf,
+        &input,
+        &mut st.points,
+        &mut ws.out,
+        None,
+    )
+    .map_err(|(p, m)| Error::Diverged {
+        step: st.step,
+        time: st.time,
+        what: format!(
+            "integration point {p} (reference position {:?} m): {m}",
+            disc.point_positions[p]
+        ),
+    })?;
+    st.stable_dt = disc.critical_dt0 * sums.min_altitude;
+    Ok((sums.elastic, sums.plastic))
+}
+
+/// Stage 3: the force gather into `ws.f_int` (N), fused with the predictor on `st.v` when
+/// `step` is given (recording the move bound `dt V*` for the contact stage).
+fn gather(
+    disc: &SolidDisc,
+    st: &mut SolidState,
+    ws: &mut SolidWorkspace,
+    step: Option<StepLength>,
+) {
+    let predictor = step.map(|s| Predictor {
+        dt_avg: s.avg,
+        v: &mut st.v,
+        v_prev: &mut ws.v_prev,
+        inv_mass: &disc.inv_mass,
+        track: true,
+    });
+    let speed = update::gather_forces(
+        &ws.team,
+        &disc.scatter,
+        &ws.buf,
+        None,
+        &mut ws.f_int,
+        predictor,
+    );
+    if let Some(s) = step {
+        ws.contact.predicted_move(s.full * speed);
+    }
+}
+
+impl SolidSimulation {
+    /// One central-difference step, at most `max_dt` long (s), the 2D step's stages in the
+    /// 2D order ([`super::Simulation::step`]): stress, step length, force gather and
+    /// predictor, contact (the planes advance, penalty forces), corrector and the friction
+    /// carried, update with the energy sums, energy account and clock, and its check.
+    ///
+    /// # Errors
+    ///
+    /// A point's update failed, a velocity is not finite, the energy balance does not
+    /// close, or a tool is too fast for the step: each named.
+    pub fn step(&mut self, max_dt: Option<Real>) -> Result<()> {
+        let SolidSimulation {
+            scene,
+            disc,
+            tools,
+            st,
+            ws,
+            times,
+        } = self;
+        let natural = scene
+            .time
+            .dt_s
+            .unwrap_or(scene.time.dt_safety * st.stable_dt);
+        let tool_dt = tool_step_limit(tools, st.time, natural, disc.h_min).map_err(|what| {
+            Error::Request(format!("step {} (t = {:.6e} s): {what}", st.step, st.time))
+        })?;
+        let (elastic, plastic) = timed(&mut times.stress, || stress_stage(disc, st, ws))?;
+        let full = scene
+            .time
+            .dt_s
+            .unwrap_or(scene.time.dt_safety * st.stable_dt)
+            .min(tool_dt);
+        let dt = landing_step(full, max_dt);
+        if dt.is_nan() || dt <= 0.0 {
+            return Err(Error::Request(format!(
+                "step length {dt} s is not positive"
+            )));
+        }
+        let step = StepLength {
+            dt,
+            full,
+            avg: 0.5 * (dt + st.dt_prev),
+        };
+        timed(&mut times.internal_force, || {
+            gather(disc, st, ws, Some(step))
+        });
+        let touch = timed(&mut times.contact, || {
+            let t_mid = st.time + 0.5 * dt;
+            for t in tools.iter_mut() {
+                t.state.velocity = t.velocity_at(t_mid);
+                t.state.stroke += dt * t.state.velocity;
+            }
+            let at_end: Vec<Real> = tools.iter().map(|t| t.state.stroke).collect();
+            for t in tools.iter_mut() {
+                t.state.stroke += (full - dt) * t.state.velocity;
+            }
+            let touch = ws.contact.stage(&ws.team, disc, tools, st, full, step.avg);
+            for (t, s) in tools.iter_mut().zip(at_end) {
+                t.state.stroke = s;
+            }
+            touch
+        });
+        timed(&mut times.integration, || -> Result<()> {
+            if touch.any {
+                update::correct_velocities(&mut st.v, &ws.contact.force, &disc.inv_mass, step.avg);
+                ws.contact.carry(disc, tools, st, step.avg);
+            }
+            let motion = Motion {
+                v: &st.v,
+                mass: &disc.mass,
+                f_int: &ws.f_int,
+            };
+            let mut u = update::update(&ws.team, &mut st.d, &motion, dt, true);
+            if touch.any {
+                u.contact_work =
+                    update::contact_work(&st.v, &ws.v_prev, &ws.contact.force, step.avg);
+            }
+            ws.contact.updated_move(dt * u.largest_speed);
+            if !u.kinetic.is_finite() {
+                let i =
+                    st.v.iter()
+                        .position(|v| !v.iter().all(|x| x.is_finite()))
+                        .unwrap_or(0);
+                return Err(Error::Diverged {
+                    step: st.step,
+                    time: st.time,
+                    what: format!(
+                        "velocity of particle {i} at {:?} m is not finite",
+                        disc.ref_pos[i]
+                    ),
+                });
+            }
+            st.energy.add_step(StepEnergy {
+                kinetic: u.kinetic,
+                elastic,
+                plastic,
+                contact_work: u.contact_work,
+                tool_work: touch.tool_work,
+                internal_half_step: u.half_step,
+            });
+            st.step += 1;
+            match scene.time.dt_s {
+                Some(fixed) if dt == fixed => {
+                    st.time = st.anchor_time + (st.step - st.anchor_step) as Real * fixed;
+                }
+                _ => {
+                    st.time += dt;
+                    st.anchor_time = st.time;
+                    st.anchor_step = st.step;
+                }
+            }
+            st.dt_prev = dt;
+            for (t, s) in tools.iter().zip(st.tools.iter_mut()) {
+                *s = t.state;
+            }
+            st.energy.check(
+                scene.checks.energy_balance_tol,
+                st.step,
+                st.time,
+                dt,
+                st.stable_dt,
+            )
+        })
+    }
+
+    /// Step toward `t_end` (s), the last step shortened to land on it, taking at most
+    /// `max_steps` steps; `between(sim, taken)` is called before each step and returns
+    /// `false` to stop there (the 2D loop, [`super::Simulation::run_toward`]).
+    ///
+    /// # Errors
+    ///
+    /// A step failed (see [`SolidSimulation::step`]).
+    pub fn run_toward(
+        &mut self,
+        t_end: Real,
+        max_steps: u64,
+        mut between: impl FnMut(&mut SolidSimulation, u64) -> bool + Send,
+    ) -> Result<Ran> {
+        let this = &mut *self;
+        let mut run = move || -> Result<Ran> {
+            let mut ran = Ran {
+                steps: 0,
+                reached: false,
+                interrupted: false,
+            };
+            loop {
+                if this.st.time >= t_end - 1e-12 * t_end.abs() {
+                    ran.reached = true;
+                    return Ok(ran);
+                }
+                if ran.steps >= max_steps {
+                    return Ok(ran);
+                }
+                if !between(this, ran.steps) {
+                    ran.interrupted = true;
+                    return Ok(ran);
+                }
+                this.step(Some(t_end - this.st.time))?;
+                ran.steps += 1;
+            }
+        };
+        if rayon::current_thread_index().is_some() {
+            run()
+        } else {
+            rayon::scope(|_| run())
+        }
+    }
+
+    /// The scene being run.
+    pub fn scene(&self) -> &SolidScene {
+        &self.scene
+    }
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.disc.ref_pos.len()
+    }
+    /// Number of integration points.
+    pub fn point_count(&self) -> usize {
+        self.disc.point_positions.len()
+    }
+    /// Time (s).
+    pub fn time(&self) -> Real {
+        self.st.time
+    }
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.st.step
+    }
+    /// The whole changing state.
+    pub fn state(&self) -> &SolidState {
+        &self.st
+    }
+    /// Energy account (J).
+    pub fn energy(&self) -> Energy {
+        self.st.energy
+    }
+    /// Smallest particle spacing (m).
+    pub fn h_min(&self) -> Real {
+        self.disc.h_min
+    }
+    /// Critical step of the undeformed discretisation (s).
+    pub fn critical_dt0(&self) -> Real {
+        self.disc.critical_dt0
+    }
+    /// Stable step estimate on the current deformation (s).
+    pub fn stable_dt(&self) -> Real {
+        self.st.stable_dt
+    }
+    /// Lumped masses (kg).
+    pub fn masses(&self) -> &[Real] {
+        &self.disc.mass
+    }
+    /// Particle volumes (m^3).
+    pub fn volumes(&self) -> &[Real] {
+        &self.disc.volumes
+    }
+    /// Particle positions of the undeformed workpiece (m).
+    pub fn reference_positions(&self) -> &[[Real; 3]] {
+        &self.disc.ref_pos
+    }
+    /// The hexahedral cells of 8 particles.
+    pub fn cells(&self) -> &[[u32; 8]] {
+        &self.disc.cells
+    }
+    /// The scene's tools (the symmetry planes are not among them).
+    pub fn tools(&self) -> &[PlaneTool] {
+        &self.tools[..self.disc.scene_tools]
+    }
+    /// The symmetry planes.
+    pub fn symmetry_planes(&self) -> &[PlaneTool] {
+        &self.tools[self.disc.scene_tools..]
+    }
+    /// Physical particle positions `X_J + sum_I N_I(X_J) d_I` (m).
+    pub fn positions(&self) -> Vec<[Real; 3]> {
+        (0..self.disc.ref_pos.len())
+            .map(|j| {
+                let u = self.disc.nodal.interpolate(j, &self.st.d);
+                std::array::from_fn(|k| self.disc.ref_pos[j][k] + u[k])
+            })
+            .collect()
+    }
+    /// Physical particle velocities `sum_I N_I(X_J) v_I` (m/s) at the last half step.
+    pub fn velocities(&self) -> Vec<[Real; 3]> {
+        (0..self.disc.ref_pos.len())
+            .map(|j| self.disc.nodal.interpolate(j, &self.st.v))
+            .collect()
+    }
+    /// Equivalent plastic strain at each integration point (-).
+    pub fn point_plastic_strain(&self) -> Vec<Real> {
+        self.st.points.iter().map(|p| p.eps_p).collect()
+    }
+    /// Integration point positions in the reference configuration (m).
+    pub fn point_positions(&self) -> &[[Real; 3]] {
+        &self.disc.point_positions
+    }
+    /// Mises stress at each integration point after the last stress stage (Pa).
+    pub fn point_von_mises(&self) -> Vec<Real> {
+        self.ws.out.iter().map(|o| o.von_mises).collect()
+    }
+
+    /// The Taylor bar's measures from the physical positions (m): the impact face's radius
+    /// (the largest `sqrt(x^2 + y^2)` of the particles that started on the lowest face) and
+    /// the length (the largest `z` of those that started on the highest face, from `z =
+    /// 0`).
+    pub fn impact_readings(&self) -> (Real, Real) {
+        let x = |j: u32| {
+            let j = j as usize;
+            let u = self.disc.nodal.interpolate(j, &self.st.d);
+            let r = self.disc.ref_pos[j];
+            [r[0] + u[0], r[1] + u[1], r[2] + u[2]]
+        };
+        let radius = self
+            .disc
+            .impact_face
+            .iter()
+            .map(|&j| {
+                let p = x(j);
+                (p[0] * p[0] + p[1] * p[1]).sqrt()
+            })
+            .fold(0.0, Real::max);
+        let length = self
+            .disc
+            .top_face
+            .iter()
+            .map(|&j| x(j)[2])
+            .fold(Real::NEG_INFINITY, Real::max);
+        (radius, length)
+    }
+
+    /// The deepest physical particle position inside a scene tool and beyond a symmetry
+    /// plane (m), over every particle (the truth the contact's own checks cannot see),
+    /// recorded in the state's maxima; a depth past `checks.max_penetration_rel` smallest
+    /// spacings inside a tool or beyond a plane stops the run naming the particle.
+    ///
+    /// # Errors
+    ///
+    /// The penetration bound is exceeded.
+    pub fn measure_penetration(&mut self) -> Result<(Real, Real)> {
+        let x = self.positions();
+        let mut worst = [(0.0 as Real, 0usize, 0usize); 2];
+        for (j, p) in x.iter().enumerate() {
+            for (t, plane) in self.tools.iter().enumerate() {
+                let depth = plane.depth_of(*p);
+                let w = &mut worst[plane.symmetry as usize];
+                if depth > w.0 {
+                    *w = (depth, j, t);
+                }
+            }
+        }
+        self.st.max_penetration = self.st.max_penetration.max(worst[0].0);
+        self.st.max_beyond_plane = self.st.max_beyond_plane.max(worst[1].0);
+        let bound = self.scene.checks.max_penetration_rel * self.disc.h_min;
+        for (depth, j, t) in worst {
+            if depth > bound {
+                return Err(Error::Diverged {
+                    step: self.st.step,
+                    time: self.st.time,
+                    what: format!(
+                        "particle {j} (reference position {:?} m) lies {depth:.4e} m inside `{}`, more than checks.max_penetration_rel = {} smallest spacings ({bound:.4e} m)",
+                        self.disc.ref_pos[j],
+                        self.tools[t].name,
+                        self.scene.checks.max_penetration_rel
+                    ),
+                });
+            }
+        }
+        Ok((worst[0].0, worst[1].0))
+    }
+}

@@ -1,0 +1,347 @@
+//! Building a [`SolidSimulation`] from a validated 3D scene: the particles of the box
+//! lattice or the cylinder's O-grid, the points of the cell rule with their RK shape
+//! functions (the same [`KernelCloud`] and [`Lattice`] as 2D, `D = 3`), the row-sum lumped
+//! masses, the plane tools and symmetry planes, the critical step.
+
+use super::contact::PlaneContact;
+use super::{SolidDisc, SolidSimulation, SolidState, SolidWorkspace};
+use crate::cylinder_grid::{CylinderGrid, Sector};
+use crate::error::{Error, Result};
+use crate::integration::point_shapes;
+use crate::material::{HenckyJ2, PointState3};
+use crate::math::Real;
+use crate::plane_tool::PlaneTool;
+use crate::rk_shape::{for_each_index, KernelCloud, Lattice, ShapeTable, Site};
+use crate::scene::solid::{CylinderPart, SolidScene, SolidShape};
+use crate::solver::critical_step::critical_step;
+use crate::solver::energy::Energy;
+use crate::solver::layout::{Scatter, MAX_GROUP_3D};
+use crate::solver::point_outputs::PointOut;
+use crate::solver::setup::lumped_masses;
+use crate::solver::simulation::StageTimes;
+use crate::solver::update::initial_motion;
+use crate::team::Team;
+use crate::tools::SEARCH_DEPTH_SPACINGS;
+use std::time::Instant;
+
+/// The particles and points of a 3D workpiece before the masses: positions (m), the
+/// point and particle shape functions, the point weights (m^3), the symmetry planes as
+/// `(axis, coordinate)`, the hexahedral cells (for the frames) and the smallest spacing.
+struct Particles {
+    positions: Vec<[Real; 3]>,
+    volumes: Vec<Real>,
+    points: Vec<[Real; 3]>,
+    weights: Vec<Real>,
+    pt: ShapeTable<3>,
+    nodal: ShapeTable<3>,
+    planes: Vec<(usize, Real)>,
+    cells: Vec<[u32; 8]>,
+    h_min: Real,
+    /// Points per layer of cells along z: the chunks of the stress stage are two layers.
+    layer_points: usize,
+}
+
+/// The cylinder's O-grid ([`CylinderGrid`]) with each particle's own supports, `support`
+/// times its cells' extent.
+fn cylinder(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
+    let SolidShape::Cylinder {
+        radius_m,
+        length_m,
+        part,
+        cells,
+        core_ratio,
+    } = *shape
+    else {
+        unreachable!("called for a cylinder")
+    };
+    let (sector, planes) = match part {
+        CylinderPart::Full => (Sector::Full, vec![]),
+        CylinderPart::Half => (Sector::Half, vec![(0, 0.0)]),
+        CylinderPart::Quarter => (Sector::Quarter, vec![(0, 0.0), (1, 0.0)]),
+    };
+    let grid = CylinderGrid::new(radius_m, length_m, cells, core_ratio, sector)
+        .map_err(|m| Error::Request(format!("workpiece: {m}")))?;
+    let rule = scene.discretization.integration;
+    let (points, weights) = grid.points(rule);
+    let supports = grid.supports(scene.discretization.support);
+    let cloud = KernelCloud::with_supports(grid.positions.clone(), grid.volumes.clone(), supports);
+    let per_cell = points.len() / grid.cells.len();
+    let pt = cloud.shape_table(&points, &|p| {
+        format!("integration point {p} (cell {})", p / per_cell)
+    })?;
+    let mut nodal = cloud.shape_table(&grid.positions, &|j| format!("particle {j}"))?;
+    nodal.drop_gradients();
+    let h_min = smallest_edge(&grid.positions, &grid.cells);
+    Ok(Particles {
+        layer_points: points.len() / cells[2],
+        positions: grid.positions.clone(),
+        volumes: grid.volumes.clone(),
+        points,
+        weights,
+        pt,
+        nodal,
+        planes,
+        cells: grid.cells.clone(),
+        h_min,
+    })
+}
+
+/// The box's lattice ([`Lattice`]), its points those of the 2D code in three dimensions.
+fn lattice(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
+    let SolidShape::Box {
+        origin_m,
+        size_m,
+        particles,
+        ref symmetry,
+    } = *shape
+    else {
+        unreachable!("called for a box")
+    };
+    let h: [Real; 3] = std::array::from_fn(|k| size_m[k] / (particles[k] - 1) as Real);
+    let support = h.map(|hk| scene.discretization.support * hk);
+    let lattice = Lattice::new(origin_m, h, particles, support);
+    let (points, pt) = point_shapes(&lattice, scene.discretization.integration)?;
+    let mut sites = Vec::with_capacity(particles.iter().product());
+    for_each_index([0; 3], particles, |node| {
+        sites.push(Site {
+            node,
+            offset: [0.0; 3],
+        })
+    });
+    let mut nodal = lattice.shape_table(&sites, &|j| format!("particle {j}"))?;
+    nodal.drop_gradients();
+    let id = |i: [usize; 3]| (i[0] + particles[0] * (i[1] + particles[1] * i[2])) as u32;
+    let mut cells = Vec::new();
+    for_each_index([0; 3], particles.map(|n| n - 1), |[i, j, k]| {
+        cells.push([
+            id([i, j, k]),
+            id([i + 1, j, k]),
+            id([i + 1, j + 1, k]),
+            id([i, j + 1, k]),
+            id([i, j, k + 1]),
+            id([i + 1, j, k + 1]),
+            id([i + 1, j + 1, k + 1]),
+            id([i, j + 1, k + 1]),
+        ])
+    });
+    let layer_points = points.positions.len() / (particles[2] - 1);
+    Ok(Particles {
+        positions: lattice.cloud().positions.clone(),
+        volumes: lattice.cloud().volumes.clone(),
+        weights: points.areas,
+        points: points.positions,
+        pt,
+        nodal,
+        planes: symmetry
+            .iter()
+            .map(|f| (f.axis(), origin_m[f.axis()]))
+            .collect(),
+        cells,
+        h_min: h[0].min(h[1]).min(h[2]),
+        layer_points,
+    })
+}
+
+/// The shortest edge of the hexahedral `cells` (m) over `positions`: the smallest spacing.
+fn smallest_edge(positions: &[[Real; 3]], cells: &[[u32; 8]]) -> Real {
+    const EDGES: [(usize, usize); 12] = [
+        (0, 1),
+        (1, 2),
+        (2, 3),
+        (3, 0),
+        (4, 5),
+        (5, 6),
+        (6, 7),
+        (7, 4),
+        (0, 4),
+        (1, 5),
+        (2, 6),
+        (3, 7),
+    ];
+    cells
+        .iter()
+        .flat_map(|c| {
+            EDGES.iter().map(move |&(a, b)| {
+                let (p, q) = (positions[c[a] as usize], positions[c[b] as usize]);
+                ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+            })
+        })
+        .fold(Real::INFINITY, Real::min)
+}
+
+impl SolidSimulation {
+    /// Build the discretisation of a validated 3D scene.
+    ///
+    /// # Errors
+    ///
+    /// Shape functions that cannot be formed (too small a support), a mass that is not
+    /// positive, a fixed step above the critical step.
+    pub fn new(scene: &SolidScene) -> Result<SolidSimulation> {
+        let t0 = Instant::now();
+        let shape = scene
+            .workpiece
+            .shape()
+            .ok_or_else(|| Error::Request("workpiece: the shape's keys are missing".into()))?;
+        let t_shapes = Instant::now();
+        let p = match shape {
+            SolidShape::Cylinder { .. } => cylinder(&shape, scene)?,
+            SolidShape::Box { .. } => lattice(&shape, scene)?,
+        };
+        let shape_functions = t_shapes.elapsed();
+        let rho = scene.material.density_kg_per_m3;
+        let np = p.positions.len();
+        let mass = lumped_masses(&p.pt, &p.weights, rho, &p.positions)?;
+        let chunk = (2 * p.layer_points).max(64);
+        let scatter = Scatter::new(&p.pt, np, chunk, MAX_GROUP_3D);
+        let material = HenckyJ2::new(
+            scene.material.youngs_modulus_pa,
+            scene.material.poisson_ratio,
+            scene.material.hardening.clone(),
+        );
+        let wave_speed = material.wave_speed(rho);
+        let depth = SEARCH_DEPTH_SPACINGS * p.h_min;
+        let mut tools: Vec<PlaneTool> = scene
+            .tools
+            .iter()
+            .map(|t| PlaneTool::new(t, depth))
+            .collect();
+        let scene_tools = tools.len();
+        tools.extend(
+            p.planes
+                .iter()
+                .map(|&(axis, at)| PlaneTool::symmetry(axis, at, depth)),
+        );
+        let (v, initial) = initial_motion(scene.workpiece.initial_velocity_m_per_s, None, &mass);
+        let zmin = p
+            .positions
+            .iter()
+            .map(|x| x[2])
+            .fold(Real::INFINITY, Real::min);
+        let zmax = p
+            .positions
+            .iter()
+            .map(|x| x[2])
+            .fold(Real::NEG_INFINITY, Real::max);
+        let on = |z: Real| -> Vec<u32> {
+            (0..np as u32)
+                .filter(|&j| (p.positions[j as usize][2] - z).abs() <= 1e-9 * p.h_min)
+                .collect()
+        };
+        let sum_abs: Vec<Real> = (0..np)
+            .map(|j| p.nodal.row(j).map(|e| p.nodal.n[e].abs()).sum())
+            .collect();
+        // The particles on a symmetry plane start held on it.
+        let ntools = tools.len();
+        let mut held = vec![false; np * ntools];
+        for (t, tool) in tools.iter().enumerate().skip(scene_tools) {
+            for (j, x) in p.positions.iter().enumerate() {
+                if tool.depth_of(*x).abs() <= 1e-9 * p.h_min {
+                    held[j * ntools + t] = true;
+                }
+            }
+        }
+        let npts = p.points.len();
+        let (impact_face, top_face) = (on(zmin), on(zmax));
+        let mut disc = SolidDisc {
+            inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
+            mass,
+            material,
+            ref_pos: p.positions,
+            volumes: p.volumes,
+            point_positions: p.points,
+            weights: p.weights,
+            inv_radius: vec![0.0; npts],
+            reference_jacobian: vec![1.0; npts],
+            scatter,
+            nodal: p.nodal,
+            sum_abs,
+            h_min: p.h_min,
+            critical_dt0: p.h_min / wave_speed,
+            impact_face,
+            top_face,
+            cells: p.cells,
+            scene_tools,
+        };
+        let mut ws = SolidWorkspace {
+            out: vec![PointOut::initial(&disc.material); npts],
+            buf: disc.scatter.buffers(),
+            f_int: vec![[0.0; 3]; np],
+            v_prev: v.clone(),
+            contact: PlaneContact::new(np, ntools),
+            team: Team::default(),
+        };
+        let mut st = SolidState {
+            step: 0,
+            time: 0.0,
+            dt_prev: 0.0,
+            d: vec![[0.0; 3]; np],
+            v,
+            points: vec![PointState3::default(); npts],
+            tools: tools.iter().map(|t| t.state).collect(),
+            energy: Energy {
+                initial,
+                kinetic: initial,
+                ..Default::default()
+            },
+            held,
+            stick: vec![None; np * ntools],
+            max_penetration: 0.0,
+            max_beyond_plane: 0.0,
+            stable_dt: disc.critical_dt0,
+            anchor_time: 0.0,
+            anchor_step: 0,
+        };
+        disc.critical_dt0 = measure_critical_step(&disc, &mut st, &mut ws)?;
+        st.stable_dt = disc.critical_dt0;
+        super::stress_stage(&disc, &mut st, &mut ws)?;
+        super::gather(&disc, &mut st, &mut ws, None);
+        let sim = SolidSimulation {
+            scene: scene.clone(),
+            disc,
+            tools,
+            st,
+            ws,
+            times: StageTimes {
+                setup: t0.elapsed(),
+                shape_functions,
+                ..Default::default()
+            },
+        };
+        if let Some(dt) = scene.time.dt_s {
+            if dt > sim.st.stable_dt {
+                return Err(Error::Unstable {
+                    step: 0,
+                    time: 0.0,
+                    dt,
+                    dt_crit: sim.st.stable_dt,
+                    detail: format!(
+                        "time.dt_s is above the critical step 2 / omega_max of this discretisation (h_min / c = {:.4e} s); lower it or remove it to use dt_safety",
+                        sim.disc.h_min / wave_speed
+                    ),
+                });
+            }
+        }
+        Ok(sim)
+    }
+}
+
+/// The critical step `2 / omega_max` of the undeformed discretisation (s) by Lanczos
+/// ([`critical_step`]) on the internal force of a displacement of 1e-7 of the smallest
+/// spacing; the state is left undeformed.
+fn measure_critical_step(
+    disc: &SolidDisc,
+    st: &mut SolidState,
+    ws: &mut SolidWorkspace,
+) -> Result<Real> {
+    let saved = (st.points.clone(), st.energy);
+    let inv_sqrt_m: Vec<Real> = disc.mass.iter().map(|m| 1.0 / m.sqrt()).collect();
+    let dt = critical_step(&inv_sqrt_m, 1e-7 * disc.h_min, |d| {
+        st.d = d;
+        super::stress_stage(disc, st, ws)?;
+        super::gather(disc, st, ws, None);
+        Ok(ws.f_int.clone())
+    });
+    st.d.fill([0.0; 3]);
+    (st.points, st.energy) = saved;
+    dt
+}
