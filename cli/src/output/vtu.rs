@@ -1,4 +1,5 @@
-//! VTK XML output for ParaView: one `.vtu` file per frame plus a `.pvd` collection.
+//! VTK XML output for ParaView: one `.vtu` file per frame plus a `.pvd` collection. 2D frames
+//! ([`write_vtu`]) hold quads, 3D frames ([`write_vtu_3d`]) hexahedra with cell data as well.
 //!
 //! Files are written in ASCII so they stay diff-able and easy to inspect. Floating-point values
 //! use Rust's shortest round-trip representation in exponent form (`{:e}`), so reading a file
@@ -12,6 +13,9 @@ use std::path::Path;
 
 /// VTK cell type id of a linear quadrilateral (`VTK_QUAD`).
 const VTK_QUAD: u8 = 9;
+
+/// VTK cell type id of a linear hexahedron (`VTK_HEXAHEDRON`).
+const VTK_HEXAHEDRON: u8 = 12;
 
 /// Number of scalar values written per line of a `DataArray`.
 const SCALARS_PER_LINE: usize = 6;
@@ -37,10 +41,49 @@ pub fn write_vtu(
     scalars: &[(&str, &[f64])],
     vectors: &[(&str, &[[f64; 2]])],
 ) -> io::Result<()> {
-    validate_vtu(positions, quads, scalars, vectors)?;
-    let mut out = BufWriter::new(File::create(path)?);
-    write_vtu_to(&mut out, positions, quads, scalars, vectors)?;
-    out.flush()
+    let grid = Grid {
+        positions,
+        cells: quads,
+        cell_kind: ("quad", VTK_QUAD),
+        point_scalars: scalars,
+        point_vectors: vectors,
+        cell_scalars: &[],
+    };
+    grid.write(path)
+}
+
+/// Write one 3D frame as a VTK XML UnstructuredGrid (.vtu), ASCII, VTK_HEXAHEDRON (type 12) cells.
+///
+/// Each hex lists its corners as VTK expects (and the solver gives them): `(-,-,-), (+,-,-),
+/// (+,+,-), (-,+,-)`, then the same at `+z`. `point_scalars` and `point_vectors` become point
+/// data arrays, `cell_scalars` cell data arrays (`Float64`, with 1 and 3 components); the first
+/// array of each kind is marked as the active one. Conventions as [`write_vtu`].
+///
+/// # Errors
+///
+/// Returns an [`io::ErrorKind::InvalidInput`] error, before anything is written, when a point
+/// array's length differs from `positions.len()`, a cell array's from `hexes.len()`, a hex
+/// references a point that does not exist, or an array name is empty or used twice among the
+/// point or among the cell arrays. I/O failures are returned as they occur.
+// The 3D run (issue 36) calls it next; until then only the tests do.
+#[cfg_attr(not(test), allow(dead_code))]
+pub fn write_vtu_3d(
+    path: &Path,
+    positions: &[[f64; 3]],
+    hexes: &[[u32; 8]],
+    point_scalars: &[(&str, &[f64])],
+    point_vectors: &[(&str, &[[f64; 3]])],
+    cell_scalars: &[(&str, &[f64])],
+) -> io::Result<()> {
+    let grid = Grid {
+        positions,
+        cells: hexes,
+        cell_kind: ("hex", VTK_HEXAHEDRON),
+        point_scalars,
+        point_vectors,
+        cell_scalars,
+    };
+    grid.write(path)
 }
 
 /// Write a ParaView collection (.pvd) listing frames (time in s, file name relative to the .pvd).
@@ -74,112 +117,193 @@ pub fn write_pvd(path: &Path, frames: &[(f64, String)]) -> io::Result<()> {
     out.flush()
 }
 
-/// Checks every array length, quad index and array name before the file is created.
-fn validate_vtu(
-    positions: &[[f64; 2]],
-    quads: &[[u32; 4]],
-    scalars: &[(&str, &[f64])],
-    vectors: &[(&str, &[[f64; 2]])],
+/// A point or vector written as a 3-component tuple: 2D ones with z = 0.
+trait Tuple3 {
+    fn write_to<W: Write>(&self, out: &mut W) -> io::Result<()>;
+}
+
+impl Tuple3 for [f64; 2] {
+    fn write_to<W: Write>(&self, out: &mut W) -> io::Result<()> {
+        let [x, y] = self;
+        write!(out, "{x:e} {y:e} 0e0")
+    }
+}
+
+impl Tuple3 for [f64; 3] {
+    fn write_to<W: Write>(&self, out: &mut W) -> io::Result<()> {
+        let [x, y, z] = self;
+        write!(out, "{x:e} {y:e} {z:e}")
+    }
+}
+
+/// One frame of either writer: points (`P` is `[f64; 2]` or `[f64; 3]`), cells of `K` corners
+/// and the data arrays.
+struct Grid<'a, P, const K: usize> {
+    positions: &'a [P],
+    cells: &'a [[u32; K]],
+    /// Name of a cell in error messages and its VTK cell type id.
+    cell_kind: (&'a str, u8),
+    point_scalars: &'a [(&'a str, &'a [f64])],
+    point_vectors: &'a [(&'a str, &'a [P])],
+    cell_scalars: &'a [(&'a str, &'a [f64])],
+}
+
+impl<P: Tuple3, const K: usize> Grid<'_, P, K> {
+    /// Validates, then writes the file.
+    fn write(&self, path: &Path) -> io::Result<()> {
+        self.validate()?;
+        let mut out = BufWriter::new(File::create(path)?);
+        self.write_to(&mut out)?;
+        out.flush()
+    }
+
+    /// Checks every array length, cell index and array name before the file is created.
+    fn validate(&self) -> io::Result<()> {
+        let n = self.positions.len();
+        let point_lengths = self
+            .point_scalars
+            .iter()
+            .map(|(name, data)| (*name, data.len()))
+            .chain(
+                self.point_vectors
+                    .iter()
+                    .map(|(name, data)| (*name, data.len())),
+            );
+        check_arrays("point", point_lengths, n, "points")?;
+        let cell_lengths = self
+            .cell_scalars
+            .iter()
+            .map(|(name, data)| (*name, data.len()));
+        check_arrays("cell", cell_lengths, self.cells.len(), "cells")?;
+        let kind = self.cell_kind.0;
+        for (cell, corners) in self.cells.iter().enumerate() {
+            if let Some(&bad) = corners.iter().find(|&&i| i as usize >= n) {
+                return Err(invalid_input(format!(
+                    "{kind} {cell} references point {bad} but there are only {n} points"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the XML document; inputs must have been validated. Without cell arrays there is
+    /// no `CellData` element.
+    fn write_to(&self, out: &mut impl Write) -> io::Result<()> {
+        writeln!(out, "<?xml version=\"1.0\"?>")?;
+        writeln!(
+            out,
+            "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"
+        )?;
+        writeln!(out, "  <UnstructuredGrid>")?;
+        writeln!(
+            out,
+            "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
+            self.positions.len(),
+            self.cells.len()
+        )?;
+
+        write!(out, "      <PointData")?;
+        if let Some((name, _)) = self.point_scalars.first() {
+            write!(out, " Scalars=\"{}\"", escape_attr(name))?;
+        }
+        if let Some((name, _)) = self.point_vectors.first() {
+            write!(out, " Vectors=\"{}\"", escape_attr(name))?;
+        }
+        writeln!(out, ">")?;
+        write_scalar_arrays(out, self.point_scalars)?;
+        for (name, data) in self.point_vectors {
+            open_array(out, "Float64", name, 3)?;
+            write_rows(out, data.iter(), VECTORS_PER_LINE, |o, v| v.write_to(o))?;
+            close_array(out)?;
+        }
+        writeln!(out, "      </PointData>")?;
+
+        if let Some((name, _)) = self.cell_scalars.first() {
+            writeln!(out, "      <CellData Scalars=\"{}\">", escape_attr(name))?;
+            write_scalar_arrays(out, self.cell_scalars)?;
+            writeln!(out, "      </CellData>")?;
+        }
+
+        writeln!(out, "      <Points>")?;
+        open_array(out, "Float64", "Points", 3)?;
+        write_rows(out, self.positions.iter(), VECTORS_PER_LINE, |o, p| {
+            p.write_to(o)
+        })?;
+        close_array(out)?;
+        writeln!(out, "      </Points>")?;
+
+        writeln!(out, "      <Cells>")?;
+        open_array(out, "Int64", "connectivity", 1)?;
+        write_rows(out, self.cells.iter(), 1, |o, corners| {
+            write_corners(o, corners)
+        })?;
+        close_array(out)?;
+        open_array(out, "Int64", "offsets", 1)?;
+        let offsets = (1..=self.cells.len()).map(|cell| K * cell);
+        write_rows(out, offsets, SCALARS_PER_LINE, |o, v| write!(o, "{v}"))?;
+        close_array(out)?;
+        open_array(out, "UInt8", "types", 1)?;
+        let types = self.cells.iter().map(|_| self.cell_kind.1);
+        write_rows(out, types, 4 * SCALARS_PER_LINE, |o, v| write!(o, "{v}"))?;
+        close_array(out)?;
+        writeln!(out, "      </Cells>")?;
+
+        writeln!(out, "    </Piece>")?;
+        writeln!(out, "  </UnstructuredGrid>")?;
+        writeln!(out, "</VTKFile>")
+    }
+}
+
+/// Checks the `(name, length)` of one set of `association` ("point" or "cell") data arrays:
+/// names non-empty and unique, every length `n` (the number of `what`).
+fn check_arrays<'a>(
+    association: &str,
+    lengths: impl IntoIterator<Item = (&'a str, usize)>,
+    n: usize,
+    what: &str,
 ) -> io::Result<()> {
-    let n = positions.len();
-    let lengths = scalars
-        .iter()
-        .map(|(name, data)| (*name, data.len()))
-        .chain(vectors.iter().map(|(name, data)| (*name, data.len())));
     let mut seen = HashSet::new();
     for (name, len) in lengths {
         if name.is_empty() {
-            return Err(invalid_input("point data array with an empty name".into()));
+            return Err(invalid_input(format!(
+                "{association} data array with an empty name"
+            )));
         }
         if !seen.insert(name) {
             return Err(invalid_input(format!(
-                "point data array name '{name}' is used more than once"
+                "{association} data array name '{name}' is used more than once"
             )));
         }
         if len != n {
             return Err(invalid_input(format!(
-                "point data array '{name}' has {len} values but there are {n} points"
-            )));
-        }
-    }
-    for (cell, quad) in quads.iter().enumerate() {
-        if let Some(&bad) = quad.iter().find(|&&i| i as usize >= n) {
-            return Err(invalid_input(format!(
-                "quad {cell} references point {bad} but there are only {n} points"
+                "{association} data array '{name}' has {len} values but there are {n} {what}"
             )));
         }
     }
     Ok(())
 }
 
-/// Writes the XML document; inputs must have been validated.
-fn write_vtu_to(
-    out: &mut impl Write,
-    positions: &[[f64; 2]],
-    quads: &[[u32; 4]],
-    scalars: &[(&str, &[f64])],
-    vectors: &[(&str, &[[f64; 2]])],
-) -> io::Result<()> {
-    writeln!(out, "<?xml version=\"1.0\"?>")?;
-    writeln!(
-        out,
-        "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"
-    )?;
-    writeln!(out, "  <UnstructuredGrid>")?;
-    writeln!(
-        out,
-        "    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">",
-        positions.len(),
-        quads.len()
-    )?;
-
-    write!(out, "      <PointData")?;
-    if let Some((name, _)) = scalars.first() {
-        write!(out, " Scalars=\"{}\"", escape_attr(name))?;
-    }
-    if let Some((name, _)) = vectors.first() {
-        write!(out, " Vectors=\"{}\"", escape_attr(name))?;
-    }
-    writeln!(out, ">")?;
-    for (name, data) in scalars {
+/// Writes named scalar arrays (`Float64`, 1 component).
+fn write_scalar_arrays(out: &mut impl Write, arrays: &[(&str, &[f64])]) -> io::Result<()> {
+    for (name, data) in arrays {
         open_array(out, "Float64", name, 1)?;
         write_rows(out, data.iter(), SCALARS_PER_LINE, |o, v| {
             write!(o, "{v:e}")
         })?;
         close_array(out)?;
     }
-    for (name, data) in vectors {
-        open_array(out, "Float64", name, 3)?;
-        write_rows(out, data.iter(), VECTORS_PER_LINE, write_xy0)?;
-        close_array(out)?;
+    Ok(())
+}
+
+/// Writes a cell's corner indices separated by spaces.
+fn write_corners<W: Write>(out: &mut W, corners: &[u32]) -> io::Result<()> {
+    for (k, corner) in corners.iter().enumerate() {
+        if k > 0 {
+            write!(out, " ")?;
+        }
+        write!(out, "{corner}")?;
     }
-    writeln!(out, "      </PointData>")?;
-
-    writeln!(out, "      <Points>")?;
-    open_array(out, "Float64", "Points", 3)?;
-    write_rows(out, positions.iter(), VECTORS_PER_LINE, write_xy0)?;
-    close_array(out)?;
-    writeln!(out, "      </Points>")?;
-
-    writeln!(out, "      <Cells>")?;
-    open_array(out, "Int64", "connectivity", 1)?;
-    write_rows(out, quads.iter(), 1, |o, [a, b, c, d]| {
-        write!(o, "{a} {b} {c} {d}")
-    })?;
-    close_array(out)?;
-    open_array(out, "Int64", "offsets", 1)?;
-    let offsets = (1..=quads.len()).map(|cell| 4 * cell);
-    write_rows(out, offsets, SCALARS_PER_LINE, |o, v| write!(o, "{v}"))?;
-    close_array(out)?;
-    open_array(out, "UInt8", "types", 1)?;
-    let types = quads.iter().map(|_| VTK_QUAD);
-    write_rows(out, types, 4 * SCALARS_PER_LINE, |o, v| write!(o, "{v}"))?;
-    close_array(out)?;
-    writeln!(out, "      </Cells>")?;
-
-    writeln!(out, "    </Piece>")?;
-    writeln!(out, "  </UnstructuredGrid>")?;
-    writeln!(out, "</VTKFile>")
+    Ok(())
 }
 
 /// Writes the opening tag of an ASCII `DataArray`.
@@ -194,11 +318,6 @@ fn open_array(out: &mut impl Write, ty: &str, name: &str, components: usize) -> 
 /// Writes the closing tag of a `DataArray`.
 fn close_array(out: &mut impl Write) -> io::Result<()> {
     writeln!(out, "        </DataArray>")
-}
-
-/// Writes a 2D vector as a 3-component tuple with z = 0.
-fn write_xy0<W: Write>(out: &mut W, [x, y]: &[f64; 2]) -> io::Result<()> {
-    write!(out, "{x:e} {y:e} 0e0")
 }
 
 /// Writes `values` as indented rows of `per_line` items, each formatted by `item`.
@@ -479,6 +598,189 @@ mod tests {
             assert_eq!(err.kind(), io::ErrorKind::InvalidInput, "{case}: {err}");
             assert!(!path.exists(), "{case}: no file may be written");
         }
+    }
+
+    /// A 3 x 2 x 2 node block with 2 x 1 x 1 hexes, corners in VTK order.
+    fn block() -> (Vec<[f64; 3]>, Vec<[u32; 8]>) {
+        let mut positions = Vec::new();
+        for k in 0..2 {
+            for j in 0..2 {
+                for i in 0..3 {
+                    let (x, y, z) = (f64::from(i), f64::from(j), f64::from(k));
+                    positions.push([0.1 * x, 1.0 / 3.0 * y + 1e-3 * x, -0.7 * z]);
+                }
+            }
+        }
+        let node = |i: u32, j: u32, k: u32| 6 * k + 3 * j + i;
+        let hexes = (0..2)
+            .map(|i| {
+                [
+                    node(i, 0, 0),
+                    node(i + 1, 0, 0),
+                    node(i + 1, 1, 0),
+                    node(i, 1, 0),
+                    node(i, 0, 1),
+                    node(i + 1, 0, 1),
+                    node(i + 1, 1, 1),
+                    node(i, 1, 1),
+                ]
+            })
+            .collect();
+        (positions, hexes)
+    }
+
+    fn bits(values: &[f64]) -> Vec<u64> {
+        values.iter().map(|v| v.to_bits()).collect()
+    }
+
+    #[test]
+    fn hex_block_round_trips_exactly() {
+        let (positions, hexes) = block();
+        assert_eq!(hexes[0], [0, 1, 4, 3, 6, 7, 10, 9]);
+        let temperature: Vec<f64> = (0..12).map(|i| 20.0 + f64::from(i) / 7.0).collect();
+        let mut pressure = vec![-0.0, 1e-300, f64::MAX, std::f64::consts::E, 3.0, -4.5];
+        pressure.extend([f64::MIN_POSITIVE, 0.1, 0.2, 0.3, 1e300, -1.0 / 3.0]);
+        let velocity: Vec<[f64; 3]> = (0..12)
+            .map(|i| {
+                let t = f64::from(i);
+                [t.sin(), -t.cos() * 1e-7, t / 3.0]
+            })
+            .collect();
+        let strain = [0.1 + 0.2, f64::NAN];
+        let damage = [f64::INFINITY, f64::NEG_INFINITY];
+        let path = temp_dir("hex").join("frame_0001.vtu");
+        write_vtu_3d(
+            &path,
+            &positions,
+            &hexes,
+            &[("temperature", &temperature), ("p & <q>", &pressure)],
+            &[("velocity", &velocity)],
+            &[("plastic strain", &strain), ("damage", &damage)],
+        )
+        .expect("write vtu");
+
+        let root = parse(&path);
+        assert_eq!(root.attr("type"), "UnstructuredGrid");
+        let piece = root.child("UnstructuredGrid").child("Piece");
+        assert_eq!(piece.attr("NumberOfPoints"), "12");
+        assert_eq!(piece.attr("NumberOfCells"), "2");
+
+        let points = piece.child("Points").array("Points");
+        assert_eq!(points.attr("NumberOfComponents"), "3");
+        let xyz: Vec<f64> = points.values();
+        assert_eq!(bits(&xyz), bits(&positions.concat()));
+
+        let cells = piece.child("Cells");
+        let connectivity: Vec<u32> = cells.array("connectivity").values();
+        assert_eq!(connectivity, hexes.concat());
+        let offsets: Vec<u64> = cells.array("offsets").values();
+        assert_eq!(offsets, [8, 16]);
+        let types: Vec<u8> = cells.array("types").values();
+        assert_eq!(types, [12, 12]);
+
+        let point_data = piece.child("PointData");
+        assert_eq!(point_data.attr("Scalars"), "temperature");
+        assert_eq!(point_data.attr("Vectors"), "velocity");
+        for (name, data) in [("temperature", &temperature), ("p & <q>", &pressure)] {
+            let array = point_data.array(name);
+            assert_eq!(array.attr("NumberOfComponents"), "1");
+            assert_eq!(bits(&array.values::<f64>()), bits(data), "array {name}");
+        }
+        let array = point_data.array("velocity");
+        assert_eq!(array.attr("NumberOfComponents"), "3");
+        assert_eq!(bits(&array.values::<f64>()), bits(&velocity.concat()));
+
+        let cell_data = piece.child("CellData");
+        assert_eq!(cell_data.attr("Scalars"), "plastic strain");
+        for (name, data) in [("plastic strain", &strain), ("damage", &damage)] {
+            let array = cell_data.array(name);
+            assert_eq!(array.attr("type"), "Float64");
+            assert_eq!(array.attr("NumberOfComponents"), "1");
+            assert_eq!(bits(&array.values::<f64>()), bits(data), "array {name}");
+        }
+    }
+
+    #[test]
+    fn frames_without_cell_data_have_no_cell_data_element() {
+        let (positions, hexes) = block();
+        let path = temp_dir("hex_no_cells").join("frame.vtu");
+        write_vtu_3d(&path, &positions, &hexes, &[], &[], &[]).expect("write vtu");
+        let piece = parse(&path);
+        let piece = piece.child("UnstructuredGrid").child("Piece");
+        assert!(piece.children.iter().all(|c| c.name != "CellData"));
+        let (positions, quads) = grid();
+        write_vtu(&path, &positions, &quads, &[], &[]).expect("write vtu");
+        let piece = parse(&path);
+        let piece = piece.child("UnstructuredGrid").child("Piece");
+        assert!(piece.children.iter().all(|c| c.name != "CellData"));
+    }
+
+    #[test]
+    fn invalid_hex_input_is_rejected_without_writing() {
+        let (positions, hexes) = block();
+        let path = temp_dir("hex_invalid").join("bad.vtu");
+        let _ = std::fs::remove_file(&path);
+        let points = [0.0; 12];
+        let cells = [0.0; 2];
+        let bad_hexes = [[0, 1, 4, 3, 6, 7, 10, 12]];
+        type Case<'a> = (
+            &'a str,
+            &'a [[u32; 8]],
+            &'a [(&'a str, &'a [f64])],
+            &'a [(&'a str, &'a [[f64; 3]])],
+            &'a [(&'a str, &'a [f64])],
+        );
+        let cases: [Case; 8] = [
+            (
+                "short point scalar",
+                &hexes,
+                &[("s", &points[1..])],
+                &[],
+                &[],
+            ),
+            ("long vector", &hexes, &[], &[("v", &[[0.0; 3]; 13])], &[]),
+            ("cell array per point", &hexes, &[], &[], &[("c", &points)]),
+            ("short cell array", &hexes, &[], &[], &[("c", &cells[1..])]),
+            ("hex index", &bad_hexes, &[], &[], &[("c", &cells[1..])]),
+            (
+                "duplicate cell name",
+                &hexes,
+                &[],
+                &[],
+                &[("c", &cells), ("c", &cells)],
+            ),
+            ("empty cell name", &hexes, &[], &[], &[("", &cells)]),
+            (
+                "duplicate point name",
+                &hexes,
+                &[("s", &points)],
+                &[("s", &[[0.0; 3]; 12])],
+                &[],
+            ),
+        ];
+        for (case, hexes, point_scalars, point_vectors, cell_scalars) in cases {
+            let err = write_vtu_3d(
+                &path,
+                &positions,
+                hexes,
+                point_scalars,
+                point_vectors,
+                cell_scalars,
+            )
+            .expect_err(case);
+            assert_eq!(err.kind(), io::ErrorKind::InvalidInput, "{case}: {err}");
+            assert!(!path.exists(), "{case}: no file may be written");
+        }
+        // A point and a cell array may share a name (ParaView tells them apart).
+        let ok = write_vtu_3d(
+            &path,
+            &positions,
+            &hexes,
+            &[("s", &points)],
+            &[],
+            &[("s", &cells)],
+        );
+        assert!(ok.is_ok());
     }
 
     #[test]

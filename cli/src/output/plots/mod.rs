@@ -1,5 +1,6 @@
-//! PNG figures for reports, by kind: [`line`] plots (histories, forces, energy, sweeps) and
-//! [`shape`] plots (deformed shapes and forging stages, coloured through [`colour_bar`]).
+//! PNG figures for reports, by kind: [`line`] plots (histories, forces, energy, sweeps),
+//! [`shape`] plots (deformed shapes and forging stages, coloured through [`colour_bar`]) and
+//! [`solid`] plots (deformed 3D bodies, shaded, coloured the same way).
 //!
 //! This module owns what they share: the Ubuntu Light font embedded in
 //! `epaint_default_fonts` (registered once with plotters as `sans-serif`, so rendering never
@@ -12,9 +13,13 @@ mod clip;
 mod colour_bar;
 mod line;
 mod shape;
+mod solid;
 
 pub use line::{line_plot, Colour, Marker, Series};
 pub use shape::{shape_plot, stages_plot, Lap, Stage};
+// The 3D run (issue 36) uses these next; until then only the tests do.
+#[allow(unused_imports)]
+pub use solid::{solid_plot, SolidPanel, View};
 
 use std::path::Path;
 use std::sync::OnceLock;
@@ -118,6 +123,17 @@ fn titled<DB: DrawingBackend>(
     let centre = ((strip.dim_in_pixel().0 / 2) as i32, (TITLE_H / 2) as i32);
     centred_text(&strip, title, TITLE_FONT, centre)?;
     Ok(body)
+}
+
+/// At most `max` items, evenly spaced and including the first and the last.
+fn evenly_spaced<T>(items: &[T], max: usize) -> Vec<&T> {
+    if items.len() <= max || max < 2 {
+        return items.iter().take(max.max(1)).collect();
+    }
+    let (last, steps) = (items.len() - 1, max - 1);
+    (0..max)
+        .map(|i| &items[(i * last + steps / 2) / steps])
+        .collect()
 }
 
 /// A closed interval of finite numbers.

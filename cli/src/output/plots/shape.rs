@@ -10,7 +10,8 @@ use plotters::prelude::*;
 use super::clip::clip_polyline;
 use super::colour_bar::ColourScale;
 use super::PANEL_TITLE_FONT;
-use super::{axes_chart, centred_text, draw_err, ensure_font, png_canvas, save, titled};
+use super::{axes_chart, centred_text, draw_err, ensure_font, evenly_spaced, png_canvas};
+use super::{save, titled};
 use super::{Axis, Span, MARGIN_BOTTOM, MARGIN_LEFT, MARGIN_RIGHT, MARGIN_TOP, TITLE_H, X_AREA};
 
 /// One panel of [`stages_plot`]: a deformed shape with its own title and tools.
@@ -390,17 +391,6 @@ impl ShapeLayout {
     fn column_width(&self, column: usize) -> u32 {
         MARGIN_LEFT + self.y_area_of(column) + self.plot_w + MARGIN_RIGHT
     }
-}
-
-/// At most `max` items, evenly spaced and including the first and the last.
-fn evenly_spaced<T>(items: &[T], max: usize) -> Vec<&T> {
-    if items.len() <= max || max < 2 {
-        return items.iter().take(max.max(1)).collect();
-    }
-    let (last, steps) = (items.len() - 1, max - 1);
-    (0..max)
-        .map(|i| &items[(i * last + steps / 2) / steps])
-        .collect()
 }
 
 /// Everything needed to draw a shape figure, laid out before the image is created.
