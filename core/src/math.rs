@@ -50,33 +50,50 @@ pub const JACOBI_SWEEPS: usize = 5;
 /// Entries beyond `1e150` in magnitude (squares overflowing) are not supported.
 #[inline(always)]
 pub fn sym_spectral3(a: [Real; 6]) -> ([Real; 3], [[Real; 3]; 3]) {
+    let (l, v) = sym_spectral3_lanes(a.map(|x| [x]));
+    (l.map(|x| x[0]), v.map(|row| row.map(|x| x[0])))
+}
+
+/// [`sym_spectral3`] of `L` matrices at once, one per lane (`a[c][l]`), eigenvalues
+/// `l[k][lane]` and vectors `V[i][k][lane]`: every operation runs over the lanes in an
+/// inner loop the compiler turns into vector instructions (the square roots and divisions
+/// of the rotations are most of the 3D stress update's time), each lane with the bits of
+/// the one-matrix function.
+#[inline(always)]
+#[allow(clippy::type_complexity)] // lanes of the eigenvalues and of the eigenvector matrix
+pub fn sym_spectral3_lanes<const L: usize>(
+    a: [[Real; L]; 6],
+) -> ([[Real; L]; 3], [[[Real; L]; 3]; 3]) {
     let [a11, a22, a33, a12, a23, a13] = a;
     let mut m = [[a11, a12, a13], [a12, a22, a23], [a13, a23, a33]];
-    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let (zero, one) = ([0.0; L], [1.0; L]);
+    let mut v = [[one, zero, zero], [zero, one, zero], [zero, zero, one]];
     for _ in 0..JACOBI_SWEEPS {
         for (p, q, r) in [(0, 1, 2), (0, 2, 1), (1, 2, 0)] {
-            let apq = m[p][q];
-            let d = m[q][q] - m[p][p];
-            let den = d.abs() + (d * d + 4.0 * apq * apq).sqrt();
-            let t = if den > 0.0 { 2.0 * apq / den } else { 0.0 };
-            let t = if d < 0.0 { -t } else { t };
-            let c = 1.0 / (t * t + 1.0).sqrt();
-            let s = t * c;
-            let tau = s / (1.0 + c);
-            let h = t * apq;
-            m[p][p] -= h;
-            m[q][q] += h;
-            m[p][q] = 0.0;
-            m[q][p] = 0.0;
-            let (arp, arq) = (m[r][p], m[r][q]);
-            m[r][p] = arp - s * (arq + tau * arp);
-            m[p][r] = m[r][p];
-            m[r][q] = arq + s * (arp - tau * arq);
-            m[q][r] = m[r][q];
-            for row in v.iter_mut() {
-                let (vp, vq) = (row[p], row[q]);
-                row[p] = vp - s * (vq + tau * vp);
-                row[q] = vq + s * (vp - tau * vq);
+            for l in 0..L {
+                let apq = m[p][q][l];
+                let d = m[q][q][l] - m[p][p][l];
+                let den = d.abs() + (d * d + 4.0 * apq * apq).sqrt();
+                let t = if den > 0.0 { 2.0 * apq / den } else { 0.0 };
+                let t = if d < 0.0 { -t } else { t };
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                let tau = s / (1.0 + c);
+                let h = t * apq;
+                m[p][p][l] -= h;
+                m[q][q][l] += h;
+                m[p][q][l] = 0.0;
+                m[q][p][l] = 0.0;
+                let (arp, arq) = (m[r][p][l], m[r][q][l]);
+                m[r][p][l] = arp - s * (arq + tau * arp);
+                m[p][r][l] = m[r][p][l];
+                m[r][q][l] = arq + s * (arp - tau * arq);
+                m[q][r][l] = m[r][q][l];
+                for row in v.iter_mut() {
+                    let (vp, vq) = (row[p][l], row[q][l]);
+                    row[p][l] = vp - s * (vq + tau * vp);
+                    row[q][l] = vq + s * (vp - tau * vq);
+                }
             }
         }
     }

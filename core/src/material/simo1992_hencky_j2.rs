@@ -252,6 +252,11 @@ pub(super) trait Kinematics {
     type Stress: Default;
     /// The fields that do not depend on the dimension.
     fn plastic(&mut self) -> Plastic<'_>;
+    /// Step 1 for all lanes at once, before [`Kinematics::trial`] reads each lane: what is
+    /// cheaper computed over the lanes together (3D: the spectral decomposition of `b_e`,
+    /// whose square roots and divisions vectorise over the lanes); nothing by default.
+    #[inline(always)]
+    fn prepare(&self, _t: &mut Self::Trial) {}
     /// Step 1 for lane `l`: the principal values of the trial `b_e`; keeps in `t` what the
     /// other steps need.
     fn trial(&self, l: usize, t: &mut Self::Trial) -> Principal;
@@ -533,6 +538,7 @@ impl HenckyJ2 {
             factor.map(|f| f * self.shear),
         );
         let mut t = Trial::<B::Trial>::default();
+        p.prepare(&mut t.kin);
         for l in 0..LANES {
             let Principal { b, jac, ok } = p.trial(l, &mut t.kin);
             let eps = [

@@ -19,7 +19,7 @@
 
 use super::simo1992_hencky_j2::{HenckyJ2, Kinematics, Plastic, Principal};
 use crate::lanes::{Lanes, LANES};
-use crate::math::{sym_spectral3, Real};
+use crate::math::{sym_spectral3_lanes, Real};
 use serde::{Deserialize, Serialize};
 
 /// Trial elastic left Cauchy-Green tensor `b_e = F C_p^{-1} F^T` (-) as `[11, 22, 33, 12,
@@ -190,6 +190,10 @@ pub struct StressLanes3 {
 /// What the 3D kinematics keep of each lane from the trial to the stress.
 #[derive(Default)]
 pub(super) struct SolidTrial {
+    /// `det F`.
+    jac: Lanes,
+    /// Principal values of `b_e`.
+    b: [Lanes; 3],
     /// `1 / det F`.
     inv_det: Lanes,
     /// `F^{-1}` row-major.
@@ -237,32 +241,50 @@ impl Kinematics for PointLanes3 {
         }
     }
 
-    /// `b_e` by [`elastic_left_cauchy_green3`], its principal values and directions by
-    /// [`sym_spectral3`]; `F^{-1} = adj F / det F`, `det F` by the first row's cofactors.
+    /// `b_e` by [`elastic_left_cauchy_green3`] and `F^{-1} = adj F / det F` (`det F` by the
+    /// first row's cofactors) lane by lane, then the principal values and directions of
+    /// every lane's `b_e` at once by [`sym_spectral3_lanes`].
+    #[inline(always)]
+    fn prepare(&self, t: &mut SolidTrial) {
+        let mut be = [[0.0; LANES]; 6];
+        for l in 0..LANES {
+            let f: [Real; 9] = std::array::from_fn(|c| self.f[c][l]);
+            let cp: [Real; 6] = std::array::from_fn(|c| self.cp_inv[c][l]);
+            // adj F, row-major: (adj F)_ij is the cofactor of F_ji.
+            let adj = [
+                f[4] * f[8] - f[5] * f[7],
+                f[2] * f[7] - f[1] * f[8],
+                f[1] * f[5] - f[2] * f[4],
+                f[5] * f[6] - f[3] * f[8],
+                f[0] * f[8] - f[2] * f[6],
+                f[2] * f[3] - f[0] * f[5],
+                f[3] * f[7] - f[4] * f[6],
+                f[1] * f[6] - f[0] * f[7],
+                f[0] * f[4] - f[1] * f[3],
+            ];
+            let jac = f[0] * adj[0] + f[1] * adj[3] + f[2] * adj[6];
+            let inv_det = 1.0 / jac;
+            t.jac[l] = jac;
+            t.inv_det[l] = inv_det;
+            for c in 0..9 {
+                t.inv[c][l] = adj[c] * inv_det;
+            }
+            for (c, b) in elastic_left_cauchy_green3(f, cp).into_iter().enumerate() {
+                be[c][l] = b;
+            }
+        }
+        let (b, dir) = sym_spectral3_lanes(be);
+        t.b = b;
+        for c in 0..9 {
+            t.dir[c] = dir[c / 3][c % 3];
+        }
+    }
+
+    /// Lane `l` of what [`Kinematics::prepare`] found: `b_e`'s principal values, `det F`,
+    /// and whether both are admissible.
     #[inline(always)]
     fn trial(&self, l: usize, t: &mut SolidTrial) -> Principal {
-        let f: [Real; 9] = std::array::from_fn(|c| self.f[c][l]);
-        let cp: [Real; 6] = std::array::from_fn(|c| self.cp_inv[c][l]);
-        // adj F, row-major: (adj F)_ij is the cofactor of F_ji.
-        let adj = [
-            f[4] * f[8] - f[5] * f[7],
-            f[2] * f[7] - f[1] * f[8],
-            f[1] * f[5] - f[2] * f[4],
-            f[5] * f[6] - f[3] * f[8],
-            f[0] * f[8] - f[2] * f[6],
-            f[2] * f[3] - f[0] * f[5],
-            f[3] * f[7] - f[4] * f[6],
-            f[1] * f[6] - f[0] * f[7],
-            f[0] * f[4] - f[1] * f[3],
-        ];
-        let jac = f[0] * adj[0] + f[1] * adj[3] + f[2] * adj[6];
-        let inv_det = 1.0 / jac;
-        let (b, dir) = sym_spectral3(elastic_left_cauchy_green3(f, cp));
-        t.inv_det[l] = inv_det;
-        for c in 0..9 {
-            t.inv[c][l] = adj[c] * inv_det;
-            t.dir[c][l] = dir[c / 3][c % 3];
-        }
+        let (b, jac) = ([t.b[0][l], t.b[1][l], t.b[2][l]], t.jac[l]);
         let positive = |x: Real| x >= Real::MIN_POSITIVE && x.is_finite();
         Principal {
             b,

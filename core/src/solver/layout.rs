@@ -108,6 +108,36 @@ struct GroupPlan {
 }
 
 impl GroupPlan {
+    /// In 3D, the largest group of 8, 4 or 2 consecutive points from `p` (within `..end`,
+    /// at most `max_group`) over the union of their particle lists, when one vector
+    /// operation per particle of the union and per 4 lanes costs less than each point
+    /// over its own list: `|union| ceil(size / 4) < sum |list|`. The points of a cell
+    /// of a cylinder's O-grid, where each particle has its own support, each have a list
+    /// of their own (about 75 particles at a support of 2) and a union of about a third
+    /// more, so the cell's points are gathered together instead of one by one.
+    fn union_3d<const D: usize>(
+        pt: &ShapeTable<D>,
+        p: usize,
+        end: usize,
+        max_group: usize,
+    ) -> Option<GroupPlan> {
+        let list = |q: usize| &pt.index[pt.row(q)];
+        [8, 4, 2]
+            .into_iter()
+            .filter(|&size| size <= max_group && p + size <= end)
+            .find_map(|size| {
+                let separate: usize = (p..p + size).map(|q| list(q).len()).sum();
+                let mut union: Vec<u32> = (p..p + size).flat_map(list).copied().collect();
+                union.sort_unstable();
+                union.dedup();
+                (union.len() * size.div_ceil(4) < separate).then_some(GroupPlan {
+                    size,
+                    list: union,
+                    strip: false,
+                })
+            })
+    }
+
     /// The group starting at point `p`, within points `..end`: two q2 cells forming a
     /// strip ([`Scatter::strip`]); else the consecutive points
     /// sharing `p`'s list (up to `max_group`), or, where those are a single point or a
@@ -125,6 +155,11 @@ impl GroupPlan {
             }
             n
         };
+        if D == 3 {
+            if let Some(plan) = GroupPlan::union_3d(pt, p, end, max_group) {
+                return plan;
+            }
+        }
         let same = run(p);
         if D == 2 && same == 2 && max_group >= 4 && p + 4 <= end && run(p + 2) == 2 {
             let (a, b) = (list(p), list(p + 2));
