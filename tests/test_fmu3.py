@@ -52,6 +52,12 @@ def test_every_shipped_scene_packs_and_validates_in_fmi2_and_fmi3(rkforge_bin, t
     scenes = sorted((ROOT / "scenes").glob("*.toml"))
     assert len(scenes) >= 13
     for scene in scenes:
+        if 'kinematics = "3d"' in scene.read_text():
+            # The FMU takes 2D scenes for now: a 3D one is refused, naming the key.
+            proc = subprocess.run([rkforge_bin, "fmu", str(scene), "--out", str(tmp_path / "x.fmu")],
+                                  capture_output=True, text=True, timeout=60)
+            assert proc.returncode != 0 and "model.kinematics" in proc.stderr, proc.stderr
+            continue
         outputs = []
         for fmi in ("2", "3"):
             path = pack(rkforge_bin, scene, tmp_path / f"{scene.stem}-{fmi}.fmu", fmi)

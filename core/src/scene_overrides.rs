@@ -9,6 +9,7 @@
 //! its dotted key; errors in the file keep the file's key and line.
 
 use crate::error::{Error, Result};
+use crate::scene::solid::is_solid;
 use crate::scene::{Scene, SolidScene};
 use crate::scene_keys::{key_line, syntax_message};
 use toml::{Table, Value};
@@ -163,17 +164,21 @@ pub fn split_values(text: &str) -> Vec<&str> {
 
 /// A scene type the overrides apply to: the 2D [`Scene`] and the 3D [`SolidScene`].
 pub trait Overridable: serde::Serialize + serde::de::DeserializeOwned {
+    /// Whether the type is a 3D scene (`model.kinematics = "3d"`).
+    const SOLID: bool;
     /// Every non-physical or inconsistent value, as (key path, message).
     fn findings(&self) -> Vec<(String, String)>;
 }
 
 impl Overridable for Scene {
+    const SOLID: bool = false;
     fn findings(&self) -> Vec<(String, String)> {
         self.validate()
     }
 }
 
 impl Overridable for SolidScene {
+    const SOLID: bool = true;
     fn findings(&self) -> Vec<(String, String)> {
         self.validate()
     }
@@ -209,6 +214,14 @@ fn build<S: Overridable>(text: &str, file: &str, overrides: &[(String, Value)]) 
         file: file.to_string(),
         message: syntax_message(text, &e),
     };
+    if is_solid(text) && !S::SOLID {
+        return Err(Error::SceneValue {
+            file: file.to_string(),
+            line: key_line(text, "model.kinematics").unwrap_or(0),
+            key: "model.kinematics".into(),
+            message: "a 3D scene: `rkforge run` runs it; the FMU, the Python package, the ROS node, `compare`, `sweep` and the SSP take 2D scenes for now (issue 36)".into(),
+        });
+    }
     if overrides.is_empty() {
         let scene: S = toml::from_str(text).map_err(syntax)?;
         return match scene.findings().into_iter().next() {

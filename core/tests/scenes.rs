@@ -10,6 +10,8 @@
 //! mass-scaled scene is held in its first steps to the runs' own default bound,
 //! `checks.energy_balance_tol` = 0.05.
 
+use rkforge_core::scene::SceneFile;
+use rkforge_core::solver::SolidSimulation;
 use rkforge_core::{IntegrationRule, Scene, Simulation};
 
 #[test]
@@ -19,6 +21,25 @@ fn every_shipped_scene_runs_a_few_steps() {
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().and_then(|e| e.to_str()) != Some("toml") {
+            continue;
+        }
+        if let SceneFile::Solid(scene) = SceneFile::from_file(&path).unwrap() {
+            for rule in [IntegrationRule::Q4, IntegrationRule::Q2] {
+                let mut scene = (*scene).clone();
+                scene.discretization.integration = rule;
+                let mut sim = SolidSimulation::new(&scene)
+                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                for _ in 0..20 {
+                    sim.step(None).unwrap();
+                    let e = sim.energy();
+                    assert!(
+                        e.kinetic.is_finite() && e.balance_error_rel() < 1e-3,
+                        "{}: {e:?}",
+                        path.display()
+                    );
+                }
+            }
+            count += 1;
             continue;
         }
         for rule in [IntegrationRule::Q4, IntegrationRule::Q2] {

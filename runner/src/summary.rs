@@ -10,6 +10,7 @@
 //! re-referencing and the stage times.
 
 use rkforge_core::outputs::{columns, At, Column, Sample};
+use rkforge_core::scene::Reference;
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -141,8 +142,14 @@ fn lookup(summary: &Value, key: &str) -> Option<f64> {
 
 /// Our figures beside every reference of the scene, one column per referenced key.
 pub fn reference_table(scene: &Scene, summary: &Value) -> String {
+    references_beside(&scene.name, &scene.reference, summary)
+}
+
+/// [`reference_table`] of the scene named `name` with its `references`, for a scene of
+/// either kind (2D or 3D).
+pub fn references_beside(name: &str, references: &[Reference], summary: &Value) -> String {
     let mut keys: Vec<&String> = Vec::new();
-    for r in &scene.reference {
+    for r in references {
         for k in r.values.keys() {
             if !keys.contains(&k) {
                 keys.push(k);
@@ -155,7 +162,7 @@ pub fn reference_table(scene: &Scene, summary: &Value) -> String {
     let _ = writeln!(
         s,
         "{} at t = {:.3e} s: {} rule, {} particles, {} integration points, {} steps, {:.2} s wall",
-        scene.name,
+        name,
         summary["end_time_s"].as_f64().unwrap_or(0.0),
         summary["integration"].as_str().unwrap_or("?"),
         summary["particles"],
@@ -175,8 +182,7 @@ pub fn reference_table(scene: &Scene, summary: &Value) -> String {
     };
     let ours = format!("rkforge {}", summary["integration"].as_str().unwrap_or("?"));
     // The label column fits the longest source in full (two sources may share a prefix).
-    let width = scene
-        .reference
+    let width = references
         .iter()
         .map(|r| r.source.chars().count())
         .chain([ours.chars().count()])
@@ -211,7 +217,7 @@ pub fn reference_table(scene: &Scene, summary: &Value) -> String {
         }
     }
     s.push('\n');
-    for r in &scene.reference {
+    for r in references {
         let _ = write!(s, "{:<width$}", r.source);
         for k in &keys {
             let (_, f) = unit(k);

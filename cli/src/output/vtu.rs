@@ -65,8 +65,6 @@ pub fn write_vtu(
 /// array's length differs from `positions.len()`, a cell array's from `hexes.len()`, a hex
 /// references a point that does not exist, or an array name is empty or used twice among the
 /// point or among the cell arrays. I/O failures are returned as they occur.
-// The 3D run (issue 36) calls it next; until then only the tests do.
-#[cfg_attr(not(test), allow(dead_code))]
 pub fn write_vtu_3d(
     path: &Path,
     positions: &[[f64; 3]],

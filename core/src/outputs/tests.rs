@@ -33,6 +33,10 @@ fn column_names_are_unique_in_every_shipped_scene() {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes");
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
+        // A 3D scene's outputs are the 3D run's own (`cli/src/run_solid.rs`).
+        if crate::scene::solid::is_solid(&std::fs::read_to_string(&path).unwrap()) {
+            continue;
+        }
         let scene = Scene::from_file(&path).unwrap();
         let mut names: Vec<String> = columns(&scene).into_iter().map(|c| c.name).collect();
         names.extend(fields(&scene).map(Output::full_name));

@@ -17,8 +17,6 @@ mod solid;
 
 pub use line::{line_plot, Colour, Marker, Series};
 pub use shape::{shape_plot, stages_plot, Lap, Stage};
-// The 3D run (issue 36) uses these next; until then only the tests do.
-#[allow(unused_imports)]
 pub use solid::{solid_plot, SolidPanel, View};
 
 use std::path::Path;

@@ -23,16 +23,12 @@ use super::{TICK_FONT, X_AREA};
 
 /// Direction the body is seen from: azimuth in the x-y plane from +x towards +y, elevation
 /// above it (degrees); z is up on screen.
-// The 3D run (issue 36) calls it next; until then only the tests do.
-#[cfg_attr(not(test), allow(dead_code))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct View {
     pub azimuth_deg: f64,
     pub elevation_deg: f64,
 }
 
-// The 3D run (issue 36) calls it next; until then only the tests do.
-#[cfg_attr(not(test), allow(dead_code))]
 impl View {
     /// From the positive x, y side, a little above: the outside of a quarter model.
     pub const OUTSIDE: View = View {
@@ -53,8 +49,6 @@ impl Default for View {
 }
 
 /// One frame of [`solid_plot`].
-// The 3D run (issue 36) calls it next; until then only the tests do.
-#[cfg_attr(not(test), allow(dead_code))]
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SolidPanel {
     /// Time of the frame (s), the panel's title.
@@ -121,8 +115,6 @@ const INK: RGBColor = RGBColor(40, 40, 40);
 /// No panels, a panel's values not matching its hexes, a hex index out of range, a non-finite
 /// view angle, nothing finite to draw, a path not ending in `.png`, or a failure to render or
 /// write.
-// The 3D run (issue 36) calls it next; until then only the tests do.
-#[cfg_attr(not(test), allow(dead_code))]
 pub fn solid_plot(path: &Path, title: &str, panels: &[SolidPanel]) -> Result<(), String> {
     let plan = SolidPlan::new(title, panels)?;
     let root = png_canvas(path, plan.layout.size)?;

@@ -60,6 +60,9 @@ pub(super) struct SolidDisc {
     scatter: Scatter<3>,
     /// `N_I(X_J)` in row `J` (no gradients).
     nodal: ShapeTable<3>,
+    /// Mean number of particles whose shape functions reach a point (-): what a point's
+    /// gather and scatter cost.
+    neighbours: Real,
     /// `S_J = sum_I |N_I(X_J)|` (-), the contact's move bound.
     sum_abs: Vec<Real>,
     /// Smallest particle spacing (m).
@@ -410,6 +413,10 @@ impl SolidSimulation {
     /// Energy account (J).
     pub fn energy(&self) -> Energy {
         self.st.energy
+    }
+    /// Mean number of particles whose shape functions reach an integration point (-).
+    pub fn neighbours_per_point(&self) -> Real {
+        self.disc.neighbours
     }
     /// Smallest particle spacing (m).
     pub fn h_min(&self) -> Real {

@@ -191,6 +191,7 @@ impl SolidSimulation {
         let rho = scene.material.density_kg_per_m3;
         let np = p.positions.len();
         let mass = lumped_masses(&p.pt, &p.weights, rho, &p.positions)?;
+        let npts = p.points.len();
         let chunk = (2 * p.layer_points).max(64);
         let scatter = Scatter::new(&p.pt, np, chunk, MAX_GROUP_3D);
         let material = HenckyJ2::new(
@@ -240,7 +241,6 @@ impl SolidSimulation {
                 }
             }
         }
-        let npts = p.points.len();
         let (impact_face, top_face) = (on(zmin), on(zmax));
         let mut disc = SolidDisc {
             inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
@@ -254,6 +254,7 @@ impl SolidSimulation {
             reference_jacobian: vec![1.0; npts],
             scatter,
             nodal: p.nodal,
+            neighbours: p.pt.entries() as Real / npts as Real,
             sum_abs,
             h_min: p.h_min,
             critical_dt0: p.h_min / wave_speed,

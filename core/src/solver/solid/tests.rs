@@ -66,3 +66,44 @@ fn a_coarse_quarter_bar_runs() {
     assert!(r > r0 && l < l0, "{r} {l}");
     assert!(e.balance_error_rel() < 0.01, "{e:?}");
 }
+
+/// The bits do not depend on the number of threads: the stress stage's chunks, the
+/// particle phases' blocks and the contact stage's order are fixed.
+#[test]
+fn the_bits_do_not_depend_on_the_threads() {
+    let scene = quarter_bar([4, 2, 16], "q4", 1e-6);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut sim = SolidSimulation::new(&scene).unwrap();
+            sim.run_toward(1e-6, u64::MAX, |_, _| true).unwrap();
+            sim.state().clone()
+        })
+    };
+    let (one, two) = (run(1), run(2));
+    assert!(one.step > 100);
+    assert_eq!(one, two);
+}
+
+/// The points of an O-grid cell, each with its own particle list (the particles' supports
+/// differ), are gathered as one group over the union of their lists.
+#[test]
+fn a_cells_points_are_one_group() {
+    let scene = quarter_bar([8, 4, 20], "q2", 1e-7);
+    let sim = SolidSimulation::new(&scene).unwrap();
+    let groups = &sim.disc.scatter.group;
+    let firsts = groups.iter().filter(|&&g| g > 0).count();
+    assert_eq!(
+        groups.iter().map(|&g| g as usize).sum::<usize>(),
+        groups.len()
+    );
+    assert_eq!(
+        firsts,
+        groups.len() / 8,
+        "{firsts} groups of {} points",
+        groups.len()
+    );
+}

@@ -1,0 +1,222 @@
+//! One run of a 3D scene (`model.kinematics = "3d"`): the time loop over the history's
+//! samples and frames, the physical penetration measured at each sample, and the files
+//! written: the summary (`summary.json`, with the keys of the 2D summary where they mean
+//! the same, so the scene's references print beside it), the history (`history.csv`), and
+//! with frames the VTK frames of the body (`frames/frame_NNNN.vtu`, hexahedra with the
+//! plastic strain of each cell, and `frames.pvd` for ParaView) and `stages.png`: the body
+//! at each frame seen from outside, and at the end from the other side, where a half or
+//! quarter model shows its sections on the symmetry planes.
+
+use crate::output::plots::{solid_plot, SolidPanel, View};
+use crate::output::vtu::{write_pvd, write_vtu_3d};
+use rkforge_core::scene::SolidScene;
+use rkforge_core::solver::SolidSimulation;
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// The columns of `history.csv` of a 3D run, then `<tool>.force_N` for each tool (its
+/// force along its axis, N).
+const COLUMNS: &str = "time_s,workpiece.radius_m,workpiece.height_m,energy.kinetic_J,energy.internal_J,energy.balance_error_rel,max_penetration_m,max_beyond_plane_m";
+
+/// What a finished (or failed) 3D run produced.
+pub struct SolidReport {
+    /// The summary written to summary.json.
+    pub summary: Value,
+    /// The failure, if the run stopped with an error.
+    pub error: Option<String>,
+}
+
+/// Run `scene` to its end time, writing `summary.json` and `history.csv` into `out`. A run
+/// that fails midway still writes both, the summary with `"status": "error"` and the
+/// error.
+pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let wall = Instant::now();
+    let mut sim = SolidSimulation::new(scene).map_err(|e| e.to_string())?;
+    let end = scene.time.end_s;
+    let nframes = if frames { scene.output.frames } else { 0 };
+    let marks = rkforge_runner::schedule_every(end, scene.history_interval(), nframes).ok_or_else(
+        || {
+            format!(
+                "output.history_interval_s {:e} s: too many samples",
+                scene.history_interval()
+            )
+        },
+    )?;
+    let mut history = String::from(COLUMNS);
+    for t in sim.tools() {
+        let _ = write!(history, ",{}.force_N", t.name);
+    }
+    history.push('\n');
+    let mut row = |sim: &mut SolidSimulation| -> Result<(), String> {
+        let measured = sim.measure_penetration().map_err(|e| e.to_string());
+        let (radius, height) = sim.impact_readings();
+        let (e, st) = (sim.energy(), sim.state());
+        let _ = write!(
+            history,
+            "{:e},{radius:e},{height:e},{:e},{:e},{:e},{:e},{:e}",
+            sim.time(),
+            e.kinetic,
+            e.internal(),
+            e.balance_error_rel(),
+            st.max_penetration,
+            st.max_beyond_plane
+        );
+        for t in sim.tools() {
+            let _ = write!(history, ",{:e}", t.axial_force());
+        }
+        history.push('\n');
+        measured.map(|_| ())
+    };
+    let mut error = row(&mut sim).err();
+    let mut shots = Vec::new();
+    if nframes > 0 {
+        shots.push(Frame::of(&sim));
+    }
+    for mark in &marks {
+        if error.is_some() {
+            break;
+        }
+        if let Err(e) = sim.run_toward(mark.time, u64::MAX, |_, _| true) {
+            error = Some(e.to_string());
+            break;
+        }
+        if mark.sample {
+            error = row(&mut sim).err();
+        }
+        if mark.frame {
+            shots.push(Frame::of(&sim));
+        }
+    }
+    if !shots.is_empty() {
+        write_frames(&sim, &shots, out, &scene.name)?;
+    }
+    let wall_s = wall.elapsed().as_secs_f64();
+    std::fs::write(out.join("history.csv"), &history)
+        .map_err(|e| format!("cannot write history.csv: {e}"))?;
+    let summary = summary(scene, &sim, wall_s, error.as_deref());
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
+    std::fs::write(out.join("summary.json"), text + "\n")
+        .map_err(|e| format!("cannot write summary.json: {e}"))?;
+    Ok(SolidReport { summary, error })
+}
+
+/// The summary of a 3D run that took `wall_s` (s) of wall time, ended by `error` if any.
+fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option<&str>) -> Value {
+    let (radius, height) = sim.impact_readings();
+    let e = sim.energy();
+    let st = sim.state();
+    let particle_steps = sim.particle_count() as f64 * sim.steps() as f64;
+    let t = &sim.times;
+    json!({
+        "status": if error.is_some() { "error" } else { "finished" },
+        "error": error,
+        "scene": scene.name,
+        "kinematics": "3d",
+        "integration": scene.discretization.integration.name(),
+        "support": scene.discretization.support,
+        "particles": sim.particle_count(),
+        "integration_points": sim.point_count(),
+        "neighbours_per_point": sim.neighbours_per_point(),
+        "steps": sim.steps(),
+        "end_time_s": sim.time(),
+        "wall_s": wall_s,
+        "us_per_particle_step": if particle_steps > 0.0 { 1e6 * wall_s / particle_steps } else { 0.0 },
+        "smallest_spacing_m": sim.h_min(),
+        "critical_dt_s": sim.critical_dt0(),
+        "workpiece": { "radius_m": radius, "height_m": height },
+        "energy": {
+            "initial_J": e.initial,
+            "kinetic_J": e.kinetic,
+            "elastic_J": e.elastic,
+            "plastic_J": e.plastic,
+            "contact_work_J": e.contact_work,
+            "balance_error_rel": e.balance_error_rel(),
+        },
+        "contact": {
+            "max_penetration_m": st.max_penetration,
+            "max_beyond_plane_m": st.max_beyond_plane,
+        },
+        "tools": sim.tools().iter().map(|t| json!({
+            "name": t.name,
+            "stroke_m": t.state.stroke,
+            "force_N": t.axial_force(),
+            "peak_force_N": t.state.peak_force,
+        })).collect::<Vec<_>>(),
+        "stage_seconds": {
+            "setup": t.setup.as_secs_f64(),
+            "shape_functions": t.shape_functions.as_secs_f64(),
+            "stress": t.stress.as_secs_f64(),
+            "internal_force": t.internal_force.as_secs_f64(),
+            "contact": t.contact.as_secs_f64(),
+            "integration": t.integration.as_secs_f64(),
+        },
+    })
+}
+
+/// One frame of the body: time (s), particle positions (m) and each cell's plastic strain
+/// (the mean over its integration points, -).
+struct Frame {
+    time: f64,
+    positions: Vec<[f64; 3]>,
+    plastic_strain: Vec<f64>,
+}
+
+impl Frame {
+    fn of(sim: &SolidSimulation) -> Frame {
+        let eps = sim.point_plastic_strain();
+        let per_cell = eps.len() / sim.cells().len().max(1);
+        Frame {
+            time: sim.time(),
+            positions: sim.positions(),
+            plastic_strain: eps
+                .chunks(per_cell.max(1))
+                .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+                .collect(),
+        }
+    }
+}
+
+/// The VTK frames with their collection and the picture of the frames.
+fn write_frames(
+    sim: &SolidSimulation,
+    shots: &[Frame],
+    out: &Path,
+    name: &str,
+) -> Result<(), String> {
+    let dir = out.join("frames");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let mut listed = Vec::new();
+    for (k, f) in shots.iter().enumerate() {
+        let file = format!("frame_{k:04}.vtu");
+        write_vtu_3d(
+            &dir.join(&file),
+            &f.positions,
+            sim.cells(),
+            &[],
+            &[],
+            &[("plastic_strain", &f.plastic_strain)],
+        )
+        .map_err(|e| format!("cannot write {file}: {e}"))?;
+        listed.push((f.time, format!("frames/{file}")));
+    }
+    write_pvd(&out.join("frames.pvd"), &listed)
+        .map_err(|e| format!("cannot write frames.pvd: {e}"))?;
+    let panel = |f: &Frame, view: View| SolidPanel {
+        time: f.time,
+        positions: f.positions.clone(),
+        hexes: sim.cells().to_vec(),
+        cell_values: f.plastic_strain.clone(),
+        label: "plastic strain".into(),
+        view,
+    };
+    let mut panels: Vec<SolidPanel> = shots.iter().map(|f| panel(f, View::OUTSIDE)).collect();
+    if !sim.symmetry_planes().is_empty() {
+        if let Some(last) = shots.last() {
+            panels.push(panel(last, View::SECTIONS));
+        }
+    }
+    solid_plot(&out.join("stages.png"), name, &panels)
+}

@@ -1,0 +1,93 @@
+"""End-to-end tests of `rkforge run` on the shipped 3D scene (scenes/taylor_bar_3d.toml,
+coarsened): the files it writes, their values, and its answers to bad 3D scene files."""
+import csv
+import json
+import subprocess
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from conftest import ROOT, scene_variant
+
+COARSE = {"cells = [8, 4, 60]": "cells = [4, 2, 24]"}
+
+
+@pytest.fixture(scope="module")
+def coarse_run(rkforge_bin, tmp_path_factory):
+    """The quarter Taylor bar on a coarse O-grid, to the end (80 us), with frames."""
+    tmp = tmp_path_factory.mktemp("taylor3d")
+    scene = tmp / "taylor_3d_coarse.toml"
+    scene.write_text(scene_variant("taylor_bar_3d.toml", COARSE))
+    out = tmp / "out"
+    proc = subprocess.run(
+        [rkforge_bin, "run", str(scene), "--out", str(out), "--quiet"],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    return out, proc.stdout
+
+
+def test_summary_is_the_bar_after_impact(coarse_run):
+    out, stdout = coarse_run
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "finished" and s["kinematics"] == "3d" and s["integration"] == "q2"
+    # A quarter O-grid of 4 core cells per side and 2 ring layers: 3 x 3 + 2 x 5 particles
+    # per layer, 25 layers; q2 puts 4 points in each of (2 x 2 + 2 x 4) x 24 cells.
+    assert s["particles"] == 19 * 25 and s["integration_points"] == 4 * 12 * 24
+    assert abs(s["end_time_s"] - 80e-6) < 1e-12
+    w = s["workpiece"]
+    assert 6.8e-3 < w["radius_m"] < 7.5e-3, w
+    assert 21.2e-3 < w["height_m"] < 21.9e-3, w
+    assert s["energy"]["balance_error_rel"] < 0.01
+    assert s["contact"]["max_penetration_m"] < 0.1 * s["smallest_spacing_m"]
+    assert s["contact"]["max_beyond_plane_m"] < 0.1 * s["smallest_spacing_m"]
+    (wall,) = s["tools"]
+    assert wall["name"] == "wall" and wall["peak_force_N"] > 1e4
+    assert "Foulk et al. 2021, converged FE" in stdout and "us per particle-step" in stdout
+
+
+def test_history_has_the_readings_and_the_wall_force(coarse_run):
+    out, _ = coarse_run
+    with open(out / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 81
+    assert float(rows[0]["workpiece.radius_m"]) == pytest.approx(3.2e-3, abs=1e-12)
+    radius = [float(r["workpiece.radius_m"]) for r in rows]
+    assert radius[-1] > 2 * radius[0]
+    assert max(float(r["wall.force_N"]) for r in rows) > 1e4
+
+
+def test_frames_are_hexahedra_with_plastic_strain_and_a_picture(coarse_run):
+    out, _ = coarse_run
+    pvd = ET.parse(out / "frames.pvd").getroot()
+    files = [d.get("file") for d in pvd.iter("DataSet")]
+    assert len(files) == 6
+    grid = ET.parse(out / files[-1]).getroot().find("UnstructuredGrid/Piece")
+    assert int(grid.get("NumberOfPoints")) == 19 * 25
+    assert int(grid.get("NumberOfCells")) == 12 * 24
+    types = grid.find("Cells/DataArray[@Name='types']").text.split()
+    assert set(types) == {"12"}
+    strain = [float(x) for x in grid.find("CellData/DataArray[@Name='plastic_strain']").text.split()]
+    assert len(strain) == 12 * 24 and max(strain) > 1.0
+    assert (out / "stages.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("old, new, expected", [
+    ("cells = [8, 4, 60]", "cells = [7, 4, 60]", "taylor_bar_3d.toml:29: `workpiece.cells`"),
+    ("normal = [0.0, 0.0, 1.0]", "normal = [0.0, 0.0, 0.5]", "`tools[0].normal`"),
+    ("part = \"quarter\"", "part = \"third\"", "third"),
+])
+def test_bad_3d_scene_is_refused_with_key_and_line(rkforge_bin, tmp_path, old, new, expected):
+    scene = tmp_path / "taylor_bar_3d.toml"
+    scene.write_text(scene_variant("taylor_bar_3d.toml", {old: new}))
+    proc = subprocess.run([rkforge_bin, "run", str(scene), "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode != 0 and expected in proc.stderr, proc.stderr
+
+
+def test_3d_overrides_name_the_dotted_key(rkforge_bin, tmp_path):
+    proc = subprocess.run(
+        [rkforge_bin, "run", str(ROOT / "scenes" / "taylor_bar_3d.toml"), "--out", str(tmp_path / "o"),
+         "--set", "discretization.support=9"],
+        capture_output=True, text=True, timeout=60)
+    assert proc.returncode != 0 and "discretization.support" in proc.stderr, proc.stderr
