@@ -39,3 +39,16 @@ pub(crate) fn increasing_table(table: &[[Real; 2]], value_ok: impl Fn(Real) -> b
 pub(crate) fn is_name(name: &str) -> bool {
     !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
+
+/// A scene's name, used for output folders and FMU identifiers: non-empty, letters,
+/// digits, `_` and `-`, under the key `name`.
+pub(crate) fn scene_name(name: &str, out: &mut Checks) {
+    out.check(
+        !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
+        "name",
+        format!("`{name}` must be non-empty and use only letters, digits, `_` and `-`"),
+    );
+}

@@ -129,18 +129,7 @@ impl Scene {
     /// scaling (`time.mass_scaling`) last.
     pub fn validate(&self) -> Vec<(String, String)> {
         let mut out = validation::Checks::default();
-        out.check(
-            !self.name.is_empty()
-                && self
-                    .name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
-            "name",
-            format!(
-                "`{}` must be non-empty and use only letters, digits, `_` and `-`",
-                self.name
-            ),
-        );
+        validation::scene_name(&self.name, &mut out);
         self.model.check(&mut out);
         self.workpiece.check(&mut out);
         across_sections::axisymmetric_workpiece(&self.model, &self.workpiece, &mut out);

@@ -301,18 +301,7 @@ impl SolidScene {
     /// the sections.
     pub fn validate(&self) -> Vec<(String, String)> {
         let mut out = validation::Checks::default();
-        out.check(
-            !self.name.is_empty()
-                && self
-                    .name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-'),
-            "name",
-            format!(
-                "`{}` must be non-empty and use only letters, digits, `_` and `-`",
-                self.name
-            ),
-        );
+        validation::scene_name(&self.name, &mut out);
         self.check_workpiece(&mut out);
         self.material.check(&mut out);
         out.check(

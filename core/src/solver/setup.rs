@@ -249,25 +249,29 @@ impl Simulation {
                 ..Default::default()
             },
         };
-        sim.check_fixed_step(h[0].min(h[1]) / wave_speed)?;
+        check_fixed_step(
+            scene.time.dt_s,
+            sim.st.stable_dt,
+            h[0].min(h[1]) / wave_speed,
+        )?;
         Ok(sim)
     }
+}
 
-    /// A scene's fixed step (`time.dt_s`) above the critical step stops the setup; `h_c` is
-    /// `h_min / c` (s), quoted in the message.
-    fn check_fixed_step(&self, h_c: Real) -> Result<()> {
-        match self.scene.time.dt_s {
-            Some(dt) if dt > self.st.stable_dt => Err(Error::Unstable {
-                step: 0,
-                time: 0.0,
-                dt,
-                dt_crit: self.st.stable_dt,
-                detail: format!(
-                    "time.dt_s is above the critical step 2 / omega_max of this discretisation (h_min / c = {h_c:.4e} s); lower it or remove it to use dt_safety"
-                ),
-            }),
-            _ => Ok(()),
-        }
+/// A scene's fixed step `fixed` (`time.dt_s`, s) above the critical step `stable_dt` (s)
+/// stops the setup; `h_c` is `h_min / c` (s), quoted in the message.
+pub(super) fn check_fixed_step(fixed: Option<Real>, stable_dt: Real, h_c: Real) -> Result<()> {
+    match fixed {
+        Some(dt) if dt > stable_dt => Err(Error::Unstable {
+            step: 0,
+            time: 0.0,
+            dt,
+            dt_crit: stable_dt,
+            detail: format!(
+                "time.dt_s is above the critical step 2 / omega_max of this discretisation (h_min / c = {h_c:.4e} s); lower it or remove it to use dt_safety"
+            ),
+        }),
+        _ => Ok(()),
     }
 }
 

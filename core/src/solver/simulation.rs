@@ -78,6 +78,66 @@ pub struct Ran {
     pub interrupted: bool,
 }
 
+/// A simulation the stepping loop drives: the 2D [`Simulation`] and the 3D
+/// [`super::SolidSimulation`].
+pub(super) trait Stepping: Send {
+    /// Time (s).
+    fn now(&self) -> Real;
+    /// One step of at most `max_dt` (s).
+    fn step_at_most(&mut self, max_dt: Option<Real>) -> Result<()>;
+}
+
+impl Stepping for Simulation {
+    fn now(&self) -> Real {
+        self.st.time
+    }
+    fn step_at_most(&mut self, max_dt: Option<Real>) -> Result<()> {
+        self.step(max_dt)
+    }
+}
+
+/// The one stepping loop of every front end, 2D and 3D: steps `sim` toward `t_end` (s),
+/// the last step shortened to land on it, taking at most `max_steps` steps;
+/// `between(sim, taken)` is called before each step and returns `false` to stop there. The
+/// loop runs on a worker of the current rayon pool, so the parallel stages of each step
+/// start without a thread hand-off.
+pub(super) fn stepping_loop<S: Stepping>(
+    sim: &mut S,
+    t_end: Real,
+    max_steps: u64,
+    mut between: impl FnMut(&mut S, u64) -> bool + Send,
+) -> Result<Ran> {
+    let mut run = move || -> Result<Ran> {
+        let mut ran = Ran {
+            steps: 0,
+            reached: false,
+            interrupted: false,
+        };
+        loop {
+            if sim.now() >= t_end - 1e-12 * t_end.abs() {
+                ran.reached = true;
+                return Ok(ran);
+            }
+            if ran.steps >= max_steps {
+                return Ok(ran);
+            }
+            if !between(sim, ran.steps) {
+                ran.interrupted = true;
+                return Ok(ran);
+            }
+            let left = t_end - sim.now();
+            sim.step_at_most(Some(left))?;
+            ran.steps += 1;
+        }
+    };
+    if rayon::current_thread_index().is_some() {
+        run()
+    } else {
+        // `scope` runs its body on a worker of the global pool.
+        rayon::scope(|_| run())
+    }
+}
+
 impl Simulation {
     /// One central-difference step, at most `max_dt` long (s). The stages, in order (the
     /// module doc of [`crate::solver`] gives each one's formula and file):
@@ -179,37 +239,9 @@ impl Simulation {
         &mut self,
         t_end: Real,
         max_steps: u64,
-        mut between: impl FnMut(&mut Simulation, u64) -> bool + Send,
+        between: impl FnMut(&mut Simulation, u64) -> bool + Send,
     ) -> Result<Ran> {
-        let this = &mut *self;
-        let mut run = move || -> Result<Ran> {
-            let mut ran = Ran {
-                steps: 0,
-                reached: false,
-                interrupted: false,
-            };
-            loop {
-                if this.st.time >= t_end - 1e-12 * t_end.abs() {
-                    ran.reached = true;
-                    return Ok(ran);
-                }
-                if ran.steps >= max_steps {
-                    return Ok(ran);
-                }
-                if !between(this, ran.steps) {
-                    ran.interrupted = true;
-                    return Ok(ran);
-                }
-                this.step(Some(t_end - this.st.time))?;
-                ran.steps += 1;
-            }
-        };
-        if rayon::current_thread_index().is_some() {
-            run()
-        } else {
-            // `scope` runs its body on a worker of the global pool.
-            rayon::scope(|_| run())
-        }
+        stepping_loop(self, t_end, max_steps, between)
     }
 
     /// The scene being run.

@@ -23,7 +23,7 @@ mod tests;
 use super::energy::{Energy, StepEnergy};
 use super::layout::Scatter;
 use super::point_outputs::PointOut;
-use super::simulation::{Ran, StageTimes};
+use super::simulation::{stepping_loop, Ran, StageTimes, Stepping};
 use super::stable_step::{landing_step, tool_step_limit, StepLength};
 use super::stress::{self, has_avx2, Inputs};
 use super::update::{self, Motion, Predictor};
@@ -218,6 +218,15 @@ fn gather(
     }
 }
 
+impl Stepping for SolidSimulation {
+    fn now(&self) -> Real {
+        self.st.time
+    }
+    fn step_at_most(&mut self, max_dt: Option<Real>) -> Result<()> {
+        self.step(max_dt)
+    }
+}
+
 impl SolidSimulation {
     /// One central-difference step, at most `max_dt` long (s), the 2D step's stages in the
     /// 2D order ([`super::Simulation::step`]): stress, step length, force gather and
@@ -354,36 +363,9 @@ impl SolidSimulation {
         &mut self,
         t_end: Real,
         max_steps: u64,
-        mut between: impl FnMut(&mut SolidSimulation, u64) -> bool + Send,
+        between: impl FnMut(&mut SolidSimulation, u64) -> bool + Send,
     ) -> Result<Ran> {
-        let this = &mut *self;
-        let mut run = move || -> Result<Ran> {
-            let mut ran = Ran {
-                steps: 0,
-                reached: false,
-                interrupted: false,
-            };
-            loop {
-                if this.st.time >= t_end - 1e-12 * t_end.abs() {
-                    ran.reached = true;
-                    return Ok(ran);
-                }
-                if ran.steps >= max_steps {
-                    return Ok(ran);
-                }
-                if !between(this, ran.steps) {
-                    ran.interrupted = true;
-                    return Ok(ran);
-                }
-                this.step(Some(t_end - this.st.time))?;
-                ran.steps += 1;
-            }
-        };
-        if rayon::current_thread_index().is_some() {
-            run()
-        } else {
-            rayon::scope(|_| run())
-        }
+        stepping_loop(self, t_end, max_steps, between)
     }
 
     /// The scene being run.

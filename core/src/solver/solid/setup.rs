@@ -17,7 +17,7 @@ use crate::solver::critical_step::critical_step;
 use crate::solver::energy::Energy;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
 use crate::solver::point_outputs::PointOut;
-use crate::solver::setup::lumped_masses;
+use crate::solver::setup::{check_fixed_step, lumped_masses};
 use crate::solver::simulation::StageTimes;
 use crate::solver::update::initial_motion;
 use crate::team::Team;
@@ -308,20 +308,11 @@ impl SolidSimulation {
                 ..Default::default()
             },
         };
-        if let Some(dt) = scene.time.dt_s {
-            if dt > sim.st.stable_dt {
-                return Err(Error::Unstable {
-                    step: 0,
-                    time: 0.0,
-                    dt,
-                    dt_crit: sim.st.stable_dt,
-                    detail: format!(
-                        "time.dt_s is above the critical step 2 / omega_max of this discretisation (h_min / c = {:.4e} s); lower it or remove it to use dt_safety",
-                        sim.disc.h_min / wave_speed
-                    ),
-                });
-            }
-        }
+        check_fixed_step(
+            scene.time.dt_s,
+            sim.st.stable_dt,
+            sim.disc.h_min / wave_speed,
+        )?;
         Ok(sim)
     }
 }
