@@ -69,35 +69,53 @@ pub fn sym_spectral3_lanes<const L: usize>(
     let (zero, one) = ([0.0; L], [1.0; L]);
     let mut v = [[one, zero, zero], [zero, one, zero], [zero, zero, one]];
     for _ in 0..JACOBI_SWEEPS {
-        for (p, q, r) in [(0, 1, 2), (0, 2, 1), (1, 2, 0)] {
-            for l in 0..L {
-                let apq = m[p][q][l];
-                let d = m[q][q][l] - m[p][p][l];
-                let den = d.abs() + (d * d + 4.0 * apq * apq).sqrt();
-                let t = if den > 0.0 { 2.0 * apq / den } else { 0.0 };
-                let t = if d < 0.0 { -t } else { t };
-                let c = 1.0 / (t * t + 1.0).sqrt();
-                let s = t * c;
-                let tau = s / (1.0 + c);
-                let h = t * apq;
-                m[p][p][l] -= h;
-                m[q][q][l] += h;
-                m[p][q][l] = 0.0;
-                m[q][p][l] = 0.0;
-                let (arp, arq) = (m[r][p][l], m[r][q][l]);
-                m[r][p][l] = arp - s * (arq + tau * arp);
-                m[p][r][l] = m[r][p][l];
-                m[r][q][l] = arq + s * (arp - tau * arq);
-                m[q][r][l] = m[r][q][l];
-                for row in v.iter_mut() {
-                    let (vp, vq) = (row[p][l], row[q][l]);
-                    row[p][l] = vp - s * (vq + tau * vp);
-                    row[q][l] = vq + s * (vp - tau * vq);
-                }
-            }
-        }
+        jacobi_rotation::<L, 0, 1, 2>(&mut m, &mut v);
+        jacobi_rotation::<L, 0, 2, 1>(&mut m, &mut v);
+        jacobi_rotation::<L, 1, 2, 0>(&mut m, &mut v);
     }
     ([m[0][0], m[1][1], m[2][2]], v)
+}
+
+/// One Jacobi rotation of [`sym_spectral3_lanes`] in the plane `(P, Q)` (`R` the third
+/// axis) on every lane of `m`, accumulated into `v`: the angle's `s = sin phi`, `tau = s /
+/// (1 + cos phi)` and `h = tan phi a_pq` lane by lane, then each entry's update over the
+/// lanes, so that every loop is one vector operation per quantity (the indices are
+/// constants).
+#[inline(always)]
+fn jacobi_rotation<const L: usize, const P: usize, const Q: usize, const R: usize>(
+    m: &mut [[[Real; L]; 3]; 3],
+    v: &mut [[[Real; L]; 3]; 3],
+) {
+    let (mut s, mut tau, mut h) = ([0.0; L], [0.0; L], [0.0; L]);
+    for l in 0..L {
+        let apq = m[P][Q][l];
+        let d = m[Q][Q][l] - m[P][P][l];
+        let den = d.abs() + (d * d + 4.0 * apq * apq).sqrt();
+        let t = if den > 0.0 { 2.0 * apq / den } else { 0.0 };
+        let t = if d < 0.0 { -t } else { t };
+        let c = 1.0 / (t * t + 1.0).sqrt();
+        s[l] = t * c;
+        tau[l] = s[l] / (1.0 + c);
+        h[l] = t * apq;
+    }
+    for l in 0..L {
+        m[P][P][l] -= h[l];
+        m[Q][Q][l] += h[l];
+        m[P][Q][l] = 0.0;
+        m[Q][P][l] = 0.0;
+        let (arp, arq) = (m[R][P][l], m[R][Q][l]);
+        m[R][P][l] = arp - s[l] * (arq + tau[l] * arp);
+        m[P][R][l] = m[R][P][l];
+        m[R][Q][l] = arq + s[l] * (arp - tau[l] * arq);
+        m[Q][R][l] = m[R][Q][l];
+    }
+    for row in v.iter_mut() {
+        for l in 0..L {
+            let (vp, vq) = (row[P][l], row[Q][l]);
+            row[P][l] = vp - s[l] * (vq + tau[l] * vp);
+            row[Q][l] = vq + s[l] * (vp - tau[l] * vq);
+        }
+    }
 }
 
 /// `sum_k term(k)` over the `D >= 1` components, summed from the first term on:

@@ -878,13 +878,23 @@ impl StressContext<'_, 3> {
         let (base, index, table) = self.neighbours(p0, G);
         let buf = &mut buf[base - lo..];
         for (&i, e) in index.iter().zip(table.chunks_exact(4 * G)) {
+            // The group's terms over its lanes at once (one vector operation per
+            // component), then added to the particle point by point.
+            let (nx, ny, nz) = (&e[G..2 * G], &e[2 * G..3 * G], &e[3 * G..4 * G]);
+            let mut terms = [[0.0; MAX_GROUP_3D]; 3];
+            for (r, tr) in terms.iter_mut().enumerate() {
+                for j in 0..G {
+                    let l = l0 + j;
+                    tr[j] = pw[3 * r][l].mul_add(
+                        nx[j],
+                        pw[3 * r + 1][l].mul_add(ny[j], pw[3 * r + 2][l] * nz[j]),
+                    );
+                }
+            }
             let b = &mut buf[i as usize];
             for j in 0..G {
-                let l = l0 + j;
-                let (nx, ny, nz) = (e[G + j], e[2 * G + j], e[3 * G + j]);
-                for (r, br) in b.iter_mut().enumerate() {
-                    *br += pw[3 * r][l]
-                        .mul_add(nx, pw[3 * r + 1][l].mul_add(ny, pw[3 * r + 2][l] * nz));
+                for (br, tr) in b.iter_mut().zip(&terms) {
+                    *br += tr[j];
                 }
             }
         }
