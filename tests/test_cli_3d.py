@@ -91,3 +91,20 @@ def test_3d_overrides_name_the_dotted_key(rkforge_bin, tmp_path):
          "--set", "discretization.support=9"],
         capture_output=True, text=True, timeout=60)
     assert proc.returncode != 0 and "discretization.support" in proc.stderr, proc.stderr
+
+
+def test_a_crushing_impact_stops_with_a_diagnosis_and_keeps_its_files(rkforge_bin, tmp_path):
+    """At 3000 m/s on the coarsest grid the foot's cells are crushed: the run stops naming
+    the step and why instead of crawling on at ever shorter steps, and still writes its
+    history and a summary with the error."""
+    out = tmp_path / "o"
+    proc = subprocess.run(
+        [rkforge_bin, "run", str(ROOT / "scenes" / "taylor_bar_3d.toml"), "--out", str(out), "--quiet",
+         "--no-frames", "--set", "workpiece.cells=[2, 1, 8]",
+         "--set", "workpiece.initial_velocity_m_per_s=[0.0, 0.0, -3000.0]"],
+        capture_output=True, text=True, timeout=120)
+    assert proc.returncode != 0 and "the stable step fell" in proc.stderr, proc.stderr
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "error" and "crushed" in s["error"]
+    with open(out / "history.csv") as f:
+        assert len(list(csv.DictReader(f))) > 10
