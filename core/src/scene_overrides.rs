@@ -30,12 +30,7 @@ impl SceneSource {
     ///
     /// The file cannot be read, or its scene is invalid (key and line named).
     pub fn from_file(path: &std::path::Path) -> Result<SceneSource> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::SceneSyntax {
-            file: file.clone(),
-            message: format!("cannot read: {e}"),
-        })?;
-        SceneSource::from_str_named(&text, &file)
+        SceneSource::from_str_named(&crate::scene::read_text(path)?, &path.display().to_string())
     }
 
     /// Parse and validate scene text; `file` names it in error messages.

@@ -154,11 +154,7 @@ impl Scene {
 
     /// Read and validate a scene from a file.
     pub fn from_file(path: &std::path::Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::SceneSyntax {
-            file: path.display().to_string(),
-            message: format!("cannot read: {e}"),
-        })?;
-        Scene::from_str_named(&text, &path.display().to_string())
+        Scene::from_str_named(&read_text(path)?, &path.display().to_string())
     }
 
     /// Parse and validate scene text; `file` names it in error messages.
@@ -179,6 +175,15 @@ impl Scene {
         self.discretization.integration = rule;
         self
     }
+}
+
+/// The text of the scene file at `path`; a file that cannot be read is a syntax error
+/// naming it.
+pub(crate) fn read_text(path: &std::path::Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|e| Error::SceneSyntax {
+        file: path.display().to_string(),
+        message: format!("cannot read: {e}"),
+    })
 }
 
 #[cfg(test)]

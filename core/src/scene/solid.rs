@@ -9,7 +9,7 @@
 //! `[thermal]`, mass scaling and kernel re-referencing.
 
 use super::{Checks, IntegrationRule, MaterialSpec, Motion, Reference, Scene, TimeSpec};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::friction::Friction;
 use crate::math::Real;
 use crate::validation::{self, is_name, pos};
@@ -529,11 +529,7 @@ impl SceneFile {
     /// Read and validate a scene of either kind from a file: `model.kinematics = "3d"`
     /// makes it a [`SolidScene`].
     pub fn from_file(path: &std::path::Path) -> Result<SceneFile> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::SceneSyntax {
-            file: path.display().to_string(),
-            message: format!("cannot read: {e}"),
-        })?;
-        SceneFile::from_str_named(&text, &path.display().to_string())
+        SceneFile::from_str_named(&super::read_text(path)?, &path.display().to_string())
     }
 
     /// Parse and validate scene text of either kind; `file` names it in error messages.
