@@ -7,9 +7,11 @@
 # radius, length, deepest penetration of the wall and beyond a symmetry plane), then the
 # Richardson extrapolation of the three grids: observed order p = log2((f1 - f2) / (f2 -
 # f3)), limit f3 + (f3 - f2) / (2^p - 1), with the finest run's distance from it as the
-# uncertainty.
+# uncertainty, against each of REFERENCES ("label:radius_mm,length_mm ...").
 #   scripts/taylor_3d.sh                      (the finest grid, about 26,000 particles, takes minutes)
 #   GRIDS="4,2,30 8,4,60" RULES="q2 q4" SETS="discretization.support=1.5" scripts/taylor_3d.sh
+# Another bar: SCENE=taylor_ofhc_3d GRIDS="4,2,24 8,4,48 16,8,96" REFERENCES="axisymmetric:R,L"
+# (the OFHC bar against its axisymmetric run, docs/accuracy.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p rkforge
@@ -22,7 +24,7 @@ echo "|---|---|---|---|---|---|---|---|---|---|"
 for rule in ${RULES:-q2}; do
   for grid in ${GRIDS:-4,2,30 8,4,60 16,8,120}; do
     name="${grid//,/x}_$rule"
-    ./target/release/rkforge run scenes/taylor_bar_3d.toml --integration "$rule" \
+    ./target/release/rkforge run "scenes/${SCENE:-taylor_bar_3d}.toml" --integration "$rule" \
       --set "workpiece.cells=[${grid//,/, }]" "${sets[@]}" --out "$out/$name" --quiet --no-frames > /dev/null
     python3 - "$out/$name/summary.json" "$grid" "$rule" >> "$out/rows" <<'PY'
 import json, sys
@@ -34,24 +36,28 @@ print(f"| {sys.argv[2]} | {sys.argv[3]} | {s['particles']} | {s['steps']} | {s['
 PY
   done
 done
-python3 - "$out/rows" <<'PY'
+python3 - "$out/rows" "${REFERENCES:-FE:7.226,21.42 axisymmetric_q2:7.2266,21.4303}" <<'PY'
 import math, sys
 rows = [l.split() for l in open(sys.argv[1])]
+refs = [(label, [float(x) for x in values.split(",")])
+        for label, values in (r.split(":") for r in sys.argv[2].split())]
 by_rule = {}
 for grid, rule, r, l in rows:
     by_rule.setdefault(rule, []).append((float(r), float(l)))
 print()
-print("| rule | quantity | observed order | extrapolated (mm) | uncertainty (mm) | against FE | against axisymmetric q2 |")
-print("|---|---|---|---|---|---|---|")
+print("| rule | quantity | observed order | extrapolated (mm) | uncertainty (mm) | " + " | ".join(f"against {l}" for l, _ in refs) + " |")
+print("|---|---|---|---|---|" + "---|" * len(refs))
 for rule, fs in by_rule.items():
     if len(fs) != 3:
         continue
-    for k, (name, fe, axi) in enumerate([("radius", 7.226, 7.2266), ("length", 21.42, 21.4303)]):
+    for k, name in enumerate(["radius", "length"]):
         f1, f2, f3 = (f[k] for f in fs)
         if (f1 - f2) * (f2 - f3) <= 0:
-            print(f"| {rule} | {name} | not monotone ({f1:.4f}, {f2:.4f}, {f3:.4f}) | - | - | {100*(f3/fe-1):+.2f} % (finest) | {100*(f3/axi-1):+.2f} % (finest) |")
+            against = " | ".join(f"{100*(f3/v[k]-1):+.2f} % (finest)" for _, v in refs)
+            print(f"| {rule} | {name} | not monotone ({f1:.4f}, {f2:.4f}, {f3:.4f}) | - | - | {against} |")
             continue
         p = math.log2((f1 - f2) / (f2 - f3))
         lim = f3 + (f3 - f2) / (2**p - 1)
-        print(f"| {rule} | {name} | {p:.2f} | {lim:.4f} | {abs(f3 - lim):.4f} | {100*(lim/fe-1):+.2f} % | {100*(lim/axi-1):+.2f} % |")
+        against = " | ".join(f"{100*(lim/v[k]-1):+.2f} %" for _, v in refs)
+        print(f"| {rule} | {name} | {p:.2f} | {lim:.4f} | {abs(f3 - lim):.4f} | {against} |")
 PY

@@ -3,14 +3,17 @@
 //! written: the summary (`summary.json`, with the keys of the 2D summary where they mean
 //! the same, so the scene's references print beside it), the history (`history.csv`), and
 //! with frames the VTK frames of the body (`frames/frame_NNNN.vtu`, hexahedra with the
-//! plastic strain of each cell, and `frames.pvd` for ParaView) and `stages.png`: the body
-//! at each frame seen from outside, and at the end from the other side, where a half or
-//! quarter model shows its sections on the symmetry planes.
+//! plastic strain of each cell, and its temperature in a scene with `[thermal]`, and
+//! `frames.pvd` for ParaView) and `stages.png`: the body at each frame seen from outside,
+//! and at the end from the other side, where a half or quarter model shows its sections on
+//! the symmetry planes; with `[thermal]`, `temperature.png`: the last frame's temperature
+//! from both sides.
 
 use crate::output::plots::{solid_plot, SolidPanel, View};
 use crate::output::vtu::{write_pvd, write_vtu_3d};
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::SolidSimulation;
+use rkforge_core::THERMAL_MEASURES;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -49,6 +52,11 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
     for t in sim.tools() {
         let _ = write!(history, ",{}.force_N", t.name);
     }
+    if sim.thermal_values().is_some() {
+        for (name, _, _) in THERMAL_MEASURES {
+            let _ = write!(history, ",thermal.{name}");
+        }
+    }
     history.push('\n');
     let mut row = |sim: &mut SolidSimulation| -> Result<(), String> {
         let measured = sim.measure_penetration().map_err(|e| e.to_string());
@@ -66,6 +74,9 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
         );
         for t in sim.tools() {
             let _ = write!(history, ",{:e}", t.axial_force());
+        }
+        for v in sim.thermal_values().into_iter().flatten() {
+            let _ = write!(history, ",{v:e}");
         }
         history.push('\n');
         measured.map(|_| ())
@@ -110,6 +121,13 @@ fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option
     let st = sim.state();
     let particle_steps = sim.particle_count() as f64 * sim.steps() as f64;
     let t = &sim.times;
+    let thermal: Option<serde_json::Map<String, Value>> = sim.thermal_values().map(|v| {
+        THERMAL_MEASURES
+            .iter()
+            .zip(v)
+            .map(|((name, _, _), v)| (name.to_string(), json!(v)))
+            .collect()
+    });
     json!({
         "status": if error.is_some() { "error" } else { "finished" },
         "error": error,
@@ -127,6 +145,7 @@ fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option
         "smallest_spacing_m": sim.h_min(),
         "critical_dt_s": sim.critical_dt0(),
         "workpiece": { "radius_m": radius, "height_m": height },
+        "thermal": thermal,
         "energy": {
             "initial_J": e.initial,
             "kinetic_J": e.kinetic,
@@ -156,25 +175,30 @@ fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option
     })
 }
 
-/// One frame of the body: time (s), particle positions (m) and each cell's plastic strain
-/// (the mean over its integration points, -).
+/// One frame of the body: time (s), particle positions (m), each cell's plastic strain
+/// (-) and in a scene with `[thermal]` its temperature (degrees C), the means over the
+/// cell's integration points.
 struct Frame {
     time: f64,
     positions: Vec<[f64; 3]>,
     plastic_strain: Vec<f64>,
+    temperature: Option<Vec<f64>>,
 }
 
 impl Frame {
     fn of(sim: &SolidSimulation) -> Frame {
         let eps = sim.point_plastic_strain();
-        let per_cell = eps.len() / sim.cells().len().max(1);
+        let per_cell = (eps.len() / sim.cells().len().max(1)).max(1);
+        let cell_means = |v: &[f64]| -> Vec<f64> {
+            v.chunks(per_cell)
+                .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+                .collect()
+        };
         Frame {
             time: sim.time(),
             positions: sim.positions(),
-            plastic_strain: eps
-                .chunks(per_cell.max(1))
-                .map(|c| c.iter().sum::<f64>() / c.len() as f64)
-                .collect(),
+            plastic_strain: cell_means(&eps),
+            temperature: sim.point_temperature().map(cell_means),
         }
     }
 }
@@ -191,32 +215,59 @@ fn write_frames(
     let mut listed = Vec::new();
     for (k, f) in shots.iter().enumerate() {
         let file = format!("frame_{k:04}.vtu");
+        let mut cell_fields: Vec<(&str, &[f64])> = vec![("plastic_strain", &f.plastic_strain)];
+        if let Some(t) = &f.temperature {
+            cell_fields.push(("temperature_C", t));
+        }
         write_vtu_3d(
             &dir.join(&file),
             &f.positions,
             sim.cells(),
             &[],
             &[],
-            &[("plastic_strain", &f.plastic_strain)],
+            &cell_fields,
         )
         .map_err(|e| format!("cannot write {file}: {e}"))?;
         listed.push((f.time, format!("frames/{file}")));
     }
     write_pvd(&out.join("frames.pvd"), &listed)
         .map_err(|e| format!("cannot write frames.pvd: {e}"))?;
-    let panel = |f: &Frame, view: View| SolidPanel {
+    let panel = |f: &Frame, values: &[f64], label: &str, view: View| SolidPanel {
         time: f.time,
         positions: f.positions.clone(),
         hexes: sim.cells().to_vec(),
-        cell_values: f.plastic_strain.clone(),
-        label: "plastic strain".into(),
+        cell_values: values.to_vec(),
+        label: label.into(),
         view,
     };
-    let mut panels: Vec<SolidPanel> = shots.iter().map(|f| panel(f, View::OUTSIDE)).collect();
-    if !sim.symmetry_planes().is_empty() {
-        if let Some(last) = shots.last() {
-            panels.push(panel(last, View::SECTIONS));
-        }
+    let sections = !sim.symmetry_planes().is_empty();
+    let mut panels: Vec<SolidPanel> = shots
+        .iter()
+        .map(|f| panel(f, &f.plastic_strain, "plastic strain", View::OUTSIDE))
+        .collect();
+    if let (true, Some(last)) = (sections, shots.last()) {
+        panels.push(panel(
+            last,
+            &last.plastic_strain,
+            "plastic strain",
+            View::SECTIONS,
+        ));
     }
-    solid_plot(&out.join("stages.png"), name, &panels)
+    solid_plot(&out.join("stages.png"), name, &panels)?;
+    // The last frame's temperature, from outside and on the symmetry planes' sections.
+    let Some((last, temperature)) = shots
+        .last()
+        .and_then(|f| f.temperature.as_ref().map(|t| (f, t)))
+    else {
+        return Ok(());
+    };
+    let mut panels = vec![panel(last, temperature, "temperature (C)", View::OUTSIDE)];
+    if sections {
+        panels.push(panel(last, temperature, "temperature (C)", View::SECTIONS));
+    }
+    solid_plot(
+        &out.join("temperature.png"),
+        &format!("{name}: temperature"),
+        &panels,
+    )
 }

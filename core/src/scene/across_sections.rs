@@ -47,13 +47,7 @@ pub(super) fn heat(
         }
         return;
     }
-    out.check(
-        !material.hardening.is_thermal(),
-        "material.hardening.law",
-        "a flow stress of rate and temperature needs the [thermal] section \
-         (initial_temperature_c, specific_heat_j_per_kg_k)"
-            .into(),
-    );
+    flow_stress_needs_heat(material, out);
     for tool in tools {
         out.check(
             tool.temperature_c.is_none() && tool.heat_transfer_w_per_m2_k == 0.0,
@@ -61,6 +55,18 @@ pub(super) fn heat(
             "a tool's temperature and heat transfer need the [thermal] section".into(),
         );
     }
+}
+
+/// A scene without `[thermal]` (2D or 3D): no flow stress of rate and temperature
+/// (`[material]`).
+pub(super) fn flow_stress_needs_heat(material: &MaterialSpec, out: &mut Checks) {
+    out.check(
+        !material.hardening.is_thermal(),
+        "material.hardening.law",
+        "a flow stress of rate and temperature needs the [thermal] section \
+         (initial_temperature_c, specific_heat_j_per_kg_k)"
+            .into(),
+    );
 }
 
 /// The history interval (`[output]`) against the end time (`[time]`): positive, and at

@@ -5,10 +5,14 @@
 //! checks; what depends on the dimension (the workpiece, the tools, the discretisation's
 //! support) is here. [`SceneFile::from_file`] reads either kind and says which.
 //!
-//! What the 3D solver does not model yet is refused with the key that asks for it:
-//! `[thermal]`, mass scaling and kernel re-referencing.
+//! What the 3D solver does not model yet is refused with the key that asks for it: the
+//! heat that moves (conduction, the surroundings, friction heat) and elasticity over
+//! temperature in `[thermal]` (3D heats adiabatically), mass scaling and kernel
+//! re-referencing.
 
-use super::{Checks, IntegrationRule, MaterialSpec, Motion, Reference, Scene, TimeSpec};
+use super::{
+    Checks, IntegrationRule, MaterialSpec, Motion, Reference, Scene, ThermalSpec, TimeSpec,
+};
 use crate::error::Result;
 use crate::friction::Friction;
 use crate::math::Real;
@@ -264,10 +268,11 @@ pub struct SolidScene {
     pub workpiece: SolidWorkpiece,
     /// Its material.
     pub material: MaterialSpec,
-    /// Temperature and heat: not modelled in 3D yet (refused when given).
+    /// Temperature and heat: the adiabatic heating of the plastic work, as in 2D
+    /// ([`ThermalSpec`]; the heat that moves and elasticity over temperature are refused,
+    /// [`SolidScene::check_adiabatic`]); a scene without it is isothermal.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    #[schemars(with = "Option<serde_json::Value>")]
-    pub thermal: Option<toml::Value>,
+    pub thermal: Option<ThermalSpec>,
     /// Speed/accuracy knobs of the discretisation.
     #[serde(default)]
     pub discretization: SolidDiscretization,
@@ -304,11 +309,13 @@ impl SolidScene {
         validation::scene_name(&self.name, &mut out);
         self.check_workpiece(&mut out);
         self.material.check(&mut out);
-        out.check(
-            self.thermal.is_none(),
-            "thermal",
-            "the 3D solver does not model heat yet; remove [thermal] or run the scene in 2D".into(),
-        );
+        match &self.thermal {
+            Some(t) => {
+                t.check(&mut out);
+                self.check_adiabatic(t, &mut out);
+            }
+            None => super::across_sections::flow_stress_needs_heat(&self.material, &mut out),
+        }
         let d = &self.discretization;
         out.check(
             d.integration != IntegrationRule::Scni,
@@ -374,6 +381,45 @@ impl SolidScene {
         );
         self.checks.check(&mut out);
         out.0
+    }
+
+    /// The 3D solver's heat is adiabatic: each point keeps the heat of its plastic work,
+    /// `rho_0 c dT = beta dW_p` (`solver/heat.rs`), and nothing moves it. Conduction, the
+    /// surroundings (convection, radiation), elasticity over temperature and friction heat
+    /// (which needs the heat stage) are 2D only for now: each is refused with its key.
+    fn check_adiabatic(&self, t: &ThermalSpec, out: &mut validation::Checks) {
+        let moving = [
+            ("conductivity_w_per_m_k", t.conductivity_w_per_m_k != 0.0),
+            (
+                "conductivity_by_temperature",
+                !t.conductivity_by_temperature.is_empty(),
+            ),
+            ("convection_w_per_m2_k", t.convection_w_per_m2_k != 0.0),
+            ("emissivity", t.emissivity != 0.0),
+            (
+                "modulus_factor_by_temperature",
+                !t.modulus_factor_by_temperature.is_empty(),
+            ),
+            ("expansion_per_k", t.expansion_per_k != 0.0),
+            (
+                "thermal_strain_by_temperature",
+                !t.thermal_strain_by_temperature.is_empty(),
+            ),
+        ];
+        for (key, given) in moving {
+            out.check(
+                !given,
+                &format!("thermal.{key}"),
+                "the 3D solver heats adiabatically only for now (the plastic work's heat stays where it is made: no conduction, surroundings or elasticity over temperature); remove it or run the scene in 2D".into(),
+            );
+        }
+        for (i, tool) in self.tools.iter().enumerate() {
+            out.check(
+                tool.friction.is_frictionless(),
+                &format!("tools[{i}].friction"),
+                "friction heat needs the heat stage, which is 2D only for now: a 3D scene with [thermal] takes frictionless tools".into(),
+            );
+        }
     }
 
     fn check_workpiece(&self, out: &mut validation::Checks) {
@@ -622,7 +668,24 @@ separation = false
                 "tools[0].normal",
                 22,
             ),
-            ("[time]", "[thermal]\nx = 1\n[time]", "thermal", 17),
+            (
+                "[time]",
+                "[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0\nconductivity_w_per_m_k = 390.0\n[time]",
+                "thermal.conductivity_w_per_m_k",
+                20,
+            ),
+            (
+                "hardening = { law = \"linear\", yield_stress_pa = 400e6, modulus_pa = 100e6 }",
+                "hardening = { law = \"johnson_cook\", a_pa = 90.0e6, b_pa = 292.0e6, n = 0.31, c = 0.025, reference_strain_rate_per_s = 1.0, m = 1.09, reference_temperature_c = 22.0, melting_temperature_c = 1082.85 }",
+                "material.hardening.law",
+                16,
+            ),
+            (
+                "separation = false",
+                "separation = false\nfriction = 0.1\n[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0",
+                "tools[0].friction",
+                26,
+            ),
             (
                 "end_s = 1e-6",
                 "end_s = 1e-6\nmass_scaling = { factor = 4.0 }",

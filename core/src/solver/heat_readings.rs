@@ -3,9 +3,11 @@
 //! the heat held and what flowed to the tools and the surroundings, as the register of
 //! outputs names them ([`crate::outputs::THERMAL_MEASURES`]).
 
-use super::heat::Temperatures;
+use super::discretization::Thermal;
+use super::heat::{Heat, Temperatures};
 use super::simulation::Simulation;
 use crate::math::Real;
+use crate::scene::ThermalSpec;
 
 impl Simulation {
     /// The thermal measures now, `None` for an isothermal scene: least, largest and mean
@@ -16,29 +18,15 @@ impl Simulation {
         let t = self.temperatures()?;
         let heat = self.st.heat.as_ref()?;
         let share = self.scene.thermal.as_ref()?.friction_heat_to_workpiece;
-        let plastic = self.plastic_heat()?;
-        let (made, content) = (plastic + share * heat.friction_heat_j, self.heat_content()?);
-        let to_tools: Real = heat.to_tools_j.iter().sum();
-        let lost = to_tools + heat.to_surroundings_j;
-        let scale = made.abs()
-            + heat.to_tools_j.iter().map(|q| q.abs()).sum::<Real>()
-            + heat.to_surroundings_j.abs();
-        let balance = if scale > 0.0 {
-            (content - made + lost) / scale
-        } else {
-            0.0
-        };
-        Some([
-            t.min_c,
-            t.max_c,
-            t.mean_c,
-            plastic,
+        Some(measures(
+            t,
+            self.plastic_heat()?,
             heat.friction_heat_j,
-            content,
-            to_tools,
+            share,
+            self.heat_content()?,
+            &heat.to_tools_j,
             heat.to_surroundings_j,
-            balance,
-        ])
+        ))
     }
 
     /// The points' temperatures (degrees C), `None` for an isothermal scene.
@@ -70,34 +58,14 @@ impl Simulation {
 
     /// Least, largest and mean temperature of the workpiece, `None` for an isothermal scene.
     pub fn temperatures(&self) -> Option<Temperatures> {
-        let t = self.point_temperature()?;
-        let (mut min_c, mut max_c) = (Real::INFINITY, Real::NEG_INFINITY);
-        let (mut sum, mut wsum) = (0.0, 0.0);
-        for (&t, &w) in t.iter().zip(&self.disc.weights) {
-            min_c = min_c.min(t);
-            max_c = max_c.max(t);
-            sum += w * t;
-            wsum += w;
-        }
-        Some(Temperatures {
-            min_c,
-            max_c,
-            mean_c: sum / wsum,
-        })
+        Some(temperatures(self.point_temperature()?, &self.disc.weights))
     }
 
     /// Heat the plastic work released into the workpiece so far, `beta sum_p W_p w_p` (J);
     /// `None` for an isothermal scene.
     pub fn plastic_heat(&self) -> Option<Real> {
         let (h, spec) = (self.st.heat.as_ref()?, self.scene.thermal.as_ref()?);
-        Some(
-            spec.taylor_quinney
-                * h.plastic_work
-                    .iter()
-                    .zip(&self.disc.weights)
-                    .map(|(w, v)| w * v)
-                    .sum::<Real>(),
-        )
+        Some(plastic_heat(spec, h, &self.disc.weights))
     }
 
     /// Heat held in the workpiece above its initial temperature, `sum_p rho_0 w_p (h(T_p) -
@@ -105,16 +73,87 @@ impl Simulation {
     /// `None` for an isothermal scene. Equal to [`Simulation::plastic_heat`] while no heat
     /// crosses the surface.
     pub fn heat_content(&self) -> Option<Real> {
-        let (h, spec) = (self.st.heat.as_ref()?, self.scene.thermal.as_ref()?);
-        let capacity = &self.disc.thermal.as_ref()?.capacity;
-        let t0 = spec.initial_temperature_c;
-        Some(
-            self.scene.material.density_kg_per_m3
-                * h.temperature_c
-                    .iter()
-                    .zip(&self.disc.weights)
-                    .map(|(&t, w)| w * capacity.heat_between(t0, t))
-                    .sum::<Real>(),
-        )
+        let (h, th) = (self.st.heat.as_ref()?, self.disc.thermal.as_ref()?);
+        Some(heat_content(th, h, &self.disc.weights))
     }
+}
+
+/// The thermal measures in the order of [`crate::outputs::THERMAL_MEASURES`] (2D and 3D):
+/// the temperatures `t`, the heat made by plastic work and by friction (J, the workpiece
+/// taking `share` of the friction heat), the heat content, the heat to each tool and to the
+/// surroundings (J), and the heat balance `(content - made + lost) / scale` (-), `scale`
+/// the sum of the magnitudes of what was made and of each flow.
+pub(super) fn measures(
+    t: Temperatures,
+    plastic: Real,
+    friction: Real,
+    share: Real,
+    content: Real,
+    to_each_tool: &[Real],
+    to_surroundings: Real,
+) -> [Real; 9] {
+    let made = plastic + share * friction;
+    let to_tools: Real = to_each_tool.iter().sum();
+    let lost = to_tools + to_surroundings;
+    let scale =
+        made.abs() + to_each_tool.iter().map(|q| q.abs()).sum::<Real>() + to_surroundings.abs();
+    let balance = if scale > 0.0 {
+        (content - made + lost) / scale
+    } else {
+        0.0
+    };
+    [
+        t.min_c,
+        t.max_c,
+        t.mean_c,
+        plastic,
+        friction,
+        content,
+        to_tools,
+        to_surroundings,
+        balance,
+    ]
+}
+
+/// Least, largest and volume-weighted mean of the point temperatures `t` (degrees C) with
+/// the points' weights `w_p` (m^3).
+pub(super) fn temperatures(t: &[Real], weights: &[Real]) -> Temperatures {
+    let (mut min_c, mut max_c) = (Real::INFINITY, Real::NEG_INFINITY);
+    let (mut sum, mut wsum) = (0.0, 0.0);
+    for (&t, &w) in t.iter().zip(weights) {
+        min_c = min_c.min(t);
+        max_c = max_c.max(t);
+        sum += w * t;
+        wsum += w;
+    }
+    Temperatures {
+        min_c,
+        max_c,
+        mean_c: sum / wsum,
+    }
+}
+
+/// Heat the plastic work released, `beta sum_p W_p w_p` (J), with the points' weights
+/// `w_p` (m^3).
+pub(super) fn plastic_heat(spec: &ThermalSpec, heat: &Heat, weights: &[Real]) -> Real {
+    spec.taylor_quinney
+        * heat
+            .plastic_work
+            .iter()
+            .zip(weights)
+            .map(|(w, v)| w * v)
+            .sum::<Real>()
+}
+
+/// Heat held above the initial temperature, `sum_p rho_0 w_p (h(T_p) - h(T_0))` (J), with
+/// the points' weights `w_p` (m^3).
+pub(super) fn heat_content(thermal: &Thermal, heat: &Heat, weights: &[Real]) -> Real {
+    let t0 = thermal.spec.initial_temperature_c;
+    thermal.density
+        * heat
+            .temperature_c
+            .iter()
+            .zip(weights)
+            .map(|(&t, w)| w * thermal.capacity.heat_between(t0, t))
+            .sum::<Real>()
 }

@@ -12,15 +12,21 @@
 //! cylinder (`setup.rs`), the contact of the plane tools and symmetry planes
 //! (`contact.rs`) and the readings of a 3D body.
 //!
-//! Not in 3D yet (refused by the scene's validation): heat, mass scaling, kernel
-//! re-referencing, SCNI, self-contact and curved or triangulated tools.
+//! Heat in 3D is the 2D stress stage's adiabatic heating ([`super::heat`]): each point
+//! keeps the heat of its plastic work. Not in 3D yet (refused by the scene's validation):
+//! the heat that moves (conduction, surroundings, friction heat), elasticity over
+//! temperature, mass scaling, kernel re-referencing, SCNI, self-contact and curved or
+//! triangulated tools.
 
 mod contact;
 mod setup;
 #[cfg(test)]
 mod tests;
 
+use super::discretization::Thermal;
 use super::energy::{Energy, StepEnergy};
+use super::heat::{Heat, Heating};
+use super::heat_readings;
 use super::layout::Scatter;
 use super::point_outputs::PointOut;
 use super::simulation::{stepping_loop, Ran, StageTimes, Stepping};
@@ -77,6 +83,8 @@ pub(super) struct SolidDisc {
     cells: Vec<[u32; 8]>,
     /// The scene's tools come first among the planes, the symmetry planes after them.
     scene_tools: usize,
+    /// The heat settings of a scene with `[thermal]` (adiabatic: no transfer).
+    thermal: Option<Thermal>,
 }
 
 /// Everything that changes during a 3D run.
@@ -114,6 +122,8 @@ pub struct SolidState {
     pub anchor_time: Real,
     /// Step count at `anchor_time`.
     pub anchor_step: u64,
+    /// The points' temperatures and plastic work in a scene with `[thermal]`.
+    pub heat: Option<Heat>,
 }
 
 /// The stages' working arrays.
@@ -154,10 +164,11 @@ fn timed<T>(into: &mut Duration, f: impl FnOnce() -> T) -> T {
 }
 
 /// Stage 1: the stress stage ([`stress::stage`] with `D = 3`) on the points of `disc` with
-/// the coefficients of `st`, its buffers in `ws`; sets the stable step estimate
-/// `dt_crit0 a_min` from the smallest deformed cell altitude `a_min` of a unit cell (-);
-/// returns the elastic and plastic energy (J). A point whose update fails stops the run
-/// naming it.
+/// the coefficients of `st`, its buffers in `ws`, heating each point adiabatically in a
+/// scene with `[thermal]` (`dT_p = beta dW_p / (rho_0 c)`, [`Heating`]); sets the stable
+/// step estimate `dt_crit0 a_min` from the smallest deformed cell altitude `a_min` of a
+/// unit cell (-); returns the elastic and plastic energy (J). A point whose update fails
+/// stops the run naming it.
 fn stress_stage(
     disc: &SolidDisc,
     st: &mut SolidState,
@@ -173,8 +184,19 @@ fn stress_stage(
         axi: false,
         spacing: [1.0; 3],
         avx2: has_avx2(),
-        heating: None,
+        heating: disc
+            .thermal
+            .as_ref()
+            .map(|th| Heating::new(&th.spec, &th.capacity, th.density, st.dt_prev)),
     };
+    let heat = st.heat.as_mut().map(|h| {
+        (
+            &mut h.temperature_c[..],
+            &mut h.plastic_work[..],
+            &mut h.plastic_rate[..],
+            None,
+        )
+    });
     let sums = stress::stage(
         &ws.team,
         &disc.scatter,
@@ -182,7 +204,7 @@ fn stress_stage(
         &input,
         &mut st.points,
         &mut ws.out,
-        None,
+        heat,
     )
     .map_err(|(p, m)| Error::Diverged {
         step: st.step,
@@ -474,6 +496,27 @@ impl SolidSimulation {
     /// Integration point positions in the reference configuration (m).
     pub fn point_positions(&self) -> &[[Real; 3]] {
         &self.disc.point_positions
+    }
+    /// The points' temperatures (degrees C), `None` for an isothermal scene.
+    pub fn point_temperature(&self) -> Option<&[Real]> {
+        self.st.heat.as_ref().map(|h| &h.temperature_c[..])
+    }
+    /// The thermal measures now, `None` for an isothermal scene, as the 2D run's
+    /// ([`super::Simulation::thermal_values`], named by [`crate::THERMAL_MEASURES`]): no heat
+    /// crosses a 3D body's surface, so friction heat and the heat to the tools and the
+    /// surroundings are 0, and the balance compares the heat held with the plastic work's.
+    pub fn thermal_values(&self) -> Option<[Real; 9]> {
+        let (heat, th) = (self.st.heat.as_ref()?, self.disc.thermal.as_ref()?);
+        let w = &self.disc.weights;
+        Some(heat_readings::measures(
+            heat_readings::temperatures(&heat.temperature_c, w),
+            heat_readings::plastic_heat(&th.spec, heat, w),
+            0.0,
+            0.0,
+            heat_readings::heat_content(th, heat, w),
+            &[],
+            0.0,
+        ))
     }
     /// Mises stress at each integration point after the last stress stage (Pa).
     pub fn point_von_mises(&self) -> Vec<Real> {

@@ -14,7 +14,9 @@ use crate::plane_tool::PlaneTool;
 use crate::rk_shape::{for_each_index, KernelCloud, Lattice, ShapeTable, Site};
 use crate::scene::solid::{CylinderPart, SolidScene, SolidShape};
 use crate::solver::critical_step::critical_step;
+use crate::solver::discretization::Thermal;
 use crate::solver::energy::Energy;
+use crate::solver::heat::Heat;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
 use crate::solver::point_outputs::PointOut;
 use crate::solver::setup::{check_fixed_step, lumped_masses};
@@ -262,9 +264,16 @@ impl SolidSimulation {
             top_face,
             cells: p.cells,
             scene_tools,
+            thermal: scene.thermal.as_ref().map(|spec| Thermal {
+                spec: spec.clone(),
+                capacity: spec.heat_capacity(),
+                density: rho,
+                transfer: None,
+            }),
         };
+        let temp0 = scene.thermal.as_ref().map(|t| t.initial_temperature_c);
         let mut ws = SolidWorkspace {
-            out: vec![PointOut::initial(&disc.material); npts],
+            out: vec![PointOut::at(&disc.material, 0.0, temp0); npts],
             buf: disc.scatter.buffers(),
             f_int: vec![[0.0; 3]; np],
             v_prev: v.clone(),
@@ -291,6 +300,10 @@ impl SolidSimulation {
             stable_dt: disc.critical_dt0,
             anchor_time: 0.0,
             anchor_step: 0,
+            heat: scene
+                .thermal
+                .as_ref()
+                .map(|t| Heat::initial(t, npts, ntools, 0, false, false, None)),
         };
         disc.critical_dt0 = measure_critical_step(&disc, &mut st, &mut ws)?;
         st.stable_dt = disc.critical_dt0;

@@ -1,0 +1,90 @@
+"""End-to-end tests of `rkforge run` on the shipped 3D OFHC copper bar
+(scenes/taylor_ofhc_3d.toml, coarsened): Johnson-Cook with adiabatic heating in 3D, the heat
+it books against the energy account's plastic work, the softening heating gives (the sign
+the axisymmetric run shows), its files, and the refusal of the heat 3D does not model."""
+import csv
+import json
+import subprocess
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from conftest import ROOT, scene_variant
+
+COARSE = "workpiece.cells=[4, 2, 24]"
+
+
+def run(rkforge_bin, out, *sets, frames=True):
+    args = [rkforge_bin, "run", str(ROOT / "scenes" / "taylor_ofhc_3d.toml"), "--out", str(out),
+            "--quiet", "--set", COARSE]
+    for s in sets:
+        args += ["--set", s]
+    if not frames:
+        args.append("--no-frames")
+    proc = subprocess.run(args, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads((out / "summary.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def heated(rkforge_bin, tmp_path_factory):
+    out = tmp_path_factory.mktemp("ofhc3d") / "heated"
+    return out, run(rkforge_bin, out)
+
+
+def test_heat_held_is_the_plastic_works_share(heated):
+    """Adiabatic: every joule the points hold above 22 C is beta = 0.9 of the plastic work
+    the energy account dissipated, and nothing left the body."""
+    _, s = heated
+    t = s["thermal"]
+    assert s["status"] == "finished"
+    assert t["heat_content_J"] == pytest.approx(0.9 * s["energy"]["plastic_J"], rel=1e-9)
+    assert t["plastic_heat_J"] == pytest.approx(t["heat_content_J"], rel=1e-9)
+    assert abs(t["heat_balance_rel"]) < 1e-9
+    assert t["heat_to_tools_J"] == 0.0 and t["heat_to_surroundings_J"] == 0.0
+    # The foot heats by hundreds of kelvin, the far end stays at the start's 22 C.
+    assert 150.0 < t["temperature_max_c"] < 600.0, t
+    assert t["temperature_min_c"] == pytest.approx(22.0, abs=0.5)
+    assert 22.0 < t["temperature_mean_c"] < t["temperature_max_c"]
+    assert s["energy"]["balance_error_rel"] < 0.01
+
+
+def test_heating_softens_the_foot(rkforge_bin, heated, tmp_path):
+    """As in the axisymmetric run (docs/accuracy.md: 0.11 mm shorter and 0.46 mm wider with
+    heating on 11 x 67): the heated bar ends shorter with a wider foot than with beta = 0."""
+    _, hot = heated
+    cold = run(rkforge_bin, tmp_path / "cold", "thermal.taylor_quinney=0.0", frames=False)
+    assert cold["thermal"]["temperature_max_c"] == pytest.approx(22.0, abs=1e-9)
+    assert hot["workpiece"]["height_m"] < cold["workpiece"]["height_m"] - 2e-5
+    assert hot["workpiece"]["radius_m"] > cold["workpiece"]["radius_m"] + 5e-5
+
+
+def test_history_frames_and_picture_carry_the_temperature(heated):
+    out, _ = heated
+    with open(out / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 101
+    hottest = [float(r["thermal.temperature_max_c"]) for r in rows]
+    assert hottest[0] == pytest.approx(22.0) and hottest[-1] > 150.0
+    assert all(b >= a - 1e-9 for a, b in zip(hottest, hottest[1:]))
+    pvd = ET.parse(out / "frames.pvd").getroot()
+    last = [d.get("file") for d in pvd.iter("DataSet")][-1]
+    grid = ET.parse(out / last).getroot().find("UnstructuredGrid/Piece")
+    temps = [float(x) for x in
+             grid.find("CellData/DataArray[@Name='temperature_C']").text.split()]
+    assert len(temps) == int(grid.get("NumberOfCells")) and max(temps) > 100.0
+    assert (out / "temperature.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("old, new, expected", [
+    ("taylor_quinney = 0.9", "taylor_quinney = 0.9\nconductivity_w_per_m_k = 390.0",
+     "taylor_ofhc_3d.toml:46: `thermal.conductivity_w_per_m_k`"),
+    ("[thermal]\ninitial_temperature_c = 22.0\nspecific_heat_j_per_kg_k = 383.0\ntaylor_quinney = 0.9\n",
+     "", "`material.hardening.law`"),
+])
+def test_heat_3d_does_not_model_is_refused(rkforge_bin, tmp_path, old, new, expected):
+    scene = tmp_path / "taylor_ofhc_3d.toml"
+    scene.write_text(scene_variant("taylor_ofhc_3d.toml", {old: new}))
+    proc = subprocess.run([rkforge_bin, "run", str(scene), "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode != 0 and expected in proc.stderr, proc.stderr
