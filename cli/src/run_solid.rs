@@ -34,6 +34,7 @@ pub struct SolidReport {
 pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let wall = Instant::now();
+    let heap = crate::heap::start();
     let mut sim = SolidSimulation::new(scene).map_err(|e| e.to_string())?;
     let end = scene.time.end_s;
     let nframes = if frames { scene.output.frames } else { 0 };
@@ -96,7 +97,8 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
     let wall_s = wall.elapsed().as_secs_f64();
     std::fs::write(out.join("history.csv"), &history)
         .map_err(|e| format!("cannot write history.csv: {e}"))?;
-    let summary = summary(scene, &sim, wall_s, error.as_deref());
+    let mut summary = summary(scene, &sim, wall_s, error.as_deref());
+    summary["memory_bytes"] = json!(crate::heap::peak_since(heap));
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     std::fs::write(out.join("summary.json"), text + "\n")
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
