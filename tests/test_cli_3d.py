@@ -1,7 +1,10 @@
-"""End-to-end tests of `rkforge run` on the shipped 3D scene (scenes/taylor_bar_3d.toml,
-coarsened): the files it writes, their values, and its answers to bad 3D scene files."""
+"""End-to-end tests of `rkforge run` and `rkforge sweep` on the shipped 3D scene
+(scenes/taylor_bar_3d.toml, coarsened): the files they write, their values, and their
+answers to bad 3D scene files and options."""
 import csv
 import json
+import math
+import re
 import subprocess
 import xml.etree.ElementTree as ET
 
@@ -108,3 +111,79 @@ def test_a_crushing_impact_stops_with_a_diagnosis_and_keeps_its_files(rkforge_bi
     assert s["status"] == "error" and "crushed" in s["error"]
     with open(out / "history.csv") as f:
         assert len(list(csv.DictReader(f))) > 10
+
+
+BAR_3D = str(ROOT / "scenes" / "taylor_bar_3d.toml")
+
+
+def test_sweep_of_the_3d_bar_on_two_grids(rkforge_bin, tmp_path):
+    """`rkforge sweep` on the shipped 3D bar, cut short, on two O-grids (the axial cells 10
+    and 16, the core's 2 and 4): a row per run with the grid as the cylinder's cells, finite
+    readings, an error against the Richardson reference of the two grids at the axial
+    spacing ratio, which sweep.md states."""
+    out = tmp_path / "sweep"
+    proc = subprocess.run(
+        [rkforge_bin, "sweep", BAR_3D, "--resolution", "2x1x10,4x2x16", "--integration", "q2",
+         "--set", "time.end_s=20e-6", "--out", str(out)],
+        capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    with open(out / "sweep.csv") as f:
+        reader = csv.DictReader(f)
+        header, rows = reader.fieldnames, list(reader)
+    assert header[:3] == ["time.end_s", "integration", "cells"] and "nx" not in header
+    # The fixed wall's peak force is not compared (as in 2D).
+    assert "peak_force_N" not in header and header[-2:] == ["error_rel", "pareto"]
+    assert [(r["integration"], r["cells"], r["time.end_s"]) for r in rows] == [
+        ("q2", "2x1x10", "20e-6"), ("q2", "4x2x16", "20e-6")]
+    radius = [float(r["radius_m"]) for r in rows]
+    height = [float(r["height_m"]) for r in rows]
+    for r, rad, h in zip(rows, radius, height):
+        assert math.isfinite(rad) and 3.2e-3 < rad < 10e-3, r
+        assert math.isfinite(h) and 20e-3 < h < 32.4e-3, r
+        assert int(r["steps"]) > 0 and float(r["wall_s"]) > 0 and float(r["memory_MB"]) > 0, r
+        assert math.isfinite(float(r["error_rel"])) and float(r["error_rel"]) >= 0, r
+    # The finer grid holds more.
+    assert float(rows[0]["memory_MB"]) < float(rows[1]["memory_MB"])
+    # Two grids of spacing ratio 1.6 (10 to 16 axial cells): order 1, f + (f - c) / 0.6.
+    ref_radius = radius[1] + (radius[1] - radius[0]) / 0.6
+    ref_height = height[1] + (height[1] - height[0]) / 0.6
+    md = (out / "sweep.md").read_text()
+    match = re.search(r"Reference \(extrapolated, \+- uncertainty\): radius_m = (\S+) \+- \S+, "
+                      r"height_m = (\S+) \+-", md)
+    assert match, md
+    assert float(match[1]) == pytest.approx(ref_radius, rel=1e-5)
+    assert float(match[2]) == pytest.approx(ref_height, rel=1e-5)
+    assert "| q2 | 4x2x16 |" in md and "workpiece.cells" in md
+    expected = max(abs(radius[1] - ref_radius) / ref_radius, abs(height[1] - ref_height) / ref_height)
+    assert float(rows[1]["error_rel"]) == pytest.approx(expected, rel=1e-4)
+    s = json.loads((out / "time.end_s=20e-6" / "q2_4x2x16_0.5" / "summary.json").read_text())
+    assert s["kinematics"] == "3d" and s["end_time_s"] == pytest.approx(20e-6)
+    assert (out / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_sweep_of_a_3d_scene_takes_q4_and_q2_by_default(rkforge_bin, tmp_path):
+    out = tmp_path / "sweep"
+    proc = subprocess.run(
+        [rkforge_bin, "sweep", BAR_3D, "--resolution", "2x1x8", "--set", "time.end_s=5e-6",
+         "--out", str(out)],
+        capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    with open(out / "sweep.csv") as f:
+        assert [r["integration"] for r in csv.DictReader(f)] == ["q4", "q2"]
+
+
+@pytest.mark.parametrize("scene, args, expected", [
+    (BAR_3D, ["--resolution", "8x60"], ["--resolution `8x60`", "three numbers", "8x4x60"]),
+    (BAR_3D, ["--resolution", "7x4x60"], ["--resolution `7x4x60`", "workpiece.cells"]),
+    (BAR_3D, ["--integration", "q2,scni"], ["--integration `scni`", "3D scene integrates with q4 or q2"]),
+    (BAR_3D, ["--set", "discretization.support=2,9"], ["discretization.support"]),
+    (str(ROOT / "scenes" / "taylor_bar.toml"), ["--resolution", "21x51x3"],
+     ["--resolution `21x51x3`", "NXxNY"]),
+])
+def test_sweep_refuses_a_grid_or_rule_of_the_other_kind(rkforge_bin, tmp_path, scene, args, expected):
+    proc = subprocess.run([rkforge_bin, "sweep", scene, *args, "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 1 and "panicked" not in proc.stderr, proc.stderr
+    for e in expected:
+        assert e in proc.stderr, (e, proc.stderr)
+    assert not (tmp_path / "o" / "sweep.csv").exists()

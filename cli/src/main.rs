@@ -76,11 +76,13 @@ struct RingChartArgs {
 struct SweepArgs {
     /// Scene file (TOML).
     scene: PathBuf,
-    /// Particle grids, e.g. 11x26,21x51,41x101 (default: the scene's grid).
+    /// Grids, e.g. 11x26,21x51,41x101 (2D: particles along x and y) or 4x2x30,8x4x60 (3D: a
+    /// cylinder's cells, core x ring x axial, or a box's particles along x, y, z); default:
+    /// the scene's grid.
     #[arg(long, value_delimiter = ',')]
     resolution: Vec<String>,
-    /// Integration rules, e.g. q4,q2,scni.
-    #[arg(long, value_delimiter = ',', default_values_t = ["q4".to_string(), "q2".to_string(), "scni".to_string()])]
+    /// Integration rules, e.g. q4,q2,scni (default: q4,q2,scni in 2D, q4,q2 in 3D).
+    #[arg(long, value_delimiter = ',')]
     integration: Vec<String>,
     /// Time-step safety factors (the scene's fixed step is replaced by these), e.g. 0.5,0.9.
     #[arg(long, value_delimiter = ',', default_values_t = [0.5])]
@@ -356,12 +358,14 @@ fn compare_command(a: CompareArgs) -> Result<(), String> {
 }
 
 /// The scenes of the `--set KEY=V1,V2` grid (every combination, the first key varying
-/// slowest), each validated before anything runs.
-fn sweep_cases(path: &std::path::Path, sets: &[String]) -> Result<Vec<sweep::Case>, String> {
-    let source = SceneSource::from_file(path).map_err(|e| e.to_string())?;
+/// slowest), each built by `build` from its overrides and validated before anything runs.
+fn sweep_cases<S>(
+    sets: &[String],
+    build: impl Fn(&[(String, toml::Value)]) -> Result<S, String>,
+) -> Result<Vec<sweep::Case<S>>, String> {
     let mut cases = vec![sweep::Case {
         inputs: Vec::new(),
-        scene: source.scene().clone(),
+        scene: build(&[])?,
     }];
     let mut overrides: Vec<Vec<(String, toml::Value)>> = vec![Vec::new()];
     for arg in sets {
@@ -372,13 +376,11 @@ fn sweep_cases(path: &std::path::Path, sets: &[String]) -> Result<Vec<sweep::Cas
             for text in split_values(values) {
                 let mut o = o.clone();
                 o.push((key.to_string(), parse_value(text)));
-                let built = SceneSource::with_overrides(source.text(), source.file(), o.clone())
-                    .map_err(|e| e.to_string())?;
                 let mut inputs = case.inputs.clone();
                 inputs.push((key.to_string(), text.trim().to_string()));
                 next.push(sweep::Case {
                     inputs,
-                    scene: built.scene().clone(),
+                    scene: build(&o)?,
                 });
                 next_overrides.push(o);
             }
@@ -391,42 +393,79 @@ fn sweep_cases(path: &std::path::Path, sets: &[String]) -> Result<Vec<sweep::Cas
 
 fn sweep_command(a: SweepArgs) -> Result<(), String> {
     set_threads(a.threads)?;
-    let cases = sweep_cases(&a.scene, &a.set)?;
-    let scene = &cases[0].scene;
-    let mut grids = Vec::new();
-    for r in &a.resolution {
-        let parsed = r.split_once('x').and_then(|(x, y)| {
-            Some([
-                x.trim().parse::<usize>().ok()?,
-                y.trim().parse::<usize>().ok()?,
-            ])
-        });
-        match parsed {
-            Some(g) if g[0] >= 2 && g[1] >= 2 => grids.push(g),
-            _ => {
-                return Err(format!(
-                    "--resolution `{r}`: expected NXxNY with both at least 2, e.g. 21x51"
-                ))
-            }
-        }
+    let text = std::fs::read_to_string(&a.scene).unwrap_or_default();
+    if is_solid(&text) {
+        let file = a.scene.display().to_string();
+        let cases = sweep_cases(&a.set, |o| {
+            solid_with_overrides(&text, &file, o).map_err(|e| e.to_string())
+        })?;
+        return sweep_scenes(&a, &cases);
     }
+    let source = SceneSource::from_file(&a.scene).map_err(|e| e.to_string())?;
+    let cases = sweep_cases(&a.set, |o| {
+        SceneSource::with_overrides(source.text(), source.file(), o.to_vec())
+            .map(|built| built.scene().clone())
+            .map_err(|e| e.to_string())
+    })?;
+    sweep_scenes(&a, &cases)
+}
+
+/// The sweep of `cases` (2D or 3D) with the options of `a`, checked before anything runs.
+fn sweep_scenes<S: sweep::Sweepable>(
+    a: &SweepArgs,
+    cases: &[sweep::Case<S>],
+) -> Result<(), String> {
+    let scene = &cases[0].scene;
+    let names: Vec<&str> = S::RULES.iter().map(|r| r.name()).collect();
+    let listed = match names.split_last() {
+        Some((last, [])) => last.to_string(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    };
     let mut rules = Vec::new();
     for r in &a.integration {
-        rules.push(
-            IntegrationRule::parse(r)
-                .ok_or_else(|| format!("--integration `{r}`: expected q4, q2 or scni"))?,
-        );
+        let rule = IntegrationRule::parse(r)
+            .ok_or_else(|| format!("--integration `{r}`: expected {listed}"))?;
+        if !S::RULES.contains(&rule) {
+            return Err(format!(
+                "--integration `{r}`: a {} scene integrates with {listed}",
+                S::KIND
+            ));
+        }
+        rules.push(rule);
+    }
+    if rules.is_empty() {
+        rules = S::RULES.to_vec();
     }
     if let Some(s) = a.dt_safety.iter().find(|s| !(**s > 0.0 && **s <= 1.0)) {
         return Err(format!("--dt-safety {s}: must lie in (0, 1]"));
     }
+    let mut grids = Vec::new();
+    for r in &a.resolution {
+        let parsed: Option<Vec<usize>> = r.split('x').map(|n| n.trim().parse().ok()).collect();
+        match parsed {
+            Some(g) if g.len() == S::DIMENSIONS && g.iter().all(|&n| n >= S::MIN_COUNT) => {
+                scene
+                    .variant(rules[0], &g, a.dt_safety.first().copied().unwrap_or(0.5))
+                    .map_err(|e| format!("--resolution `{r}`: {e}"))?;
+                grids.push(g);
+            }
+            _ => {
+                return Err(format!(
+                    "--resolution `{r}`: expected {}",
+                    scene.grid_form()
+                ))
+            }
+        }
+    }
     if grids.is_empty() {
-        grids.push(scene.workpiece.particles);
+        grids.push(scene.grid());
     }
     let out = a
         .out
-        .unwrap_or_else(|| PathBuf::from("out").join(format!("sweep_{}", scene.name)));
-    let table = sweep::sweep(&cases, &grids, &rules, &a.dt_safety, &out)?;
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(format!("sweep_{}", scene.name())));
+    let table = sweep::sweep(cases, &grids, &rules, &a.dt_safety, &out)?;
     println!("{table}");
     println!("sweep.csv, sweep.md and sweep.png in {}", out.display());
     Ok(())

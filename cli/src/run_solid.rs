@@ -60,7 +60,8 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
     history.push('\n');
     let mut row = |sim: &mut SolidSimulation| -> Result<(), String> {
         let measured = sim.measure_penetration().map_err(|e| e.to_string());
-        let (radius, height) = sim.impact_readings();
+        let b = sim.readings();
+        let (radius, height) = (b.radius, b.height());
         let (e, st) = (sim.energy(), sim.state());
         let _ = write!(
             history,
@@ -116,7 +117,7 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
 
 /// The summary of a 3D run that took `wall_s` (s) of wall time, ended by `error` if any.
 fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option<&str>) -> Value {
-    let (radius, height) = sim.impact_readings();
+    let b = sim.readings();
     let e = sim.energy();
     let st = sim.state();
     let particle_steps = sim.particle_count() as f64 * sim.steps() as f64;
@@ -138,13 +139,20 @@ fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option
         "particles": sim.particle_count(),
         "integration_points": sim.point_count(),
         "neighbours_per_point": sim.neighbours_per_point(),
+        "memory_bytes": sim.memory_bytes(),
         "steps": sim.steps(),
         "end_time_s": sim.time(),
         "wall_s": wall_s,
         "us_per_particle_step": if particle_steps > 0.0 { 1e6 * wall_s / particle_steps } else { 0.0 },
         "smallest_spacing_m": sim.h_min(),
         "critical_dt_s": sim.critical_dt0(),
-        "workpiece": { "radius_m": radius, "height_m": height },
+        "workpiece": {
+            "radius_m": b.radius,
+            "height_m": b.height(),
+            "x_range_m": b.extents[0],
+            "y_range_m": b.extents[1],
+            "z_range_m": b.extents[2],
+        },
         "thermal": thermal,
         "energy": {
             "initial_J": e.initial,

@@ -6,18 +6,191 @@
 //! estimated from three grids when they converge monotonically, else order 1); the reference
 //! is the mean over the rules, its uncertainty the larger of their spread and the distance of
 //! the finest run from its extrapolation.
+//!
+//! One path for both kinds of scene: [`Sweepable`] is what differs between a 2D [`Scene`]
+//! (a grid is `[nx, ny]` particles) and a 3D [`SolidScene`] (a cylinder's `cells` or a
+//! box's `particles`, three numbers): how a grid is set, written and compared, and how one
+//! run is made.
 
 use crate::output::plots;
-use crate::run;
+use crate::{run, run_solid};
+use rkforge_core::scene::solid::ShapeKind;
+use rkforge_core::scene::SolidScene;
 use rkforge_core::{IntegrationRule, Scene};
 use serde_json::Value;
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// A scene the sweep runs on a grid of resolutions, rules and safety factors.
+pub trait Sweepable: Sized {
+    /// The scene's name.
+    fn name(&self) -> &str;
+    /// `2D` or `3D`, for messages.
+    const KIND: &'static str;
+    /// The integration rules the solver of this kind has, the default of `--integration`.
+    const RULES: &'static [IntegrationRule];
+    /// The numbers of a grid (`--resolution`): 2 in 2D, 3 in 3D.
+    const DIMENSIONS: usize;
+    /// The least of a grid's numbers (the scene's validation checks the rest).
+    const MIN_COUNT: usize;
+    /// The form of a grid this scene takes, for messages.
+    fn grid_form(&self) -> String;
+    /// The scene's own grid.
+    fn grid(&self) -> Vec<usize>;
+    /// The columns of `sweep.csv` that hold a grid.
+    fn grid_columns(&self) -> &'static str;
+    /// A grid's fields in `sweep.csv`.
+    fn grid_fields(grid: &[usize]) -> String;
+    /// A line of `sweep.md` that says what a grid's numbers are, if they need saying.
+    fn grid_note(&self) -> Option<String>;
+    /// The particle spacing of grid `coarse` over that of the finer grid `fine` (-).
+    fn spacing_ratio(&self, coarse: &[usize], fine: &[usize]) -> f64;
+    /// The scene of one run: `rule` on `grid` with the step at `safety` of the stable
+    /// step (the scene's fixed step dropped).
+    ///
+    /// # Errors
+    ///
+    /// The scene is invalid on this grid or with this rule, the key named.
+    fn variant(&self, rule: IntegrationRule, grid: &[usize], safety: f64) -> Result<Self, String>;
+    /// One run into `out` without frames; its summary.
+    ///
+    /// # Errors
+    ///
+    /// The run failed.
+    fn run(&self, out: &Path) -> Result<Value, String>;
+}
+
+impl Sweepable for Scene {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    const KIND: &'static str = "2D";
+    const RULES: &'static [IntegrationRule] = &[
+        IntegrationRule::Q4,
+        IntegrationRule::Q2,
+        IntegrationRule::Scni,
+    ];
+    const DIMENSIONS: usize = 2;
+    const MIN_COUNT: usize = 2;
+    fn grid_form(&self) -> String {
+        "NXxNY (a 2D scene's particles along x and y) with both at least 2, e.g. 21x51".into()
+    }
+    fn grid(&self) -> Vec<usize> {
+        self.workpiece.particles.to_vec()
+    }
+    fn grid_columns(&self) -> &'static str {
+        "nx,ny"
+    }
+    fn grid_fields(grid: &[usize]) -> String {
+        format!("{},{}", grid[0], grid[1])
+    }
+    fn grid_note(&self) -> Option<String> {
+        None
+    }
+    fn spacing_ratio(&self, coarse: &[usize], fine: &[usize]) -> f64 {
+        (fine[0] - 1) as f64 / (coarse[0] - 1) as f64
+    }
+    fn variant(&self, rule: IntegrationRule, grid: &[usize], safety: f64) -> Result<Self, String> {
+        let mut s = self.clone().with_integration(rule);
+        s.workpiece.particles = [grid[0], grid[1]];
+        s.time.dt_s = None;
+        s.time.dt_safety = safety;
+        Ok(s)
+    }
+    fn run(&self, out: &Path) -> Result<Value, String> {
+        let opts = run::Options {
+            out: out.to_path_buf(),
+            progress: false,
+            frames: false,
+            mcap: None,
+        };
+        Ok(run::run(self, &opts)?.summary)
+    }
+}
+
+impl Sweepable for SolidScene {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    const KIND: &'static str = "3D";
+    const RULES: &'static [IntegrationRule] = &[IntegrationRule::Q4, IntegrationRule::Q2];
+    const DIMENSIONS: usize = 3;
+    const MIN_COUNT: usize = 1;
+    fn grid_form(&self) -> String {
+        match self.workpiece.shape {
+            ShapeKind::Cylinder => "three numbers for a 3D cylinder, its `workpiece.cells` CORExRINGxAXIAL (core cells per side, ring layers, cells along the axis), e.g. 8x4x60",
+            ShapeKind::Box => "three numbers for a 3D box, its `workpiece.particles` NXxNYxNZ, e.g. 9x9x21",
+        }
+        .into()
+    }
+    fn grid(&self) -> Vec<usize> {
+        let w = &self.workpiece;
+        match w.shape {
+            ShapeKind::Cylinder => w.cells,
+            ShapeKind::Box => w.particles,
+        }
+        .map_or_else(Vec::new, |g| g.to_vec())
+    }
+    fn grid_columns(&self) -> &'static str {
+        match self.workpiece.shape {
+            ShapeKind::Cylinder => "cells",
+            ShapeKind::Box => "particles",
+        }
+    }
+    fn grid_fields(grid: &[usize]) -> String {
+        grid_label(grid)
+    }
+    fn grid_note(&self) -> Option<String> {
+        Some(match self.workpiece.shape {
+            ShapeKind::Cylinder => "Grid: the cylinder's `workpiece.cells`, core cells per side x ring layers x cells along the axis; the spacing ratio of the finest grids from the axial cells.".into(),
+            ShapeKind::Box => "Grid: the box's `workpiece.particles` along x, y, z; the spacing ratio of the finest grids from the largest count.".into(),
+        })
+    }
+    fn spacing_ratio(&self, coarse: &[usize], fine: &[usize]) -> f64 {
+        match self.workpiece.shape {
+            ShapeKind::Cylinder => fine[2] as f64 / coarse[2] as f64,
+            ShapeKind::Box => {
+                let k = (0..3).max_by_key(|&k| fine[k]).unwrap_or(0);
+                (fine[k] - 1) as f64 / (coarse[k] - 1) as f64
+            }
+        }
+    }
+    fn variant(&self, rule: IntegrationRule, grid: &[usize], safety: f64) -> Result<Self, String> {
+        let mut s = self.clone();
+        s.discretization.integration = rule;
+        let g = Some([grid[0], grid[1], grid[2]]);
+        match s.workpiece.shape {
+            ShapeKind::Cylinder => s.workpiece.cells = g,
+            ShapeKind::Box => s.workpiece.particles = g,
+        }
+        s.time.dt_s = None;
+        s.time.dt_safety = safety;
+        match s.validate().into_iter().next() {
+            Some((key, message)) => Err(format!("`{key}` {message}")),
+            None => Ok(s),
+        }
+    }
+    fn run(&self, out: &Path) -> Result<Value, String> {
+        let report = run_solid::run(self, out, false)?;
+        match report.error {
+            Some(e) => Err(e),
+            None => Ok(report.summary),
+        }
+    }
+}
+
+/// A grid as written on the command line and in run folders: `21x51`, `8x4x60`.
+pub fn grid_label(grid: &[usize]) -> String {
+    grid.iter()
+        .map(usize::to_string)
+        .collect::<Vec<_>>()
+        .join("x")
+}
+
 /// One run of the grid.
 struct Row {
     rule: IntegrationRule,
-    grid: [usize; 2],
+    grid: Vec<usize>,
     safety: f64,
     steps: u64,
     wall: f64,
@@ -71,11 +244,11 @@ fn extrapolate(v: &[f64], r: f64) -> (f64, f64) {
 }
 
 /// One combination of the `--set` values: the keys and values as given, and its scene.
-pub struct Case {
+pub struct Case<S> {
     /// `(dotted key, value as written)` in the order of the `--set` options.
     pub inputs: Vec<(String, String)>,
     /// The scene with these overrides.
-    pub scene: Scene,
+    pub scene: S,
 }
 
 /// The runs of one case, their error against the case's extrapolated reference and whether
@@ -93,9 +266,9 @@ struct Assessed {
 /// Run the grid for every case, write sweep.csv, sweep.md and sweep.png into `out`, return
 /// the table. Each case has its own reference (its physics differs); its runs go to
 /// `out/<key=value,...>/` when there are `--set` keys, else to `out/`.
-pub fn sweep(
-    cases: &[Case],
-    grids: &[[usize; 2]],
+pub fn sweep<S: Sweepable>(
+    cases: &[Case<S>],
+    grids: &[Vec<usize>],
     rules: &[IntegrationRule],
     safeties: &[f64],
     out: &Path,
@@ -108,8 +281,11 @@ pub fn sweep(
     let mut csv = String::new();
     let mut md = format!(
         "# Sweep of {}\n\n",
-        cases.first().map_or("", |c| c.scene.name.as_str())
+        cases.first().map_or("", |c| c.scene.name())
     );
+    if let Some(note) = cases.first().and_then(|c| c.scene.grid_note()) {
+        let _ = write!(md, "{note}\n\n");
+    }
     let mut series = Vec::new();
     for case in cases {
         let label = case
@@ -128,7 +304,11 @@ pub fn sweep(
             for k in &keys {
                 let _ = write!(csv, "{k},");
             }
-            csv.push_str("integration,nx,ny,dt_safety,steps,wall_s,memory_MB");
+            let _ = write!(
+                csv,
+                "integration,{},dt_safety,steps,wall_s,memory_MB",
+                case.scene.grid_columns()
+            );
             for n in &a.names {
                 let _ = write!(csv, ",{n}");
             }
@@ -149,10 +329,9 @@ pub fn sweep(
             }
             let _ = write!(
                 csv,
-                "{},{},{},{},{},{:.6},{:.3}",
+                "{},{},{},{},{:.6},{:.3}",
                 r.rule.name(),
-                r.grid[0],
-                r.grid[1],
+                S::grid_fields(&r.grid),
                 r.safety,
                 r.steps,
                 r.wall,
@@ -164,10 +343,9 @@ pub fn sweep(
             let _ = writeln!(csv, ",{error:e},{p}");
             let _ = writeln!(
                 md,
-                "| {} | {}x{} | {} | {} | {:.2} | {:.1} | {:.2e} | {} |",
+                "| {} | {} | {} | {} | {:.2} | {:.1} | {:.2e} | {} |",
                 r.rule.name(),
-                r.grid[0],
-                r.grid[1],
+                grid_label(&r.grid),
                 r.safety,
                 r.steps,
                 r.wall,
@@ -205,7 +383,7 @@ pub fn sweep(
         &out.join("sweep.png"),
         &format!(
             "{}: error against wall time",
-            cases.first().map_or("", |c| c.scene.name.as_str())
+            cases.first().map_or("", |c| c.scene.name())
         ),
         "log10 wall time (s)",
         "log10 relative error",
@@ -216,42 +394,35 @@ pub fn sweep(
 }
 
 /// Run the grid of one scene into `out` and assess every run.
-fn assess(
-    scene: &Scene,
-    grids: &[[usize; 2]],
+fn assess<S: Sweepable>(
+    scene: &S,
+    grids: &[Vec<usize>],
     rules: &[IntegrationRule],
     safeties: &[f64],
     out: &Path,
 ) -> Result<Assessed, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let mut grids = grids.to_vec();
-    grids.sort_by_key(|g| g[0] * g[1]);
+    grids.sort_by_key(|g| g.iter().product::<usize>());
     let mut rows = Vec::new();
     let mut names = Vec::new();
     for &rule in rules {
-        for &grid in &grids {
+        for grid in &grids {
             for &safety in safeties {
-                let mut s = scene.clone().with_integration(rule);
-                s.workpiece.particles = grid;
-                s.time.dt_s = None;
-                s.time.dt_safety = safety;
-                let label = format!("{}_{}x{}_{}", rule.name(), grid[0], grid[1], safety);
-                let opts = run::Options {
-                    out: out.join(&label),
-                    progress: false,
-                    frames: false,
-                    mcap: None,
-                };
-                let report = run::run(&s, &opts).map_err(|e| format!("{label}: {e}"))?;
-                let (n, values) = quantities(&report.summary);
+                let label = format!("{}_{}_{}", rule.name(), grid_label(grid), safety);
+                let summary = scene
+                    .variant(rule, grid, safety)
+                    .and_then(|s| s.run(&out.join(&label)))
+                    .map_err(|e| format!("{label}: {e}"))?;
+                let (n, values) = quantities(&summary);
                 names = n;
                 rows.push(Row {
                     rule,
-                    grid,
+                    grid: grid.clone(),
                     safety,
-                    steps: report.summary["steps"].as_u64().unwrap_or(0),
-                    wall: report.summary["wall_s"].as_f64().unwrap_or(f64::NAN),
-                    memory: report.summary["memory_bytes"].as_f64().unwrap_or(f64::NAN) / 1e6,
+                    steps: summary["steps"].as_u64().unwrap_or(0),
+                    wall: summary["wall_s"].as_f64().unwrap_or(f64::NAN),
+                    memory: summary["memory_bytes"].as_f64().unwrap_or(f64::NAN) / 1e6,
                     values,
                 });
             }
@@ -260,8 +431,8 @@ fn assess(
     // Reference: per rule, extrapolate the finest grids at the smallest safety factor.
     let smin = safeties.iter().copied().fold(f64::INFINITY, f64::min);
     let ratio = if grids.len() >= 2 {
-        let (a, b) = (grids[grids.len() - 2], grids[grids.len() - 1]);
-        ((b[0] - 1) as f64 / (a[0] - 1) as f64).max(1.0 + 1e-9)
+        let (a, b) = (&grids[grids.len() - 2], &grids[grids.len() - 1]);
+        scene.spacing_ratio(a, b).max(1.0 + 1e-9)
     } else {
         2.0
     };

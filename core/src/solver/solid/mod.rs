@@ -44,6 +44,23 @@ use contact::PlaneContact;
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
 
+/// The measures of a 3D workpiece from its particles' physical positions
+/// ([`SolidSimulation::readings`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyReadings {
+    /// The largest distance of a particle from the z axis (m).
+    pub radius: Real,
+    /// `[min, max]` of x, y and z over the particles (m).
+    pub extents: [[Real; 2]; 3],
+}
+
+impl BodyReadings {
+    /// The length along z, `z_max - z_min` (m).
+    pub fn height(&self) -> Real {
+        self.extents[2][1] - self.extents[2][0]
+    }
+}
+
 /// What setup fixes of a 3D simulation; the stages read it.
 #[derive(Debug, Clone)]
 pub(super) struct SolidDisc {
@@ -75,10 +92,6 @@ pub(super) struct SolidDisc {
     h_min: Real,
     /// Critical step of the undeformed discretisation (s).
     critical_dt0: Real,
-    /// The particles of the lowest and highest z at the start (the Taylor bar's impact and
-    /// free faces).
-    impact_face: Vec<u32>,
-    top_face: Vec<u32>,
     /// Hexahedral cells of 8 particles (for the frames).
     cells: Vec<[u32; 8]>,
     /// The scene's tools come first among the planes, the symmetry planes after them.
@@ -434,6 +447,30 @@ impl SolidSimulation {
     pub fn energy(&self) -> Energy {
         self.st.energy
     }
+    /// Bytes held by the discretisation, the state and the stages' arrays (an estimate from
+    /// the lengths of its arrays, as [`super::Simulation::memory_bytes`]).
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of;
+        let (d, st, ws) = (&self.disc, &self.st, &self.ws);
+        let r3 = size_of::<[Real; 3]>();
+        let (np, npts) = (d.ref_pos.len(), d.point_positions.len());
+        let nodal = (d.nodal.offsets.len() + d.nodal.index.len()) * 4 + d.nodal.n.len() * 8;
+        let heat = st.heat.as_ref().map_or(0, |h| {
+            (h.temperature_c.len() + h.plastic_work.len() + h.plastic_rate.len()) * 8
+        });
+        nodal
+            + d.scatter.memory_bytes()
+            + ws.buf.len() * r3
+            // reference positions, d, v, f_int, v_prev; volumes, masses and their
+            // inverses, the move bounds
+            + np * (5 * r3 + 4 * 8)
+            // positions, weights, 1/R, J_ref; histories and outputs
+            + npts * (r3 + 3 * 8 + size_of::<PointState3>() + size_of::<PointOut>())
+            + st.held.len() * size_of::<bool>()
+            + st.stick.len() * size_of::<Option<[Real; 3]>>()
+            + d.cells.len() * size_of::<[u32; 8]>()
+            + heat
+    }
     /// Mean number of particles whose shape functions reach an integration point (-).
     pub fn neighbours_per_point(&self) -> Real {
         self.disc.neighbours
@@ -523,33 +560,21 @@ impl SolidSimulation {
         self.ws.out.iter().map(|o| o.von_mises).collect()
     }
 
-    /// The Taylor bar's measures from the physical positions (m): the impact face's radius
-    /// (the largest `sqrt(x^2 + y^2)` of the particles that started on the lowest face) and
-    /// the length (the largest `z` of those that started on the highest face, from `z =
-    /// 0`).
-    pub fn impact_readings(&self) -> (Real, Real) {
-        let x = |j: u32| {
-            let j = j as usize;
-            let u = self.disc.nodal.interpolate(j, &self.st.d);
-            let r = self.disc.ref_pos[j];
-            [r[0] + u[0], r[1] + u[1], r[2] + u[2]]
-        };
-        let radius = self
-            .disc
-            .impact_face
-            .iter()
-            .map(|&j| {
-                let p = x(j);
-                (p[0] * p[0] + p[1] * p[1]).sqrt()
-            })
-            .fold(0.0, Real::max);
-        let length = self
-            .disc
-            .top_face
-            .iter()
-            .map(|&j| x(j)[2])
-            .fold(Real::NEG_INFINITY, Real::max);
-        (radius, length)
+    /// The workpiece's measures from the physical positions of all particles (m), as the
+    /// 2D run's `workpiece.*` ([`super::Simulation::extents`]): the largest distance from
+    /// the z axis `sqrt(x^2 + y^2)` (a Taylor bar's foot radius) and the bounds of each
+    /// coordinate, `[[x_min, x_max], [y_min, y_max], [z_min, z_max]]`; the length along z is
+    /// `z_max - z_min` (a bar that has left the wall is measured, not its flight).
+    pub fn readings(&self) -> BodyReadings {
+        let mut extents = [[Real::INFINITY, Real::NEG_INFINITY]; 3];
+        let mut radius: Real = 0.0;
+        for p in self.positions() {
+            radius = radius.max((p[0] * p[0] + p[1] * p[1]).sqrt());
+            for (e, x) in extents.iter_mut().zip(p) {
+                *e = [e[0].min(x), e[1].max(x)];
+            }
+        }
+        BodyReadings { radius, extents }
     }
 
     /// The deepest physical particle position inside a scene tool and beyond a symmetry

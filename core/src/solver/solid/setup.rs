@@ -215,21 +215,6 @@ impl SolidSimulation {
                 .map(|&(axis, at)| PlaneTool::symmetry(axis, at, depth)),
         );
         let (v, initial) = initial_motion(scene.workpiece.initial_velocity_m_per_s, None, &mass);
-        let zmin = p
-            .positions
-            .iter()
-            .map(|x| x[2])
-            .fold(Real::INFINITY, Real::min);
-        let zmax = p
-            .positions
-            .iter()
-            .map(|x| x[2])
-            .fold(Real::NEG_INFINITY, Real::max);
-        let on = |z: Real| -> Vec<u32> {
-            (0..np as u32)
-                .filter(|&j| (p.positions[j as usize][2] - z).abs() <= 1e-9 * p.h_min)
-                .collect()
-        };
         let sum_abs: Vec<Real> = (0..np)
             .map(|j| p.nodal.row(j).map(|e| p.nodal.n[e].abs()).sum())
             .collect();
@@ -243,7 +228,6 @@ impl SolidSimulation {
                 }
             }
         }
-        let (impact_face, top_face) = (on(zmin), on(zmax));
         let mut disc = SolidDisc {
             inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
             mass,
@@ -260,8 +244,6 @@ impl SolidSimulation {
             sum_abs,
             h_min: p.h_min,
             critical_dt0: p.h_min / wave_speed,
-            impact_face,
-            top_face,
             cells: p.cells,
             scene_tools,
             thermal: scene.thermal.as_ref().map(|spec| Thermal {

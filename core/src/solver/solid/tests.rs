@@ -49,13 +49,15 @@ separation = false
 fn a_coarse_quarter_bar_runs() {
     let scene = quarter_bar([4, 2, 16], "q2", 2e-6);
     let mut sim = SolidSimulation::new(&scene).unwrap();
-    let (r0, l0) = sim.impact_readings();
+    let b0 = sim.readings();
+    let (r0, l0) = (b0.radius, b0.height());
     assert!(
         (r0 - 3.2e-3).abs() < 1e-12 && (l0 - 32.4e-3).abs() < 1e-12,
         "{r0} {l0}"
     );
     sim.run_toward(2e-6, u64::MAX, |_, _| true).unwrap();
-    let (r, l) = sim.impact_readings();
+    let b = sim.readings();
+    let (r, l) = (b.radius, b.height());
     let (pen, beyond) = sim.measure_penetration().unwrap();
     let e = sim.energy();
     eprintln!(
