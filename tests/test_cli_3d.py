@@ -33,7 +33,7 @@ def coarse_run(rkforge_bin, tmp_path_factory):
 def test_summary_is_the_bar_after_impact(coarse_run):
     out, stdout = coarse_run
     s = json.loads((out / "summary.json").read_text())
-    assert s["status"] == "finished" and s["kinematics"] == "3d" and s["integration"] == "q2"
+    assert s["status"] == "ok" and s["kinematics"] == "3d" and s["integration"] == "q2"
     # A quarter O-grid of 4 core cells per side and 2 ring layers: 3 x 3 + 2 x 5 particles
     # per layer, 25 layers; q2 puts 4 points in each of (2 x 2 + 2 x 4) x 24 cells.
     assert s["particles"] == 19 * 25 and s["integration_points"] == 4 * 12 * 24

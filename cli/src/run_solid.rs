@@ -1,7 +1,8 @@
 //! One run of a 3D scene (`model.kinematics = "3d"`): the time loop over the history's
 //! samples and frames, the physical penetration measured at each sample, and the files
-//! written: the summary (`summary.json`, with the keys of the 2D summary where they mean
-//! the same, so the scene's references print beside it), the history (`history.csv`), and
+//! written: the summary (`summary.json`) and the history (`history.csv`) of the 3D
+//! register's figures ([`rkforge_core::outputs::SOLID_REGISTER`], named as the 2D ones, so
+//! the scene's references print beside them), and
 //! with frames the VTK frames of the body (`frames/frame_NNNN.vtu`, hexahedra with the
 //! plastic strain of each cell, and its temperature in a scene with `[thermal]`, and
 //! `frames.pvd` for ParaView) and `stages.png`: the body at each frame seen from outside,
@@ -11,17 +12,13 @@
 
 use crate::output::plots::{solid_plot, SolidPanel, View};
 use crate::output::vtu::{write_pvd, write_vtu_3d};
+use rkforge_core::outputs::{solid_columns, Sample};
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::SolidSimulation;
-use rkforge_core::THERMAL_MEASURES;
+use rkforge_runner::{place, History};
 use serde_json::{json, Value};
-use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
-
-/// The columns of `history.csv` of a 3D run, then `<tool>.force_N` for each tool (its
-/// force along its axis, N).
-const COLUMNS: &str = "time_s,workpiece.radius_m,workpiece.height_m,energy.kinetic_J,energy.internal_J,energy.balance_error_rel,max_penetration_m,max_beyond_plane_m";
 
 /// What a finished (or failed) 3D run produced.
 pub struct SolidReport {
@@ -48,40 +45,8 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
             )
         },
     )?;
-    let mut history = String::from(COLUMNS);
-    for t in sim.tools() {
-        let _ = write!(history, ",{}.force_N", t.name);
-    }
-    if sim.thermal_values().is_some() {
-        for (name, _, _) in THERMAL_MEASURES {
-            let _ = write!(history, ",thermal.{name}");
-        }
-    }
-    history.push('\n');
-    let mut row = |sim: &mut SolidSimulation| -> Result<(), String> {
-        let measured = sim.measure_penetration().map_err(|e| e.to_string());
-        let b = sim.readings();
-        let (radius, height) = (b.radius, b.height());
-        let (e, st) = (sim.energy(), sim.state());
-        let _ = write!(
-            history,
-            "{:e},{radius:e},{height:e},{:e},{:e},{:e},{:e},{:e}",
-            sim.time(),
-            e.kinetic,
-            e.internal(),
-            e.balance_error_rel(),
-            st.max_penetration,
-            st.max_beyond_plane
-        );
-        for t in sim.tools() {
-            let _ = write!(history, ",{:e}", t.axial_force());
-        }
-        for v in sim.thermal_values().into_iter().flatten() {
-            let _ = write!(history, ",{v:e}");
-        }
-        history.push('\n');
-        measured.map(|_| ())
-    };
+    let mut history = History::solid(&sim);
+    let mut row = |sim: &mut SolidSimulation| history.record_solid(sim).map_err(|e| e.to_string());
     let mut error = row(&mut sim).err();
     let mut shots = Vec::new();
     if nframes > 0 {
@@ -106,8 +71,7 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
         write_frames(&sim, &shots, out, &scene.name)?;
     }
     let wall_s = wall.elapsed().as_secs_f64();
-    std::fs::write(out.join("history.csv"), &history)
-        .map_err(|e| format!("cannot write history.csv: {e}"))?;
+    history.write(&out.join("history.csv"))?;
     let summary = summary(scene, &sim, wall_s, error.as_deref());
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     std::fs::write(out.join("summary.json"), text + "\n")
@@ -115,22 +79,19 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
     Ok(SolidReport { summary, error })
 }
 
-/// The summary of a 3D run that took `wall_s` (s) of wall time, ended by `error` if any.
+/// The summary of a 3D run that took `wall_s` (s) of wall time, ended by `error` if any:
+/// how it ended, the discretisation and its cost, the bounds as ranges, the largest
+/// penetrations, each tool's force vector, the stage times, and the register's figures
+/// ([`rkforge_core::outputs::SOLID_REGISTER`]) at the paths their names give, as the 2D
+/// summary places them.
 fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option<&str>) -> Value {
-    let b = sim.readings();
-    let e = sim.energy();
+    let sample = Sample::new(sim);
+    let b = sample.readings();
     let st = sim.state();
     let particle_steps = sim.particle_count() as f64 * sim.steps() as f64;
     let t = &sim.times;
-    let thermal: Option<serde_json::Map<String, Value>> = sim.thermal_values().map(|v| {
-        THERMAL_MEASURES
-            .iter()
-            .zip(v)
-            .map(|((name, _, _), v)| (name.to_string(), json!(v)))
-            .collect()
-    });
-    json!({
-        "status": if error.is_some() { "error" } else { "finished" },
+    let mut summary = json!({
+        "status": if error.is_some() { "error" } else { "ok" },
         "error": error,
         "scene": scene.name,
         "kinematics": "3d",
@@ -143,34 +104,25 @@ fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option
         "steps": sim.steps(),
         "end_time_s": sim.time(),
         "wall_s": wall_s,
+        "threads": rayon::current_num_threads(),
         "us_per_particle_step": if particle_steps > 0.0 { 1e6 * wall_s / particle_steps } else { 0.0 },
         "smallest_spacing_m": sim.h_min(),
         "critical_dt_s": sim.critical_dt0(),
         "workpiece": {
-            "radius_m": b.radius,
-            "height_m": b.height(),
             "x_range_m": b.extents[0],
             "y_range_m": b.extents[1],
             "z_range_m": b.extents[2],
         },
-        "thermal": thermal,
-        "energy": {
-            "initial_J": e.initial,
-            "kinetic_J": e.kinetic,
-            "elastic_J": e.elastic,
-            "plastic_J": e.plastic,
-            "contact_work_J": e.contact_work,
-            "balance_error_rel": e.balance_error_rel(),
-        },
         "contact": {
             "max_penetration_m": st.max_penetration,
+            "max_penetration_rel": st.max_penetration / sim.h_min(),
             "max_beyond_plane_m": st.max_beyond_plane,
+            "max_beyond_plane_rel": st.max_beyond_plane / sim.h_min(),
         },
         "tools": sim.tools().iter().map(|t| json!({
             "name": t.name,
-            "stroke_m": t.state.stroke,
-            "force_N": t.axial_force(),
-            "peak_force_N": t.state.peak_force,
+            "force_N": t.state.force,
+            "axial_force_N": t.axial_force(),
         })).collect::<Vec<_>>(),
         "stage_seconds": {
             "setup": t.setup.as_secs_f64(),
@@ -180,7 +132,9 @@ fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option
             "contact": t.contact.as_secs_f64(),
             "integration": t.integration.as_secs_f64(),
         },
-    })
+    });
+    place(&mut summary, &solid_columns(scene), &sample);
+    summary
 }
 
 /// One frame of the body: time (s), particle positions (m), each cell's plastic strain

@@ -1,14 +1,15 @@
 //! The time history of a run: one row per sample, written as history.csv. Its columns are
 //! the register's ([`rkforge_core::outputs`]) that are shown in the history, in register
-//! order.
+//! order: the 2D register's for a [`Simulation`], the 3D one's for a [`SolidSimulation`].
 
-use rkforge_core::outputs::{columns, Column, Penetration, Sample};
+use rkforge_core::outputs::{columns, solid_columns, Body, Column, Penetration, Sample};
+use rkforge_core::solver::SolidSimulation;
 use rkforge_core::Simulation;
 use std::path::Path;
 
 /// Time history: one row per sample.
-pub struct History {
-    columns: Vec<Column>,
+pub struct History<S: Body = Simulation> {
+    columns: Vec<Column<S>>,
     names: Vec<String>,
     rows: Vec<Vec<f64>>,
 }
@@ -16,15 +17,7 @@ pub struct History {
 impl History {
     /// The columns of the simulation's scene.
     pub fn new(sim: &Simulation) -> Self {
-        let columns: Vec<Column> = columns(sim.scene())
-            .into_iter()
-            .filter(|c| c.output.shown.history)
-            .collect();
-        History {
-            names: columns.iter().map(|c| c.name.clone()).collect(),
-            columns,
-            rows: Vec::new(),
-        }
+        History::of(columns(sim.scene()))
     }
 
     /// Record the current state. The penetration is measured over every particle against
@@ -37,10 +30,50 @@ impl History {
             Ok(d) => Penetration::of(d),
             Err(_) => Penetration::largest(sim),
         };
-        let sample = Sample::with_penetration(sim, depths);
-        self.rows
-            .push(self.columns.iter().map(|c| c.value(&sample)).collect());
+        self.push(&Sample::with_penetration(sim, depths));
         measured.map(|_| ())
+    }
+}
+
+impl History<SolidSimulation> {
+    /// The columns of a 3D simulation's scene.
+    pub fn solid(sim: &SolidSimulation) -> Self {
+        History::of(solid_columns(sim.scene()))
+    }
+
+    /// Record the current state of a 3D run, the penetration measured over every particle
+    /// against every tool and symmetry plane ([`SolidSimulation::measure_penetration`]); a
+    /// particle deeper than the scene's bound is returned as an error, after the row is
+    /// recorded (with the run's largest depths).
+    pub fn record_solid(&mut self, sim: &mut SolidSimulation) -> Result<(), rkforge_core::Error> {
+        let measured = sim.measure_penetration();
+        let depths = match &measured {
+            Ok((tools, planes)) => [*tools, *planes],
+            Err(_) => [sim.state().max_penetration, sim.state().max_beyond_plane],
+        };
+        self.push(&Sample::with_depths(sim, depths));
+        measured.map(|_| ())
+    }
+}
+
+impl<S: Body> History<S> {
+    /// The history of the columns among `columns` shown in it.
+    pub fn of(columns: Vec<Column<S>>) -> Self {
+        let columns: Vec<Column<S>> = columns
+            .into_iter()
+            .filter(|c| c.output.shown.history)
+            .collect();
+        History {
+            names: columns.iter().map(|c| c.name.clone()).collect(),
+            columns,
+            rows: Vec::new(),
+        }
+    }
+
+    /// Record a row of `sample`.
+    pub fn push(&mut self, sample: &Sample<'_, S>) {
+        self.rows
+            .push(self.columns.iter().map(|c| c.value(sample)).collect());
     }
 
     /// The column names: `time_s`, `dt_s`, per tool `<tool>.stroke_m` ..., `workpiece.*`,

@@ -13,7 +13,9 @@ pub mod history;
 pub mod summary;
 
 pub use history::History;
-pub use summary::{laps_json, reference_table, references_beside, summary, tool_json, Ending};
+pub use summary::{
+    laps_json, place, reference_table, references_beside, summary, tool_json, Ending,
+};
 
 impl Outcome {
     /// How the run ended, for [`summary`].

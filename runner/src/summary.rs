@@ -9,7 +9,7 @@
 //! largest penetrations, each tool's force vector and fill times, the laps, mass scaling,
 //! re-referencing and the stage times.
 
-use rkforge_core::outputs::{columns, At, Column, Sample};
+use rkforge_core::outputs::{columns, At, Body, Column, Sample};
 use rkforge_core::scene::Reference;
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
@@ -290,6 +290,19 @@ fn shown(scene: &Scene) -> impl Iterator<Item = Column> {
 }
 
 /// The place of a scalar or per-face column in the summary: the path of its dotted name.
-fn path<'v>(summary: &'v mut Value, c: &Column) -> &'v mut Value {
+fn path<'v, S: Body>(summary: &'v mut Value, c: &Column<S>) -> &'v mut Value {
     c.name.split('.').fold(summary, |v, key| &mut v[key])
+}
+
+/// The values of `columns` shown in the summary, placed in `summary`: a scalar at the path
+/// its dotted name gives, a tool's value under its name in `tools[k]` (which must hold an
+/// object per tool). What a 3D run's summary takes from its register.
+pub fn place<S: Body>(summary: &mut Value, columns: &[Column<S>], sample: &Sample<'_, S>) {
+    for c in columns.iter().filter(|c| c.output.shown.summary) {
+        let value = json!(c.value(sample));
+        match c.at {
+            At::Tool(k) => summary["tools"][k][c.output.name] = value,
+            _ => *path(summary, c) = value,
+        }
+    }
 }

@@ -30,23 +30,79 @@
 //!
 //! Adding an output is one entry in its section of `register.rs` plus its computation (a
 //! public method of [`Simulation`] or a function here, as [`mean_contact_pressure`]).
+//!
+//! A 3D run has its own register ([`SOLID_REGISTER`], `solid.rs`) of the same types over a
+//! [`SolidSimulation`] ([`solid_columns`], [`solid_fields`]): the sections both dimensions
+//! read alike (the time, the energy account, the thermal measures) are one definition
+//! generic over [`Body`], so a 3D run names and computes them as 2D does.
 
 mod pressure;
 mod register;
+mod solid;
 
 pub use pressure::{contact_area, mean_contact_pressure};
 pub use register::{REGISTER, THERMAL_MEASURES};
+pub use solid::{solid_columns, solid_fields, SolidCache, SOLID_REGISTER};
 
 use crate::geometry::Extents;
 use crate::math::Real;
 use crate::scene::{Edge, Kinematics, Scene};
-use crate::solver::{Depths, Fields, Simulation};
+use crate::solver::{Depths, Energy, Fields, Simulation, SolidSimulation};
 use std::cell::OnceCell;
 use std::ops::Deref;
 
-/// One output of the register.
-#[derive(Debug, Clone, Copy)]
-pub struct Output {
+/// What the register reads of a simulation of either dimension ([`Simulation`],
+/// [`SolidSimulation`]): the readings the shared sections take, and the measures a
+/// [`Sample`] of it keeps once taken (`Cache`).
+pub trait Body: Sized + 'static {
+    /// The measures a sample takes once, when first read.
+    type Cache: Default;
+    /// Time (s).
+    fn time_now(&self) -> Real;
+    /// Length of the last step (s), 0 before the first.
+    fn last_step(&self) -> Real;
+    /// Energy account (J).
+    fn energy_now(&self) -> Energy;
+    /// The thermal measures in the order of [`THERMAL_MEASURES`], `None` for an isothermal
+    /// scene.
+    fn thermal_now(&self) -> Option<[Real; 9]>;
+}
+
+impl Body for Simulation {
+    type Cache = PlaneCache;
+    fn time_now(&self) -> Real {
+        self.time()
+    }
+    fn last_step(&self) -> Real {
+        self.state().dt_prev
+    }
+    fn energy_now(&self) -> Energy {
+        self.energy()
+    }
+    fn thermal_now(&self) -> Option<[Real; 9]> {
+        self.thermal_values()
+    }
+}
+
+impl Body for SolidSimulation {
+    type Cache = SolidCache;
+    fn time_now(&self) -> Real {
+        self.time()
+    }
+    fn last_step(&self) -> Real {
+        self.state().dt_prev
+    }
+    fn energy_now(&self) -> Energy {
+        self.energy()
+    }
+    fn thermal_now(&self) -> Option<[Real; 9]> {
+        self.thermal_values()
+    }
+}
+
+/// One output of the register, read from a simulation of type `S`.
+#[derive(Debug)]
+pub struct Output<S: Body = Simulation> {
     /// Name with its unit, without group or instance (`force_N`, `kinetic_J`).
     pub name: &'static str,
     /// Group the name begins with (`workpiece`, `energy`, `thermal`; empty for none).
@@ -61,8 +117,16 @@ pub struct Output {
     /// The front ends that show it beside those that show every output.
     pub shown: Shown,
     /// How it is read, which also gives its kind.
-    pub read: Read,
+    pub read: Read<S>,
 }
+
+impl<S: Body> Clone for Output<S> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<S: Body> Copy for Output<S> {}
 
 /// What an output is given for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -81,24 +145,32 @@ pub enum Kind {
     PerPoint,
 }
 
-/// How an output is read from a [`Sample`].
-#[derive(Debug, Clone, Copy)]
-pub enum Read {
+/// How an output is read from a [`Sample`] of a simulation of type `S`.
+#[derive(Debug)]
+pub enum Read<S: Body = Simulation> {
     /// One value.
-    Scalar(fn(&Sample<'_>) -> Real),
+    Scalar(fn(&Sample<'_, S>) -> Real),
     /// The value for tool `k`.
-    Tool(fn(&Sample<'_>, usize) -> Real),
+    Tool(fn(&Sample<'_, S>, usize) -> Real),
     /// The value for fill point `i` of [`Simulation::fill_points`].
-    FillPoint(fn(&Sample<'_>, usize) -> Real),
+    FillPoint(fn(&Sample<'_, S>, usize) -> Real),
     /// The value for the face of the particles that started on an edge.
-    Face(fn(&Sample<'_>, Edge) -> Real),
+    Face(fn(&Sample<'_, S>, Edge) -> Real),
     /// One value per particle.
-    Particles(fn(&Sample<'_>) -> Vec<Real>),
+    Particles(fn(&Sample<'_, S>) -> Vec<Real>),
     /// One value per integration point.
-    Points(fn(&Sample<'_>) -> Vec<Real>),
+    Points(fn(&Sample<'_, S>) -> Vec<Real>),
 }
 
-impl Read {
+impl<S: Body> Clone for Read<S> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<S: Body> Copy for Read<S> {}
+
+impl<S: Body> Read<S> {
     /// What the output is given for.
     pub fn kind(&self) -> Kind {
         match self {
@@ -224,25 +296,35 @@ pub enum At {
 }
 
 /// One value of an output in a scene: the output at one instance, with its name.
-#[derive(Debug, Clone)]
-pub struct Column {
+#[derive(Debug)]
+pub struct Column<S: Body = Simulation> {
     /// The register's entry.
-    pub output: &'static Output,
+    pub output: &'static Output<S>,
     /// The instance.
     pub at: At,
     /// `<group>.<instance>.<name>`.
     pub name: String,
 }
 
-impl Column {
+impl<S: Body> Clone for Column<S> {
+    fn clone(&self) -> Self {
+        Column {
+            output: self.output,
+            at: self.at,
+            name: self.name.clone(),
+        }
+    }
+}
+
+impl<S: Body> Column<S> {
     /// The value now.
-    pub fn value(&self, sample: &Sample<'_>) -> Real {
+    pub fn value(&self, sample: &Sample<'_, S>) -> Real {
         match (self.output.read, self.at) {
             (Read::Scalar(f), At::Whole) => f(sample),
             (Read::Tool(f), At::Tool(k)) => f(sample, k),
             (Read::FillPoint(f), At::FillPoint { index, .. }) => f(sample, index),
             (Read::Face(f), At::Face(e)) => f(sample, e),
-            (read, at) => unreachable!("`columns` gives {read:?} no instance {at:?}"),
+            (read, at) => unreachable!("`columns` gives {:?} no instance {at:?}", read.kind()),
         }
     }
 
@@ -250,7 +332,9 @@ impl Column {
     pub fn unit(&self) -> &'static str {
         self.output.unit
     }
+}
 
+impl Column {
     /// The description with the tool's, point's or face's name put in.
     pub fn description(&self, scene: &Scene) -> String {
         let d = self.output.description;
@@ -270,13 +354,27 @@ impl Column {
 /// Every column of `scene`: the scalar entries present in it, section by section in register
 /// order, each section instance by instance.
 pub fn columns(scene: &Scene) -> Vec<Column> {
+    expand(
+        &REGISTER,
+        |kind| instances(scene, kind),
+        |when, at| when.holds(scene, at),
+    )
+}
+
+/// The columns of `register`: each section's entries that `holds` (when, instance) keeps,
+/// section by section, each section instance by instance (`instances` of its kind).
+fn expand<S: Body>(
+    register: &'static [&'static [Output<S>]],
+    instances: impl Fn(Kind) -> Vec<(At, String)>,
+    holds: impl Fn(When, At) -> bool,
+) -> Vec<Column<S>> {
     let mut out = Vec::new();
-    for section in REGISTER {
+    for section in register {
         let Some(first) = section.first() else {
             continue;
         };
-        for (at, instance) in instances(scene, first.read.kind()) {
-            for output in section.iter().filter(|o| o.when.holds(scene, at)) {
+        for (at, instance) in instances(first.read.kind()) {
+            for output in section.iter().filter(|o| holds(o.when, at)) {
                 let name = [output.group, &instance, output.name]
                     .into_iter()
                     .filter(|s| !s.is_empty())
@@ -328,10 +426,10 @@ fn instances(scene: &Scene, kind: Kind) -> Vec<(At, String)> {
     }
 }
 
-impl Output {
+impl<S: Body> Output<S> {
     /// The field's values now (per particle or per integration point), `None` for an
     /// output of another kind.
-    pub fn field(&self, sample: &Sample<'_>) -> Option<Vec<Real>> {
+    pub fn field(&self, sample: &Sample<'_, S>) -> Option<Vec<Real>> {
         match self.read {
             Read::Particles(f) | Read::Points(f) => Some(f(sample)),
             _ => None,
@@ -350,9 +448,16 @@ impl Output {
 /// Every field present in `scene` (outputs per particle or per integration point), in
 /// register order.
 pub fn fields(scene: &Scene) -> impl Iterator<Item = &'static Output> + '_ {
-    REGISTER.iter().flat_map(|s| s.iter()).filter(move |o| {
-        matches!(o.read.kind(), Kind::PerParticle | Kind::PerPoint)
-            && o.when.holds(scene, At::Whole)
+    fields_of(&REGISTER, move |when| when.holds(scene, At::Whole))
+}
+
+/// The fields of `register` that `holds` keeps, in register order.
+fn fields_of<S: Body>(
+    register: &'static [&'static [Output<S>]],
+    holds: impl Fn(When) -> bool,
+) -> impl Iterator<Item = &'static Output<S>> {
+    register.iter().flat_map(|s| s.iter()).filter(move |o| {
+        matches!(o.read.kind(), Kind::PerParticle | Kind::PerPoint) && holds(o.when)
     })
 }
 
@@ -393,56 +498,63 @@ impl Penetration {
     }
 }
 
-/// A simulation at one instant as the outputs read it (it dereferences to the
-/// [`Simulation`]): the measures that several outputs share are taken once, when first read.
-pub struct Sample<'a> {
-    sim: &'a Simulation,
-    extents: OnceCell<Extents>,
-    penetration: OnceCell<Penetration>,
-    fields: OnceCell<Fields>,
+/// A simulation at one instant as the outputs read it (it dereferences to the simulation,
+/// a [`Simulation`] or a [`SolidSimulation`]): the measures that several outputs share are
+/// taken once, when first read (`S::Cache`).
+pub struct Sample<'a, S: Body = Simulation> {
+    sim: &'a S,
+    cache: S::Cache,
     thermal: OnceCell<Option<[Real; 9]>>,
 }
 
-impl<'a> Sample<'a> {
-    /// The simulation now; the penetration is measured when an output reads it
-    /// ([`Simulation::penetration`]).
-    pub fn new(sim: &'a Simulation) -> Sample<'a> {
+/// The measures a sample of a 2D simulation takes once.
+#[derive(Default)]
+pub struct PlaneCache {
+    extents: OnceCell<Extents>,
+    penetration: OnceCell<Penetration>,
+    fields: OnceCell<Fields>,
+}
+
+impl<'a, S: Body> Sample<'a, S> {
+    /// The simulation now.
+    pub fn new(sim: &'a S) -> Sample<'a, S> {
         Sample {
             sim,
-            extents: OnceCell::new(),
-            penetration: OnceCell::new(),
-            fields: OnceCell::new(),
+            cache: S::Cache::default(),
             thermal: OnceCell::new(),
         }
     }
 
+    /// The thermal measures ([`Body::thermal_now`]).
+    pub fn thermal_values(&self) -> Option<[Real; 9]> {
+        *self.thermal.get_or_init(|| self.sim.thermal_now())
+    }
+}
+
+impl<'a> Sample<'a> {
     /// The simulation now with the penetration already measured.
     pub fn with_penetration(sim: &'a Simulation, p: Penetration) -> Sample<'a> {
         let sample = Sample::new(sim);
-        sample.penetration.get_or_init(|| p);
+        sample.cache.penetration.get_or_init(|| p);
         sample
     }
 
     /// Bounds of the deformed workpiece over all particles (m), [`Simulation::extents`].
     pub fn extents(&self) -> Extents {
-        *self.extents.get_or_init(|| self.sim.extents())
+        *self.cache.extents.get_or_init(|| self.sim.extents())
     }
 
-    /// The penetration now.
+    /// The penetration now ([`Simulation::penetration`], measured when first read).
     pub fn penetration(&self) -> Penetration {
         *self
+            .cache
             .penetration
             .get_or_init(|| Penetration::of(&self.sim.penetration()))
     }
 
     /// The particle fields, [`Simulation::fields`].
     pub fn particle_fields(&self) -> &Fields {
-        self.fields.get_or_init(|| self.sim.fields())
-    }
-
-    /// The thermal measures, [`Simulation::thermal_values`].
-    pub fn thermal_values(&self) -> Option<[Real; 9]> {
-        *self.thermal.get_or_init(|| self.sim.thermal_values())
+        self.cache.fields.get_or_init(|| self.sim.fields())
     }
 
     /// The smallest particle spacing (m), the scale of the `_rel` depths.
@@ -452,10 +564,10 @@ impl<'a> Sample<'a> {
     }
 }
 
-impl Deref for Sample<'_> {
-    type Target = Simulation;
+impl<S: Body> Deref for Sample<'_, S> {
+    type Target = S;
 
-    fn deref(&self) -> &Simulation {
+    fn deref(&self) -> &S {
         self.sim
     }
 }

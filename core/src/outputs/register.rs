@@ -2,18 +2,20 @@
 //! `history.csv`'s columns. Forces are for the whole ring in axisymmetry and per
 //! `model.depth_m` of depth in plane strain, as are energies and heat.
 
-use super::{mean_contact_pressure, Output, Read, Sample, Shown, When};
+use super::{mean_contact_pressure, Body, Output, Read, Sample, Shown, When};
 use crate::math::Real;
 use crate::scene::Edge;
+use crate::solver::Simulation;
 
 /// The register: its sections in order, each of outputs of one kind.
-pub static REGISTER: [&[Output]; 10] = [
+pub static REGISTER: [&[Output]; 11] = [
     &TIME,
     &TOOLS,
     &FILL,
     &WORKPIECE,
     &FACES,
     &ENERGY,
+    &ENERGY_RUN,
     &THERMAL,
     &TOOL_HEAT,
     &PARTICLE_FIELDS,
@@ -21,74 +23,80 @@ pub static REGISTER: [&[Output]; 10] = [
 ];
 
 /// The instant.
-const TIME: [Output; 2] = [
-    scalar("", "time_s", "s", "simulation time", |s| s.time()).showing(Shown::HISTORY_ONLY),
-    scalar(
-        "",
-        "dt_s",
-        "s",
-        "length of the last step (0 before the first)",
-        |s| s.state().dt_prev,
-    )
-    .showing(Shown::NOT_IN_SUMMARY),
-];
+const TIME: [Output; 2] = time();
+
+/// The instant, in either dimension.
+pub(super) const fn time<S: Body>() -> [Output<S>; 2] {
+    [
+        scalar::<S>("", "time_s", "s", "simulation time", |s| s.time_now())
+            .showing(Shown::HISTORY_ONLY),
+        scalar::<S>(
+            "",
+            "dt_s",
+            "s",
+            "length of the last step (0 before the first)",
+            |s| s.last_step(),
+        )
+        .showing(Shown::NOT_IN_SUMMARY),
+    ]
+}
 
 /// Each tool.
 const TOOLS: [Output; 9] = [
-    tool(
+    tool::<Simulation>(
         "stroke_m",
         "m",
         "displacement of tool {tool} along its axis",
         |s, k| s.tools()[k].state.stroke,
     ),
-    tool(
+    tool::<Simulation>(
         "velocity_m_per_s",
         "m/s",
         "velocity of tool {tool} along its axis during the last step",
         |s, k| s.tools()[k].state.velocity,
     )
     .showing(Shown::NOT_IN_FMU),
-    tool(
+    tool::<Simulation>(
         "force_N",
         "N",
         "force of the workpiece on tool {tool} along its axis (positive pushing it along +axis)",
         |s, k| s.tools()[k].axial_force(),
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    tool(
+    tool::<Simulation>(
         "force_x_N",
         "N",
         "x part of the force of the workpiece on tool {tool}",
         |s, k| s.tools()[k].state.force[0],
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    tool(
+    tool::<Simulation>(
         "force_y_N",
         "N",
         "y part of the force of the workpiece on tool {tool}",
         |s, k| s.tools()[k].state.force[1],
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    tool(
+    tool::<Simulation>(
         "contact_fraction",
         "1",
         "share of tool {tool}'s length that the workpiece touches",
         |s, k| s.contact_fraction(k),
     ),
-    tool(
+    tool::<Simulation>(
         "pressure_mean_Pa",
         "Pa",
         "mean contact pressure on tool {tool}: the normal contact force over the contact area",
         |s, k| mean_contact_pressure(s, k),
     ),
-    tool(
+    tool::<Simulation>(
         "contact_length_m",
         "m",
         "length of the workpiece's surface in contact with tool {tool}",
         |s, k| s.contact_length(k),
     )
     .showing(Shown::NOT_IN_HISTORY),
-    tool(
+    tool::<Simulation>(
         "peak_force_N",
         "N",
         "largest magnitude of the force on tool {tool} so far",
@@ -113,7 +121,7 @@ const FILL: [Output; 1] = [Output {
 
 /// The workpiece as a whole.
 const WORKPIECE: [Output; 15] = [
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "x_min_m",
         "m",
@@ -121,7 +129,7 @@ const WORKPIECE: [Output; 15] = [
         |s| s.extents().x[0],
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "x_max_m",
         "m",
@@ -129,7 +137,7 @@ const WORKPIECE: [Output; 15] = [
         |s| s.extents().x[1],
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "y_min_m",
         "m",
@@ -137,7 +145,7 @@ const WORKPIECE: [Output; 15] = [
         |s| s.extents().y[0],
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "y_max_m",
         "m",
@@ -145,7 +153,7 @@ const WORKPIECE: [Output; 15] = [
         |s| s.extents().y[1],
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "radius_m",
         "m",
@@ -153,7 +161,7 @@ const WORKPIECE: [Output; 15] = [
         |s| s.extents().x[1],
     )
     .present(When::Axisymmetric),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "width_m",
         "m",
@@ -164,32 +172,32 @@ const WORKPIECE: [Output; 15] = [
         },
     )
     .present(When::PlaneStrain),
-    scalar("workpiece", "height_m", "m", "height of the workpiece", |s| {
+    scalar::<Simulation>("workpiece", "height_m", "m", "height of the workpiece", |s| {
         let x = s.extents();
         x.y[1] - x.y[0]
     }),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "volume_change_rel",
         "1",
         "relative change of the volume its outline encloses",
         |s| s.volume() / s.reference_volume() - 1.0,
     ),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "integrated_volume_change_rel",
         "1",
         "relative change of the integration points' own volume, sum J_p w_p",
         |s| s.integrated_volume_change(),
     ),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "max_plastic_strain",
         "1",
         "largest equivalent plastic strain",
         |s| s.max_plastic_strain(),
     ),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "max_penetration_rel",
         "1",
@@ -197,7 +205,7 @@ const WORKPIECE: [Output; 15] = [
         |s| s.penetration().tools_m / s.min_spacing(),
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "beyond_symmetry_rel",
         "1",
@@ -205,7 +213,7 @@ const WORKPIECE: [Output; 15] = [
         |s| s.penetration().planes_m / s.min_spacing(),
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "inside_itself_rel",
         "1",
@@ -213,7 +221,7 @@ const WORKPIECE: [Output; 15] = [
         |s| s.penetration().itself_m / s.min_spacing(),
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "boundary_crossings",
         "1",
@@ -221,7 +229,7 @@ const WORKPIECE: [Output; 15] = [
         |s| s.penetration().crossings,
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    scalar(
+    scalar::<Simulation>(
         "workpiece",
         "laps",
         "1",
@@ -257,81 +265,90 @@ const FACES: [Output; 4] = [
 ];
 
 /// The energy account.
-const ENERGY: [Output; 12] = [
-    scalar(
+const ENERGY: [Output; 10] = energy();
+
+/// The energy account, in either dimension.
+pub(super) const fn energy<S: Body>() -> [Output<S>; 10] {
+    [
+    scalar::<S>(
         "energy",
         "kinetic_J",
         "J",
         "kinetic energy of the workpiece",
-        |s| s.energy().kinetic,
+        |s| s.energy_now().kinetic,
     ),
-    scalar(
+    scalar::<S>(
         "energy",
         "elastic_J",
         "J",
         "elastic energy stored in the workpiece",
-        |s| s.energy().elastic,
+        |s| s.energy_now().elastic,
     ),
-    scalar(
+    scalar::<S>(
         "energy",
         "plastic_J",
         "J",
         "plastic dissipation in the workpiece",
-        |s| s.energy().plastic,
+        |s| s.energy_now().plastic,
     ),
-    scalar(
+    scalar::<S>(
         "energy",
         "internal_J",
         "J",
         "internal energy: elastic plus plastic",
-        |s| s.energy().internal(),
+        |s| s.energy_now().internal(),
     ),
-    scalar(
+    scalar::<S>(
         "energy",
         "contact_J",
         "J",
         "work of the contact forces on the workpiece since the start",
-        |s| s.energy().contact_work,
+        |s| s.energy_now().contact_work,
     ),
-    scalar(
+    scalar::<S>(
         "energy",
         "tool_work_J",
         "J",
         "work delivered by the tools' motion since the start, summed over the tools",
-        |s| s.energy().tool_work,
+        |s| s.energy_now().tool_work,
     ),
-    scalar(
+    scalar::<S>(
         "energy",
         "balance_error_rel",
         "1",
         "error of the energy balance over the energy exchanged",
-        |s| s.energy().balance_error_rel(),
+        |s| s.energy_now().balance_error_rel(),
     ),
-    scalar(
+    scalar::<S>(
         "energy",
         "kinetic_to_internal",
         "1",
         "ratio of kinetic to internal energy (quasi-static check)",
-        |s| s.energy().kinetic_to_internal(),
+        |s| s.energy_now().kinetic_to_internal(),
     )
     .showing(Shown::NOT_IN_SUMMARY),
-    scalar(
+    scalar::<S>(
         "energy",
         "initial_J",
         "J",
         "kinetic energy at the start",
-        |s| s.energy().initial,
+        |s| s.energy_now().initial,
     )
     .showing(Shown::NOT_IN_HISTORY),
-    scalar(
+    scalar::<S>(
         "energy",
         "contact_interface_J",
         "J",
         "contact work less tool work: what the contact interface gained (negative: friction heat and penalty losses)",
-        |s| s.energy().interface_gain(),
+        |s| s.energy_now().interface_gain(),
     )
     .showing(Shown::NOT_IN_HISTORY),
-    scalar(
+    ]
+}
+
+/// What the energy account of a 2D run watches besides.
+const ENERGY_RUN: [Output; 2] = [
+    scalar::<Simulation>(
         "energy",
         "kinetic_to_internal_max",
         "1",
@@ -339,7 +356,7 @@ const ENERGY: [Output; 12] = [
         |s| s.kinetic_to_internal_max(),
     )
     .showing(Shown::NOT_IN_HISTORY),
-    scalar(
+    scalar::<Simulation>(
         "energy",
         "thermoelastic_J",
         "J",
@@ -352,66 +369,71 @@ const ENERGY: [Output; 12] = [
 
 /// The temperatures and heat of a scene with `[thermal]`, in the order of
 /// [`crate::Simulation::thermal_values`].
-const THERMAL: [Output; 9] = [
-    thermal(
-        "temperature_min_c",
-        "degC",
-        "least temperature of the workpiece's integration points",
-        |s| measure(s, 0),
-    ),
-    thermal(
-        "temperature_max_c",
-        "degC",
-        "largest temperature of the workpiece's integration points",
-        |s| measure(s, 1),
-    ),
-    thermal(
-        "temperature_mean_c",
-        "degC",
-        "mean temperature of the workpiece, weighted by the points' volumes",
-        |s| measure(s, 2),
-    ),
-    thermal(
-        "plastic_heat_J",
-        "J",
-        "heat released by plastic work since the start (Taylor-Quinney share)",
-        |s| measure(s, 3),
-    ),
-    thermal(
-        "friction_heat_J",
-        "J",
-        "heat made by friction at the tools since the start (the workpiece takes its share)",
-        |s| measure(s, 4),
-    ),
-    thermal(
-        "heat_content_J",
-        "J",
-        "heat held in the workpiece above its initial temperature",
-        |s| measure(s, 5),
-    ),
-    thermal(
-        "heat_to_tools_J",
-        "J",
-        "heat that has flowed from the workpiece into the tools since the start",
-        |s| measure(s, 6),
-    ),
-    thermal(
-        "heat_to_surroundings_J",
-        "J",
-        "heat that has left the free surface by convection and radiation since the start",
-        |s| measure(s, 7),
-    ),
-    thermal(
-        "heat_balance_rel",
-        "1",
-        "heat content less the heat made plus the heat lost, over the heat made and lost",
-        |s| measure(s, 8),
-    ),
-];
+const THERMAL: [Output; 9] = thermal_measures();
+
+/// The thermal measures, in either dimension.
+pub(super) const fn thermal_measures<S: Body>() -> [Output<S>; 9] {
+    [
+        thermal::<S>(
+            "temperature_min_c",
+            "degC",
+            "least temperature of the workpiece's integration points",
+            |s| measure(s, 0),
+        ),
+        thermal::<S>(
+            "temperature_max_c",
+            "degC",
+            "largest temperature of the workpiece's integration points",
+            |s| measure(s, 1),
+        ),
+        thermal::<S>(
+            "temperature_mean_c",
+            "degC",
+            "mean temperature of the workpiece, weighted by the points' volumes",
+            |s| measure(s, 2),
+        ),
+        thermal::<S>(
+            "plastic_heat_J",
+            "J",
+            "heat released by plastic work since the start (Taylor-Quinney share)",
+            |s| measure(s, 3),
+        ),
+        thermal::<S>(
+            "friction_heat_J",
+            "J",
+            "heat made by friction at the tools since the start (the workpiece takes its share)",
+            |s| measure(s, 4),
+        ),
+        thermal::<S>(
+            "heat_content_J",
+            "J",
+            "heat held in the workpiece above its initial temperature",
+            |s| measure(s, 5),
+        ),
+        thermal::<S>(
+            "heat_to_tools_J",
+            "J",
+            "heat that has flowed from the workpiece into the tools since the start",
+            |s| measure(s, 6),
+        ),
+        thermal::<S>(
+            "heat_to_surroundings_J",
+            "J",
+            "heat that has left the free surface by convection and radiation since the start",
+            |s| measure(s, 7),
+        ),
+        thermal::<S>(
+            "heat_balance_rel",
+            "1",
+            "heat content less the heat made plus the heat lost, over the heat made and lost",
+            |s| measure(s, 8),
+        ),
+    ]
+}
 
 /// The heat each tool takes from the workpiece.
 const TOOL_HEAT: [Output; 2] = [
-    tool(
+    tool::<Simulation>(
         "heat_flow_W",
         "W",
         "heat flow from the workpiece into tool {tool} at the last heat stage",
@@ -420,7 +442,7 @@ const TOOL_HEAT: [Output; 2] = [
     .in_group("thermal")
     .present(When::HeatedTool)
     .showing(Shown::NOT_IN_SUMMARY),
-    tool(
+    tool::<Simulation>(
         "heat_J",
         "J",
         "heat that has flowed from the workpiece into tool {tool} since the start",
@@ -433,26 +455,26 @@ const TOOL_HEAT: [Output; 2] = [
 
 /// Fields per particle, smoothed from the integration points with weights `|N_I| w_p`.
 const PARTICLE_FIELDS: [Output; 4] = [
-    particles(
+    particles::<Simulation>(
         "plastic_strain",
         "1",
         "equivalent plastic strain at the particles",
         |s| s.particle_fields().plastic_strain.clone(),
     ),
-    particles(
+    particles::<Simulation>(
         "von_mises_Pa",
         "Pa",
         "von Mises stress at the particles",
         |s| s.particle_fields().von_mises.clone(),
     ),
-    particles(
+    particles::<Simulation>(
         "temperature_c",
         "degC",
         "temperature at the particles",
         |s| s.particle_fields().temperature.clone().unwrap_or_default(),
     )
     .present(When::Thermal),
-    particles(
+    particles::<Simulation>(
         "lap",
         "1",
         "the lap each particle took part in, numbered from 1 in the order they formed (0: none)",
@@ -462,25 +484,25 @@ const PARTICLE_FIELDS: [Output; 4] = [
 
 /// Fields per integration point.
 const POINT_FIELDS: [Output; 5] = [
-    points(
+    points::<Simulation>(
         "plastic_strain",
         "1",
         "equivalent plastic strain at the integration points",
         |s| s.point_plastic_strain(),
     ),
-    points(
+    points::<Simulation>(
         "von_mises_Pa",
         "Pa",
         "von Mises stress (Cauchy) at the integration points at the last stress stage",
         |s| s.point_von_mises(),
     ),
-    points(
+    points::<Simulation>(
         "jacobian",
         "1",
         "J = det F at the integration points at the last stress stage",
         |s| s.point_jacobian(),
     ),
-    points(
+    points::<Simulation>(
         "temperature_c",
         "degC",
         "temperature at the integration points",
@@ -490,7 +512,7 @@ const POINT_FIELDS: [Output; 5] = [
         },
     )
     .present(When::Thermal),
-    points(
+    points::<Simulation>(
         "plastic_strain_rate_per_s",
         "1/s",
         "plastic strain rate at the integration points at the last stress stage",
@@ -518,13 +540,13 @@ pub const THERMAL_MEASURES: [(&str, &str, &str); 9] = {
 };
 
 /// A scalar in every scene and every front end.
-const fn scalar(
+pub(super) const fn scalar<S: Body>(
     group: &'static str,
     name: &'static str,
     unit: &'static str,
     description: &'static str,
-    read: fn(&Sample<'_>) -> Real,
-) -> Output {
+    read: fn(&Sample<'_, S>) -> Real,
+) -> Output<S> {
     Output {
         name,
         group,
@@ -537,12 +559,12 @@ const fn scalar(
 }
 
 /// A value per tool in every scene and every front end.
-const fn tool(
+pub(super) const fn tool<S: Body>(
     name: &'static str,
     unit: &'static str,
     description: &'static str,
-    read: fn(&Sample<'_>, usize) -> Real,
-) -> Output {
+    read: fn(&Sample<'_, S>, usize) -> Real,
+) -> Output<S> {
     Output {
         name,
         group: "",
@@ -572,27 +594,27 @@ const fn face(
 }
 
 /// A thermal measure, in a scene with `[thermal]`.
-const fn thermal(
+const fn thermal<S: Body>(
     name: &'static str,
     unit: &'static str,
     description: &'static str,
-    read: fn(&Sample<'_>) -> Real,
-) -> Output {
-    scalar("thermal", name, unit, description, read).present(When::Thermal)
+    read: fn(&Sample<'_, S>) -> Real,
+) -> Output<S> {
+    scalar::<S>("thermal", name, unit, description, read).present(When::Thermal)
 }
 
 /// Thermal measure `k` now (NaN in an isothermal scene, which has none).
-fn measure(s: &Sample<'_>, k: usize) -> Real {
+fn measure<S: Body>(s: &Sample<'_, S>, k: usize) -> Real {
     s.thermal_values().map_or(Real::NAN, |v| v[k])
 }
 
 /// A field per particle.
-const fn particles(
+pub(super) const fn particles<S: Body>(
     name: &'static str,
     unit: &'static str,
     description: &'static str,
-    read: fn(&Sample<'_>) -> Vec<Real>,
-) -> Output {
+    read: fn(&Sample<'_, S>) -> Vec<Real>,
+) -> Output<S> {
     Output {
         name,
         group: "particles",
@@ -605,12 +627,12 @@ const fn particles(
 }
 
 /// A field per integration point.
-const fn points(
+pub(super) const fn points<S: Body>(
     name: &'static str,
     unit: &'static str,
     description: &'static str,
-    read: fn(&Sample<'_>) -> Vec<Real>,
-) -> Output {
+    read: fn(&Sample<'_, S>) -> Vec<Real>,
+) -> Output<S> {
     Output {
         name,
         group: "points",
@@ -622,21 +644,21 @@ const fn points(
     }
 }
 
-impl Output {
+impl<S: Body> Output<S> {
     /// Shown as `shown` says.
-    const fn showing(mut self, shown: Shown) -> Output {
+    pub(super) const fn showing(mut self, shown: Shown) -> Output<S> {
         self.shown = shown;
         self
     }
 
     /// Present only `when`.
-    const fn present(mut self, when: When) -> Output {
+    pub(super) const fn present(mut self, when: When) -> Output<S> {
         self.when = when;
         self
     }
 
     /// In group `group`.
-    const fn in_group(mut self, group: &'static str) -> Output {
+    const fn in_group(mut self, group: &'static str) -> Output<S> {
         self.group = group;
         self
     }

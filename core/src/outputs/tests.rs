@@ -8,9 +8,14 @@ fn scene(file: &str) -> Scene {
 
 #[test]
 fn every_section_is_of_one_kind_and_every_entry_complete() {
-    for section in REGISTER {
+    check_sections(&REGISTER);
+    check_sections(&SOLID_REGISTER);
+}
+
+fn check_sections<S: Body>(register: &[&[Output<S>]]) {
+    for section in register {
         let kind = section[0].read.kind();
-        for o in section {
+        for o in *section {
             assert_eq!(o.read.kind(), kind, "{} in a section of {kind:?}", o.name);
             assert!(!o.name.is_empty() && !o.unit.is_empty() && !o.description.is_empty());
             let placeholder = |p: &str| o.description.contains(p);
@@ -33,14 +38,22 @@ fn column_names_are_unique_in_every_shipped_scene() {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes");
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
-        // A 3D scene's outputs are the 3D run's own (`cli/src/run_solid.rs`).
-        if crate::scene::solid::is_solid(&std::fs::read_to_string(&path).unwrap()) {
-            continue;
-        }
-        let scene = Scene::from_file(&path).unwrap();
-        let mut names: Vec<String> = columns(&scene).into_iter().map(|c| c.name).collect();
-        names.extend(fields(&scene).map(Output::full_name));
+        let mut names: Vec<String> = match crate::scene::solid::SceneFile::from_file(&path).unwrap()
+        {
+            crate::scene::solid::SceneFile::Solid(scene) => {
+                let mut names: Vec<String> =
+                    solid_columns(&scene).into_iter().map(|c| c.name).collect();
+                names.extend(solid_fields(&scene).map(Output::full_name));
+                names
+            }
+            crate::scene::solid::SceneFile::Plane(scene) => {
+                let mut names: Vec<String> = columns(&scene).into_iter().map(|c| c.name).collect();
+                names.extend(fields(&scene).map(Output::full_name));
+                names
+            }
+        };
         let count = names.len();
+        assert!(count > 10, "{}", path.display());
         names.sort();
         names.dedup();
         assert_eq!(names.len(), count, "{}", path.display());

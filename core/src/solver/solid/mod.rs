@@ -534,6 +534,19 @@ impl SolidSimulation {
     pub fn point_positions(&self) -> &[[Real; 3]] {
         &self.disc.point_positions
     }
+    /// `J = det F` at each integration point after the last stress stage (-).
+    pub fn point_jacobian(&self) -> Vec<Real> {
+        self.ws.out.iter().map(|o| o.jacobian).collect()
+    }
+    /// The largest equivalent plastic strain of the points (-).
+    pub fn max_plastic_strain(&self) -> Real {
+        self.st.points.iter().map(|p| p.eps_p).fold(0.0, Real::max)
+    }
+    /// Plastic strain rate of each point at the last stress stage (1/s), `None` for an
+    /// isothermal scene.
+    pub fn point_plastic_strain_rate(&self) -> Option<&[Real]> {
+        self.st.heat.as_ref().map(|h| &h.plastic_rate[..])
+    }
     /// The points' temperatures (degrees C), `None` for an isothermal scene.
     pub fn point_temperature(&self) -> Option<&[Real]> {
         self.st.heat.as_ref().map(|h| &h.temperature_c[..])
@@ -578,17 +591,12 @@ impl SolidSimulation {
     }
 
     /// The deepest physical particle position inside a scene tool and beyond a symmetry
-    /// plane (m), over every particle (the truth the contact's own checks cannot see),
-    /// recorded in the state's maxima; a depth past `checks.max_penetration_rel` smallest
-    /// spacings inside a tool or beyond a plane stops the run naming the particle.
-    ///
-    /// # Errors
-    ///
-    /// The penetration bound is exceeded.
-    pub fn measure_penetration(&mut self) -> Result<(Real, Real)> {
-        let x = self.positions();
+    /// plane now (m), over every particle (the truth the contact's own checks cannot see),
+    /// each with the particle and the plane: `[tools, symmetry planes]` as `(depth,
+    /// particle, plane)`, depth 0 when none lies inside.
+    pub fn penetration_now(&self) -> [(Real, usize, usize); 2] {
         let mut worst = [(0.0 as Real, 0usize, 0usize); 2];
-        for (j, p) in x.iter().enumerate() {
+        for (j, p) in self.positions().iter().enumerate() {
             for (t, plane) in self.tools.iter().enumerate() {
                 let depth = plane.depth_of(*p);
                 let w = &mut worst[plane.symmetry as usize];
@@ -597,6 +605,19 @@ impl SolidSimulation {
                 }
             }
         }
+        worst
+    }
+
+    /// [`SolidSimulation::penetration_now`] recorded in the state's maxima; a depth past
+    /// `checks.max_penetration_rel` smallest spacings inside a tool or beyond a plane stops
+    /// the run naming the particle. Returns the depths in the tools and beyond the planes
+    /// (m).
+    ///
+    /// # Errors
+    ///
+    /// The penetration bound is exceeded.
+    pub fn measure_penetration(&mut self) -> Result<(Real, Real)> {
+        let worst = self.penetration_now();
         self.st.max_penetration = self.st.max_penetration.max(worst[0].0);
         self.st.max_beyond_plane = self.st.max_beyond_plane.max(worst[1].0);
         let bound = self.scene.checks.max_penetration_rel * self.disc.h_min;

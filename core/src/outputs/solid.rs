@@ -1,0 +1,282 @@
+//! The register of a 3D run ([`SOLID_REGISTER`]): the outputs of a [`SolidSimulation`],
+//! named as the 2D register names the same figure. The time, the energy account and the
+//! thermal measures are the 2D register's own sections, generic over [`Body`]; what only a
+//! 3D body has (a tool's force along z, the z bounds) or reads differently (the workpiece's
+//! bounds and radius over its particles, the penetration of the plane tools) is here.
+//! Not in 3D yet: the particle fields (2D smooths the points' values onto the particles),
+//! fill points, followed faces, laps and the tools' heat.
+
+use super::register::{energy, particles, points, scalar, thermal_measures, time, tool};
+use super::{expand, fields_of, At, Column, Kind, Output, Sample, Shown, When};
+use crate::math::Real;
+use crate::scene::solid::SolidScene;
+use crate::solver::{BodyReadings, SolidSimulation};
+use std::cell::OnceCell;
+
+/// The register of a 3D run: its sections in order, each of outputs of one kind.
+pub static SOLID_REGISTER: [&[Output<SolidSimulation>]; 7] = [
+    &TIME,
+    &TOOLS,
+    &WORKPIECE,
+    &ENERGY,
+    &THERMAL,
+    &PARTICLE_FIELDS,
+    &POINT_FIELDS,
+];
+
+const TIME: [Output<SolidSimulation>; 2] = time();
+const ENERGY: [Output<SolidSimulation>; 10] = energy();
+const THERMAL: [Output<SolidSimulation>; 9] = thermal_measures();
+
+/// Each plane tool (the symmetry planes are not tools).
+const TOOLS: [Output<SolidSimulation>; 7] = [
+    tool::<SolidSimulation>(
+        "stroke_m",
+        "m",
+        "displacement of tool {tool} along its axis",
+        |s, k| s.tools()[k].state.stroke,
+    ),
+    tool::<SolidSimulation>(
+        "velocity_m_per_s",
+        "m/s",
+        "velocity of tool {tool} along its axis during the last step",
+        |s, k| s.tools()[k].state.velocity,
+    )
+    .showing(Shown::NOT_IN_FMU),
+    tool::<SolidSimulation>(
+        "force_N",
+        "N",
+        "force of the workpiece on tool {tool} along its axis (positive pushing it along +axis)",
+        |s, k| s.tools()[k].axial_force(),
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    tool::<SolidSimulation>(
+        "force_x_N",
+        "N",
+        "x part of the force of the workpiece on tool {tool}",
+        |s, k| s.tools()[k].state.force[0],
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    tool::<SolidSimulation>(
+        "force_y_N",
+        "N",
+        "y part of the force of the workpiece on tool {tool}",
+        |s, k| s.tools()[k].state.force[1],
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    tool::<SolidSimulation>(
+        "force_z_N",
+        "N",
+        "z part of the force of the workpiece on tool {tool}",
+        |s, k| s.tools()[k].state.force[2],
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    tool::<SolidSimulation>(
+        "peak_force_N",
+        "N",
+        "largest magnitude of the force on tool {tool} so far",
+        |s, k| s.tools()[k].state.peak_force,
+    )
+    .showing(Shown::NOT_IN_HISTORY),
+];
+
+/// The workpiece as a whole, from its particles' physical positions.
+const WORKPIECE: [Output<SolidSimulation>; 11] = [
+    bound("x_min_m", "least x of the particles", 0, 0),
+    bound("x_max_m", "largest x of the particles", 0, 1),
+    bound("y_min_m", "least y of the particles", 1, 0),
+    bound("y_max_m", "largest y of the particles", 1, 1),
+    bound("z_min_m", "least z of the particles", 2, 0),
+    bound("z_max_m", "largest z of the particles", 2, 1),
+    scalar::<SolidSimulation>(
+        "workpiece",
+        "radius_m",
+        "m",
+        "largest distance of a particle from the z axis (a Taylor bar's foot radius)",
+        |s| s.readings().radius,
+    ),
+    scalar::<SolidSimulation>(
+        "workpiece",
+        "height_m",
+        "m",
+        "length of the workpiece along z, z_max - z_min",
+        |s| s.readings().height(),
+    ),
+    scalar::<SolidSimulation>(
+        "workpiece",
+        "max_plastic_strain",
+        "1",
+        "largest equivalent plastic strain",
+        |s| s.max_plastic_strain(),
+    ),
+    scalar::<SolidSimulation>(
+        "workpiece",
+        "max_penetration_rel",
+        "1",
+        "deepest a particle lies inside a tool, in smallest particle spacings",
+        |s| s.penetration()[0] / s.h_min(),
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar::<SolidSimulation>(
+        "workpiece",
+        "beyond_symmetry_rel",
+        "1",
+        "deepest a particle lies beyond a symmetry plane, in smallest particle spacings",
+        |s| s.penetration()[1] / s.h_min(),
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+];
+
+/// A bound of the workpiece: `end` 0 (least) or 1 (largest) of coordinate `axis`.
+const fn bound(
+    name: &'static str,
+    description: &'static str,
+    axis: usize,
+    end: usize,
+) -> Output<SolidSimulation> {
+    // The reads are fn pointers, so each bound is its own function.
+    let read: fn(&Sample<'_, SolidSimulation>) -> Real = match (axis, end) {
+        (0, 0) => |s| s.readings().extents[0][0],
+        (0, _) => |s| s.readings().extents[0][1],
+        (1, 0) => |s| s.readings().extents[1][0],
+        (1, _) => |s| s.readings().extents[1][1],
+        (_, 0) => |s| s.readings().extents[2][0],
+        _ => |s| s.readings().extents[2][1],
+    };
+    // The summary has the bounds as ranges (`workpiece.x_range_m`), as in 2D.
+    scalar::<SolidSimulation>("workpiece", name, "m", description, read)
+        .showing(Shown::NOT_IN_SUMMARY)
+}
+
+/// Fields per particle.
+const PARTICLE_FIELDS: [Output<SolidSimulation>; 3] = [
+    particles::<SolidSimulation>("x_m", "m", "x of the particles", |s| coordinate(s, 0)),
+    particles::<SolidSimulation>("y_m", "m", "y of the particles", |s| coordinate(s, 1)),
+    particles::<SolidSimulation>("z_m", "m", "z of the particles", |s| coordinate(s, 2)),
+];
+
+/// Coordinate `axis` of each particle's physical position (m).
+fn coordinate(s: &Sample<'_, SolidSimulation>, axis: usize) -> Vec<Real> {
+    s.positions().iter().map(|p| p[axis]).collect()
+}
+
+/// Fields per integration point.
+const POINT_FIELDS: [Output<SolidSimulation>; 5] = [
+    points::<SolidSimulation>(
+        "plastic_strain",
+        "1",
+        "equivalent plastic strain at the integration points",
+        |s| s.point_plastic_strain(),
+    ),
+    points::<SolidSimulation>(
+        "von_mises_Pa",
+        "Pa",
+        "von Mises stress (Cauchy) at the integration points at the last stress stage",
+        |s| s.point_von_mises(),
+    ),
+    points::<SolidSimulation>(
+        "jacobian",
+        "1",
+        "J = det F at the integration points at the last stress stage",
+        |s| s.point_jacobian(),
+    ),
+    points::<SolidSimulation>(
+        "temperature_c",
+        "degC",
+        "temperature at the integration points",
+        |s| {
+            s.point_temperature()
+                .map_or_else(Vec::new, <[Real]>::to_vec)
+        },
+    )
+    .present(When::Thermal),
+    points::<SolidSimulation>(
+        "plastic_strain_rate_per_s",
+        "1/s",
+        "plastic strain rate at the integration points at the last stress stage",
+        |s| {
+            s.point_plastic_strain_rate()
+                .map_or_else(Vec::new, <[Real]>::to_vec)
+        },
+    )
+    .present(When::Thermal),
+];
+
+/// The measures a sample of a 3D simulation takes once.
+#[derive(Default)]
+pub struct SolidCache {
+    readings: OnceCell<BodyReadings>,
+    penetration: OnceCell<[Real; 2]>,
+}
+
+impl<'a> Sample<'a, SolidSimulation> {
+    /// The simulation now with the penetration already measured (m, in the tools and
+    /// beyond the symmetry planes).
+    pub fn with_depths(sim: &'a SolidSimulation, p: [Real; 2]) -> Sample<'a, SolidSimulation> {
+        let sample = Sample::new(sim);
+        sample.cache.penetration.get_or_init(|| p);
+        sample
+    }
+
+    /// The workpiece's radius and bounds ([`SolidSimulation::readings`]).
+    pub fn readings(&self) -> BodyReadings {
+        *self.cache.readings.get_or_init(|| self.sim.readings())
+    }
+
+    /// The deepest particle in a tool and beyond a symmetry plane (m), measured when first
+    /// read ([`SolidSimulation::penetration_now`]).
+    pub fn penetration(&self) -> [Real; 2] {
+        *self.cache.penetration.get_or_init(|| {
+            let [tools, planes] = self.sim.penetration_now();
+            [tools.0, planes.0]
+        })
+    }
+}
+
+impl When {
+    /// Whether a 3D scene has the output: every scene, or one with `[thermal]`; what only
+    /// 2D scenes have never.
+    pub fn holds_solid(self, scene: &SolidScene) -> bool {
+        match self {
+            When::Always => true,
+            When::Thermal => scene.thermal.is_some(),
+            _ => false,
+        }
+    }
+}
+
+impl Column<SolidSimulation> {
+    /// The description with the tool's name put in.
+    pub fn description(&self, scene: &SolidScene) -> String {
+        match self.at {
+            At::Tool(k) => self
+                .output
+                .description
+                .replace("{tool}", &scene.tools[k].name),
+            _ => self.output.description.to_string(),
+        }
+    }
+}
+
+/// Every column of a 3D `scene`, section by section in register order, each section tool
+/// by tool.
+pub fn solid_columns(scene: &SolidScene) -> Vec<Column<SolidSimulation>> {
+    expand(
+        &SOLID_REGISTER,
+        |kind| match kind {
+            Kind::Scalar => vec![(At::Whole, String::new())],
+            Kind::PerTool => (0..scene.tools.len())
+                .map(|k| (At::Tool(k), scene.tools[k].name.clone()))
+                .collect(),
+            _ => Vec::new(),
+        },
+        |when, _| when.holds_solid(scene),
+    )
+}
+
+/// Every field present in a 3D `scene`, in register order.
+pub fn solid_fields(
+    scene: &SolidScene,
+) -> impl Iterator<Item = &'static Output<SolidSimulation>> + '_ {
+    fields_of(&SOLID_REGISTER, move |when| when.holds_solid(scene))
+}
