@@ -16,7 +16,7 @@ use clap::{Parser, Subcommand};
 use rkforge_core::scene::solid::is_solid;
 use rkforge_core::scene::Friction;
 use rkforge_core::scene::SolidScene;
-use rkforge_core::scene_overrides::{parse_value, solid_with_overrides, split_arg, split_values};
+use rkforge_core::scene_overrides::{parse_value, split_arg, split_values, Overridable};
 use rkforge_core::{IntegrationRule, Scene, SceneSource};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -212,7 +212,17 @@ fn set_threads(n: Option<usize>) -> Result<(), String> {
 
 /// The scene file with the `--set KEY=VALUE` overrides of `rkforge run` applied.
 fn scene_with_overrides(path: &std::path::Path, sets: &[String]) -> Result<Scene, String> {
-    let mut source = SceneSource::from_file(path).map_err(|e| e.to_string())?;
+    with_sets(
+        SceneSource::from_file(path).map_err(|e| e.to_string())?,
+        sets,
+    )
+}
+
+/// The scene of `source` (2D or 3D) with the `--set KEY=VALUE` overrides applied.
+fn with_sets<S: Overridable + Clone>(
+    mut source: SceneSource<S>,
+    sets: &[String],
+) -> Result<S, String> {
     for arg in sets {
         source.set_arg(arg).map_err(|e| e.to_string())?;
     }
@@ -227,14 +237,8 @@ fn solid_scene(path: &std::path::Path, sets: &[String]) -> Result<Option<SolidSc
     if !is_solid(&text) {
         return Ok(None);
     }
-    let overrides = sets
-        .iter()
-        .map(|arg| split_arg(arg).map(|(k, v)| (k.to_string(), parse_value(v))))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| e.to_string())?;
-    solid_with_overrides(&text, &path.display().to_string(), &overrides)
-        .map(Some)
-        .map_err(|e| e.to_string())
+    let source = SceneSource::<SolidScene>::of_text(&text, &path.display().to_string(), vec![]);
+    with_sets(source.map_err(|e| e.to_string())?, sets).map(Some)
 }
 
 /// `rkforge run` of a 3D scene: summary, history, frames and picture (the MCAP recording
@@ -393,21 +397,25 @@ fn sweep_cases<S>(
 
 fn sweep_command(a: SweepArgs) -> Result<(), String> {
     set_threads(a.threads)?;
-    let text = std::fs::read_to_string(&a.scene).unwrap_or_default();
+    let text = rkforge_core::scene::read_text(&a.scene).map_err(|e| e.to_string())?;
+    let file = a.scene.display().to_string();
     if is_solid(&text) {
-        let file = a.scene.display().to_string();
-        let cases = sweep_cases(&a.set, |o| {
-            solid_with_overrides(&text, &file, o).map_err(|e| e.to_string())
-        })?;
-        return sweep_scenes(&a, &cases);
+        return sweep_scenes(&a, &source_cases::<SolidScene>(&text, &file, &a.set)?);
     }
-    let source = SceneSource::from_file(&a.scene).map_err(|e| e.to_string())?;
-    let cases = sweep_cases(&a.set, |o| {
-        SceneSource::with_overrides(source.text(), source.file(), o.to_vec())
+    sweep_scenes(&a, &source_cases::<Scene>(&text, &file, &a.set)?)
+}
+
+/// The cases of the `--set` grid of a scene's text (2D or 3D), each validated.
+fn source_cases<S: Overridable + Clone>(
+    text: &str,
+    file: &str,
+    sets: &[String],
+) -> Result<Vec<sweep::Case<S>>, String> {
+    sweep_cases(sets, |o| {
+        SceneSource::<S>::of_text(text, file, o.to_vec())
             .map(|built| built.scene().clone())
             .map_err(|e| e.to_string())
-    })?;
-    sweep_scenes(&a, &cases)
+    })
 }
 
 /// The sweep of `cases` (2D or 3D) with the options of `a`, checked before anything runs.

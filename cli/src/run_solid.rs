@@ -12,11 +12,10 @@
 
 use crate::output::plots::{solid_plot, SolidPanel, View};
 use crate::output::vtu::{write_pvd, write_vtu_3d};
-use rkforge_core::outputs::{solid_columns, Sample};
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::SolidSimulation;
-use rkforge_runner::{place, History};
-use serde_json::{json, Value};
+use rkforge_runner::{drive_solid, solid_summary};
+use serde_json::Value;
 use std::path::Path;
 use std::time::Instant;
 
@@ -35,106 +34,24 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let wall = Instant::now();
     let mut sim = SolidSimulation::new(scene).map_err(|e| e.to_string())?;
-    let end = scene.time.end_s;
     let nframes = if frames { scene.output.frames } else { 0 };
-    let marks = rkforge_runner::schedule_every(end, scene.history_interval(), nframes).ok_or_else(
-        || {
-            format!(
-                "output.history_interval_s {:e} s: too many samples",
-                scene.history_interval()
-            )
-        },
-    )?;
-    let mut history = History::solid(&sim);
-    let mut row = |sim: &mut SolidSimulation| history.record_solid(sim).map_err(|e| e.to_string());
-    let mut error = row(&mut sim).err();
     let mut shots = Vec::new();
-    if nframes > 0 {
-        shots.push(Frame::of(&sim));
-    }
-    for mark in &marks {
-        if error.is_some() {
-            break;
-        }
-        if let Err(e) = sim.run_toward(mark.time, u64::MAX, |_, _| true) {
-            error = Some(e.to_string());
-            break;
-        }
-        if mark.sample {
-            error = row(&mut sim).err();
-        }
-        if mark.frame {
-            shots.push(Frame::of(&sim));
-        }
-    }
+    let outcome = drive_solid(&mut sim, nframes, |sim| {
+        shots.push(Frame::of(sim));
+        Ok(())
+    })?;
     if !shots.is_empty() {
         write_frames(&sim, &shots, out, &scene.name)?;
     }
-    let wall_s = wall.elapsed().as_secs_f64();
-    history.write(&out.join("history.csv"))?;
-    let summary = summary(scene, &sim, wall_s, error.as_deref());
+    outcome.history.write(&out.join("history.csv"))?;
+    let summary = solid_summary(&sim, wall.elapsed().as_secs_f64(), outcome.ending());
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     std::fs::write(out.join("summary.json"), text + "\n")
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
-    Ok(SolidReport { summary, error })
-}
-
-/// The summary of a 3D run that took `wall_s` (s) of wall time, ended by `error` if any:
-/// how it ended, the discretisation and its cost, the bounds as ranges, the largest
-/// penetrations, each tool's force vector, the stage times, and the register's figures
-/// ([`rkforge_core::outputs::SOLID_REGISTER`]) at the paths their names give, as the 2D
-/// summary places them.
-fn summary(scene: &SolidScene, sim: &SolidSimulation, wall_s: f64, error: Option<&str>) -> Value {
-    let sample = Sample::new(sim);
-    let b = sample.readings();
-    let st = sim.state();
-    let particle_steps = sim.particle_count() as f64 * sim.steps() as f64;
-    let t = &sim.times;
-    let mut summary = json!({
-        "status": if error.is_some() { "error" } else { "ok" },
-        "error": error,
-        "scene": scene.name,
-        "kinematics": "3d",
-        "integration": scene.discretization.integration.name(),
-        "support": scene.discretization.support,
-        "particles": sim.particle_count(),
-        "integration_points": sim.point_count(),
-        "neighbours_per_point": sim.neighbours_per_point(),
-        "memory_bytes": sim.memory_bytes(),
-        "steps": sim.steps(),
-        "end_time_s": sim.time(),
-        "wall_s": wall_s,
-        "threads": rayon::current_num_threads(),
-        "us_per_particle_step": if particle_steps > 0.0 { 1e6 * wall_s / particle_steps } else { 0.0 },
-        "smallest_spacing_m": sim.h_min(),
-        "critical_dt_s": sim.critical_dt0(),
-        "workpiece": {
-            "x_range_m": b.extents[0],
-            "y_range_m": b.extents[1],
-            "z_range_m": b.extents[2],
-        },
-        "contact": {
-            "max_penetration_m": st.max_penetration,
-            "max_penetration_rel": st.max_penetration / sim.h_min(),
-            "max_beyond_plane_m": st.max_beyond_plane,
-            "max_beyond_plane_rel": st.max_beyond_plane / sim.h_min(),
-        },
-        "tools": sim.tools().iter().map(|t| json!({
-            "name": t.name,
-            "force_N": t.state.force,
-            "axial_force_N": t.axial_force(),
-        })).collect::<Vec<_>>(),
-        "stage_seconds": {
-            "setup": t.setup.as_secs_f64(),
-            "shape_functions": t.shape_functions.as_secs_f64(),
-            "stress": t.stress.as_secs_f64(),
-            "internal_force": t.internal_force.as_secs_f64(),
-            "contact": t.contact.as_secs_f64(),
-            "integration": t.integration.as_secs_f64(),
-        },
-    });
-    place(&mut summary, &solid_columns(scene), &sample);
-    summary
+    Ok(SolidReport {
+        summary,
+        error: outcome.failure,
+    })
 }
 
 /// One frame of the body: time (s), particle positions (m), each cell's plastic strain
@@ -149,18 +66,11 @@ struct Frame {
 
 impl Frame {
     fn of(sim: &SolidSimulation) -> Frame {
-        let eps = sim.point_plastic_strain();
-        let per_cell = (eps.len() / sim.cells().len().max(1)).max(1);
-        let cell_means = |v: &[f64]| -> Vec<f64> {
-            v.chunks(per_cell)
-                .map(|c| c.iter().sum::<f64>() / c.len() as f64)
-                .collect()
-        };
         Frame {
             time: sim.time(),
             positions: sim.positions(),
-            plastic_strain: cell_means(&eps),
-            temperature: sim.point_temperature().map(cell_means),
+            plastic_strain: sim.cell_means(&sim.point_plastic_strain()),
+            temperature: sim.point_temperature().map(|t| sim.cell_means(t)),
         }
     }
 }

@@ -143,6 +143,9 @@ impl Driven for PlaneTool {
     fn command(&self) -> Option<Real> {
         self.state.command
     }
+    fn set_command(&mut self, v: Real) {
+        self.state.command = Some(v);
+    }
 }
 
 #[cfg(test)]

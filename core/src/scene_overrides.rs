@@ -14,17 +14,18 @@ use crate::scene::{Scene, SolidScene};
 use crate::scene_keys::{key_line, syntax_message};
 use toml::{Table, Value};
 
-/// A scene's text with dotted-key overrides on top, and the validated scene they give.
+/// A scene's text with dotted-key overrides on top, and the validated scene they give: a
+/// 2D [`Scene`] or, as `SceneSource<SolidScene>`, a 3D one.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SceneSource {
+pub struct SceneSource<S = Scene> {
     text: String,
     file: String,
     overrides: Vec<(String, Value)>,
-    scene: Scene,
+    scene: S,
 }
 
 impl SceneSource {
-    /// Read and validate a scene file.
+    /// Read and validate a 2D scene file.
     ///
     /// # Errors
     ///
@@ -33,7 +34,7 @@ impl SceneSource {
         SceneSource::from_str_named(&crate::scene::read_text(path)?, &path.display().to_string())
     }
 
-    /// Parse and validate scene text; `file` names it in error messages.
+    /// Parse and validate 2D scene text; `file` names it in error messages.
     ///
     /// # Errors
     ///
@@ -42,7 +43,7 @@ impl SceneSource {
         SceneSource::with_overrides(text, file, Vec::new())
     }
 
-    /// Scene text with overrides applied in order (a later one wins on the same key).
+    /// 2D scene text with overrides applied in order (a later one wins on the same key).
     ///
     /// # Errors
     ///
@@ -52,6 +53,22 @@ impl SceneSource {
         file: &str,
         overrides: Vec<(String, Value)>,
     ) -> Result<SceneSource> {
+        SceneSource::of_text(text, file, overrides)
+    }
+}
+
+impl<S: Overridable> SceneSource<S> {
+    /// Scene text of the kind `S` (2D or 3D) with overrides applied in order (a later one
+    /// wins on the same key): `SceneSource::<SolidScene>::of_text(...)` for a 3D scene.
+    ///
+    /// # Errors
+    ///
+    /// The scene is invalid; an error caused by an override names its dotted key.
+    pub fn of_text(
+        text: &str,
+        file: &str,
+        overrides: Vec<(String, Value)>,
+    ) -> Result<SceneSource<S>> {
         let scene = build(text, file, &overrides)?;
         Ok(SceneSource {
             text: text.to_string(),
@@ -88,7 +105,7 @@ impl SceneSource {
     }
 
     /// The validated scene.
-    pub fn scene(&self) -> &Scene {
+    pub fn scene(&self) -> &S {
         &self.scene
     }
 
@@ -177,20 +194,6 @@ impl Overridable for SolidScene {
     fn findings(&self) -> Vec<(String, String)> {
         self.validate()
     }
-}
-
-/// A 3D scene's text with the dotted-key `overrides` applied in order, validated as
-/// [`SceneSource::with_overrides`] validates a 2D one.
-///
-/// # Errors
-///
-/// The scene is invalid; an error caused by an override names its dotted key.
-pub fn solid_with_overrides(
-    text: &str,
-    file: &str,
-    overrides: &[(String, Value)],
-) -> Result<SolidScene> {
-    build(text, file, overrides)
 }
 
 /// Deserialise and validate scene text; `file` names it in error messages, a finding is

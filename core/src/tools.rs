@@ -387,6 +387,34 @@ pub trait Driven {
     fn motion(&self) -> &Motion;
     /// Velocity set from outside (m/s), overriding the motion.
     fn command(&self) -> Option<Real>;
+    /// Set the velocity from outside (m/s).
+    fn set_command(&mut self, v: Real);
+}
+
+/// Command tool `k` of `tools` to move at `v` (m/s, along its axis) from the next step on,
+/// overriding the scene's motion (2D tools and 3D plane tools alike).
+///
+/// # Errors
+///
+/// No tool `k`, a tool the scene fixes, or a velocity that is not finite.
+pub fn command_velocity<T: Driven>(tools: &mut [T], k: usize, v: Real) -> crate::Result<()> {
+    let t = tools
+        .get_mut(k)
+        .ok_or_else(|| crate::Error::Request(format!("no tool with index {k}")))?;
+    if matches!(t.motion(), Motion::Fixed) {
+        return Err(crate::Error::Request(format!(
+            "tool `{}` is fixed in the scene",
+            t.name()
+        )));
+    }
+    if !v.is_finite() {
+        return Err(crate::Error::Request(format!(
+            "velocity {v} for tool `{}` is not finite",
+            t.name()
+        )));
+    }
+    t.set_command(v);
+    Ok(())
 }
 
 impl Driven for Tool {
@@ -398,6 +426,9 @@ impl Driven for Tool {
     }
     fn command(&self) -> Option<Real> {
         self.state.command
+    }
+    fn set_command(&mut self, v: Real) {
+        self.state.command = Some(v);
     }
 }
 

@@ -10,14 +10,16 @@
 //! services order.
 
 pub mod history;
+pub mod solid;
 pub mod summary;
 
 pub use history::History;
+pub use solid::{drive_solid, solid_summary};
 pub use summary::{
     laps_json, place, reference_table, references_beside, summary, tool_json, Ending,
 };
 
-impl Outcome {
+impl<S: Body> Outcome<S> {
     /// How the run ended, for [`summary`].
     pub fn ending(&self) -> Ending<'_> {
         match (&self.failure, self.stopped) {
@@ -28,6 +30,7 @@ impl Outcome {
     }
 }
 
+use rkforge_core::outputs::Body;
 use rkforge_core::{Scene, Simulation};
 use std::time::{Duration, Instant};
 
@@ -227,10 +230,10 @@ pub struct Quiet;
 
 impl Observer for Quiet {}
 
-/// What a run produced.
-pub struct Outcome {
+/// What a run produced (of a 2D simulation, or `Outcome<SolidSimulation>` of a 3D one).
+pub struct Outcome<S: Body = Simulation> {
     /// One row per sample (and a last one after a failure).
-    pub history: History,
+    pub history: History<S>,
     /// Why the run stopped before its end (divergence, a signal), if it did.
     pub failure: Option<String>,
     /// The observer stopped it ([`Observer::stop`]): `failure` is the reason.

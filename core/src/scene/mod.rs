@@ -179,7 +179,7 @@ impl Scene {
 
 /// The text of the scene file at `path`; a file that cannot be read is a syntax error
 /// naming it.
-pub(crate) fn read_text(path: &std::path::Path) -> Result<String> {
+pub fn read_text(path: &std::path::Path) -> Result<String> {
     std::fs::read_to_string(path).map_err(|e| Error::SceneSyntax {
         file: path.display().to_string(),
         message: format!("cannot read: {e}"),

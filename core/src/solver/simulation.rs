@@ -309,26 +309,14 @@ impl Simulation {
     pub fn tool_index(&self, name: &str) -> Option<usize> {
         self.tools.iter().position(|t| t.name == name)
     }
-    /// Set a tool's velocity along its axis (m/s) from outside, overriding the scene motion.
+    /// Set a tool's velocity along its axis (m/s) from outside, overriding the scene motion
+    /// ([`crate::tools::command_velocity`]).
+    ///
+    /// # Errors
+    ///
+    /// No such tool, a fixed tool, or a velocity that is not finite.
     pub fn set_tool_velocity(&mut self, tool: usize, v: Real) -> Result<()> {
-        let t = self
-            .tools
-            .get_mut(tool)
-            .ok_or_else(|| Error::Request(format!("no tool with index {tool}")))?;
-        if !t.is_movable() {
-            return Err(Error::Request(format!(
-                "tool `{}` is fixed in the scene",
-                t.name
-            )));
-        }
-        if !v.is_finite() {
-            return Err(Error::Request(format!(
-                "velocity {v} for tool `{}` is not finite",
-                t.name
-            )));
-        }
-        t.state.command = Some(v);
-        Ok(())
+        crate::tools::command_velocity(&mut self.tools, tool, v)
     }
     /// Total mass of the workpiece (kg; whole ring or per depth).
     pub fn total_mass(&self) -> Real {

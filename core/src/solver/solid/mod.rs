@@ -507,6 +507,20 @@ impl SolidSimulation {
     pub fn tools(&self) -> &[PlaneTool] {
         &self.tools[..self.disc.scene_tools]
     }
+    /// Index of the scene tool named `name`.
+    pub fn tool_index(&self, name: &str) -> Option<usize> {
+        self.tools().iter().position(|t| t.name == name)
+    }
+    /// Set a scene tool's velocity along its axis (m/s) from outside, overriding the scene
+    /// motion ([`crate::tools::command_velocity`]).
+    ///
+    /// # Errors
+    ///
+    /// No such tool, a fixed tool, or a velocity that is not finite.
+    pub fn set_tool_velocity(&mut self, tool: usize, v: Real) -> Result<()> {
+        let scene_tools = self.disc.scene_tools;
+        crate::tools::command_velocity(&mut self.tools[..scene_tools], tool, v)
+    }
     /// The symmetry planes.
     pub fn symmetry_planes(&self) -> &[PlaneTool] {
         &self.tools[self.disc.scene_tools..]
@@ -524,6 +538,21 @@ impl SolidSimulation {
     pub fn velocities(&self) -> Vec<[Real; 3]> {
         (0..self.disc.ref_pos.len())
             .map(|j| self.disc.nodal.interpolate(j, &self.st.v))
+            .collect()
+    }
+    /// Physical displacements `x_J - X_J = sum_I N_I(X_J) d_I` of the particles (m).
+    pub fn displacements(&self) -> Vec<[Real; 3]> {
+        (0..self.disc.ref_pos.len())
+            .map(|j| self.disc.nodal.interpolate(j, &self.st.d))
+            .collect()
+    }
+    /// The mean over each hexahedral cell's integration points of a value per point (the
+    /// points are stored cell by cell, [`SolidSimulation::cells`] order).
+    pub fn cell_means(&self, per_point: &[Real]) -> Vec<Real> {
+        let per_cell = (per_point.len() / self.disc.cells.len().max(1)).max(1);
+        per_point
+            .chunks(per_cell)
+            .map(|c| c.iter().sum::<Real>() / c.len() as Real)
             .collect()
     }
     /// Equivalent plastic strain at each integration point (-).
