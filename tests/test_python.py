@@ -16,7 +16,7 @@ import rkforge
 from conftest import ROOT, scene_variant
 
 #: Summary keys that hold timings or the machine's thread count, not results.
-TIMING = ("wall_s", "stage_seconds", "threads")
+TIMING = ("wall_s", "stage_seconds", "threads", "us_per_particle_step")
 
 SCENES = {
     "block": ("block_forging.toml", {"particles = [21, 21]": "particles = [9, 9]",
@@ -25,6 +25,9 @@ SCENES = {
                                    "end_s = 80.0e-6": "end_s = 20.0e-6"}),
     "hot": ("hot_upsetting.toml", {"particles = [11, 31]": "particles = [5, 13]",
                                    "end_s = 1.5 ": "end_s = 0.05 "}),
+    # 3D: the quarter OFHC bar with Johnson-Cook and adiabatic heating, the 3D register.
+    "ofhc3d": ("taylor_ofhc_3d.toml", {"cells = [8, 4, 48]": "cells = [4, 2, 16]",
+                                       "end_s = 100.0e-6": "end_s = 20.0e-6"}),
 }
 
 

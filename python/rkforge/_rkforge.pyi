@@ -42,6 +42,9 @@ class Scene:
     def name(self) -> str:
         """The scene's name."""
     @property
+    def kinematics(self) -> str:
+        """``"plane_strain"``, ``"axisymmetric"`` or ``"3d"``."""
+    @property
     def tools(self) -> List[str]:
         """The names of the tools, in scene order."""
     @property
@@ -95,10 +98,14 @@ class Simulation:
         """Every tool as in summary.json."""
     def laps(self) -> List[Dict[str, Any]]:
         """The laps so far, as in summary.json: ``formed_s``, ``formed_stroke_m`` (by tool),
-        ``start_m``, ``end_m``, ``length_m``, ``reference_m``, ``particles``."""
-    def fields(self) -> Dict[str, npt.NDArray[np.float64]]:
+        ``start_m``, ``end_m``, ``length_m``, ``reference_m``, ``particles`` (2D only: a
+        3D run raises ValueError)."""
+    def fields(self) -> Dict[str, npt.NDArray[Any]]:
         """Particle fields: ``positions``, ``displacement``, ``velocity`` (n, 2);
-        ``plastic_strain``, ``von_mises``, ``lap`` (n,), and ``temperature`` with heat."""
+        ``plastic_strain``, ``von_mises``, ``lap`` (n,), and ``temperature`` with heat.
+        In 3D: ``positions``, ``displacement``, ``velocity`` (n, 3), ``cells`` (m, 8) the
+        hexahedra (VTK order, int64), and per cell the mean over its points
+        ``plastic_strain``, ``von_mises`` and with heat ``temperature`` (m,)."""
     def save_state(self) -> bytes:
         """The whole changing state with its scene, as bytes."""
     def restore_state(self, state: bytes) -> None:

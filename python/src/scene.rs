@@ -1,29 +1,100 @@
-//! `rkforge.Scene`: a scene file or text with dotted-key overrides, validated like a file.
+//! `rkforge.Scene`: a scene file or text (2D or 3D) with dotted-key overrides, validated
+//! like a file.
 
 use crate::errors::{guarded, to_py};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
-use rkforge_core::outputs::{self, Kind};
-use rkforge_core::SceneSource;
+use rkforge_core::outputs::{self, Kind, Output, Shown};
+use rkforge_core::scene::solid::is_solid;
+use rkforge_core::scene::SolidScene;
+use rkforge_core::{Kinematics, SceneSource};
 use std::path::PathBuf;
 use toml::Value;
+
+/// The source of a scene of either kind: 2D (plane strain, axisymmetric) or 3D.
+#[derive(Clone, PartialEq)]
+pub(crate) enum Source {
+    /// Plane strain or axisymmetric.
+    Plane(SceneSource),
+    /// Three dimensions.
+    Solid(SceneSource<SolidScene>),
+}
+
+impl Source {
+    /// Scene text with overrides, of the kind its `model.kinematics` says.
+    fn of_text(
+        text: &str,
+        file: &str,
+        overrides: Vec<(String, Value)>,
+    ) -> rkforge_core::Result<Source> {
+        Ok(if is_solid(text) {
+            Source::Solid(SceneSource::of_text(text, file, overrides)?)
+        } else {
+            Source::Plane(SceneSource::with_overrides(text, file, overrides)?)
+        })
+    }
+
+    fn set(&mut self, key: &str, value: Value) -> rkforge_core::Result<()> {
+        match self {
+            Source::Plane(s) => s.set(key, value),
+            Source::Solid(s) => s.set(key, value),
+        }
+    }
+
+    fn text(&self) -> &str {
+        match self {
+            Source::Plane(s) => s.text(),
+            Source::Solid(s) => s.text(),
+        }
+    }
+
+    fn file(&self) -> &str {
+        match self {
+            Source::Plane(s) => s.file(),
+            Source::Solid(s) => s.file(),
+        }
+    }
+
+    fn overrides(&self) -> &[(String, Value)] {
+        match self {
+            Source::Plane(s) => s.overrides(),
+            Source::Solid(s) => s.overrides(),
+        }
+    }
+
+    fn name(&self) -> &str {
+        match self {
+            Source::Plane(s) => &s.scene().name,
+            Source::Solid(s) => &s.scene().name,
+        }
+    }
+
+    fn tools(&self) -> Vec<String> {
+        match self {
+            Source::Plane(s) => s.scene().tools.iter().map(|t| t.name.clone()).collect(),
+            Source::Solid(s) => s.scene().tools.iter().map(|t| t.name.clone()).collect(),
+        }
+    }
+}
 
 /// A validated scene: its text, and overrides set by dotted key.
 #[pyclass(module = "rkforge._rkforge", name = "Scene", from_py_object)]
 #[derive(Clone)]
 pub struct Scene {
-    pub(crate) source: SceneSource,
+    pub(crate) source: Source,
 }
 
 #[pymethods]
 impl Scene {
-    /// Read and validate a scene file (TOML).
+    /// Read and validate a scene file (TOML), 2D or 3D (`model.kinematics = "3d"`).
     #[staticmethod]
     fn from_file(path: PathBuf) -> PyResult<Scene> {
         guarded(|| {
+            let text = rkforge_core::scene::read_text(&path).map_err(to_py)?;
             Ok(Scene {
-                source: SceneSource::from_file(&path).map_err(to_py)?,
+                source: Source::of_text(&text, &path.display().to_string(), Vec::new())
+                    .map_err(to_py)?,
             })
         })
     }
@@ -34,7 +105,7 @@ impl Scene {
     fn from_toml(text: &str, name: &str) -> PyResult<Scene> {
         guarded(|| {
             Ok(Scene {
-                source: SceneSource::from_str_named(text, name).map_err(to_py)?,
+                source: Source::of_text(text, name, Vec::new()).map_err(to_py)?,
             })
         })
     }
@@ -53,18 +124,25 @@ impl Scene {
     /// The scene's name.
     #[getter]
     fn name(&self) -> String {
-        self.source.scene().name.clone()
+        self.source.name().to_string()
+    }
+
+    /// `"plane_strain"`, `"axisymmetric"` or `"3d"`.
+    #[getter]
+    fn kinematics(&self) -> String {
+        match &self.source {
+            Source::Plane(s) => match s.scene().model.kinematics {
+                Kinematics::PlaneStrain => "plane_strain".into(),
+                Kinematics::Axisymmetric => "axisymmetric".into(),
+            },
+            Source::Solid(_) => "3d".into(),
+        }
     }
 
     /// The names of the tools, in scene order.
     #[getter]
     fn tools(&self) -> Vec<String> {
-        self.source
-            .scene()
-            .tools
-            .iter()
-            .map(|t| t.name.clone())
-            .collect()
+        self.source.tools()
     }
 
     /// The overrides set so far, as (dotted key, value) pairs in order.
@@ -85,39 +163,65 @@ impl Scene {
 
     /// The validated scene with its overrides, as TOML.
     fn to_toml(&self) -> PyResult<String> {
-        toml::to_string(self.source.scene())
-            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
+        match &self.source {
+            Source::Plane(s) => toml::to_string(s.scene()),
+            Source::Solid(s) => toml::to_string(s.scene()),
+        }
+        .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))
     }
 
     /// The times (s) at which `rkforge run --no-frames` records history rows after t = 0:
     /// stepping a `Simulation` to each of them with `run_to` lands on the same steps.
     fn sample_times(&self) -> PyResult<Vec<f64>> {
-        rkforge_runner::schedule(self.source.scene(), 0)
+        let (end, interval) = match &self.source {
+            Source::Plane(s) => (s.scene().time.end_s, s.scene().history_interval()),
+            Source::Solid(s) => (s.scene().time.end_s, s.scene().history_interval()),
+        };
+        rkforge_runner::schedule_every(end, interval, 0)
             .map(|marks| marks.iter().map(|m| m.time).collect())
-            .map_err(pyo3::exceptions::PyValueError::new_err)
+            .ok_or_else(|| {
+                pyo3::exceptions::PyValueError::new_err(format!(
+                    "output.history_interval_s {interval:e} s: too many samples"
+                ))
+            })
     }
 
     /// The register of outputs (`rkforge_core::outputs`) as this scene has it: per column
     /// and per field a dict of `name`, `unit` (as FMI writes it; `1` for a pure number),
     /// `kind` (`scalar`, `per tool`, `per fill point`, `per face`, `per particle`,
     /// `per point`), `description`, and whether `history.csv`, `summary.json` and the FMU
-    /// show it (`history`, `summary`, `fmu`).
+    /// show it (`history`, `summary`, `fmu`). A 3D scene has the 3D register's.
     fn outputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        let scene = self.source.scene();
+        let entries: Vec<Entry> = match &self.source {
+            Source::Plane(s) => {
+                let scene = s.scene();
+                let columns = outputs::columns(scene)
+                    .into_iter()
+                    .map(|c| entry(c.name.clone(), c.description(scene), c.output));
+                let fields =
+                    outputs::fields(scene).map(|o| entry(o.full_name(), o.description.into(), o));
+                columns.chain(fields).collect()
+            }
+            Source::Solid(s) => {
+                let scene = s.scene();
+                let columns = outputs::solid_columns(scene)
+                    .into_iter()
+                    .map(|c| entry(c.name.clone(), c.description(scene), c.output));
+                let fields = outputs::solid_fields(scene)
+                    .map(|o| entry(o.full_name(), o.description.into(), o));
+                columns.chain(fields).collect()
+            }
+        };
         let list = PyList::empty(py);
-        let columns = outputs::columns(scene)
-            .into_iter()
-            .map(|c| (c.name.clone(), c.description(scene), c.output));
-        let fields = outputs::fields(scene).map(|o| (o.full_name(), o.description.into(), o));
-        for (name, description, o) in columns.chain(fields) {
+        for (name, description, unit, kind, shown) in entries {
             let d = PyDict::new(py);
             d.set_item("name", name)?;
-            d.set_item("unit", o.unit)?;
-            d.set_item("kind", kind_name(o.read.kind()))?;
+            d.set_item("unit", unit)?;
+            d.set_item("kind", kind_name(kind))?;
             d.set_item("description", description)?;
-            d.set_item("history", o.shown.history)?;
-            d.set_item("summary", o.shown.summary)?;
-            d.set_item("fmu", o.shown.fmu)?;
+            d.set_item("history", shown.history)?;
+            d.set_item("summary", shown.summary)?;
+            d.set_item("fmu", shown.fmu)?;
             list.append(d)?;
         }
         Ok(list)
@@ -126,14 +230,18 @@ impl Scene {
     fn __repr__(&self) -> String {
         format!(
             "Scene({:?} from {:?}, {} override(s))",
-            self.source.scene().name,
+            self.source.name(),
             self.source.file(),
             self.source.overrides().len()
         )
     }
 
     fn __eq__(&self, other: &Scene) -> bool {
-        self.source.scene() == other.source.scene()
+        match (&self.source, &other.source) {
+            (Source::Plane(a), Source::Plane(b)) => a.scene() == b.scene(),
+            (Source::Solid(a), Source::Solid(b)) => a.scene() == b.scene(),
+            _ => false,
+        }
     }
 
     /// Pickling (for Dask workers): the text, the file name and the overrides.
@@ -158,10 +266,18 @@ impl Scene {
             .collect::<PyResult<Vec<_>>>()?;
         guarded(|| {
             Ok(Scene {
-                source: SceneSource::with_overrides(text, file, overrides).map_err(to_py)?,
+                source: Source::of_text(text, file, overrides).map_err(to_py)?,
             })
         })
     }
+}
+
+/// One output as `Scene.outputs` lists it: name, description, unit, kind, where shown.
+type Entry = (String, String, &'static str, Kind, Shown);
+
+/// The entry of output `o` under `name` with `description`.
+fn entry<S: outputs::Body>(name: String, description: String, o: &Output<S>) -> Entry {
+    (name, description, o.unit, o.read.kind(), o.shown)
 }
 
 /// What an output is given for, in words.

@@ -1,22 +1,128 @@
 //! `rkforge.Simulation` (stepping, tool commands, fields, the register's outputs, saved
 //! states, the summary) and
 //! `run_scene`, the whole run of `rkforge run --no-frames` (the history and summary of
-//! [`rkforge_runner`], so the same bits as the command line).
+//! [`rkforge_runner`], so the same bits as the command line), for a 2D scene or a 3D one
+//! (`model.kinematics = "3d"`, the 3D register's outputs).
 
 use crate::errors::{guarded, to_py, StateError};
-use crate::scene::Scene;
+use crate::scene::{Scene, Source};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
+use rkforge_core::scene::SolidScene;
+use rkforge_core::solver::{SolidSimulation, SolidState};
 use rkforge_core::{outputs, IntegrationRule, State};
 use serde::{Deserialize, Serialize};
 use std::sync::Mutex;
 use std::time::Instant;
 
+/// A running simulation of either kind.
+enum Sim {
+    /// Plane strain or axisymmetric.
+    Plane(Box<rkforge_core::Simulation>),
+    /// Three dimensions.
+    Solid(Box<SolidSimulation>),
+}
+
+impl Sim {
+    fn time(&self) -> f64 {
+        match self {
+            Sim::Plane(s) => s.time(),
+            Sim::Solid(s) => s.time(),
+        }
+    }
+
+    fn steps(&self) -> u64 {
+        match self {
+            Sim::Plane(s) => s.steps(),
+            Sim::Solid(s) => s.steps(),
+        }
+    }
+
+    /// One step, at most `limit` long (s).
+    fn step(&mut self, limit: Option<f64>) -> rkforge_core::Result<()> {
+        match self {
+            Sim::Plane(s) => s.step(limit),
+            Sim::Solid(s) => s.step(limit),
+        }
+    }
+
+    /// Step to time `t` (s), the last step landing on it.
+    fn run_to(&mut self, t: f64) -> rkforge_core::Result<()> {
+        match self {
+            Sim::Plane(s) => s.run_to(t, |_| {}),
+            Sim::Solid(s) => s.run_toward(t, u64::MAX, |_, _| true).map(|_| ()),
+        }
+    }
+
+    fn tool_names(&self) -> Vec<String> {
+        match self {
+            Sim::Plane(s) => s.tools().iter().map(|t| t.name.clone()).collect(),
+            Sim::Solid(s) => s.tools().iter().map(|t| t.name.clone()).collect(),
+        }
+    }
+
+    fn tool_index(&self, name: &str) -> Option<usize> {
+        match self {
+            Sim::Plane(s) => s.tool_index(name),
+            Sim::Solid(s) => s.tool_index(name),
+        }
+    }
+
+    fn set_tool_velocity(&mut self, k: usize, v: f64) -> rkforge_core::Result<()> {
+        match self {
+            Sim::Plane(s) => s.set_tool_velocity(k, v),
+            Sim::Solid(s) => s.set_tool_velocity(k, v),
+        }
+    }
+
+    /// Tool `k`'s force along its axis (N).
+    fn tool_force(&self, k: usize) -> f64 {
+        match self {
+            Sim::Plane(s) => s.tools()[k].axial_force(),
+            Sim::Solid(s) => s.tools()[k].axial_force(),
+        }
+    }
+
+    /// Tool `k`'s stroke along its axis (m).
+    fn tool_stroke(&self, k: usize) -> f64 {
+        match self {
+            Sim::Plane(s) => s.tools()[k].state.stroke,
+            Sim::Solid(s) => s.tools()[k].state.stroke,
+        }
+    }
+
+    /// The scene's name.
+    fn scene_name(&self) -> &str {
+        match self {
+            Sim::Plane(s) => &s.scene().name,
+            Sim::Solid(s) => &s.scene().name,
+        }
+    }
+
+    /// The scene as JSON (what a saved state is checked against).
+    fn scene_json(&self) -> PyResult<serde_json::Value> {
+        match self {
+            Sim::Plane(s) => serde_json::to_value(s.scene()),
+            Sim::Solid(s) => serde_json::to_value(s.scene()),
+        }
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))
+    }
+
+    /// The summary as summary.json has it, `wall` (s) since the simulation was created.
+    fn summary(&self, wall: f64) -> serde_json::Value {
+        let ending = rkforge_runner::Ending::Finished;
+        match self {
+            Sim::Plane(s) => rkforge_runner::summary(s, wall, 0.0, ending),
+            Sim::Solid(s) => rkforge_runner::solid_summary(s, wall, ending),
+        }
+    }
+}
+
 /// A running simulation and the threads it steps on.
 struct Inner {
-    sim: rkforge_core::Simulation,
+    sim: Sim,
     /// Its own rayon pool when a thread count was asked for, else rayon's global pool.
     pool: Option<rayon::ThreadPool>,
     /// When it was created: the summary's wall time counts from here.
@@ -25,7 +131,7 @@ struct Inner {
 
 impl Inner {
     /// Run `f` on the simulation's threads.
-    fn install<R: Send>(&mut self, f: impl FnOnce(&mut rkforge_core::Simulation) -> R + Send) -> R {
+    fn install<R: Send>(&mut self, f: impl FnOnce(&mut Sim) -> R + Send) -> R {
         match &self.pool {
             Some(pool) => pool.install(|| f(&mut self.sim)),
             None => f(&mut self.sim),
@@ -33,26 +139,70 @@ impl Inner {
     }
 }
 
-/// A saved state with the scene it belongs to.
+/// A saved state of either kind.
 #[derive(Serialize, Deserialize)]
-struct Saved {
-    scene: serde_json::Value,
-    state: State,
+enum Saved {
+    /// A 2D state with its scene.
+    Plane {
+        scene: serde_json::Value,
+        state: Box<State>,
+    },
+    /// A 3D state with its scene.
+    Solid {
+        scene: serde_json::Value,
+        state: Box<SolidState>,
+    },
+}
+
+/// A scene of either kind, configured for a run.
+enum Configured {
+    Plane(rkforge_core::Scene),
+    Solid(SolidScene),
+}
+
+impl Configured {
+    /// Set up its simulation.
+    fn build(&self) -> rkforge_core::Result<Sim> {
+        Ok(match self {
+            Configured::Plane(s) => Sim::Plane(Box::new(rkforge_core::Simulation::new(s)?)),
+            Configured::Solid(s) => Sim::Solid(Box::new(SolidSimulation::new(s)?)),
+        })
+    }
 }
 
 /// The scene with the `integration` argument applied.
-fn configured(scene: &Scene, integration: Option<&str>) -> PyResult<rkforge_core::Scene> {
-    let s = scene.source.scene().clone();
-    match integration {
-        None => Ok(s),
-        Some(name) => IntegrationRule::parse(name)
-            .map(|r| s.with_integration(r))
-            .ok_or_else(|| {
+fn configured(scene: &Scene, integration: Option<&str>) -> PyResult<Configured> {
+    let rule = integration
+        .map(|name| {
+            IntegrationRule::parse(name).ok_or_else(|| {
                 PyValueError::new_err(format!(
                     "integration `{name}`: expected \"q4\", \"q2\" or \"scni\""
                 ))
-            }),
-    }
+            })
+        })
+        .transpose()?;
+    Ok(match &scene.source {
+        Source::Plane(s) => {
+            let s = s.scene().clone();
+            Configured::Plane(match rule {
+                Some(r) => s.with_integration(r),
+                None => s,
+            })
+        }
+        Source::Solid(s) => {
+            let mut s = s.scene().clone();
+            match rule {
+                Some(IntegrationRule::Scni) => {
+                    return Err(PyValueError::new_err(
+                        "integration `scni`: the 3D solver integrates with \"q4\" or \"q2\"",
+                    ))
+                }
+                Some(r) => s.discretization.integration = r,
+                None => {}
+            }
+            Configured::Solid(s)
+        }
+    })
 }
 
 /// A rayon pool of `threads` workers, or None for the global pool.
@@ -68,9 +218,12 @@ fn pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
     }
 }
 
-/// Positions or velocities as an (n, 2) array.
-fn pairs<'py>(py: Python<'py>, v: &[[f64; 2]]) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    PyArray1::from_vec(py, v.iter().flatten().copied().collect()).reshape([v.len(), 2])
+/// Positions or velocities as an (n, D) array.
+fn rows<'py, const D: usize>(
+    py: Python<'py>,
+    v: &[[f64; D]],
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    PyArray1::from_vec(py, v.iter().flatten().copied().collect()).reshape([v.len(), D])
 }
 
 /// A summary (JSON) as a Python dict, through `json.loads` (numbers round-trip exactly).
@@ -110,11 +263,14 @@ impl Simulation {
     fn per_tool<'py>(
         &self,
         py: Python<'py>,
-        value: fn(&rkforge_core::Simulation, usize) -> f64,
+        value: fn(&Sim, usize) -> f64,
     ) -> PyResult<Bound<'py, PyDict>> {
         let values = self.with(py, |s| {
-            Ok((0..s.sim.tools().len())
-                .map(|k| (s.sim.tools()[k].name.clone(), value(&s.sim, k)))
+            Ok(s.sim
+                .tool_names()
+                .into_iter()
+                .enumerate()
+                .map(|(k, name)| (name, value(&s.sim, k)))
                 .collect::<Vec<_>>())
         })?;
         let d = PyDict::new(py);
@@ -127,8 +283,9 @@ impl Simulation {
 
 #[pymethods]
 impl Simulation {
-    /// Set up the discretisation of `scene`; `integration` ("q4", "q2", "scni") overrides
-    /// the scene's rule, `threads` gives the simulation its own pool of that many threads.
+    /// Set up the discretisation of `scene` (2D or 3D); `integration` ("q4", "q2", "scni";
+    /// q4 or q2 in 3D) overrides the scene's rule, `threads` gives the simulation its own
+    /// pool of that many threads.
     #[new]
     #[pyo3(signature = (scene, integration = None, threads = None))]
     fn new(
@@ -142,7 +299,7 @@ impl Simulation {
         py.detach(|| {
             guarded(|| {
                 let started = Instant::now();
-                let build = || rkforge_core::Simulation::new(&scene);
+                let build = || scene.build();
                 let sim = match &pool {
                     Some(p) => p.install(build),
                     None => build(),
@@ -185,7 +342,7 @@ impl Simulation {
                     "run_to({t}): the time must be finite and not before the current time {now:e} s"
                 )));
             }
-            s.install(|sim| sim.run_to(t, |_| {}).map(|()| sim.time()))
+            s.install(|sim| sim.run_to(t).map(|()| sim.time()))
                 .map_err(to_py)
         })
     }
@@ -194,10 +351,9 @@ impl Simulation {
     fn set_tool_velocity(&self, py: Python<'_>, name: &str, velocity: f64) -> PyResult<()> {
         self.with(py, |s| {
             let k = s.sim.tool_index(name).ok_or_else(|| {
-                let names: Vec<&str> = s.sim.tools().iter().map(|t| t.name.as_str()).collect();
                 PyValueError::new_err(format!(
                     "no tool named `{name}` (tools: {})",
-                    names.join(", ")
+                    s.sim.tool_names().join(", ")
                 ))
             })?;
             s.sim.set_tool_velocity(k, velocity).map_err(to_py)
@@ -218,22 +374,29 @@ impl Simulation {
 
     /// Force of the workpiece on each tool along the tool's axis (N), by tool name.
     fn tool_forces<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.per_tool(py, |sim, k| sim.tools()[k].axial_force())
+        self.per_tool(py, Sim::tool_force)
     }
 
     /// Stroke of each tool along its axis (m), by tool name.
     fn tool_strokes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.per_tool(py, |sim, k| sim.tools()[k].state.stroke)
+        self.per_tool(py, Sim::tool_stroke)
     }
 
     /// Record a history row now, as `rkforge run` does at its samples (this also updates
     /// the run's largest penetration): a dict of history.csv's columns. SimulationError
     /// when a particle lies deeper inside a tool than `checks.max_penetration_rel`.
     fn sample<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (columns, row) = self.with(py, |s| {
-            let mut history = rkforge_runner::History::new(&s.sim);
-            history.record(&mut s.sim).map_err(to_py)?;
-            Ok((history.columns().to_vec(), history.rows()[0].clone()))
+        let (columns, row) = self.with(py, |s| match &mut s.sim {
+            Sim::Plane(sim) => {
+                let mut history = rkforge_runner::History::new(sim);
+                history.record(sim).map_err(to_py)?;
+                Ok((history.columns().to_vec(), history.rows()[0].clone()))
+            }
+            Sim::Solid(sim) => {
+                let mut history = rkforge_runner::History::solid(sim);
+                history.record_solid(sim).map_err(to_py)?;
+                Ok((history.columns().to_vec(), history.rows()[0].clone()))
+            }
         })?;
         let d = PyDict::new(py);
         for (c, v) in columns.into_iter().zip(row) {
@@ -248,19 +411,18 @@ impl Simulation {
     /// changes nothing (the run's largest penetration is not updated).
     fn outputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let (values, fields) = self.with(py, |s| {
-            let now = outputs::Sample::new(&s.sim);
-            let scene = s.sim.scene();
-            let values: Vec<(String, f64)> = outputs::columns(scene)
-                .into_iter()
-                .map(|c| {
-                    let v = c.value(&now);
-                    (c.name, v)
-                })
-                .collect();
-            let fields: Vec<(String, Vec<f64>)> = outputs::fields(scene)
-                .filter_map(|o| Some((o.full_name(), o.field(&now)?)))
-                .collect();
-            Ok((values, fields))
+            Ok(match &s.sim {
+                Sim::Plane(sim) => read(
+                    &outputs::Sample::new(&**sim),
+                    outputs::columns(sim.scene()),
+                    outputs::fields(sim.scene()),
+                ),
+                Sim::Solid(sim) => read(
+                    &outputs::Sample::new(&**sim),
+                    outputs::solid_columns(sim.scene()),
+                    outputs::solid_fields(sim.scene()),
+                ),
+            })
         })?;
         let d = PyDict::new(py);
         for (name, v) in values {
@@ -272,14 +434,22 @@ impl Simulation {
         Ok(d)
     }
 
-    /// Every tool as in summary.json: name, stroke, velocity, force [x, y], axial and peak force.
+    /// Every tool as in summary.json: name, stroke, velocity, force [x, y] ([x, y, z] in
+    /// 3D), axial and peak force.
     fn tools<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let tools = self.with(py, |s| {
-            Ok(serde_json::Value::Array(
-                (0..s.sim.tools().len())
-                    .map(|k| rkforge_runner::tool_json(&s.sim, k))
-                    .collect(),
-            ))
+            Ok(match &s.sim {
+                Sim::Plane(sim) => serde_json::Value::Array(
+                    (0..sim.tools().len())
+                        .map(|k| rkforge_runner::tool_json(sim, k))
+                        .collect(),
+                ),
+                Sim::Solid(sim) => {
+                    rkforge_runner::solid_summary(sim, 0.0, rkforge_runner::Ending::Finished)
+                        ["tools"]
+                        .clone()
+                }
+            })
         })?;
         to_dict(py, &tools)
     }
@@ -288,8 +458,11 @@ impl Simulation {
     /// in summary.json: each with `formed_s`, `formed_stroke_m` (by tool), `start_m`,
     /// `end_m`, `length_m`, `reference_m` and its surface `particles`.
     fn laps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let laps = self.with(py, |s| {
-            Ok(serde_json::Value::Array(rkforge_runner::laps_json(&s.sim)))
+        let laps = self.with(py, |s| match &s.sim {
+            Sim::Plane(sim) => Ok(serde_json::Value::Array(rkforge_runner::laps_json(sim))),
+            Sim::Solid(_) => Err(PyValueError::new_err(
+                "laps: a 3D run does not track the surface's folds yet (2D only)",
+            )),
         })?;
         to_dict(py, &laps)
     }
@@ -297,29 +470,62 @@ impl Simulation {
     /// Particle fields as numpy arrays: `positions`, `displacement`, `velocity` (n, 2) in m
     /// and m/s; `plastic_strain`, `von_mises` (Pa) and, in a scene with `[thermal]`,
     /// `temperature` (degrees C) (n,), smoothed from the points; `lap` (n,), the lap each
-    /// particle took part in numbered from 1 (0: none).
+    /// particle took part in numbered from 1 (0: none). In 3D: `positions`, `displacement`,
+    /// `velocity` (n, 3); `cells` (m, 8), the hexahedra of 8 particles (VTK order); and per
+    /// cell, the mean over its integration points, `plastic_strain` and `von_mises` (Pa)
+    /// (m,) and with `[thermal]` `temperature` (degrees C).
     fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let f = self.with(py, |s| Ok(s.sim.fields()))?;
         let d = PyDict::new(py);
-        d.set_item("positions", pairs(py, &f.positions)?)?;
-        d.set_item("displacement", pairs(py, &f.displacement)?)?;
-        d.set_item("velocity", pairs(py, &f.velocity)?)?;
-        d.set_item("plastic_strain", PyArray1::from_vec(py, f.plastic_strain))?;
-        d.set_item("von_mises", PyArray1::from_vec(py, f.von_mises))?;
-        if let Some(t) = f.temperature {
-            d.set_item("temperature", PyArray1::from_vec(py, t))?;
+        let solid = self.with(py, |s| {
+            Ok(match &s.sim {
+                Sim::Plane(sim) => Err(sim.fields()),
+                Sim::Solid(sim) => Ok(SolidFields::of(sim)),
+            })
+        })?;
+        match solid {
+            Err(f) => {
+                d.set_item("positions", rows(py, &f.positions)?)?;
+                d.set_item("displacement", rows(py, &f.displacement)?)?;
+                d.set_item("velocity", rows(py, &f.velocity)?)?;
+                d.set_item("plastic_strain", PyArray1::from_vec(py, f.plastic_strain))?;
+                d.set_item("von_mises", PyArray1::from_vec(py, f.von_mises))?;
+                if let Some(t) = f.temperature {
+                    d.set_item("temperature", PyArray1::from_vec(py, t))?;
+                }
+                d.set_item("lap", PyArray1::from_vec(py, f.lap))?;
+            }
+            Ok(f) => {
+                d.set_item("positions", rows(py, &f.positions)?)?;
+                d.set_item("displacement", rows(py, &f.displacement)?)?;
+                d.set_item("velocity", rows(py, &f.velocity)?)?;
+                let cells: Vec<i64> = f.cells.iter().flatten().map(|&i| i64::from(i)).collect();
+                d.set_item(
+                    "cells",
+                    PyArray1::from_vec(py, cells).reshape([f.cells.len(), 8])?,
+                )?;
+                d.set_item("plastic_strain", PyArray1::from_vec(py, f.plastic_strain))?;
+                d.set_item("von_mises", PyArray1::from_vec(py, f.von_mises))?;
+                if let Some(t) = f.temperature {
+                    d.set_item("temperature", PyArray1::from_vec(py, t))?;
+                }
+            }
         }
-        d.set_item("lap", PyArray1::from_vec(py, f.lap))?;
         Ok(d)
     }
 
     /// The whole changing state, with its scene, as bytes (restoring it continues bit for bit).
     fn save_state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
         let bytes = self.with(py, |s| {
-            let saved = Saved {
-                scene: serde_json::to_value(s.sim.scene())
-                    .map_err(|e| PyRuntimeError::new_err(e.to_string()))?,
-                state: s.sim.state().clone(),
+            let scene = s.sim.scene_json()?;
+            let saved = match &s.sim {
+                Sim::Plane(sim) => Saved::Plane {
+                    scene,
+                    state: Box::new(sim.state().clone()),
+                },
+                Sim::Solid(sim) => Saved::Solid {
+                    scene,
+                    state: Box::new(sim.state().clone()),
+                },
             };
             serde_json::to_vec(&saved).map_err(|e| PyRuntimeError::new_err(e.to_string()))
         })?;
@@ -332,20 +538,31 @@ impl Simulation {
         self.with(py, move |s| {
             let saved: Saved = serde_json::from_slice(&state)
                 .map_err(|e| StateError::new_err(format!("not a saved rkforge state: {e}")))?;
-            let ours = serde_json::to_value(s.sim.scene())
-                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-            if saved.scene != ours {
-                let name = saved.scene["name"].as_str().unwrap_or("?");
-                return Err(StateError::new_err(if name == s.sim.scene().name {
+            let scene = match &saved {
+                Saved::Plane { scene, .. } | Saved::Solid { scene, .. } => scene,
+            };
+            let ours = s.sim.scene_json()?;
+            if *scene != ours {
+                let name = scene["name"].as_str().unwrap_or("?");
+                return Err(StateError::new_err(if name == s.sim.scene_name() {
                     format!("the state was saved from scene `{name}` with other settings")
                 } else {
                     format!(
                         "the state was saved from scene `{name}`, not `{}`",
-                        s.sim.scene().name
+                        s.sim.scene_name()
                     )
                 }));
             }
-            s.sim.restore(saved.state).map_err(to_py)
+            match (&mut s.sim, saved) {
+                (Sim::Plane(sim), Saved::Plane { state, .. }) => sim.restore(*state),
+                (Sim::Solid(sim), Saved::Solid { state, .. }) => sim.restore(*state),
+                _ => {
+                    return Err(StateError::new_err(
+                        "the state was saved from a scene of the other kind (2D and 3D)",
+                    ))
+                }
+            }
+            .map_err(to_py)
         })
     }
 
@@ -353,12 +570,57 @@ impl Simulation {
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let summary = self.with(py, |s| {
             let wall = s.started.elapsed().as_secs_f64();
-            Ok(s.install(|sim| {
-                rkforge_runner::summary(sim, wall, 0.0, rkforge_runner::Ending::Finished)
-            }))
+            Ok(s.install(|sim| sim.summary(wall)))
         })?;
         to_dict(py, &summary)
     }
+}
+
+/// The 3D fields `Simulation.fields` gives.
+struct SolidFields {
+    positions: Vec<[f64; 3]>,
+    displacement: Vec<[f64; 3]>,
+    velocity: Vec<[f64; 3]>,
+    cells: Vec<[u32; 8]>,
+    plastic_strain: Vec<f64>,
+    von_mises: Vec<f64>,
+    temperature: Option<Vec<f64>>,
+}
+
+impl SolidFields {
+    fn of(sim: &SolidSimulation) -> SolidFields {
+        SolidFields {
+            positions: sim.positions(),
+            displacement: sim.displacements(),
+            velocity: sim.velocities(),
+            cells: sim.cells().to_vec(),
+            plastic_strain: sim.cell_means(&sim.point_plastic_strain()),
+            von_mises: sim.cell_means(&sim.point_von_mises()),
+            temperature: sim.point_temperature().map(|t| sim.cell_means(t)),
+        }
+    }
+}
+
+/// Every column's value and every field of a sample, by name.
+type Read = (Vec<(String, f64)>, Vec<(String, Vec<f64>)>);
+
+/// The values of `columns` and `fields` in `now`.
+fn read<S: outputs::Body>(
+    now: &outputs::Sample<'_, S>,
+    columns: Vec<outputs::Column<S>>,
+    fields: impl Iterator<Item = &'static outputs::Output<S>>,
+) -> Read {
+    let values = columns
+        .into_iter()
+        .map(|c| {
+            let v = c.value(now);
+            (c.name, v)
+        })
+        .collect();
+    let fields = fields
+        .filter_map(|o| Some((o.full_name(), o.field(now)?)))
+        .collect();
+    (values, fields)
 }
 
 /// What `run_scene` returns: the summary (dict), the history's columns and rows, the failure.
@@ -368,6 +630,16 @@ type RunResult<'py> = (
     Bound<'py, PyArray2<f64>>,
     Option<String>,
 );
+
+/// A finished run's summary, history columns, rows (flat) and failure.
+fn ran<S: outputs::Body>(
+    summary: serde_json::Value,
+    outcome: rkforge_runner::Outcome<S>,
+) -> (serde_json::Value, Vec<String>, Vec<f64>, Option<String>) {
+    let columns = outcome.history.columns().to_vec();
+    let rows: Vec<f64> = outcome.history.rows().iter().flatten().copied().collect();
+    (summary, columns, rows, outcome.failure)
+}
 
 /// The whole run of a scene, as `rkforge run --no-frames` does it: returns the summary
 /// (dict), the history's column names and its rows (a 2D array), and the failure, if any.
@@ -385,18 +657,30 @@ pub fn run_scene<'py>(
         guarded(|| {
             let go = || -> PyResult<_> {
                 let wall = Instant::now();
-                let mut sim = rkforge_core::Simulation::new(&scene).map_err(to_py)?;
-                let outcome = rkforge_runner::drive(&mut sim, 0, &mut rkforge_runner::Quiet)
-                    .map_err(PyRuntimeError::new_err)?;
-                let summary = rkforge_runner::summary(
-                    &sim,
-                    wall.elapsed().as_secs_f64(),
-                    outcome.output_time.as_secs_f64(),
-                    outcome.ending(),
-                );
-                let columns = outcome.history.columns().to_vec();
-                let rows: Vec<f64> = outcome.history.rows().iter().flatten().copied().collect();
-                Ok((summary, columns, rows, outcome.failure))
+                match scene.build().map_err(to_py)? {
+                    Sim::Plane(mut sim) => {
+                        let outcome =
+                            rkforge_runner::drive(&mut sim, 0, &mut rkforge_runner::Quiet)
+                                .map_err(PyRuntimeError::new_err)?;
+                        let summary = rkforge_runner::summary(
+                            &sim,
+                            wall.elapsed().as_secs_f64(),
+                            outcome.output_time.as_secs_f64(),
+                            outcome.ending(),
+                        );
+                        Ok(ran(summary, outcome))
+                    }
+                    Sim::Solid(mut sim) => {
+                        let outcome = rkforge_runner::drive_solid(&mut sim, 0, |_| Ok(()))
+                            .map_err(PyRuntimeError::new_err)?;
+                        let summary = rkforge_runner::solid_summary(
+                            &sim,
+                            wall.elapsed().as_secs_f64(),
+                            outcome.ending(),
+                        );
+                        Ok(ran(summary, outcome))
+                    }
+                }
             };
             match &pool {
                 Some(p) => p.install(go),

@@ -447,6 +447,37 @@ impl SolidSimulation {
     pub fn energy(&self) -> Energy {
         self.st.energy
     }
+    /// Restore a state saved from a simulation of the same scene ([`SolidSimulation::state`]):
+    /// stepping on from it gives the bits the saved run gave.
+    ///
+    /// # Errors
+    ///
+    /// The state belongs to another discretisation (its arrays have other lengths).
+    pub fn restore(&mut self, st: SolidState) -> Result<()> {
+        let same = st.d.len() == self.st.d.len()
+            && st.v.len() == self.st.v.len()
+            && st.points.len() == self.st.points.len()
+            && st.tools.len() == self.st.tools.len()
+            && st.held.len() == self.st.held.len()
+            && st.stick.len() == self.st.stick.len()
+            && st.heat.is_some() == self.st.heat.is_some();
+        if !same {
+            return Err(Error::State(
+                "the saved state belongs to another discretisation".into(),
+            ));
+        }
+        for (t, s) in self.tools.iter_mut().zip(&st.tools) {
+            t.state = *s;
+        }
+        self.ws.v_prev.clone_from(&st.v);
+        self.ws.contact = PlaneContact::new(st.d.len(), self.tools.len());
+        for (p, (out, point)) in self.ws.out.iter_mut().zip(&st.points).enumerate() {
+            let temp = st.heat.as_ref().map(|h| h.temperature_c[p]);
+            *out = PointOut::at(&self.disc.material, point.eps_p, temp);
+        }
+        self.st = st;
+        Ok(())
+    }
     /// Bytes held by the discretisation, the state and the stages' arrays (an estimate from
     /// the lengths of its arrays, as [`super::Simulation::memory_bytes`]).
     pub fn memory_bytes(&self) -> usize {
