@@ -98,6 +98,7 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
         "us_per_particle_step": if particle_steps > 0.0 { 1e6 * wall_s / particle_steps } else { 0.0 },
         "smallest_spacing_m": sim.h_min(),
         "critical_dt_s": sim.critical_dt0(),
+        "mass_scaling": sim.mass_scaling(),
         "workpiece": {
             "x_range_m": b.extents[0],
             "y_range_m": b.extents[1],

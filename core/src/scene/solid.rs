@@ -7,8 +7,7 @@
 //!
 //! What the 3D solver does not model yet is refused with the key that asks for it: the
 //! heat that moves (conduction, the surroundings, friction heat) and elasticity over
-//! temperature in `[thermal]` (3D heats adiabatically), mass scaling and kernel
-//! re-referencing.
+//! temperature in `[thermal]` (3D heats adiabatically), scni and kernel re-referencing.
 
 use super::{
     Checks, IntegrationRule, MaterialSpec, Motion, Reference, Scene, ThermalSpec, TimeSpec,
@@ -331,11 +330,9 @@ impl SolidScene {
             ),
         );
         self.time.check(&mut out);
-        out.check(
-            self.time.mass_scaling.is_none(),
-            "time.mass_scaling",
-            "mass scaling is not in the 3D solver yet; remove it".into(),
-        );
+        if let Some(mass_scaling) = &self.time.mass_scaling {
+            mass_scaling.check(&mut out);
+        }
         let mut names = std::collections::BTreeSet::new();
         for (i, t) in self.tools.iter().enumerate() {
             let key = |k: &str| format!("tools[{i}].{k}");
@@ -688,8 +685,8 @@ separation = false
             ),
             (
                 "end_s = 1e-6",
-                "end_s = 1e-6\nmass_scaling = { factor = 4.0 }",
-                "time.mass_scaling",
+                "end_s = 1e-6\nmass_scaling = { factor = 0.5 }",
+                "time.mass_scaling.factor",
                 19,
             ),
         ];

@@ -37,9 +37,9 @@ const AIM: Real = 1.02;
 
 /// Upper bounds `k_I = M sum_p w_p g_I(p) sum_J g_J(p)` (N/m) of the stiffness row sums of
 /// each of `particles` particles from the point shape table `pt` (weights `w_p`, m^3; `1/R_p`,
-/// 1/m, used in axisymmetry), with the P-wave modulus `modulus` (Pa).
-pub(super) fn stiffness_bounds(
-    pt: &ShapeTable,
+/// 1/m, used in axisymmetry), with the P-wave modulus `modulus` (Pa); in `D` dimensions.
+pub(super) fn stiffness_bounds<const D: usize>(
+    pt: &ShapeTable<D>,
     weights: &[Real],
     inv_radius: &[Real],
     axi: bool,
@@ -51,7 +51,11 @@ pub(super) fn stiffness_bounds(
     for (p, w) in weights.iter().enumerate() {
         g.clear();
         g.extend(pt.row(p).map(|e| {
-            let grad = pt.grad[0][e].hypot(pt.grad[1][e]);
+            let grad = if D == 2 {
+                pt.grad[0][e].hypot(pt.grad[1][e])
+            } else {
+                pt.grad.iter().map(|g| g[e] * g[e]).sum::<Real>().sqrt()
+            };
             if axi {
                 grad + (pt.n[e] * inv_radius[p]).abs()
             } else {
@@ -86,28 +90,51 @@ pub(super) fn scale(
 ) -> Result<()> {
     let unscaled = disc.mass.clone();
     let critical_dt_unscaled_s = disc.critical_dt0;
+    let safety = scene.time.dt_safety;
+    let critical = scaled(plan, &unscaled, disc.critical_dt0, safety, |mass| {
+        set_masses(scene, disc, st, ws, mass)?;
+        measure_critical_step(scene, disc, st, ws)
+    })?;
+    disc.critical_dt0 = critical;
+    disc.mass_scaling = Some(report(
+        &unscaled,
+        &disc.mass,
+        critical_dt_unscaled_s,
+        critical,
+    ));
+    Ok(())
+}
+
+/// The scaling of `plan` from the `unscaled` masses (kg) whose critical step is
+/// `critical_dt0` (s), with the run's step safety `safety`: `install(masses)` puts masses in
+/// the discretisation and returns the critical step measured with them (s). Returns the
+/// critical step of the last masses installed (2D and 3D alike).
+pub(super) fn scaled(
+    plan: Plan,
+    unscaled: &[Real],
+    critical_dt0: Real,
+    safety: Real,
+    mut install: impl FnMut(Vec<Real>) -> Result<Real>,
+) -> Result<Real> {
+    let mut critical = critical_dt0;
     match plan {
         Plan::Uniform(f) => {
-            let scaled = unscaled.iter().map(|m| m * f).collect();
-            set_masses(scene, disc, st, ws, scaled)?;
-            disc.critical_dt0 = measure_critical_step(scene, disc, st, ws)?;
+            critical = install(unscaled.iter().map(|m| m * f).collect())?;
         }
         Plan::Selective { target, stiffness } => {
-            let safety = scene.time.dt_safety;
+            let mut mass = unscaled.to_vec();
             for _ in 0..MAX_ROUNDS {
-                if safety * disc.critical_dt0 >= target {
+                if safety * critical >= target {
                     break;
                 }
-                let local: Vec<Real> = disc
-                    .mass
+                let local: Vec<Real> = mass
                     .iter()
                     .zip(&stiffness)
                     .map(|(m, k)| 2.0 * (m / k).sqrt())
                     .collect();
                 let shortest = local.iter().copied().fold(Real::INFINITY, Real::min);
-                let calibration = disc.critical_dt0 / shortest;
-                let scaled = disc
-                    .mass
+                let calibration = critical / shortest;
+                mass = mass
                     .iter()
                     .zip(&local)
                     .map(|(m, dt)| {
@@ -119,28 +146,37 @@ pub(super) fn scale(
                         }
                     })
                     .collect();
-                set_masses(scene, disc, st, ws, scaled)?;
-                disc.critical_dt0 = measure_critical_step(scene, disc, st, ws)?;
+                critical = install(mass.clone())?;
             }
         }
     }
+    Ok(critical)
+}
+
+/// What scaling the `unscaled` masses to `scaled` (kg) added, with the critical steps before
+/// and after (s).
+pub(super) fn report(
+    unscaled: &[Real],
+    scaled: &[Real],
+    critical_dt_unscaled_s: Real,
+    critical_dt_s: Real,
+) -> MassScalingReport {
     let total: Real = unscaled.iter().sum();
-    let added: Real = disc.mass.iter().sum::<Real>() - total;
+    let added: Real = scaled.iter().sum::<Real>() - total;
     let (mut most, mut count) = (0.0, 0);
-    for (m, m0) in disc.mass.iter().zip(&unscaled) {
+    for (m, m0) in scaled.iter().zip(unscaled) {
         if m > m0 {
             most = Real::max(most, (m - m0) / m0);
             count += 1;
         }
     }
-    disc.mass_scaling = Some(MassScalingReport {
+    MassScalingReport {
         added_mass_rel: added / total,
         max_added_rel: most,
         scaled_particles: count,
         critical_dt_unscaled_s,
-        critical_dt_s: disc.critical_dt0,
-    });
-    Ok(())
+        critical_dt_s,
+    }
 }
 
 /// Replaces the lumped masses (kg) of `disc` and what depends on them: inverse masses, the

@@ -13,17 +13,17 @@
 //! (`contact.rs`) and the readings of a 3D body.
 //!
 //! Heat in 3D is the 2D stress stage's adiabatic heating ([`super::heat`]): each point
-//! keeps the heat of its plastic work. Not in 3D yet (refused by the scene's validation):
-//! the heat that moves (conduction, surroundings, friction heat), elasticity over
-//! temperature, mass scaling, kernel re-referencing, SCNI, self-contact and curved or
-//! triangulated tools.
+//! keeps the heat of its plastic work. Mass scaling, uniform or selective, is 2D's
+//! ([`super::mass_scaling`]). Not in 3D yet (refused by the scene's validation): the heat
+//! that moves (conduction, surroundings, friction heat), elasticity over temperature,
+//! kernel re-referencing, SCNI, self-contact and curved or triangulated tools.
 
 mod contact;
 mod setup;
 #[cfg(test)]
 mod tests;
 
-use super::discretization::Thermal;
+use super::discretization::{MassScalingReport, Thermal};
 use super::energy::{Energy, StepEnergy};
 use super::heat::{Heat, Heating};
 use super::heat_readings;
@@ -98,6 +98,8 @@ pub(super) struct SolidDisc {
     scene_tools: usize,
     /// The heat settings of a scene with `[thermal]` (adiabatic: no transfer).
     thermal: Option<Thermal>,
+    /// What mass scaling added, if the scene scales ([`super::mass_scaling`]).
+    mass_scaling: Option<MassScalingReport>,
 }
 
 /// Everything that changes during a 3D run.
@@ -510,9 +512,14 @@ impl SolidSimulation {
     pub fn h_min(&self) -> Real {
         self.disc.h_min
     }
-    /// Critical step of the undeformed discretisation (s).
+    /// Critical step of the undeformed discretisation (s), with the scaled masses in a
+    /// scene with mass scaling.
     pub fn critical_dt0(&self) -> Real {
         self.disc.critical_dt0
+    }
+    /// What mass scaling added, `None` without it.
+    pub fn mass_scaling(&self) -> Option<MassScalingReport> {
+        self.disc.mass_scaling
     }
     /// Stable step estimate on the current deformation (s).
     pub fn stable_dt(&self) -> Real {

@@ -18,6 +18,7 @@ use crate::solver::discretization::Thermal;
 use crate::solver::energy::Energy;
 use crate::solver::heat::Heat;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
+use crate::solver::mass_scaling::{report, scaled, stiffness_bounds, Plan};
 use crate::solver::point_outputs::PointOut;
 use crate::solver::setup::{check_fixed_step, lumped_masses};
 use crate::solver::simulation::StageTimes;
@@ -246,6 +247,7 @@ impl SolidSimulation {
             critical_dt0: p.h_min / wave_speed,
             cells: p.cells,
             scene_tools,
+            mass_scaling: None,
             thermal: scene.thermal.as_ref().map(|spec| Thermal {
                 spec: spec.clone(),
                 capacity: spec.heat_capacity(),
@@ -288,6 +290,53 @@ impl SolidSimulation {
                 .map(|t| Heat::initial(t, npts, ntools, 0, false, false, None)),
         };
         disc.critical_dt0 = measure_critical_step(&disc, &mut st, &mut ws)?;
+        if let Some(ms) = scene.time.mass_scaling {
+            let plan = match ms.factor {
+                Some(f) => Plan::Uniform(f),
+                None => Plan::Selective {
+                    target: ms.target_dt_s.unwrap_or(0.0),
+                    stiffness: stiffness_bounds(
+                        &p.pt,
+                        &disc.weights,
+                        &disc.inv_radius,
+                        false,
+                        rho * wave_speed * wave_speed,
+                        np,
+                    ),
+                },
+            };
+            let unscaled = disc.mass.clone();
+            let critical_dt_unscaled_s = disc.critical_dt0;
+            let v0 = scene.workpiece.initial_velocity_m_per_s;
+            let critical = scaled(
+                plan,
+                &unscaled,
+                critical_dt_unscaled_s,
+                scene.time.dt_safety,
+                |mass| {
+                    // The masses and what depends on them: inverses, the initial motion
+                    // and its kinetic energy.
+                    let (v, initial) = initial_motion(v0, None, &mass);
+                    disc.inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+                    disc.mass = mass;
+                    st.v.clone_from(&v);
+                    ws.v_prev = v;
+                    st.energy = Energy {
+                        initial,
+                        kinetic: initial,
+                        ..Default::default()
+                    };
+                    measure_critical_step(&disc, &mut st, &mut ws)
+                },
+            )?;
+            disc.critical_dt0 = critical;
+            disc.mass_scaling = Some(report(
+                &unscaled,
+                &disc.mass,
+                critical_dt_unscaled_s,
+                critical,
+            ));
+        }
         st.stable_dt = disc.critical_dt0;
         super::stress_stage(&disc, &mut st, &mut ws)?;
         super::gather(&disc, &mut st, &mut ws, None);
