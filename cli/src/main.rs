@@ -424,7 +424,8 @@ fn sweep_scenes<S: sweep::Sweepable>(
     cases: &[sweep::Case<S>],
 ) -> Result<(), String> {
     let scene = &cases[0].scene;
-    let names: Vec<&str> = S::RULES.iter().map(|r| r.name()).collect();
+    let available = scene.rules();
+    let names: Vec<&str> = available.iter().map(|r| r.name()).collect();
     let listed = match names.split_last() {
         Some((last, [])) => last.to_string(),
         Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
@@ -434,16 +435,16 @@ fn sweep_scenes<S: sweep::Sweepable>(
     for r in &a.integration {
         let rule = IntegrationRule::parse(r)
             .ok_or_else(|| format!("--integration `{r}`: expected {listed}"))?;
-        if !S::RULES.contains(&rule) {
+        if !available.contains(&rule) {
             return Err(format!(
-                "--integration `{r}`: a {} scene integrates with {listed}",
+                "--integration `{r}`: this {} scene integrates with {listed}",
                 S::KIND
             ));
         }
         rules.push(rule);
     }
     if rules.is_empty() {
-        rules = S::RULES.to_vec();
+        rules = available;
     }
     if let Some(s) = a.dt_safety.iter().find(|s| !(**s > 0.0 && **s <= 1.0)) {
         return Err(format!("--dt-safety {s}: must lie in (0, 1]"));

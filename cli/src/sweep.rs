@@ -27,8 +27,8 @@ pub trait Sweepable: Sized {
     fn name(&self) -> &str;
     /// `2D` or `3D`, for messages.
     const KIND: &'static str;
-    /// The integration rules the solver of this kind has, the default of `--integration`.
-    const RULES: &'static [IntegrationRule];
+    /// The integration rules the solver has for this scene, the default of `--integration`.
+    fn rules(&self) -> Vec<IntegrationRule>;
     /// The numbers of a grid (`--resolution`): 2 in 2D, 3 in 3D.
     const DIMENSIONS: usize;
     /// The least of a grid's numbers (the scene's validation checks the rest).
@@ -65,11 +65,13 @@ impl Sweepable for Scene {
         &self.name
     }
     const KIND: &'static str = "2D";
-    const RULES: &'static [IntegrationRule] = &[
-        IntegrationRule::Q4,
-        IntegrationRule::Q2,
-        IntegrationRule::Scni,
-    ];
+    fn rules(&self) -> Vec<IntegrationRule> {
+        vec![
+            IntegrationRule::Q4,
+            IntegrationRule::Q2,
+            IntegrationRule::Scni,
+        ]
+    }
     const DIMENSIONS: usize = 2;
     const MIN_COUNT: usize = 2;
     fn grid_form(&self) -> String {
@@ -113,7 +115,16 @@ impl Sweepable for SolidScene {
         &self.name
     }
     const KIND: &'static str = "3D";
-    const RULES: &'static [IntegrationRule] = &[IntegrationRule::Q4, IntegrationRule::Q2];
+    fn rules(&self) -> Vec<IntegrationRule> {
+        match self.workpiece.shape {
+            ShapeKind::Cylinder => vec![IntegrationRule::Q4, IntegrationRule::Q2],
+            ShapeKind::Box => vec![
+                IntegrationRule::Q4,
+                IntegrationRule::Q2,
+                IntegrationRule::Scni,
+            ],
+        }
+    }
     const DIMENSIONS: usize = 3;
     const MIN_COUNT: usize = 1;
     fn grid_form(&self) -> String {

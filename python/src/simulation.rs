@@ -191,14 +191,14 @@ fn configured(scene: &Scene, integration: Option<&str>) -> PyResult<Configured> 
         }
         Source::Solid(s) => {
             let mut s = s.scene().clone();
-            match rule {
-                Some(IntegrationRule::Scni) => {
-                    return Err(PyValueError::new_err(
-                        "integration `scni`: the 3D solver integrates with \"q4\" or \"q2\"",
-                    ))
+            if let Some(r) = rule {
+                s.discretization.integration = r;
+                if let Some((key, message)) = s.validate().into_iter().next() {
+                    return Err(PyValueError::new_err(format!(
+                        "integration `{}`: `{key}` {message}",
+                        r.name()
+                    )));
                 }
-                Some(r) => s.discretization.integration = r,
-                None => {}
             }
             Configured::Solid(s)
         }
@@ -284,7 +284,7 @@ impl Simulation {
 #[pymethods]
 impl Simulation {
     /// Set up the discretisation of `scene` (2D or 3D); `integration` ("q4", "q2", "scni";
-    /// q4 or q2 in 3D) overrides the scene's rule, `threads` gives the simulation its own
+    /// scni on a 3D box, not a cylinder) overrides the scene's rule, `threads` gives the simulation its own
     /// pool of that many threads.
     #[new]
     #[pyo3(signature = (scene, integration = None, threads = None))]

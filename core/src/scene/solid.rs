@@ -7,7 +7,8 @@
 //!
 //! What the 3D solver does not model yet is refused with the key that asks for it: the
 //! heat that moves (conduction, the surroundings, friction heat) and elasticity over
-//! temperature in `[thermal]` (3D heats adiabatically), scni and kernel re-referencing.
+//! temperature in `[thermal]` (3D heats adiabatically), scni on a cylinder (a box takes
+//! it) and kernel re-referencing.
 
 use super::{
     Checks, IntegrationRule, MaterialSpec, Motion, Reference, Scene, ThermalSpec, TimeSpec,
@@ -317,9 +318,9 @@ impl SolidScene {
         }
         let d = &self.discretization;
         out.check(
-            d.integration != IntegrationRule::Scni,
+            d.integration != IntegrationRule::Scni || self.workpiece.shape == ShapeKind::Box,
             "discretization.integration",
-            "the 3D solver integrates with q4 or q2; scni is 2D only for now".into(),
+            "scni in 3D integrates over the nodal domains of a box's lattice; a cylinder's O-grid has none yet (q4 or q2)".into(),
         );
         out.check(
             d.support.is_finite() && (1.05..=4.0).contains(&d.support),

@@ -14,9 +14,11 @@
 //!
 //! Heat in 3D is the 2D stress stage's adiabatic heating ([`super::heat`]): each point
 //! keeps the heat of its plastic work. Mass scaling, uniform or selective, is 2D's
-//! ([`super::mass_scaling`]). Not in 3D yet (refused by the scene's validation): the heat
-//! that moves (conduction, surroundings, friction heat), elasticity over temperature,
-//! kernel re-referencing, SCNI, self-contact and curved or triangulated tools.
+//! ([`super::mass_scaling`]). SCNI integrates a box over its particles' nodal domains
+//! ([`crate::integration::point_shapes`], the 2D code in three dimensions). Not in 3D yet
+//! (refused by the scene's validation): the heat that moves (conduction, surroundings,
+//! friction heat), elasticity over temperature, kernel re-referencing, SCNI on a cylinder
+//! and its stabilization, self-contact and curved or triangulated tools.
 
 mod contact;
 mod setup;
@@ -100,6 +102,9 @@ pub(super) struct SolidDisc {
     thermal: Option<Thermal>,
     /// What mass scaling added, if the scene scales ([`super::mass_scaling`]).
     mass_scaling: Option<MassScalingReport>,
+    /// The points are the particles' (SCNI: one per nodal domain, in particle order), not
+    /// the cells'.
+    nodal_points: bool,
 }
 
 /// Everything that changes during a 3D run.
@@ -584,9 +589,18 @@ impl SolidSimulation {
             .map(|j| self.disc.nodal.interpolate(j, &self.st.d))
             .collect()
     }
-    /// The mean over each hexahedral cell's integration points of a value per point (the
-    /// points are stored cell by cell, [`SolidSimulation::cells`] order).
+    /// The mean over each hexahedral cell of a value per point: over the cell's
+    /// integration points (stored cell by cell, [`SolidSimulation::cells`] order), or with
+    /// SCNI, whose points are the particles', over its eight corners.
     pub fn cell_means(&self, per_point: &[Real]) -> Vec<Real> {
+        if self.disc.nodal_points {
+            return self
+                .disc
+                .cells
+                .iter()
+                .map(|c| c.iter().map(|&j| per_point[j as usize]).sum::<Real>() / 8.0)
+                .collect();
+        }
         let per_cell = (per_point.len() / self.disc.cells.len().max(1)).max(1);
         per_point
             .chunks(per_cell)

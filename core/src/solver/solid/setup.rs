@@ -13,6 +13,7 @@ use crate::math::Real;
 use crate::plane_tool::PlaneTool;
 use crate::rk_shape::{for_each_index, KernelCloud, Lattice, ShapeTable, Site};
 use crate::scene::solid::{CylinderPart, SolidScene, SolidShape};
+use crate::scene::IntegrationRule;
 use crate::solver::critical_step::critical_step;
 use crate::solver::discretization::Thermal;
 use crate::solver::energy::Energy;
@@ -127,7 +128,11 @@ fn lattice(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
             id([i, j + 1, k + 1]),
         ])
     });
-    let layer_points = points.positions.len() / (particles[2] - 1);
+    // SCNI has a point per particle, the other rules theirs in each cell.
+    let layer_points = match scene.discretization.integration {
+        IntegrationRule::Scni => particles[0] * particles[1],
+        _ => points.positions.len() / (particles[2] - 1),
+    };
     Ok(Particles {
         positions: lattice.cloud().positions.clone(),
         volumes: lattice.cloud().volumes.clone(),
@@ -248,6 +253,7 @@ impl SolidSimulation {
             cells: p.cells,
             scene_tools,
             mass_scaling: None,
+            nodal_points: scene.discretization.integration == IntegrationRule::Scni,
             thermal: scene.thermal.as_ref().map(|spec| Thermal {
                 spec: spec.clone(),
                 capacity: spec.heat_capacity(),
