@@ -51,6 +51,16 @@ pub(super) fn kinetic_energy<const D: usize>(mass: &[Real], v: &[[Real; D]]) -> 
 }
 
 impl Energy {
+    /// The account at the start of a run: the body's kinetic energy `initial` (J), nothing
+    /// exchanged yet.
+    pub fn starting(initial: Real) -> Energy {
+        Energy {
+            initial,
+            kinetic: initial,
+            ..Default::default()
+        }
+    }
+
     /// Internal energy: stored elastic plus plastic dissipation.
     pub fn internal(&self) -> Real {
         self.elastic + self.plastic

@@ -89,40 +89,40 @@ pub(super) fn scale(
     plan: Plan,
 ) -> Result<()> {
     let unscaled = disc.mass.clone();
-    let critical_dt_unscaled_s = disc.critical_dt0;
-    let safety = scene.time.dt_safety;
-    let critical = scaled(plan, &unscaled, disc.critical_dt0, safety, |mass| {
-        set_masses(scene, disc, st, ws, mass)?;
-        measure_critical_step(scene, disc, st, ws)
-    })?;
-    disc.critical_dt0 = critical;
-    disc.mass_scaling = Some(report(
-        &unscaled,
-        &disc.mass,
-        critical_dt_unscaled_s,
-        critical,
-    ));
+    let report = scaled(
+        plan,
+        unscaled,
+        disc.critical_dt0,
+        scene.time.dt_safety,
+        |mass| {
+            set_masses(scene, disc, st, ws, mass)?;
+            measure_critical_step(scene, disc, st, ws)
+        },
+    )?;
+    disc.critical_dt0 = report.critical_dt_s;
+    disc.mass_scaling = Some(report);
     Ok(())
 }
 
 /// The scaling of `plan` from the `unscaled` masses (kg) whose critical step is
 /// `critical_dt0` (s), with the run's step safety `safety`: `install(masses)` puts masses in
-/// the discretisation and returns the critical step measured with them (s). Returns the
-/// critical step of the last masses installed (2D and 3D alike).
+/// the discretisation and returns the critical step measured with them (s). Returns what
+/// the masses last installed added and their critical step (2D and 3D alike).
 pub(super) fn scaled(
     plan: Plan,
-    unscaled: &[Real],
+    unscaled: Vec<Real>,
     critical_dt0: Real,
     safety: Real,
     mut install: impl FnMut(Vec<Real>) -> Result<Real>,
-) -> Result<Real> {
+) -> Result<MassScalingReport> {
     let mut critical = critical_dt0;
+    let mut mass = unscaled.clone();
     match plan {
         Plan::Uniform(f) => {
-            critical = install(unscaled.iter().map(|m| m * f).collect())?;
+            mass = unscaled.iter().map(|m| m * f).collect();
+            critical = install(mass.clone())?;
         }
         Plan::Selective { target, stiffness } => {
-            let mut mass = unscaled.to_vec();
             for _ in 0..MAX_ROUNDS {
                 if safety * critical >= target {
                     break;
@@ -150,12 +150,12 @@ pub(super) fn scaled(
             }
         }
     }
-    Ok(critical)
+    Ok(report(&unscaled, &mass, critical_dt0, critical))
 }
 
 /// What scaling the `unscaled` masses to `scaled` (kg) added, with the critical steps before
 /// and after (s).
-pub(super) fn report(
+fn report(
     unscaled: &[Real],
     scaled: &[Real],
     critical_dt_unscaled_s: Real,
@@ -198,10 +198,6 @@ fn set_masses(
     disc.mass = mass;
     st.v.clone_from(&v);
     ws.v_prev = v;
-    st.energy = Energy {
-        initial,
-        kinetic: initial,
-        ..Default::default()
-    };
+    st.energy = Energy::starting(initial);
     Ok(())
 }

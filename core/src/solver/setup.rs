@@ -186,11 +186,7 @@ impl Simulation {
             v: v.clone(),
             points: vec![PointState::default(); npts],
             tools: tools.iter().map(|t| t.state).collect(),
-            energy: Energy {
-                initial,
-                kinetic: initial,
-                ..Default::default()
-            },
+            energy: Energy::starting(initial),
             max_penetration: 0.0,
             stable_dt,
             anchor_time: 0.0,

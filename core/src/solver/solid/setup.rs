@@ -19,7 +19,7 @@ use crate::solver::discretization::Thermal;
 use crate::solver::energy::Energy;
 use crate::solver::heat::Heat;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
-use crate::solver::mass_scaling::{report, scaled, stiffness_bounds, Plan};
+use crate::solver::mass_scaling::{scaled, stiffness_bounds, Plan};
 use crate::solver::point_outputs::PointOut;
 use crate::solver::setup::{check_fixed_step, lumped_masses};
 use crate::solver::simulation::StageTimes;
@@ -278,11 +278,7 @@ impl SolidSimulation {
             v,
             points: vec![PointState3::default(); npts],
             tools: tools.iter().map(|t| t.state).collect(),
-            energy: Energy {
-                initial,
-                kinetic: initial,
-                ..Default::default()
-            },
+            energy: Energy::starting(initial),
             held,
             stick: vec![None; np * ntools],
             max_penetration: 0.0,
@@ -311,13 +307,12 @@ impl SolidSimulation {
                     ),
                 },
             };
-            let unscaled = disc.mass.clone();
-            let critical_dt_unscaled_s = disc.critical_dt0;
             let v0 = scene.workpiece.initial_velocity_m_per_s;
-            let critical = scaled(
+            let unscaled = disc.mass.clone();
+            let report = scaled(
                 plan,
-                &unscaled,
-                critical_dt_unscaled_s,
+                unscaled,
+                disc.critical_dt0,
                 scene.time.dt_safety,
                 |mass| {
                     // The masses and what depends on them: inverses, the initial motion
@@ -327,21 +322,12 @@ impl SolidSimulation {
                     disc.mass = mass;
                     st.v.clone_from(&v);
                     ws.v_prev = v;
-                    st.energy = Energy {
-                        initial,
-                        kinetic: initial,
-                        ..Default::default()
-                    };
+                    st.energy = Energy::starting(initial);
                     measure_critical_step(&disc, &mut st, &mut ws)
                 },
             )?;
-            disc.critical_dt0 = critical;
-            disc.mass_scaling = Some(report(
-                &unscaled,
-                &disc.mass,
-                critical_dt_unscaled_s,
-                critical,
-            ));
+            disc.critical_dt0 = report.critical_dt_s;
+            disc.mass_scaling = Some(report);
         }
         st.stable_dt = disc.critical_dt0;
         super::stress_stage(&disc, &mut st, &mut ws)?;
