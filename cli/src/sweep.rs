@@ -366,25 +366,31 @@ pub fn sweep<S: Sweepable>(
             );
         }
         md.push('\n');
+        // One line per rule and step safety, through its grids from coarse to fine (a line
+        // through both safeties of each grid would zigzag).
         for &rule in rules {
-            let (x, y) = a
-                .rows
-                .iter()
-                .zip(&a.errors)
-                .filter(|(r, _)| r.rule == rule)
-                .map(|(r, e)| (r.wall.log10(), e.max(1e-12).log10()))
-                .unzip();
-            let name = if label.is_empty() {
-                rule.name().to_string()
-            } else {
-                format!("{} {label}", rule.name())
-            };
-            series.push(plots::Series {
-                label: name,
-                x,
-                y,
-                ..plots::Series::default()
-            });
+            for &safety in safeties {
+                let (x, y) = a
+                    .rows
+                    .iter()
+                    .zip(&a.errors)
+                    .filter(|(r, _)| r.rule == rule && r.safety == safety)
+                    .map(|(r, e)| (r.wall.log10(), e.max(1e-12).log10()))
+                    .unzip();
+                let mut name = rule.name().to_string();
+                if safeties.len() > 1 {
+                    name.push_str(&format!(" dt_safety {safety}"));
+                }
+                if !label.is_empty() {
+                    name.push_str(&format!(" {label}"));
+                }
+                series.push(plots::Series {
+                    label: name,
+                    x,
+                    y,
+                    ..plots::Series::default()
+                });
+            }
         }
     }
     std::fs::write(out.join("sweep.csv"), &csv)
