@@ -14,7 +14,7 @@ use crate::output::plots::{solid_plot, SolidPanel, View};
 use crate::output::vtu::{write_pvd, write_vtu_3d};
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::SolidSimulation;
-use rkforge_runner::{drive_solid, solid_summary};
+use rkforge_runner::{drive, solid_summary, Observer};
 use serde_json::Value;
 use std::path::Path;
 use std::time::Instant;
@@ -35,13 +35,10 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
     let wall = Instant::now();
     let mut sim = SolidSimulation::new(scene).map_err(|e| e.to_string())?;
     let nframes = if frames { scene.output.frames } else { 0 };
-    let mut shots = Vec::new();
-    let outcome = drive_solid(&mut sim, nframes, |sim| {
-        shots.push(Frame::of(sim));
-        Ok(())
-    })?;
-    if !shots.is_empty() {
-        write_frames(&sim, &shots, out, &scene.name)?;
+    let mut shots = Shots(Vec::new());
+    let outcome = drive(&mut sim, nframes, &mut shots)?;
+    if !shots.0.is_empty() {
+        write_frames(&sim, &shots.0, out, &scene.name)?;
     }
     outcome.history.write(&out.join("history.csv"))?;
     let summary = solid_summary(&sim, wall.elapsed().as_secs_f64(), outcome.ending());
@@ -52,6 +49,16 @@ pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, 
         summary,
         error: outcome.failure,
     })
+}
+
+/// The frames of a run, taken as it goes and written at its end.
+struct Shots(Vec<Frame>);
+
+impl Observer<SolidSimulation> for Shots {
+    fn frame(&mut self, sim: &SolidSimulation) -> Result<(), String> {
+        self.0.push(Frame::of(sim));
+        Ok(())
+    }
 }
 
 /// One frame of the body: time (s), particle positions (m), each cell's plastic strain

@@ -660,7 +660,7 @@ pub fn run_scene<'py>(
                 match scene.build().map_err(to_py)? {
                     Sim::Plane(mut sim) => {
                         let outcome =
-                            rkforge_runner::drive(&mut sim, 0, &mut rkforge_runner::Quiet)
+                            rkforge_runner::drive(&mut *sim, 0, &mut rkforge_runner::Quiet)
                                 .map_err(PyRuntimeError::new_err)?;
                         let summary = rkforge_runner::summary(
                             &sim,
@@ -671,8 +671,9 @@ pub fn run_scene<'py>(
                         Ok(ran(summary, outcome))
                     }
                     Sim::Solid(mut sim) => {
-                        let outcome = rkforge_runner::drive_solid(&mut sim, 0, |_| Ok(()))
-                            .map_err(PyRuntimeError::new_err)?;
+                        let outcome =
+                            rkforge_runner::drive(&mut *sim, 0, &mut rkforge_runner::Quiet)
+                                .map_err(PyRuntimeError::new_err)?;
                         let summary = rkforge_runner::solid_summary(
                             &sim,
                             wall.elapsed().as_secs_f64(),

@@ -1,22 +1,23 @@
 //! rkforge-runner: one run of a scene as the command line and the Python package both do
 //! it, so that their results are the same bits.
 //!
-//! A [`Run`] steps a [`Simulation`] from mark to mark of its [`schedule`] (history rows
-//! every `output.history_interval_s`, frame times merged in), or by a number of steps, with
-//! a hook between steps (commands, cancels), and records the [`History`]; the run ends with
-//! the [`summary`]. [`drive`] runs a scene to its end through one, for the command line and
-//! the Python package, with what a caller adds at the samples and frames (files, plots,
-//! MCAP, a progress bar) through an [`Observer`]; the ROS node steps its own [`Run`] as its
-//! services order.
+//! A [`Run`] steps a simulation of either kind ([`Runnable`]: the 2D [`Simulation`], the 3D
+//! `SolidSimulation`) from mark to mark of its [`schedule`] (history rows every
+//! `output.history_interval_s`, frame times merged in), or by a number of steps, with a
+//! hook between steps (commands, cancels), and records the [`History`]; the run ends with
+//! the [`summary`] ([`solid_summary`] in 3D). [`drive`] runs a scene to its end through one,
+//! for the command line and the Python package, with what a caller adds at the samples and
+//! frames (files, plots, MCAP, a progress bar) through an [`Observer`]; the ROS node and
+//! the FMU step their own [`Run`] as their services and communication points order.
 
 pub mod history;
-pub mod solid;
+pub mod runnable;
 pub mod summary;
 
 pub use history::History;
-pub use solid::{drive_solid, solid_summary};
+pub use runnable::Runnable;
 pub use summary::{
-    laps_json, place, reference_table, references_beside, summary, tool_json, Ending,
+    laps_json, reference_table, references_beside, solid_summary, summary, tool_json, Ending,
 };
 
 impl<S: Body> Outcome<S> {
@@ -31,7 +32,7 @@ impl<S: Body> Outcome<S> {
 }
 
 use rkforge_core::outputs::Body;
-use rkforge_core::{Scene, Simulation};
+use rkforge_core::Simulation;
 use std::time::{Duration, Instant};
 
 /// One instant of the schedule.
@@ -45,15 +46,15 @@ pub struct Mark {
     pub frame: bool,
 }
 
-/// The instants a run stops at: the history's sample times up to the end, and `frames`
-/// frame times `k * end / frames`, merged in order.
+/// The instants a run of `sim` stops at: the history's sample times up to the scene's end,
+/// and `frames` frame times `k * end / frames`, merged in order.
 ///
 /// # Errors
 ///
 /// The scene's history interval gives more than [`rkforge_core::MAX_SAMPLES`] samples.
-pub fn schedule(scene: &Scene, frames: usize) -> Result<Vec<Mark>, String> {
-    let interval = scene.history_interval();
-    schedule_every(scene.time.end_s, interval, frames)
+pub fn schedule<S: Runnable>(sim: &S, frames: usize) -> Result<Vec<Mark>, String> {
+    let interval = sim.history_interval();
+    schedule_every(sim.end_time(), interval, frames)
         .ok_or_else(|| format!("output.history_interval_s {interval:e} s: too many samples"))
 }
 
@@ -78,10 +79,10 @@ pub fn schedule_every(end: f64, interval: f64, frames: usize) -> Option<Vec<Mark
 }
 
 /// A run under way: the marks of its schedule still ahead and its history so far.
-pub struct Run {
+pub struct Run<S: Runnable = Simulation> {
     marks: Vec<Mark>,
     next: usize,
-    history: History,
+    history: History<S>,
 }
 
 /// How far [`Run::advance`] goes.
@@ -104,20 +105,20 @@ pub struct Advance {
     pub interrupted: bool,
 }
 
-impl Run {
+impl<S: Runnable> Run<S> {
     /// A run of `sim` from its current time over `marks` (from [`schedule`]).
-    pub fn new(sim: &Simulation, marks: Vec<Mark>) -> Run {
+    pub fn new(sim: &S, marks: Vec<Mark>) -> Run<S> {
         Run {
             marks,
             next: 0,
-            history: History::new(sim),
+            history: sim.new_history(),
         }
     }
 
     /// Back to the first mark with an empty history, for a simulation rebuilt at t = 0.
-    pub fn restart(&mut self, sim: &Simulation) {
+    pub fn restart(&mut self, sim: &S) {
         self.next = 0;
-        self.history = History::new(sim);
+        self.history = sim.new_history();
     }
 
     /// Make `mark` the one mark ahead, for a caller that learns its marks one at a time: the
@@ -134,27 +135,27 @@ impl Run {
         self.next >= self.marks.len()
     }
 
-    /// Record a history row of the current state ([`History::record`]).
+    /// Record a history row of the current state ([`Runnable::record_in`]).
     ///
     /// # Errors
     ///
     /// A particle is deeper in a tool than the scene's bound (the row is recorded).
-    pub fn record(&mut self, sim: &mut Simulation) -> Result<(), rkforge_core::Error> {
-        self.history.record(sim)
+    pub fn record(&mut self, sim: &mut S) -> Result<(), rkforge_core::Error> {
+        sim.record_in(&mut self.history)
     }
 
     /// The history so far.
-    pub fn history(&self) -> &History {
+    pub fn history(&self) -> &History<S> {
         &self.history
     }
 
     /// The history, at the end of the run.
-    pub fn into_history(self) -> History {
+    pub fn into_history(self) -> History<S> {
         self.history
     }
 
     /// Step on as `until` says, each step shortened to land on the next mark
-    /// ([`Simulation::run_toward`]). `between(sim, taken)` is called before each step
+    /// ([`Runnable::step_toward`]). `between(sim, taken)` is called before each step
     /// with the steps taken so far in this call: it may change the simulation (a velocity
     /// command) and returns `false` to stop there.
     ///
@@ -163,9 +164,9 @@ impl Run {
     /// A step failed; the simulation holds the state reached.
     pub fn advance(
         &mut self,
-        sim: &mut Simulation,
+        sim: &mut S,
         until: Until,
-        mut between: impl FnMut(&mut Simulation, u64) -> bool + Send,
+        mut between: impl FnMut(&mut S, u64) -> bool + Send,
     ) -> Result<Advance, rkforge_core::Error> {
         let mut steps = 0;
         while let Some(&mark) = self.marks.get(self.next) {
@@ -173,7 +174,7 @@ impl Run {
                 Until::NextMark => u64::MAX,
                 Until::Steps(n) => n - steps,
             };
-            let ran = sim.run_toward(mark.time, limit, |s, k| between(s, steps + k))?;
+            let ran = sim.step_toward(mark.time, limit, |s, k| between(s, steps + k))?;
             steps += ran.steps;
             if !ran.reached {
                 return Ok(Advance {
@@ -199,14 +200,15 @@ impl Run {
     }
 }
 
-/// What a caller does at the instants of a run. Every method has a default that does nothing.
-pub trait Observer {
+/// What a caller does at the instants of a run of an `S`. Every method has a default that
+/// does nothing.
+pub trait Observer<S = Simulation> {
     /// After each history row: at t = 0, at every sample, and once more after a failure.
     ///
     /// # Errors
     ///
     /// An output error, which ends the run at once.
-    fn sample(&mut self, _sim: &Simulation) -> Result<(), String> {
+    fn sample(&mut self, _sim: &S) -> Result<(), String> {
         Ok(())
     }
     /// At t = 0 and at every frame time, when the run has frames.
@@ -214,21 +216,21 @@ pub trait Observer {
     /// # Errors
     ///
     /// An output error, which ends the run at once.
-    fn frame(&mut self, _sim: &Simulation) -> Result<(), String> {
+    fn frame(&mut self, _sim: &S) -> Result<(), String> {
         Ok(())
     }
     /// Asked before each stretch of steps: a reason to stop the run there (a signal).
-    fn stop(&self, _sim: &Simulation) -> Option<String> {
+    fn stop(&self, _sim: &S) -> Option<String> {
         None
     }
     /// After each instant of the schedule.
-    fn progress(&mut self, _sim: &Simulation) {}
+    fn progress(&mut self, _sim: &S) {}
 }
 
 /// An observer that does nothing: the bare run.
 pub struct Quiet;
 
-impl Observer for Quiet {}
+impl<S> Observer<S> for Quiet {}
 
 /// What a run produced (of a 2D simulation, or `Outcome<SolidSimulation>` of a 3D one).
 pub struct Outcome<S: Body = Simulation> {
@@ -250,12 +252,12 @@ pub struct Outcome<S: Body = Simulation> {
 /// # Errors
 ///
 /// The schedule is too long, or the observer failed.
-pub fn drive(
-    sim: &mut Simulation,
+pub fn drive<S: Runnable>(
+    sim: &mut S,
     frames: usize,
-    observer: &mut impl Observer,
-) -> Result<Outcome, String> {
-    let mut run = Run::new(sim, schedule(sim.scene(), frames)?);
+    observer: &mut impl Observer<S>,
+) -> Result<Outcome<S>, String> {
+    let mut run = Run::new(sim, schedule(sim, frames)?);
     let mut output_time = Duration::ZERO;
     let clock = Instant::now();
     let mut failure = run.record(sim).err().map(|e| e.to_string());
@@ -312,6 +314,7 @@ pub fn drive(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rkforge_core::Scene;
 
     fn block(end: &str) -> Scene {
         let text = include_str!("../../scenes/block_forging.toml")
@@ -322,8 +325,8 @@ mod tests {
 
     #[test]
     fn schedule_merges_frames_into_the_samples() {
-        let scene = block("0.0015");
-        let marks = schedule(&scene, 3).unwrap();
+        let sim = Simulation::new(&block("0.0015")).unwrap();
+        let marks = schedule(&sim, 3).unwrap();
         // history_interval_s = 0.15e-3: ten samples; three frames, the last on the end.
         assert_eq!(marks.iter().filter(|m| m.sample).count(), 10);
         assert_eq!(marks.iter().filter(|m| m.frame).count(), 3);
@@ -358,5 +361,25 @@ mod tests {
             .unwrap();
         assert!(v < 0.0 && v > -1e-2, "{v}");
         assert_eq!(s["end_time_s"], 0.0006);
+    }
+
+    /// A 3D run goes through the same loop: a row at t = 0 and at every sample, the last on
+    /// the end time, and the 3D register's columns.
+    #[test]
+    fn a_3d_run_records_every_sample() {
+        let text = include_str!("../../scenes/taylor_bar_3d.toml")
+            .replace("cells = [8, 4, 60]", "cells = [2, 1, 8]")
+            .replace("end_s = 80.0e-6", "end_s = 4.0e-6");
+        let scene = rkforge_core::scene::SolidScene::from_str_named(&text, "bar").unwrap();
+        let mut sim = rkforge_core::solver::SolidSimulation::new(&scene).unwrap();
+        let outcome = drive(&mut sim, 2, &mut Quiet).unwrap();
+        assert!(outcome.failure.is_none());
+        let time = outcome.history.column("time_s").unwrap();
+        assert_eq!(time.len(), 5);
+        assert_eq!(time.last(), Some(&4.0e-6));
+        assert!(outcome.history.column("wall.force_z_N").is_some());
+        let s = solid_summary(&sim, 1.0, outcome.ending());
+        assert_eq!(s["status"], "ok");
+        assert_eq!(s["end_time_s"], 4.0e-6);
     }
 }

@@ -7,10 +7,12 @@
 //! its `tools[k].fill_points[i]`). What the summary says of the run as a whole is written
 //! here: how it ended, the discretisation, the time step, the bounds as ranges, the
 //! largest penetrations, each tool's force vector and fill times, the laps, mass scaling,
-//! re-referencing and the stage times.
+//! re-referencing and the stage times; [`solid_summary`] is a 3D run's, with the 3D
+//! register's figures placed the same way.
 
-use rkforge_core::outputs::{columns, At, Body, Column, Sample};
+use rkforge_core::outputs::{columns, solid_columns, At, Body, Column, Sample};
 use rkforge_core::scene::Reference;
+use rkforge_core::solver::SolidSimulation;
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -106,6 +108,70 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "velocity_fit_residual": sim.reference().map(|r| r.fit_residual),
         });
     }
+    summary
+}
+
+/// The summary of a 3D run (summary.json) that took `wall_s` (s) of wall time and ended
+/// as `ending` says: how it ended, the discretisation and its cost, the bounds as ranges,
+/// the largest penetrations, each tool's force vector, the stage times, and the register's
+/// figures ([`rkforge_core::outputs::SOLID_REGISTER`]) at the paths their names give.
+pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> Value {
+    let (status, error) = match ending {
+        Ending::Finished => ("ok", None),
+        Ending::Stopped(reason) => ("stopped", Some(reason)),
+        Ending::Failed(error) => ("error", Some(error)),
+    };
+    let scene = sim.scene();
+    let sample = Sample::new(sim);
+    let b = sample.readings();
+    let st = sim.state();
+    let particle_steps = sim.particle_count() as f64 * sim.steps() as f64;
+    let t = &sim.times;
+    let mut summary = json!({
+        "status": status,
+        "error": error,
+        "scene": scene.name,
+        "kinematics": "3d",
+        "integration": scene.discretization.integration.name(),
+        "support": scene.discretization.support,
+        "particles": sim.particle_count(),
+        "integration_points": sim.point_count(),
+        "neighbours_per_point": sim.neighbours_per_point(),
+        "memory_bytes": sim.memory_bytes(),
+        "steps": sim.steps(),
+        "end_time_s": sim.time(),
+        "wall_s": wall_s,
+        "threads": rayon::current_num_threads(),
+        "us_per_particle_step": if particle_steps > 0.0 { 1e6 * wall_s / particle_steps } else { 0.0 },
+        "smallest_spacing_m": sim.h_min(),
+        "critical_dt_s": sim.critical_dt0(),
+        "mass_scaling": sim.mass_scaling(),
+        "workpiece": {
+            "x_range_m": b.extents[0],
+            "y_range_m": b.extents[1],
+            "z_range_m": b.extents[2],
+        },
+        "contact": {
+            "max_penetration_m": st.max_penetration,
+            "max_penetration_rel": st.max_penetration / sim.h_min(),
+            "max_beyond_plane_m": st.max_beyond_plane,
+            "max_beyond_plane_rel": st.max_beyond_plane / sim.h_min(),
+        },
+        "tools": sim.tools().iter().map(|t| json!({
+            "name": t.name,
+            "force_N": t.state.force,
+            "axial_force_N": t.axial_force(),
+        })).collect::<Vec<_>>(),
+        "stage_seconds": {
+            "setup": t.setup.as_secs_f64(),
+            "shape_functions": t.shape_functions.as_secs_f64(),
+            "stress": t.stress.as_secs_f64(),
+            "internal_force": t.internal_force.as_secs_f64(),
+            "contact": t.contact.as_secs_f64(),
+            "integration": t.integration.as_secs_f64(),
+        },
+    });
+    place(&mut summary, &solid_columns(scene), &sample);
     summary
 }
 
@@ -297,7 +363,7 @@ fn path<'v, S: Body>(summary: &'v mut Value, c: &Column<S>) -> &'v mut Value {
 /// The values of `columns` shown in the summary, placed in `summary`: a scalar at the path
 /// its dotted name gives, a tool's value under its name in `tools[k]` (which must hold an
 /// object per tool). What a 3D run's summary takes from its register.
-pub fn place<S: Body>(summary: &mut Value, columns: &[Column<S>], sample: &Sample<'_, S>) {
+fn place<S: Body>(summary: &mut Value, columns: &[Column<S>], sample: &Sample<'_, S>) {
     for c in columns.iter().filter(|c| c.output.shown.summary) {
         let value = json!(c.value(sample));
         match c.at {

@@ -1,0 +1,85 @@
+//! The simulations the run layer steps: [`Runnable`], implemented by the 2D
+//! [`Simulation`] and the 3D [`SolidSimulation`], so that one [`Run`](crate::Run) and one
+//! [`drive`](crate::drive) serve both kinds.
+
+use crate::History;
+use rkforge_core::outputs::Body;
+use rkforge_core::solver::SolidSimulation;
+use rkforge_core::{Error, Ran, Simulation};
+
+/// A simulation a [`Run`](crate::Run) steps and records.
+pub trait Runnable: Body + Send {
+    /// The scene's end time (s).
+    fn end_time(&self) -> f64;
+    /// The interval between history rows (s), `output.history_interval_s` or its default.
+    fn history_interval(&self) -> f64;
+    /// An empty history of the scene's columns.
+    fn new_history(&self) -> History<Self>;
+    /// Record a row of the current state in `history`, the penetration measured over every
+    /// particle; a particle deeper than the scene's bound is returned as an error, after the
+    /// row is recorded.
+    ///
+    /// # Errors
+    ///
+    /// The penetration bound is exceeded.
+    fn record_in(&mut self, history: &mut History<Self>) -> Result<(), Error>;
+    /// Step toward `t_end` (s), at most `max_steps` steps, the last one shortened to land on
+    /// it; `between(sim, taken)` before each step returns `false` to stop there (the
+    /// simulation's own `run_toward`).
+    ///
+    /// # Errors
+    ///
+    /// A step failed; the simulation holds the state reached.
+    fn step_toward(
+        &mut self,
+        t_end: f64,
+        max_steps: u64,
+        between: impl FnMut(&mut Self, u64) -> bool + Send,
+    ) -> Result<Ran, Error>;
+}
+
+impl Runnable for Simulation {
+    fn end_time(&self) -> f64 {
+        self.scene().time.end_s
+    }
+    fn history_interval(&self) -> f64 {
+        self.scene().history_interval()
+    }
+    fn new_history(&self) -> History<Self> {
+        History::new(self)
+    }
+    fn record_in(&mut self, history: &mut History<Self>) -> Result<(), Error> {
+        history.record(self)
+    }
+    fn step_toward(
+        &mut self,
+        t_end: f64,
+        max_steps: u64,
+        between: impl FnMut(&mut Self, u64) -> bool + Send,
+    ) -> Result<Ran, Error> {
+        self.run_toward(t_end, max_steps, between)
+    }
+}
+
+impl Runnable for SolidSimulation {
+    fn end_time(&self) -> f64 {
+        self.scene().time.end_s
+    }
+    fn history_interval(&self) -> f64 {
+        self.scene().history_interval()
+    }
+    fn new_history(&self) -> History<Self> {
+        History::solid(self)
+    }
+    fn record_in(&mut self, history: &mut History<Self>) -> Result<(), Error> {
+        history.record_solid(self)
+    }
+    fn step_toward(
+        &mut self,
+        t_end: f64,
+        max_steps: u64,
+        between: impl FnMut(&mut Self, u64) -> bool + Send,
+    ) -> Result<Ran, Error> {
+        self.run_toward(t_end, max_steps, between)
+    }
+}
