@@ -120,15 +120,6 @@ impl Run {
         self.history = History::new(sim);
     }
 
-    /// Make `mark` the one mark ahead, for a caller that learns its marks one at a time: the
-    /// FMU, whose `doStep` names the next communication point (an early return leaves a mark
-    /// unreached, which the next step's replaces).
-    pub fn aim(&mut self, mark: Mark) {
-        self.marks.clear();
-        self.marks.push(mark);
-        self.next = 0;
-    }
-
     /// Every mark is behind: the run is at its end.
     pub fn finished(&self) -> bool {
         self.next >= self.marks.len()
