@@ -87,3 +87,39 @@ def test_a_3d_fmu3_rolls_back_and_commands_its_tool(bar, rkforge_bin, tmp_path):
     s.step(1e-6)
     assert s.get("wall.force_N", "wall.stroke_m", "workpiece.height_m") == first
     s.fmu.freeInstance()
+
+
+def test_a_3d_fmu3_returns_early_where_its_intermediate_updates_see_the_event(bar, rkforge_bin,
+                                                                           tmp_path):
+    """One 5 us communication step of the bar: the intermediate updates see every solver
+    step (time and wall force); with early return on contact the step returns after the
+    first solver step (the bar lies on the wall), and with early return at a force level
+    at the first solver step whose force magnitude reaches it, as the updates saw it."""
+    path = pack(rkforge_bin, bar, tmp_path / "bar3.fmu", "3")
+    seen, holder = [], {}
+
+    def update(env, time, set_requested, get_allowed, finished, can_return, early, when):
+        s = holder["s"]
+        seen.append((time, *s.fmu.getFloat64([s.vr["time"], s.vr["wall.force_N"]])))
+
+    holder["s"] = s = Slave3(path, intermediate_update=update)
+    assert s.step(5e-6) == (False, 5e-6)
+    assert len(seen) > 5 and seen[-1][0] == 5e-6
+    assert all(t == u for t, u, _ in seen) and seen[-1][2] == s.get("wall.force_N")[0]
+    s.fmu.freeInstance()
+
+    touch = Slave3(path, {"wall.early_return.contact": True}, early_return=True)
+    early, last = touch.step(5e-6)
+    assert early and last == seen[0][0], (last, seen[0])
+    early, end = touch.step(5e-6 - last)
+    assert not early and end == pytest.approx(5e-6, rel=1e-12)
+    touch.fmu.freeInstance()
+
+    level = 0.5 * max(abs(f) for _, _, f in seen)
+    expected = next(t for t, _, f in seen if abs(f) >= level)
+    forced = Slave3(path, {"wall.early_return.force": True, "wall.early_return.force_level": level},
+                    early_return=True)
+    early, last = forced.step(5e-6)
+    assert early and last == expected, (last, expected)
+    assert abs(forced.get("wall.force_N")[0]) >= level
+    forced.fmu.freeInstance()
