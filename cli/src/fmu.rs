@@ -6,9 +6,11 @@
 //! `binaries/linux64/<modelIdentifier>.so` (2.0) or `binaries/x86_64-linux/...` (3.0), the
 //! scene in `resources/scene.toml` and `documentation/index.html`.
 
+use rkforge_core::scene::solid::is_solid;
+use rkforge_core::scene::SolidScene;
 use rkforge_core::Scene;
 use rkforge_model_description::{
-    press, time_value_reference, variable_table, variable_table3, xml, xml3,
+    press, time_value_reference, variable_table, variable_table3, xml, xml3, FmuScene,
 };
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -104,17 +106,54 @@ impl Version {
     }
 }
 
-/// Write the FMU of the scene file `scene_path` to `out`; returns the model identifier.
+/// What the header of an FMU takes from its scene, of either kind: its name, description,
+/// end time (s) and history interval (s, the default communication step).
+struct About<'a> {
+    name: &'a str,
+    description: &'a str,
+    stop_time: f64,
+    step_size: f64,
+}
+
+/// Write the FMU of the scene file `scene_path` (2D or 3D) to `out`; returns the model
+/// identifier.
 pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, String> {
     let text = std::fs::read_to_string(scene_path)
         .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
-    let scene = Scene::from_str_named(&text, &scene_path.display().to_string())
-        .map_err(|e| e.to_string())?;
+    let file = scene_path.display().to_string();
+    // The scene of either kind (the same fields by the same names) and its header.
+    macro_rules! pack_as {
+        ($kind:ty) => {{
+            let scene = <$kind>::from_str_named(&text, &file).map_err(|e| e.to_string())?;
+            let about = About {
+                name: &scene.name,
+                description: &scene.description,
+                stop_time: scene.time.end_s,
+                step_size: scene.history_interval(),
+            };
+            pack_scene(&scene, &about, &text, out, version)
+        }};
+    }
+    if is_solid(&text) {
+        pack_as!(SolidScene)
+    } else {
+        pack_as!(Scene)
+    }
+}
+
+/// Write the FMU of `scene` (its text `text`) to `out`; returns the model identifier.
+fn pack_scene<S: FmuScene>(
+    scene: &S,
+    about: &About<'_>,
+    text: &str,
+    out: &Path,
+    version: Version,
+) -> Result<String, String> {
     let vars = match version {
-        Version::Fmi2 => variable_table(&scene),
-        Version::Fmi3 => variable_table3(&scene),
+        Version::Fmi2 => variable_table(scene),
+        Version::Fmi3 => variable_table3(scene),
     };
-    let id: String = scene
+    let id: String = about
         .name
         .chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
@@ -125,21 +164,21 @@ pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, S
         id
     };
     let header = xml::Header {
-        model_name: scene.name.clone(),
+        model_name: about.name.to_string(),
         model_identifier: id.clone(),
-        guid: xml::guid(&text),
-        description: scene.description.clone(),
-        stop_time: scene.time.end_s,
-        step_size: scene.history_interval(),
+        guid: xml::guid(text),
+        description: about.description.to_string(),
+        stop_time: about.stop_time,
+        step_size: about.step_size,
     };
     let (md, platform) = match version {
         Version::Fmi2 => (xml::write(&header, &vars)?, "linux64"),
         Version::Fmi3 => (
-            xml3::write(&header, &vars, time_value_reference(&scene))?,
+            xml3::write(&header, &vars, time_value_reference(scene))?,
             "x86_64-linux",
         ),
     };
-    let doc = documentation(&scene.name, &scene.description, &vars, version);
+    let doc = documentation(about.name, about.description, &vars, version);
     write_archive(
         out,
         &md,

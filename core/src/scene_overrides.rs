@@ -217,7 +217,7 @@ fn build<S: Overridable>(text: &str, file: &str, overrides: &[(String, Value)]) 
             file: file.to_string(),
             line: key_line(text, "model.kinematics").unwrap_or(0),
             key: "model.kinematics".into(),
-            message: "a 3D scene: `rkforge run` and `rkforge sweep` run it; the FMU, the Python package, the ROS node, `compare` and the SSP take 2D scenes for now (issue 36)".into(),
+            message: "a 3D scene: `rkforge run`, `rkforge sweep`, `rkforge fmu` and the Python package take it; the ROS node, `compare` and the SSP take 2D scenes for now (issue 36)".into(),
         });
     }
     if overrides.is_empty() {

@@ -13,7 +13,6 @@
 //! `hardening.law`: they change which keys exist) and `reference` (published figures, not
 //! used by the solver).
 
-use crate::scene::Scene;
 use serde_json::{Map, Value};
 
 /// What values a parameter takes.
@@ -44,9 +43,10 @@ pub struct Parameter {
     pub description: String,
 }
 
-/// The tunable keys of `scene`, sorted by key.
-pub fn parameters(scene: &Scene) -> Vec<Parameter> {
-    let schema = schemars::schema_for!(Scene);
+/// The tunable keys of `scene`, a 2D [`crate::Scene`] or a 3D
+/// [`crate::scene::SolidScene`], sorted by key.
+pub fn parameters<S: serde::Serialize + schemars::JsonSchema>(scene: &S) -> Vec<Parameter> {
+    let schema = schemars::schema_for!(S);
     let root = schema.as_value();
     let value = serde_json::to_value(scene).unwrap_or(Value::Null);
     let mut out = Vec::new();
@@ -250,6 +250,7 @@ impl Walk<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Scene;
 
     fn scene(name: &str) -> Scene {
         let path = format!("{}/../scenes/{name}", env!("CARGO_MANIFEST_DIR"));
@@ -341,19 +342,38 @@ mod tests {
             if path.extension().is_none_or(|e| e != "toml") {
                 continue;
             }
-            // The parameters are the 2D front ends' (FMU, Python); 3D scenes have none yet.
-            if crate::scene::solid::is_solid(&std::fs::read_to_string(&path).unwrap()) {
-                continue;
+            let text = std::fs::read_to_string(&path).unwrap();
+            let file = path.display().to_string();
+            if crate::scene::solid::is_solid(&text) {
+                let source = crate::SceneSource::<crate::scene::SolidScene>::of_text(
+                    &text,
+                    &file,
+                    Vec::new(),
+                )
+                .unwrap();
+                each_parameter_set_to_its_start(source, &file);
+            } else {
+                each_parameter_set_to_its_start(
+                    crate::SceneSource::from_file(&path).unwrap(),
+                    &file,
+                );
             }
-            let mut source = crate::SceneSource::from_file(&path).unwrap();
-            let params = parameters(source.scene());
-            assert!(params.len() > 10, "{}", path.display());
-            for p in &params {
-                source
-                    .set(&p.key, p.start.clone())
-                    .unwrap_or_else(|e| panic!("{}: {}: {e}", path.display(), p.key));
-            }
-            assert_eq!(parameters(source.scene()), params, "{}", path.display());
         }
+    }
+
+    fn each_parameter_set_to_its_start<
+        S: crate::scene_overrides::Overridable + schemars::JsonSchema + PartialEq,
+    >(
+        mut source: crate::SceneSource<S>,
+        file: &str,
+    ) {
+        let params = parameters(source.scene());
+        assert!(params.len() > 10, "{file}");
+        for p in &params {
+            source
+                .set(&p.key, p.start.clone())
+                .unwrap_or_else(|e| panic!("{file}: {}: {e}", p.key));
+        }
+        assert_eq!(parameters(source.scene()), params, "{file}");
     }
 }

@@ -1,16 +1,22 @@
 //! The FMU's instance in safe Rust: an explicit FMI state machine ([`Phase`]) over one
-//! scene, reading and writing variables through the scene's variable table (outputs from
-//! the register, [`rkforge_model_description::fmu_columns`]) and stepping its simulation on
-//! the run layer (`stepping.rs`), with the saved state of a rollback ([`Snapshot`]).
+//! scene, 2D or 3D, reading and writing variables through the scene's variable table
+//! (outputs from the register, [`rkforge_model_description::fmu_columns`]) and stepping its
+//! simulation (`stepping.rs`), with the saved state of a rollback ([`Snapshot`]). What
+//! depends on the kind of scene is a [`Model`] of its simulation ([`Forging`]), behind
+//! [`Plant`].
 
-use crate::stepping::{EarlyReturn, Observer, Stepper};
+use crate::stepping::{EarlyReturn, Forging, Observer, Stepper};
 use rkforge_core::outputs::{Column, Sample};
-use rkforge_core::scene_parameters::{parameters, Parameter};
-use rkforge_core::{Error, Result, Scene, SceneSource, Simulation, State};
+use rkforge_core::scene::solid::is_solid;
+use rkforge_core::scene_parameters::Parameter;
+use rkforge_core::solver::{SolidSimulation, SolidState};
+use rkforge_core::{Error, Result, SceneSource, Simulation, State};
 use rkforge_model_description::{
-    fmu_columns, variable_table3, xml, Binding, Causality, Kind, Variable,
+    fmu_columns, time_value_reference, variable_table3, xml, Binding, Causality, FmuScene, Kind,
+    Variable,
 };
 use serde::{Deserialize, Serialize};
+use std::any::Any;
 
 /// Where an instance is in the FMI 2.0 Co-Simulation state machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -34,15 +40,15 @@ pub type Params = Vec<Option<toml::Value>>;
 /// The value of a Real variable that the simulation answers (an input's current value, an
 /// output of the register, `columns` the FMU's [`fmu_columns`]), `None` for the other
 /// bindings.
-fn output_value(
+fn output_value<S: Forging>(
     binding: Binding,
-    sample: &Sample<'_>,
-    columns: &[Column],
+    sample: &Sample<'_, S>,
+    columns: &[Column<S>],
     commands: &[Option<f64>],
 ) -> Option<f64> {
     Some(match binding {
         Binding::ToolVelocity(k) => {
-            commands[k].unwrap_or_else(|| sample.tools()[k].velocity_at(sample.time()))
+            commands[k].unwrap_or_else(|| sample.velocity_at(k, sample.time_now()))
         }
         Binding::Output(k) => columns[k].value(sample),
         Binding::Parameter(_)
@@ -55,10 +61,10 @@ fn output_value(
 }
 
 /// The Float64 outputs of `table` now, by value reference (FMI 3.0 intermediate updates).
-fn outputs_of(
+fn outputs_of<S: Forging>(
     table: &[Variable],
-    sim: &Simulation,
-    columns: &[Column],
+    sim: &S,
+    columns: &[Column<S>],
     commands: &[Option<f64>],
 ) -> Vec<(u32, f64)> {
     let sample = Sample::new(sim);
@@ -72,6 +78,204 @@ fn outputs_of(
         .collect()
 }
 
+/// The scene text an instance was made of, with the values set on its parameters: what
+/// builds its simulation.
+struct Configured<'a> {
+    text: &'a str,
+    label: &'a str,
+    overrides: Vec<(String, toml::Value)>,
+    commands: &'a [Option<f64>],
+}
+
+/// The dotted keys of `parameters` with the values set on them (`params`, by index).
+fn overrides(parameters: &[Parameter], params: &Params) -> Vec<(String, toml::Value)> {
+    parameters
+        .iter()
+        .zip(params)
+        .filter_map(|(p, v)| Some((p.key.clone(), v.clone()?)))
+        .collect()
+}
+
+/// The host's intermediate updates during a step: `observe` gets the time (shifted by
+/// `start`, s) and the outputs of `table` after each solver step.
+struct Watch<'a> {
+    observe: Observer<'a>,
+    table: &'a [Variable],
+    commands: &'a [Option<f64>],
+    start: f64,
+}
+
+/// The part of an instance that depends on the kind of its scene ([`Model`]).
+trait Plant: Send {
+    /// Whether the scene with these overrides is valid.
+    fn check(&self, c: &Configured<'_>) -> Result<()>;
+    /// Build the simulation of the configured scene, its tools commanded.
+    fn build(&mut self, c: &Configured<'_>) -> Result<()>;
+    /// Drop the simulation (it is built again when needed).
+    fn clear(&mut self);
+    /// The simulation's time (s), once built.
+    fn time(&self) -> Option<f64>;
+    /// The simulation, once built.
+    fn simulation(&self) -> Option<&dyn Any>;
+    /// The value of a Real variable bound to `binding`, once built.
+    fn output(&self, binding: Binding, commands: &[Option<f64>]) -> Option<f64>;
+    /// Command tool `k`'s velocity (m/s), once built.
+    fn command(&mut self, k: usize, v: f64) -> Result<()>;
+    /// Step to `target` (s, the simulation's own time): [`Stepper::step_to`], reporting
+    /// to the host's `report`.
+    fn step_to(
+        &mut self,
+        target: f64,
+        armed: &[EarlyReturn],
+        early: bool,
+        report: Option<Watch<'_>>,
+    ) -> Result<bool>;
+    /// The contact pressure at tool `k`'s stations (Pa), once built.
+    fn contact_pressure(&self, k: usize) -> Option<Vec<f64>>;
+    /// Keep the simulation's state in `snapshot`.
+    fn save(&self, snapshot: &mut Snapshot);
+    /// Go on from the state `snapshot` keeps (none: drop the simulation), built anew from
+    /// `c` when the simulation has another discretisation.
+    fn restore(&mut self, snapshot: &Snapshot, c: &Configured<'_>) -> Result<()>;
+}
+
+/// The simulation of a scene of kind `S` and the register's columns its outputs read.
+struct Model<S: Forging> {
+    /// The register's columns the outputs read ([`Binding::Output`]).
+    columns: Vec<Column<S>>,
+    /// The simulation, once built.
+    sim: Option<Stepper<S>>,
+}
+
+impl<S: Forging> Model<S> {
+    fn scene(c: &Configured<'_>) -> Result<S::Scene> {
+        Ok(
+            SceneSource::<S::Scene>::of_text(c.text, c.label, c.overrides.clone())?
+                .scene()
+                .clone(),
+        )
+    }
+}
+
+impl<S: Forging> Plant for Model<S>
+where
+    Column<S>: Send,
+{
+    fn check(&self, c: &Configured<'_>) -> Result<()> {
+        Self::scene(c).map(|_| ())
+    }
+
+    fn build(&mut self, c: &Configured<'_>) -> Result<()> {
+        let mut sim = S::build(&Self::scene(c)?)?;
+        for (k, v) in c.commands.iter().enumerate() {
+            if let Some(v) = v {
+                sim.command(k, *v)?;
+            }
+        }
+        self.sim = Some(Stepper::new(sim));
+        Ok(())
+    }
+
+    fn clear(&mut self) {
+        self.sim = None;
+    }
+
+    fn time(&self) -> Option<f64> {
+        self.sim.as_ref().map(|s| s.sim().time_now())
+    }
+
+    fn simulation(&self) -> Option<&dyn Any> {
+        self.sim.as_ref().map(|s| s.sim() as &dyn Any)
+    }
+
+    fn output(&self, binding: Binding, commands: &[Option<f64>]) -> Option<f64> {
+        let sim = self.sim.as_ref()?.sim();
+        output_value(binding, &Sample::new(sim), &self.columns, commands)
+    }
+
+    fn command(&mut self, k: usize, v: f64) -> Result<()> {
+        match self.sim.as_mut() {
+            Some(s) => s.sim_mut().command(k, v),
+            None => Ok(()),
+        }
+    }
+
+    fn step_to(
+        &mut self,
+        target: f64,
+        armed: &[EarlyReturn],
+        early: bool,
+        report: Option<Watch<'_>>,
+    ) -> Result<bool> {
+        let columns = &self.columns;
+        let stepper = self
+            .sim
+            .as_mut()
+            .ok_or_else(|| request("not initialised".into()))?;
+        let mut report = report.map(|w| {
+            move |sim: &S| {
+                (w.observe)(
+                    w.start + sim.time_now(),
+                    &outputs_of(w.table, sim, columns, w.commands),
+                )
+            }
+        });
+        let report = report
+            .as_mut()
+            .map(|r| r as &mut (dyn FnMut(&S) -> bool + Send));
+        stepper.step_to(target, armed, early, report)
+    }
+
+    fn contact_pressure(&self, k: usize) -> Option<Vec<f64>> {
+        Some(self.sim.as_ref()?.sim().pressure(k))
+    }
+
+    fn save(&self, snapshot: &mut Snapshot) {
+        if let Some(s) = &self.sim {
+            S::put(s.sim().saved(), snapshot);
+        }
+    }
+
+    fn restore(&mut self, snapshot: &Snapshot, c: &Configured<'_>) -> Result<()> {
+        match S::take(snapshot) {
+            Some(state) => {
+                if self.sim.as_ref().is_none_or(|s| !s.sim().fits(state)) {
+                    self.build(c)?;
+                }
+                if let Some(s) = self.sim.as_mut() {
+                    s.sim_mut().restore_state(state.clone())?;
+                }
+            }
+            None => self.sim = None,
+        }
+        Ok(())
+    }
+}
+
+/// What an instance needs of its scene, of kind `S`: its plant, its FMI 3.0 variable
+/// table, its parameters, the value reference of `time` and its number of tools.
+type Made = (Box<dyn Plant>, Vec<Variable>, Vec<Parameter>, u32, usize);
+
+fn made<S: Forging>(text: &str, label: &str) -> Result<Made>
+where
+    Column<S>: Send,
+{
+    let scene = SceneSource::<S::Scene>::of_text(text, label, Vec::new())?
+        .scene()
+        .clone();
+    let model = Model::<S> {
+        columns: fmu_columns(&scene),
+        sim: None,
+    };
+    Ok((
+        Box::new(model),
+        variable_table3(&scene),
+        scene.tunable(),
+        time_value_reference(&scene),
+        scene.tool_motions().len(),
+    ))
+}
+
 /// A saved FMU state: everything needed to continue bit for bit, also in a fresh instance.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot {
@@ -80,7 +284,11 @@ pub struct Snapshot {
     params: Params,
     start_time: f64,
     commands: Vec<Option<f64>>,
-    state: Option<State>,
+    /// The state of a 2D simulation.
+    pub(crate) state: Option<State>,
+    /// The state of a 3D simulation (absent from a 2D FMU's serialized states).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) solid: Option<Box<SolidState>>,
 }
 
 /// One co-simulation instance.
@@ -88,18 +296,19 @@ pub struct Instance {
     /// The scene as packed, and its name in errors.
     text: String,
     label: String,
-    scene: Scene,
+    /// The scene's number of tools.
+    tools: usize,
     parameters: Vec<Parameter>,
     guid: String,
     /// The FMI 3.0 table (the 2.0 table and, after `time`, the early-return switches).
     table: Vec<Variable>,
-    /// The register's columns the outputs read ([`Binding::Output`]).
-    columns: Vec<Column>,
+    /// Value reference of FMI 3.0's `time`.
+    time_vr: u32,
     early: Vec<EarlyReturn>,
     params: Params,
     commands: Vec<Option<f64>>,
-    /// The simulation on the run layer, once built.
-    sim: Option<Stepper>,
+    /// The scene's simulation (2D or 3D) and the columns its outputs read.
+    model: Box<dyn Plant>,
     phase: Phase,
     start_time: f64,
 }
@@ -109,22 +318,26 @@ fn request(msg: String) -> Error {
 }
 
 impl Instance {
-    /// An instance of the scene given as TOML text; `label` names it in errors.
+    /// An instance of the scene given as TOML text, 2D or 3D (`model.kinematics = "3d"`);
+    /// `label` names it in errors.
     pub fn new(scene_text: &str, label: &str) -> Result<Instance> {
-        let scene = Scene::from_str_named(scene_text, label)?;
-        let parameters = parameters(&scene);
+        let (model, table, parameters, time_vr, tools) = if is_solid(scene_text) {
+            made::<SolidSimulation>(scene_text, label)?
+        } else {
+            made::<Simulation>(scene_text, label)?
+        };
         Ok(Instance {
             text: scene_text.to_string(),
             label: label.to_string(),
-            table: variable_table3(&scene),
-            columns: fmu_columns(&scene),
-            early: vec![EarlyReturn::default(); scene.tools.len()],
+            tools,
+            table,
+            time_vr,
+            early: vec![EarlyReturn::default(); tools],
             guid: xml::guid(scene_text),
-            commands: vec![None; scene.tools.len()],
+            commands: vec![None; tools],
             params: vec![None; parameters.len()],
             parameters,
-            scene,
-            sim: None,
+            model,
             phase: Phase::Instantiated,
             start_time: 0.0,
         })
@@ -136,7 +349,7 @@ impl Instance {
     }
     /// Value reference of FMI 3.0's independent variable `time`.
     pub fn time_value_reference(&self) -> u32 {
-        rkforge_model_description::time_value_reference(&self.scene)
+        self.time_vr
     }
     /// The variable table (FMI 3.0's: the 2.0 table, then the early-return switches).
     pub fn variables(&self) -> &[Variable] {
@@ -148,11 +361,15 @@ impl Instance {
     }
     /// Current time (s).
     pub fn time(&self) -> f64 {
-        self.start_time + self.simulation().map_or(0.0, Simulation::time)
+        self.start_time + self.model.time().unwrap_or(0.0)
     }
-    /// The simulation, once initialised.
+    /// The simulation of a 2D scene, once initialised.
     pub fn simulation(&self) -> Option<&Simulation> {
-        self.sim.as_ref().map(Stepper::sim)
+        self.model.simulation()?.downcast_ref()
+    }
+    /// The simulation of a 3D scene, once initialised.
+    pub fn solid_simulation(&self) -> Option<&SolidSimulation> {
+        self.model.simulation()?.downcast_ref()
     }
 
     fn variable(&self, vr: u32) -> Result<&Variable> {
@@ -162,15 +379,32 @@ impl Instance {
             .ok_or_else(|| request(format!("unknown value reference {vr}")))
     }
 
-    /// The scene with `params` applied, as `--set` applies dotted keys, and validated by
-    /// the scene's own rules: an error names the key.
-    fn scene_with(&self, params: &Params) -> Result<Scene> {
-        let overrides = self
-            .parameters
-            .iter()
-            .zip(params)
-            .filter_map(|(p, v)| Some((p.key.clone(), v.clone()?)))
-            .collect();
+    /// The scene text with `params` applied, as `--set` applies dotted keys (validated by
+    /// the scene's own rules when built: an error names the key).
+    fn configured_with<'a>(&'a self, params: &Params) -> Configured<'a> {
+        Configured {
+            text: &self.text,
+            label: &self.label,
+            overrides: overrides(&self.parameters, params),
+            commands: &self.commands,
+        }
+    }
+
+    /// Run `f` on the model with the scene as configured now.
+    fn on_model<R>(&mut self, f: impl FnOnce(&mut dyn Plant, &Configured<'_>) -> R) -> R {
+        let c = Configured {
+            text: &self.text,
+            label: &self.label,
+            overrides: overrides(&self.parameters, &self.params),
+            commands: &self.commands,
+        };
+        f(self.model.as_mut(), &c)
+    }
+
+    /// The 2D scene with the current parameters applied.
+    #[cfg(test)]
+    fn configured_scene(&self) -> Result<rkforge_core::Scene> {
+        let overrides = overrides(&self.parameters, &self.params);
         Ok(
             SceneSource::with_overrides(&self.text, &self.label, overrides)?
                 .scene()
@@ -178,19 +412,15 @@ impl Instance {
         )
     }
 
-    /// The scene with the current parameters applied.
-    fn configured_scene(&self) -> Result<Scene> {
-        self.scene_with(&self.params)
-    }
-
     /// Set parameter `k` (the variable `v`) to `value` if the scene it gives is valid.
     fn set_parameter(&mut self, v: &Variable, k: usize, value: toml::Value) -> Result<()> {
         let mut params = self.params.clone();
         params[k] = Some(value.clone());
-        self.scene_with(&params)
+        self.model
+            .check(&self.configured_with(&params))
             .map_err(|e| request(format!("`{}` = {value}: {e}", v.name)))?;
         self.params = params;
-        self.sim = None;
+        self.model.clear();
         Ok(())
     }
 
@@ -200,14 +430,7 @@ impl Instance {
     }
 
     fn build(&mut self) -> Result<()> {
-        let mut sim = Simulation::new(&self.configured_scene()?)?;
-        for (k, c) in self.commands.iter().enumerate() {
-            if let Some(v) = c {
-                sim.set_tool_velocity(k, *v)?;
-            }
-        }
-        self.sim = Some(Stepper::new(sim));
-        Ok(())
+        self.on_model(|m, c| m.build(c))
     }
 
     fn expect(&self, allowed: &[Phase], what: &str) -> Result<()> {
@@ -241,7 +464,7 @@ impl Instance {
     /// `fmi2ExitInitializationMode`: builds the discretisation with the parameters set.
     pub fn exit_initialization(&mut self) -> Result<()> {
         self.expect(&[Phase::Initialization], "fmi2ExitInitializationMode")?;
-        if self.sim.is_none() {
+        if self.model.time().is_none() {
             self.build()?;
         }
         self.phase = Phase::Stepping;
@@ -258,15 +481,15 @@ impl Instance {
     /// `fmi2Reset`: back to the freshly instantiated state with the scene's own values.
     pub fn reset(&mut self) {
         self.params = vec![None; self.parameters.len()];
-        self.commands = vec![None; self.scene.tools.len()];
-        self.early = vec![EarlyReturn::default(); self.scene.tools.len()];
-        self.sim = None;
+        self.commands = vec![None; self.tools];
+        self.early = vec![EarlyReturn::default(); self.tools];
+        self.model.clear();
         self.phase = Phase::Instantiated;
         self.start_time = 0.0;
     }
 
     /// Outputs are read from a simulation; during initialisation one is built on demand.
-    fn readable_sim(&mut self) -> Result<&Simulation> {
+    fn readable(&mut self) -> Result<()> {
         self.expect(
             &[
                 Phase::Initialization,
@@ -276,11 +499,10 @@ impl Instance {
             ],
             "reading a variable",
         )?;
-        if self.sim.is_none() {
+        if self.model.time().is_none() {
             self.build()?;
         }
-        self.simulation()
-            .ok_or_else(|| request("no simulation".into()))
+        Ok(())
     }
 
     /// `fmi2GetReal`.
@@ -297,11 +519,9 @@ impl Instance {
                 ))),
             };
         }
-        self.readable_sim()?;
-        let sim = self
-            .simulation()
-            .ok_or_else(|| request("no simulation".into()))?;
-        output_value(binding, &Sample::new(sim), &self.columns, &self.commands)
+        self.readable()?;
+        self.model
+            .output(binding, &self.commands)
             .ok_or_else(|| request(format!("value reference {vr} is not a Real variable")))
     }
 
@@ -370,10 +590,7 @@ impl Instance {
         match (v.binding, &v.kind) {
             (Binding::ToolVelocity(k), _) => {
                 self.commands[k] = Some(value);
-                if let Some(sim) = self.sim.as_mut() {
-                    sim.sim_mut().set_tool_velocity(k, value)?;
-                }
-                Ok(())
+                self.model.command(k, value)
             }
             (Binding::Parameter(k), Kind::Real(_)) => {
                 self.set_parameter(&v, k, toml::Value::Float(value))
@@ -462,25 +679,15 @@ impl Instance {
         }
         let target = now - self.start_time + h;
         let armed: Vec<EarlyReturn> = self.early.iter().map(|e| e.armed(early)).collect();
-        let (table, columns, commands) = (&self.table, &self.columns, &self.commands);
         let start = self.start_time;
-        let stepper = self
-            .sim
-            .as_mut()
-            .ok_or_else(|| request("not initialised".into()))?;
-        let mut report = observe.map(|o| {
-            move |sim: &Simulation| {
-                o(
-                    start + sim.time(),
-                    &outputs_of(table, sim, columns, commands),
-                )
-            }
+        let report = observe.map(|observe| Watch {
+            observe,
+            table: &self.table,
+            commands: &self.commands,
+            start,
         });
-        let report = report
-            .as_mut()
-            .map(|r| r as &mut (dyn FnMut(&Simulation) -> bool + Send));
-        match stepper.step_to(target, &armed, early, report) {
-            Ok(true) => Ok(Some(start + stepper.sim().time())),
+        match self.model.step_to(target, &armed, early, report) {
+            Ok(true) => Ok(Some(self.time())),
             Ok(false) => Ok(None),
             Err(e) => {
                 self.phase = Phase::Failed;
@@ -500,7 +707,12 @@ impl Instance {
     /// `fmi3GetFloat64` of an array variable: the contact pressure at a tool's stations (Pa).
     pub fn get_real_array(&mut self, vr: u32) -> Result<Vec<f64>> {
         match self.variable(vr)?.binding {
-            Binding::ContactPressure(k) => Ok(self.readable_sim()?.contact_pressure(k)),
+            Binding::ContactPressure(k) => {
+                self.readable()?;
+                self.model
+                    .contact_pressure(k)
+                    .ok_or_else(|| request("no simulation".into()))
+            }
             _ => Err(request(format!("value reference {vr} is not an array"))),
         }
     }
@@ -530,14 +742,17 @@ impl Instance {
 
     /// `fmi2GetFMUstate`.
     pub fn snapshot(&self) -> Snapshot {
-        Snapshot {
+        let mut s = Snapshot {
             guid: self.guid.clone(),
             phase: self.phase,
             params: self.params.clone(),
             start_time: self.start_time,
             commands: self.commands.clone(),
-            state: self.simulation().map(|s| s.state().clone()),
-        }
+            state: None,
+            solid: None,
+        };
+        self.model.save(&mut s);
+        s
     }
 
     /// `fmi2SetFMUstate`: restores a snapshot of an instance of the same scene.
@@ -550,21 +765,7 @@ impl Instance {
         self.params = s.params.clone();
         self.commands = s.commands.clone();
         self.start_time = s.start_time;
-        match &s.state {
-            Some(state) => {
-                if self
-                    .simulation()
-                    .is_none_or(|sim| sim.state().d.len() != state.d.len())
-                {
-                    self.sim = None;
-                    self.build()?;
-                }
-                if let Some(sim) = self.sim.as_mut() {
-                    sim.sim_mut().restore(state.clone())?;
-                }
-            }
-            None => self.sim = None,
-        }
+        self.on_model(|m, c| m.restore(s, c))?;
         self.phase = s.phase;
         Ok(())
     }
@@ -585,21 +786,33 @@ impl Snapshot {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rkforge_core::Scene;
 
-    fn scene_text() -> String {
-        include_str!("../../scenes/taylor_bar.toml")
-            .replace("particles = [21, 51]", "particles = [7, 15]")
-            .replace(
-                "motion = { kind = \"fixed\" }",
-                "motion = { kind = \"external\" }",
-            )
+    /// A scene's text with its fixed tools commanded from outside.
+    fn external(text: String) -> String {
+        text.replace(
+            "motion = { kind = \"fixed\" }",
+            "motion = { kind = \"external\" }",
+        )
     }
 
-    fn ready() -> Instance {
-        let mut i = Instance::new(&scene_text(), "t").unwrap();
+    fn scene_text() -> String {
+        external(
+            include_str!("../../scenes/taylor_bar.toml")
+                .replace("particles = [21, 51]", "particles = [7, 15]"),
+        )
+    }
+
+    /// An instance of `text`, initialised.
+    fn initialised(text: &str) -> Instance {
+        let mut i = Instance::new(text, "t").unwrap();
         i.enter_initialization().unwrap();
         i.exit_initialization().unwrap();
         i
+    }
+
+    fn ready() -> Instance {
+        initialised(&scene_text())
     }
 
     fn vr(i: &Instance, n: &str) -> u32 {
@@ -671,15 +884,23 @@ mod tests {
 
     #[test]
     fn snapshot_round_trip_continues_bit_for_bit() {
-        let mut a = ready();
+        continues_bit_for_bit(ready(), &scene_text());
+    }
+
+    /// `a`, an initialised instance of the scene `text`, steps, saves its serialized state
+    /// and steps on; a fresh instance restoring the state and taking the same step ends in
+    /// the same bits. Returns the serialized state.
+    fn continues_bit_for_bit(mut a: Instance, text: &str) -> Vec<u8> {
         let h = 1e-6;
         a.do_step(0.0, h).unwrap();
         let bytes = a.snapshot().to_bytes();
         a.do_step(h, h).unwrap();
-        let mut b = Instance::new(&scene_text(), "t").unwrap();
+        let mut b = Instance::new(text, "t").unwrap();
         b.restore(&Snapshot::from_bytes(&bytes).unwrap()).unwrap();
         b.do_step(h, h).unwrap();
         assert_eq!(a.snapshot(), b.snapshot());
+        assert_eq!(a.snapshot().to_bytes(), b.snapshot().to_bytes());
+        bytes
     }
 
     #[test]
@@ -753,5 +974,115 @@ mod tests {
             .variables()
             .iter()
             .any(|v| v.name.starts_with("time.mass_scaling")));
+    }
+
+    /// The Taylor bar in 3D, coarse and short, its wall commanded from outside.
+    fn solid_text() -> String {
+        external(
+            include_str!("../../scenes/taylor_bar_3d.toml")
+                .replace("cells = [8, 4, 60]", "cells = [2, 1, 8]")
+                .replace("end_s = 80.0e-6", "end_s = 10.0e-6"),
+        )
+    }
+
+    fn solid_ready() -> Instance {
+        initialised(&solid_text())
+    }
+
+    /// A 3D scene gives the 2D interface: the wall's velocity input, the 3D register's
+    /// outputs under their history names, the scene's own keys as parameters, no
+    /// contact-pressure arrays; stepping moves the wall and the bar pushes it.
+    #[test]
+    fn a_3d_scene_steps_with_the_same_interface() {
+        let mut i = solid_ready();
+        assert!(i.simulation().is_none() && i.solid_simulation().is_some());
+        let names: Vec<&str> = i.variables().iter().map(|v| v.name.as_str()).collect();
+        for n in [
+            "wall.velocity_m_per_s",
+            "wall.force_N",
+            "wall.stroke_m",
+            "workpiece.height_m",
+            "energy.kinetic_J",
+            "workpiece.cells[2]",
+            "discretization.integration",
+            "wall.early_return.contact",
+        ] {
+            assert!(names.contains(&n), "{n} in {names:?}");
+        }
+        assert!(!names.iter().any(|n| n.contains("contact_pressure")));
+        let (vel, stroke, force, height) = (
+            vr(&i, "wall.velocity_m_per_s"),
+            vr(&i, "wall.stroke_m"),
+            vr(&i, "wall.force_N"),
+            vr(&i, "workpiece.height_m"),
+        );
+        let h0 = i.get_real(height).unwrap();
+        assert!((h0 - 0.0324).abs() < 1e-12, "{h0}");
+        i.set_real(vel, 2.0).unwrap();
+        let h = 1e-6;
+        for k in 0..3 {
+            i.do_step(k as f64 * h, h).unwrap();
+        }
+        assert!((i.time() - 3e-6).abs() < 1e-15);
+        assert!((i.get_real(stroke).unwrap() - 2.0 * 3e-6).abs() < 1e-15);
+        assert_eq!(i.get_real(vel).unwrap(), 2.0);
+        // The bar hits the wall: it pushes it along -axis (the axis points down, -z).
+        assert!(i.get_real(force).unwrap().abs() > 1e3);
+        assert!(i.get_real(height).unwrap() < h0);
+        let f = i.get_real(force).unwrap();
+        let sim = i.solid_simulation().unwrap();
+        assert_eq!(f.to_bits(), sim.tools()[0].axial_force().to_bits());
+    }
+
+    /// Early return on contact in 3D: the bar lies on the wall, so the first solver step
+    /// that presses on it ends the step.
+    #[test]
+    fn a_3d_step_returns_early_at_the_first_touch() {
+        let mut i = Instance::new(&solid_text(), "t3").unwrap();
+        i.set_boolean(vr(&i, "wall.early_return.contact"), true)
+            .unwrap();
+        i.enter_initialization().unwrap();
+        i.exit_initialization().unwrap();
+        let h = 1e-6;
+        let back = i.do_step_early(0.0, h).unwrap().expect("an early return");
+        assert!(back > 0.0 && back < h, "{back}");
+        assert!(i.solid_simulation().unwrap().tools()[0].state.normal_force != 0.0);
+        assert_eq!(i.do_step_early(back, h).unwrap(), None);
+    }
+
+    #[test]
+    fn a_3d_snapshot_round_trip_continues_bit_for_bit() {
+        let mut a = solid_ready();
+        a.set_real(vr(&a, "wall.velocity_m_per_s"), -1.0).unwrap();
+        let bytes = continues_bit_for_bit(a, &solid_text());
+        // A 2D instance takes no 3D state.
+        let mut plane = Instance::new(&scene_text(), "t").unwrap();
+        assert!(plane
+            .restore(&Snapshot::from_bytes(&bytes).unwrap())
+            .is_err());
+    }
+
+    /// A 3D scene's keys are parameters, validated by the 3D scene's rules.
+    #[test]
+    fn a_3d_scenes_parameters_change_its_discretisation() {
+        let mut i = Instance::new(&solid_text(), "t3").unwrap();
+        let cells = vr(&i, "workpiece.cells[2]");
+        assert_eq!(i.get_integer(cells).unwrap(), 8);
+        i.set_integer(cells, 6).unwrap();
+        let err = i
+            .set_real(vr(&i, "material.poisson_ratio"), 0.7)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("`material.poisson_ratio`"), "{err}");
+        i.enter_initialization().unwrap();
+        i.exit_initialization().unwrap();
+        let coarse = solid_ready();
+        let (a, b) = (
+            coarse.solid_simulation().unwrap(),
+            i.solid_simulation().unwrap(),
+        );
+        assert!(b.particle_count() < a.particle_count());
+        i.reset();
+        assert_eq!(i.get_integer(cells).unwrap(), 8);
     }
 }

@@ -1,11 +1,115 @@
-//! The instance's simulation on the run layer: a communication step is a
+//! The instance's simulation, of either kind ([`Forging`]: the 2D [`Simulation`], the 3D
+//! [`SolidSimulation`]), on the run layer: a communication step is a
 //! [`rkforge_runner::Run`] advanced to one mark, the communication point, as the command
 //! line, the Python package and the ROS node step theirs (the last solver step shortened to
 //! land on it). Between solver steps, the hook ends the step early at an armed event (FMI
 //! 3.0 early return) and reports the step to the host (FMI 3.0 intermediate update).
 
-use rkforge_core::{Result, Simulation};
-use rkforge_runner::{Mark, Run, Until};
+use crate::instance::Snapshot;
+use rkforge_core::scene::SolidScene;
+use rkforge_core::scene_overrides::Overridable;
+use rkforge_core::solver::{SolidSimulation, SolidState};
+use rkforge_core::{Result, Scene, Simulation, State};
+use rkforge_model_description::FmuScene;
+use rkforge_runner::{Mark, Run, Runnable, Until};
+
+/// A simulation an FMU steps: what the instance reads, commands and saves of either kind.
+pub(crate) trait Forging: Runnable {
+    /// Its scene.
+    type Scene: FmuScene<Body = Self> + Overridable + Clone;
+    /// Everything that changes during a run (what an FMU state saves).
+    type State: Clone;
+    /// Set up the simulation of `scene`.
+    fn build(scene: &Self::Scene) -> Result<Self>;
+    /// Whether tool `k` touches the workpiece.
+    fn touches(&self, k: usize) -> bool;
+    /// Tool `k`'s force along its axis (N).
+    fn axial_force(&self, k: usize) -> f64;
+    /// Tool `k`'s velocity along its axis at time `t` (s): its command, else its motion's.
+    fn velocity_at(&self, k: usize, t: f64) -> f64;
+    /// Command tool `k`'s velocity (m/s).
+    fn command(&mut self, k: usize, v: f64) -> Result<()>;
+    /// The state.
+    fn saved(&self) -> &Self::State;
+    /// Whether `state` has this simulation's discretisation.
+    fn fits(&self, state: &Self::State) -> bool;
+    /// Go on from `state`.
+    fn restore_state(&mut self, state: Self::State) -> Result<()>;
+    /// The contact pressure at tool `k`'s stations (Pa); none in 3D.
+    fn pressure(&self, k: usize) -> Vec<f64>;
+    /// Keep `state` in a snapshot.
+    fn put(state: &Self::State, snapshot: &mut Snapshot);
+    /// The state a snapshot keeps of this kind.
+    fn take(snapshot: &Snapshot) -> Option<&Self::State>;
+}
+
+/// The methods of [`Forging`] that both simulations answer with their own inherent methods
+/// of the same names.
+macro_rules! shared {
+    () => {
+        fn axial_force(&self, k: usize) -> f64 {
+            self.tools()[k].axial_force()
+        }
+        fn velocity_at(&self, k: usize, t: f64) -> f64 {
+            self.tools()[k].velocity_at(t)
+        }
+        fn command(&mut self, k: usize, v: f64) -> Result<()> {
+            self.set_tool_velocity(k, v)
+        }
+        fn saved(&self) -> &Self::State {
+            self.state()
+        }
+        fn fits(&self, state: &Self::State) -> bool {
+            self.state().d.len() == state.d.len()
+        }
+        fn restore_state(&mut self, state: Self::State) -> Result<()> {
+            self.restore(state)
+        }
+    };
+}
+
+impl Forging for Simulation {
+    type Scene = Scene;
+    type State = State;
+    fn build(scene: &Scene) -> Result<Simulation> {
+        Simulation::new(scene)
+    }
+    shared!();
+    fn touches(&self, k: usize) -> bool {
+        self.contact_fraction(k) > 0.0
+    }
+    fn pressure(&self, k: usize) -> Vec<f64> {
+        self.contact_pressure(k)
+    }
+    fn put(state: &State, snapshot: &mut Snapshot) {
+        snapshot.state = Some(state.clone());
+    }
+    fn take(snapshot: &Snapshot) -> Option<&State> {
+        snapshot.state.as_ref()
+    }
+}
+
+impl Forging for SolidSimulation {
+    type Scene = SolidScene;
+    type State = SolidState;
+    fn build(scene: &SolidScene) -> Result<SolidSimulation> {
+        SolidSimulation::new(scene)
+    }
+    shared!();
+    /// A plane tool touches when the workpiece presses on it.
+    fn touches(&self, k: usize) -> bool {
+        self.tools()[k].state.normal_force != 0.0
+    }
+    fn pressure(&self, _k: usize) -> Vec<f64> {
+        Vec::new()
+    }
+    fn put(state: &SolidState, snapshot: &mut Snapshot) {
+        snapshot.solid = Some(Box::new(state.clone()));
+    }
+    fn take(snapshot: &Snapshot) -> Option<&SolidState> {
+        snapshot.solid.as_deref()
+    }
+}
 
 /// The early-return events of one tool (FMI 3.0 `fmi3DoStep`).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -31,16 +135,11 @@ impl EarlyReturn {
 
 /// Whether tool `k` touches the workpiece, and whether its force magnitude has reached its
 /// early-return level: the states whose rise ends a step early.
-fn event_states(sim: &Simulation, early: &[EarlyReturn]) -> Vec<(bool, bool)> {
+fn event_states<S: Forging>(sim: &S, early: &[EarlyReturn]) -> Vec<(bool, bool)> {
     early
         .iter()
         .enumerate()
-        .map(|(k, e)| {
-            (
-                sim.contact_fraction(k) > 0.0,
-                sim.tools()[k].axial_force().abs() >= e.level,
-            )
-        })
+        .map(|(k, e)| (sim.touches(k), sim.axial_force(k).abs() >= e.level))
         .collect()
 }
 
@@ -51,28 +150,28 @@ pub type Observer<'a> = &'a mut (dyn FnMut(f64, &[(u32, f64)]) -> bool + Send);
 
 /// A report to the host after a solver step: called with the simulation, it returns true
 /// when the host asks the step to return there.
-pub(crate) type Report<'a> = &'a mut (dyn FnMut(&Simulation) -> bool + Send);
+pub(crate) type Report<'a, S> = &'a mut (dyn FnMut(&S) -> bool + Send);
 
 /// A simulation and the run that steps it.
-pub(crate) struct Stepper {
-    sim: Simulation,
-    run: Run,
+pub(crate) struct Stepper<S: Forging> {
+    sim: S,
+    run: Run<S>,
 }
 
-impl Stepper {
+impl<S: Forging> Stepper<S> {
     /// `sim` on a run with no mark yet: each step names its own.
-    pub(crate) fn new(sim: Simulation) -> Stepper {
+    pub(crate) fn new(sim: S) -> Stepper<S> {
         let run = Run::new(&sim, Vec::new());
         Stepper { sim, run }
     }
 
     /// The simulation.
-    pub(crate) fn sim(&self) -> &Simulation {
+    pub(crate) fn sim(&self) -> &S {
         &self.sim
     }
 
     /// The simulation, to command or restore.
-    pub(crate) fn sim_mut(&mut self) -> &mut Simulation {
+    pub(crate) fn sim_mut(&mut self) -> &mut S {
         &mut self.sim
     }
 
@@ -89,7 +188,7 @@ impl Stepper {
         target: f64,
         events: &[EarlyReturn],
         early: bool,
-        mut report: Option<Report<'_>>,
+        mut report: Option<Report<'_, S>>,
     ) -> Result<bool> {
         let any_armed = events.iter().any(|e| e.contact || e.force);
         let mut before = if any_armed {
@@ -109,7 +208,7 @@ impl Stepper {
                     return true;
                 }
                 if any_armed {
-                    let now = event_states(sim, events);
+                    let now = event_states(&*sim, events);
                     let fired = events
                         .iter()
                         .zip(before.iter().zip(&now))

@@ -16,9 +16,73 @@ pub mod press;
 pub mod xml;
 pub mod xml3;
 
-use rkforge_core::outputs::{columns, Column};
-use rkforge_core::scene::{Motion, Scene};
-use rkforge_core::scene_parameters::{parameters, ParameterKind};
+use rkforge_core::outputs::{columns, solid_columns, Body, Column};
+use rkforge_core::scene::{Motion, Scene, SolidScene};
+use rkforge_core::scene_parameters::{parameters, Parameter, ParameterKind};
+use rkforge_core::solver::SolidSimulation;
+use rkforge_core::Simulation;
+
+/// A scene an FMU is made of: a 2D [`Scene`] or a 3D [`SolidScene`], what the table reads
+/// of either kind.
+pub trait FmuScene {
+    /// The simulation whose register the outputs read.
+    type Body: Body;
+    /// Each tool's name and motion, in scene order (the tools' index `k`).
+    fn tool_motions(&self) -> Vec<(&str, &Motion)>;
+    /// Every column of the scene's register.
+    fn register(&self) -> Vec<Column<Self::Body>>;
+    /// A column's description with its tool's or face's name put in.
+    fn describe(&self, column: &Column<Self::Body>) -> String;
+    /// The scene's tunable keys ([`rkforge_core::scene_parameters::parameters`]).
+    fn tunable(&self) -> Vec<Parameter>;
+    /// The stations of the contact-pressure arrays (FMI 3.0), if the scene asks for them.
+    fn pressure_stations(&self) -> Option<usize>;
+}
+
+impl FmuScene for Scene {
+    type Body = Simulation;
+    fn tool_motions(&self) -> Vec<(&str, &Motion)> {
+        self.tools
+            .iter()
+            .map(|t| (t.name.as_str(), &t.motion))
+            .collect()
+    }
+    fn register(&self) -> Vec<Column> {
+        columns(self)
+    }
+    fn describe(&self, column: &Column) -> String {
+        column.description(self)
+    }
+    fn tunable(&self) -> Vec<Parameter> {
+        parameters(self)
+    }
+    fn pressure_stations(&self) -> Option<usize> {
+        self.output.pressure_stations
+    }
+}
+
+impl FmuScene for SolidScene {
+    type Body = SolidSimulation;
+    fn tool_motions(&self) -> Vec<(&str, &Motion)> {
+        self.tools
+            .iter()
+            .map(|t| (t.name.as_str(), &t.motion))
+            .collect()
+    }
+    fn register(&self) -> Vec<Column<SolidSimulation>> {
+        solid_columns(self)
+    }
+    fn describe(&self, column: &Column<SolidSimulation>) -> String {
+        column.description(self)
+    }
+    fn tunable(&self) -> Vec<Parameter> {
+        parameters(self)
+    }
+    /// A 3D scene has no contact-pressure arrays.
+    fn pressure_stations(&self) -> Option<usize> {
+        None
+    }
+}
 
 /// FMI 2.0 causality.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -112,8 +176,9 @@ impl Variable {
     }
 }
 
-/// The variable table of a scene.
-pub fn variable_table(scene: &Scene) -> Vec<Variable> {
+/// The variable table of a scene, 2D or 3D.
+pub fn variable_table<S: FmuScene>(scene: &S) -> Vec<Variable> {
+    let columns = fmu_columns(scene);
     let mut t = Vec::new();
     let mut push =
         |name: String, causality, variability, kind, unit, description: String, binding| {
@@ -131,8 +196,8 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
         };
     use Causality::*;
     use Variability::*;
-    for (k, tool) in scene.tools.iter().enumerate() {
-        let start = match &tool.motion {
+    for (k, (name, motion)) in scene.tool_motions().into_iter().enumerate() {
+        let start = match motion {
             Motion::Fixed => None,
             Motion::Constant { velocity_m_per_s } => Some(*velocity_m_per_s),
             Motion::Table { points } => Some(points[0][1]),
@@ -142,29 +207,31 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
         };
         if let Some(v) = start {
             push(
-                format!("{}.velocity_m_per_s", tool.name),
+                format!("{name}.velocity_m_per_s"),
                 Input,
                 Continuous,
                 Kind::Real(Some(v)),
                 Some("m/s"),
-                format!("velocity of tool {} along its axis", tool.name),
+                format!("velocity of tool {name} along its axis"),
                 Binding::ToolVelocity(k),
             );
         }
     }
-    for (k, c) in fmu_columns(scene).iter().enumerate() {
+    for (k, c) in columns.iter().enumerate() {
         push(
             c.name.clone(),
             Output,
             Continuous,
             Kind::Real(None),
             (c.unit() != "1").then(|| c.unit()),
-            c.description(scene),
+            scene.describe(c),
             Binding::Output(k),
         );
     }
-    for (k, p) in parameters(scene).into_iter().enumerate() {
-        if writes_files_only(&p.key) {
+    for (k, p) in scene.tunable().into_iter().enumerate() {
+        // A key an output is named after (a 3D cylinder's `workpiece.radius_m`, the
+        // output being the bar's radius now) is no parameter: names are unique.
+        if writes_files_only(&p.key) || columns.iter().any(|c| c.name == p.key) {
             continue;
         }
         let kind = match (&p.kind, &p.start) {
@@ -197,28 +264,29 @@ pub fn variable_table(scene: &Scene) -> Vec<Variable> {
 
 /// The register's columns of `scene` that the FMU shows ([`rkforge_core::outputs::Shown::fmu`]),
 /// in register order: what [`Binding::Output`] indexes.
-pub fn fmu_columns(scene: &Scene) -> Vec<Column> {
-    columns(scene)
+pub fn fmu_columns<S: FmuScene>(scene: &S) -> Vec<Column<S::Body>> {
+    scene
+        .register()
         .into_iter()
         .filter(|c| c.output.shown.fmu)
         .collect()
 }
 
 /// Value reference of FMI 3.0's independent variable `time`: the one after the 2.0 table's.
-pub fn time_value_reference(scene: &Scene) -> u32 {
+pub fn time_value_reference<S: FmuScene>(scene: &S) -> u32 {
     variable_table(scene).len() as u32
 }
 
 /// The FMI 3.0 table: the 2.0 table (same value references), then, after `time`, per tool
 /// the early-return events of `fmi3DoStep` as parameters: `<tool>.early_return.contact`
 /// (Boolean), `<tool>.early_return.force` (Boolean) and `<tool>.early_return.force_level`
-/// (N); with `output.pressure_stations`, per tool the array output
+/// (N); with `output.pressure_stations` (2D), per tool the array output
 /// `<tool>.contact_pressure` (Pa, one value per station).
-pub fn variable_table3(scene: &Scene) -> Vec<Variable> {
+pub fn variable_table3<S: FmuScene>(scene: &S) -> Vec<Variable> {
     let mut t = variable_table(scene);
     let mut vr = time_value_reference(scene);
-    for (k, tool) in scene.tools.iter().enumerate() {
-        let name = &tool.name;
+    let tools = scene.tool_motions();
+    for (k, (name, _)) in tools.iter().enumerate() {
         let rows = [
             (
                 "contact",
@@ -256,19 +324,18 @@ pub fn variable_table3(scene: &Scene) -> Vec<Variable> {
             });
         }
     }
-    if let Some(n) = scene.output.pressure_stations {
-        for (k, tool) in scene.tools.iter().enumerate() {
+    if let Some(n) = scene.pressure_stations() {
+        for (k, (name, _)) in tools.iter().enumerate() {
             vr += 1;
             t.push(Variable {
-                name: format!("{}.contact_pressure_Pa", tool.name),
+                name: format!("{name}.contact_pressure_Pa"),
                 value_reference: vr,
                 causality: Causality::Output,
                 variability: Variability::Continuous,
                 kind: Kind::RealArray(n),
                 unit: Some("Pa"),
                 description: format!(
-                    "contact pressure along tool {}: its polyline in {n} stations of equal length from its first point, the normal contact force on each over its area",
-                    tool.name
+                    "contact pressure along tool {name}: its polyline in {n} stations of equal length from its first point, the normal contact force on each over its area"
                 ),
                 binding: Binding::ContactPressure(k),
             });
@@ -397,5 +464,29 @@ mod tests {
         assert!(t.iter().any(|v| v.name == "workpiece.radius_m"));
         assert!(t.iter().any(|v| v.name == "time.end_s"));
         assert!(!t.iter().any(|v| v.name == "output.frames"));
+    }
+
+    /// A 3D scene's table: the 2D interface over the 3D register and scene, names unique
+    /// (the cylinder's `workpiece.radius_m` key gives way to the output of that name).
+    #[test]
+    fn a_3d_scene_has_the_2d_interface_and_unique_names() {
+        let s = SolidScene::from_str_named(
+            include_str!("../../scenes/taylor_bar_3d.toml"),
+            "taylor_bar_3d.toml",
+        )
+        .unwrap();
+        let t = variable_table3(&s);
+        let mut names: Vec<_> = t.iter().map(|v| v.name.clone()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), t.len());
+        let find = |n: &str| t.iter().find(|v| v.name == n).unwrap();
+        assert_eq!(find("workpiece.radius_m").causality, Causality::Output);
+        assert_eq!(find("wall.force_z_N").unit, Some("N"));
+        assert_eq!(find("workpiece.cells[2]").kind, Kind::Integer(Some(60)));
+        assert_eq!(find("workpiece.length_m").causality, Causality::Parameter);
+        assert!(!t.iter().any(|v| v.causality == Causality::Input));
+        assert!(!t.iter().any(|v| matches!(v.kind, Kind::RealArray(_))));
+        assert_eq!(time_value_reference(&s), variable_table(&s).len() as u32);
     }
 }
