@@ -169,13 +169,13 @@ def test_sweep_of_a_3d_scene_takes_q4_and_q2_by_default(rkforge_bin, tmp_path):
         capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr
     with open(out / "sweep.csv") as f:
-        assert [r["integration"] for r in csv.DictReader(f)] == ["q4", "q2"]
+        assert [r["integration"] for r in csv.DictReader(f)] == ["q4", "q2", "scni"]
 
 
 @pytest.mark.parametrize("scene, args, expected", [
     (BAR_3D, ["--resolution", "8x60"], ["--resolution `8x60`", "three numbers", "8x4x60"]),
     (BAR_3D, ["--resolution", "7x4x60"], ["--resolution `7x4x60`", "workpiece.cells"]),
-    (BAR_3D, ["--integration", "q2,scni"], ["--integration `scni`", "this 3D scene integrates with q4 or q2"]),
+    (BAR_3D, ["--integration", "q2,q3"], ["--integration `q3`", "expected q4, q2 or scni"]),
     (BAR_3D, ["--set", "discretization.support=2,9"], ["discretization.support"]),
     (str(ROOT / "scenes" / "taylor_bar.toml"), ["--resolution", "21x51x3"],
      ["--resolution `21x51x3`", "NXxNY"]),

@@ -63,8 +63,8 @@ def test_a_study_of_3d_cases_gives_a_row_each():
 
 def test_bad_3d_input_is_a_python_error():
     s = scene()
-    with pytest.raises(ValueError, match="scni"):
-        rkforge.Simulation(s, integration="scni")
+    with pytest.raises(ValueError, match="integration `q8`"):
+        rkforge.Simulation(s, integration="q8")
     with pytest.raises(rkforge.SceneError, match="workpiece.cells"):
         s.set("workpiece.cells", [3, 2, 16])
     sim = rkforge.Simulation(s)

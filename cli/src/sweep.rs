@@ -25,10 +25,6 @@ use std::path::Path;
 pub trait Sweepable: Sized {
     /// The scene's name.
     fn name(&self) -> &str;
-    /// `2D` or `3D`, for messages.
-    const KIND: &'static str;
-    /// The integration rules the solver has for this scene, the default of `--integration`.
-    fn rules(&self) -> Vec<IntegrationRule>;
     /// The numbers of a grid (`--resolution`): 2 in 2D, 3 in 3D.
     const DIMENSIONS: usize;
     /// The least of a grid's numbers (the scene's validation checks the rest).
@@ -63,14 +59,6 @@ pub trait Sweepable: Sized {
 impl Sweepable for Scene {
     fn name(&self) -> &str {
         &self.name
-    }
-    const KIND: &'static str = "2D";
-    fn rules(&self) -> Vec<IntegrationRule> {
-        vec![
-            IntegrationRule::Q4,
-            IntegrationRule::Q2,
-            IntegrationRule::Scni,
-        ]
     }
     const DIMENSIONS: usize = 2;
     const MIN_COUNT: usize = 2;
@@ -113,17 +101,6 @@ impl Sweepable for Scene {
 impl Sweepable for SolidScene {
     fn name(&self) -> &str {
         &self.name
-    }
-    const KIND: &'static str = "3D";
-    fn rules(&self) -> Vec<IntegrationRule> {
-        match self.workpiece.shape {
-            ShapeKind::Cylinder => vec![IntegrationRule::Q4, IntegrationRule::Q2],
-            ShapeKind::Box => vec![
-                IntegrationRule::Q4,
-                IntegrationRule::Q2,
-                IntegrationRule::Scni,
-            ],
-        }
     }
     const DIMENSIONS: usize = 3;
     const MIN_COUNT: usize = 1;

@@ -307,7 +307,8 @@ pub fn point_shapes<const D: usize>(
             let on_edges = lattice.shape_table(&edges, &|q| {
                 format!("boundary point {q} of nodal domain {}", q / per_domain)
             })?;
-            let pt = smoothed(Some(&at_centre), &on_edges, &nw, &points.areas);
+            let boundaries = DomainBoundaries::consecutive(nw, points.areas.len());
+            let pt = smoothed(Some(&at_centre), &on_edges, &boundaries, &points.areas);
             (points, pt)
         }
         rule => {
@@ -331,22 +332,49 @@ pub fn quadrant_shapes(lattice: &Lattice) -> Result<(PointSet, ShapeTable)> {
             q / (4 * QUADRANT_EDGE_POINTS)
         )
     })?;
-    let table = smoothed(None, &on_edges, &nw, &quadrants.areas);
+    let boundaries = DomainBoundaries::consecutive(nw, quadrants.areas.len());
+    let table = smoothed(None, &on_edges, &boundaries, &quadrants.areas);
     Ok((quadrants, table))
+}
+
+/// The boundary terms of smoothing domains: domain `L`'s terms are
+/// `rows[offsets[L]..offsets[L + 1]]` with `nw[..]` alike, each a row of the boundary
+/// shape table (a quadrature point on the domain's boundary) and the outward normal times
+/// the quadrature weight there (m^(D-1)). A point on a face two domains share is one row
+/// that both domains' terms name, with opposite normals.
+#[derive(Debug, Clone, Default)]
+pub struct DomainBoundaries<const D: usize> {
+    /// Start of each domain's terms, and their end.
+    pub offsets: Vec<usize>,
+    /// The row of each term in the boundary shape table.
+    pub rows: Vec<u32>,
+    /// Outward normal times weight of each term (m^(D-1)).
+    pub nw: Vec<[Real; D]>,
+}
+
+impl<const D: usize> DomainBoundaries<D> {
+    /// `nw.len() / domains` consecutive rows per domain, in order: each domain's own
+    /// boundary points.
+    fn consecutive(nw: Vec<[Real; D]>, domains: usize) -> Self {
+        let per_domain = nw.len() / domains;
+        DomainBoundaries {
+            offsets: (0..=domains).map(|l| l * per_domain).collect(),
+            rows: (0..nw.len() as u32).collect(),
+            nw,
+        }
+    }
 }
 
 /// Smoothed shape table (Chen, Wu, Yoon, You 2001): per domain `L` of measure `A_L`
 /// (m^D), `N_I` at its centroid (from `at_centre`, or none) and the smoothed gradient
-/// `B_I = (1 / A_L) sum_g N_I(x_g) n w_g` (1/m) from the domain's boundary sites
-/// (`on_edges`, `nw.len() / areas.len()` consecutive rows per domain, `nw` their outward
-/// normal times weight, m^(D-1)).
-fn smoothed<const D: usize>(
+/// `B_I = (1 / A_L) sum_g N_I(x_g) n w_g` (1/m) over the domain's boundary terms
+/// (`boundaries`: the rows of `on_edges` and their outward normal times weight, m^(D-1)).
+pub fn smoothed<const D: usize>(
     at_centre: Option<&ShapeTable<D>>,
     on_edges: &ShapeTable<D>,
-    nw: &[[Real; D]],
+    boundaries: &DomainBoundaries<D>,
     areas: &[Real],
 ) -> ShapeTable<D> {
-    let per_domain = nw.len() / areas.len();
     let mut t = ShapeTable {
         offsets: vec![0],
         ..Default::default()
@@ -359,9 +387,12 @@ fn smoothed<const D: usize>(
                 row.entry(c.index[e]).or_insert((0.0, [0.0; D])).0 = c.n[e];
             }
         }
-        let first = p * per_domain;
-        for (q, w) in nw.iter().enumerate().skip(first).take(per_domain) {
-            for e in on_edges.row(q) {
+        let terms = boundaries.offsets[p]..boundaries.offsets[p + 1];
+        for (&q, w) in boundaries.rows[terms.clone()]
+            .iter()
+            .zip(&boundaries.nw[terms])
+        {
+            for e in on_edges.row(q as usize) {
                 let (_, g) = row.entry(on_edges.index[e]).or_insert((0.0, [0.0; D]));
                 for (gk, &wk) in g.iter_mut().zip(w) {
                     *gk += on_edges.n[e] * wk / area;

@@ -283,8 +283,8 @@ impl Simulation {
 
 #[pymethods]
 impl Simulation {
-    /// Set up the discretisation of `scene` (2D or 3D); `integration` ("q4", "q2", "scni";
-    /// scni on a 3D box, not a cylinder) overrides the scene's rule, `threads` gives the simulation its own
+    /// Set up the discretisation of `scene` (2D or 3D); `integration` ("q4", "q2", "scni")
+    /// overrides the scene's rule, `threads` gives the simulation its own
     /// pool of that many threads.
     #[new]
     #[pyo3(signature = (scene, integration = None, threads = None))]

@@ -22,6 +22,12 @@ pub enum IntegrationRule {
 }
 
 impl IntegrationRule {
+    /// Every rule, in the order a sweep runs them.
+    pub const ALL: [IntegrationRule; 3] = [
+        IntegrationRule::Q4,
+        IntegrationRule::Q2,
+        IntegrationRule::Scni,
+    ];
     /// The scene/CLI name.
     pub fn name(self) -> &'static str {
         match self {

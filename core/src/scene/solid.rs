@@ -7,8 +7,7 @@
 //!
 //! What the 3D solver does not model yet is refused with the key that asks for it: the
 //! heat that moves (conduction, the surroundings, friction heat) and elasticity over
-//! temperature in `[thermal]` (3D heats adiabatically), scni on a cylinder (a box takes
-//! it) and kernel re-referencing.
+//! temperature in `[thermal]` (3D heats adiabatically) and kernel re-referencing.
 
 use super::{
     Checks, IntegrationRule, MaterialSpec, Motion, Reference, Scene, ThermalSpec, TimeSpec,
@@ -317,11 +316,6 @@ impl SolidScene {
             None => super::across_sections::flow_stress_needs_heat(&self.material, &mut out),
         }
         let d = &self.discretization;
-        out.check(
-            d.integration != IntegrationRule::Scni || self.workpiece.shape == ShapeKind::Box,
-            "discretization.integration",
-            "scni in 3D integrates over the nodal domains of a box's lattice; a cylinder's O-grid has none yet (q4 or q2)".into(),
-        );
         out.check(
             d.support.is_finite() && (1.05..=4.0).contains(&d.support),
             "discretization.support",

@@ -15,10 +15,12 @@
 //! Heat in 3D is the 2D stress stage's adiabatic heating ([`super::heat`]): each point
 //! keeps the heat of its plastic work. Mass scaling, uniform or selective, is 2D's
 //! ([`super::mass_scaling`]). SCNI integrates a box over its particles' nodal domains
-//! ([`crate::integration::point_shapes`], the 2D code in three dimensions). Not in 3D yet
-//! (refused by the scene's validation): the heat that moves (conduction, surroundings,
-//! friction heat), elasticity over temperature, kernel re-referencing, SCNI on a cylinder
-//! and its stabilization, self-contact and curved or triangulated tools.
+//! ([`crate::integration::point_shapes`], the 2D code in three dimensions) and a cylinder
+//! over the O-grid's ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by
+//! the same [`crate::integration::smoothed`]). Not in 3D yet (refused by the scene's
+//! validation): the heat that moves (conduction, surroundings, friction heat), elasticity
+//! over temperature, kernel re-referencing, SCNI's stabilization, self-contact and curved
+//! or triangulated tools.
 
 mod contact;
 mod setup;

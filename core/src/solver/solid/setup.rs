@@ -7,7 +7,7 @@ use super::contact::PlaneContact;
 use super::{SolidDisc, SolidSimulation, SolidState, SolidWorkspace};
 use crate::cylinder_grid::{CylinderGrid, Sector};
 use crate::error::{Error, Result};
-use crate::integration::point_shapes;
+use crate::integration::{point_shapes, smoothed};
 use crate::material::{HenckyJ2, PointState3};
 use crate::math::Real;
 use crate::plane_tool::PlaneTool;
@@ -66,18 +66,38 @@ fn cylinder(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
     let grid = CylinderGrid::new(radius_m, length_m, cells, core_ratio, sector)
         .map_err(|m| Error::Request(format!("workpiece: {m}")))?;
     let rule = scene.discretization.integration;
-    let (points, weights) = grid.points(rule);
     let supports = grid.supports(scene.discretization.support);
     let cloud = KernelCloud::with_supports(grid.positions.clone(), grid.volumes.clone(), supports);
-    let per_cell = points.len() / grid.cells.len();
-    let pt = cloud.shape_table(&points, &|p| {
-        format!("integration point {p} (cell {})", p / per_cell)
-    })?;
+    let (points, weights, pt, layer_points) = if rule == IntegrationRule::Scni {
+        let domains = grid.nodal_domains();
+        let at_centre = cloud.shape_table(&domains.centroids, &|p| {
+            format!("nodal integration point {p}")
+        })?;
+        let on_faces = cloud.shape_table(&domains.sites, &|q| {
+            format!("boundary point {q} of the nodal domains")
+        })?;
+        let pt = smoothed(
+            Some(&at_centre),
+            &on_faces,
+            &domains.boundaries,
+            &domains.volumes,
+        );
+        let per_layer = domains.centroids.len() / (cells[2] + 1);
+        (domains.centroids, domains.volumes, pt, per_layer)
+    } else {
+        let (points, weights) = grid.points(rule);
+        let per_cell = points.len() / grid.cells.len();
+        let pt = cloud.shape_table(&points, &|p| {
+            format!("integration point {p} (cell {})", p / per_cell)
+        })?;
+        let per_layer = points.len() / cells[2];
+        (points, weights, pt, per_layer)
+    };
     let mut nodal = cloud.shape_table(&grid.positions, &|j| format!("particle {j}"))?;
     nodal.drop_gradients();
     let h_min = smallest_edge(&grid.positions, &grid.cells);
     Ok(Particles {
-        layer_points: points.len() / cells[2],
+        layer_points,
         positions: grid.positions.clone(),
         volumes: grid.volumes.clone(),
         points,
