@@ -223,9 +223,7 @@ fn with_sets<S: Overridable + Clone>(
     mut source: SceneSource<S>,
     sets: &[String],
 ) -> Result<S, String> {
-    for arg in sets {
-        source.set_arg(arg).map_err(|e| e.to_string())?;
-    }
+    source.set_args(sets).map_err(|e| e.to_string())?;
     Ok(source.scene().clone())
 }
 

@@ -93,15 +93,23 @@ impl<S: Overridable> SceneSource<S> {
         Ok(())
     }
 
-    /// Applies one command-line override `KEY=VALUE` (`--set`), the value read as by
-    /// [`parse_value`].
+    /// Applies the command-line overrides `KEY=VALUE` (`--set`), the values read as by
+    /// [`parse_value`], together: the scene is validated once with all of them, so keys
+    /// that constrain each other change together (an end time and a history interval
+    /// shortened at once, in either order); a later one wins on the same key.
     ///
     /// # Errors
     ///
-    /// `arg` is not `KEY=VALUE`, or as [`SceneSource::set`].
-    pub fn set_arg(&mut self, arg: &str) -> Result<()> {
-        let (key, value) = split_arg(arg)?;
-        self.set(key, parse_value(value))
+    /// An argument is not `KEY=VALUE`, or as [`SceneSource::set`].
+    pub fn set_args(&mut self, args: &[impl AsRef<str>]) -> Result<()> {
+        let mut overrides = self.overrides.clone();
+        for arg in args {
+            let (key, value) = split_arg(arg.as_ref())?;
+            overrides.push((key.to_string(), parse_value(value)));
+        }
+        self.scene = build(&self.text, &self.file, &overrides)?;
+        self.overrides = overrides;
+        Ok(())
     }
 
     /// The validated scene.
@@ -463,6 +471,28 @@ friction = 0.2
         assert_eq!(s.scene().workpiece.particles, [7, 9]);
         let s = with("time.dt_s", "1e-8").unwrap();
         assert_eq!(s.scene().time.dt_s, Some(1e-8));
+    }
+
+    /// Keys that constrain each other change together, in either order: a 3D scene's
+    /// history interval above its end time is refused alone, not beside a new end time.
+    #[test]
+    fn overrides_of_the_command_line_are_validated_together() {
+        use crate::scene::SolidScene;
+        let text = include_str!("../../scenes/taylor_bar_3d.toml");
+        let source = || SceneSource::<SolidScene>::of_text(text, "bar", Vec::new()).unwrap();
+        for args in [
+            ["time.end_s=1e-7", "output.history_interval_s=1e-8"],
+            ["output.history_interval_s=1e-8", "time.end_s=1e-7"],
+        ] {
+            let mut s = source();
+            s.set_args(&args).unwrap();
+            assert_eq!(s.scene().time.end_s, 1e-7);
+            assert_eq!(s.scene().output.history_interval_s, Some(1e-8));
+        }
+        let mut s = source();
+        let e = s.set_args(&["time.end_s=1e-7"]).unwrap_err().to_string();
+        assert!(e.contains("history_interval_s"), "{e}");
+        assert_eq!(s.scene().time.end_s, 80e-6);
     }
 
     #[test]

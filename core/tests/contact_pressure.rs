@@ -12,9 +12,7 @@ use rkforge_core::{Scene, SceneSource, Simulation};
 fn shipped(name: &str, args: &[&str]) -> Scene {
     let path = format!("{}/../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
     let mut source = SceneSource::from_file(std::path::Path::new(&path)).unwrap();
-    for arg in args {
-        source.set_arg(arg).unwrap();
-    }
+    source.set_args(args).unwrap();
     source.scene().clone()
 }
 

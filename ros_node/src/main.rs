@@ -131,9 +131,7 @@ fn run(a: &Args) -> Result<(), String> {
     positive("--publish-rate", a.publish_rate)?;
     rkforge_core::set_threads(a.threads).map_err(|e| e.to_string())?;
     let mut source = SceneSource::from_file(&a.scene).map_err(|e| e.to_string())?;
-    for arg in &a.set {
-        source.set_arg(arg).map_err(|e| e.to_string())?;
-    }
+    source.set_args(&a.set).map_err(|e| e.to_string())?;
     let scene = source.scene().clone();
     let topics = rkforge_ros::topics(&scene, &a.namespace)?;
     let domain = domain_id_from_env()?;
