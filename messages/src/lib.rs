@@ -1,11 +1,14 @@
 //! The ROS 2 messages of an rkforge run and their recording, without DDS: which topics a
 //! run publishes and subscribes to, with their standard message types, under a namespace
 //! validated by the ROS 2 naming rules. Used by the ROS 2 node (`rkforge-ros`) and by
-//! `rkforge run --mcap`.
+//! `rkforge run --mcap`, for scenes of both kinds: a 2D [`Scene`] (plane strain,
+//! axisymmetric) run by a [`Simulation`](rkforge_core::Simulation) and a 3D [`SolidScene`]
+//! run by a [`SolidSimulation`](rkforge_core::solver::SolidSimulation), through the traits
+//! [`PublishedScene`] and [`frame::Published`].
 //!
 //! - [`msgs`]: the standard messages, generated from the `.msg` files in `messages/msg`, and
 //!   their CDR encoding;
-//! - [`frame`]: the messages of one sample of a [`Simulation`](rkforge_core::Simulation);
+//! - [`frame`]: the messages of one sample of a simulation of either kind;
 //! - [`record`]: the MCAP recorder (used by `rkforge-ros --record` and `rkforge run --mcap`);
 //! - [`signals`]: SIGINT and SIGTERM as a flag, so that a run stops and finishes its files.
 //!
@@ -17,7 +20,105 @@ pub mod record;
 pub mod signals;
 
 use msgs::RosMessage;
-use rkforge_core::scene::{Motion, Scene};
+use rkforge_core::scene::solid::ShapeKind;
+use rkforge_core::scene::{Kinematics, Motion, Scene, SolidScene, TimeSpec};
+
+/// What the topics and the recording's metadata read of a scene of either kind: a 2D
+/// [`Scene`] or a 3D [`SolidScene`].
+pub trait PublishedScene: std::fmt::Debug {
+    /// The scene's short name.
+    fn scene_name(&self) -> &str;
+    /// The scene's free-text description.
+    fn scene_description(&self) -> &str;
+    /// `model.kinematics` as the scene file writes it: `plane_strain`, `axisymmetric` or
+    /// `3d`.
+    fn kinematics_name(&self) -> &'static str;
+    /// The integration rule's name (`q4`, `q2`, `scni`).
+    fn integration_name(&self) -> &'static str;
+    /// The scene's `[time]` table.
+    fn time_spec(&self) -> &TimeSpec;
+    /// The grid as the recording's metadata gives it: `resolution`, the particle counts of
+    /// a 2D scene (`21x21`), or the grid key of a 3D one (a cylinder's `workpiece.cells`, a
+    /// box's `workpiece.particles`, `4x2x24`) with `resolution_key` naming that key.
+    fn grid(&self) -> Vec<(&'static str, String)>;
+    /// Each tool in scene order: its name and whether it moves (a tool whose motion is not
+    /// `fixed` takes velocity commands).
+    fn tool_list(&self) -> Vec<(&str, bool)>;
+    /// Whether the scene publishes the topics only 2D has: the die fill (fill points and
+    /// contact fractions of polyline tools) and the laps (a 2D boundary folding onto
+    /// itself). A 3D scene has neither and leaves both topics out.
+    fn has_die_fill_and_laps(&self) -> bool;
+}
+
+impl PublishedScene for Scene {
+    fn scene_name(&self) -> &str {
+        &self.name
+    }
+    fn scene_description(&self) -> &str {
+        &self.description
+    }
+    fn kinematics_name(&self) -> &'static str {
+        match self.model.kinematics {
+            Kinematics::PlaneStrain => "plane_strain",
+            Kinematics::Axisymmetric => "axisymmetric",
+        }
+    }
+    fn integration_name(&self) -> &'static str {
+        self.discretization.integration.name()
+    }
+    fn time_spec(&self) -> &TimeSpec {
+        &self.time
+    }
+    fn grid(&self) -> Vec<(&'static str, String)> {
+        let [nx, ny] = self.workpiece.particles;
+        vec![("resolution", format!("{nx}x{ny}"))]
+    }
+    fn tool_list(&self) -> Vec<(&str, bool)> {
+        self.tools
+            .iter()
+            .map(|t| (t.name.as_str(), !matches!(t.motion, Motion::Fixed)))
+            .collect()
+    }
+    fn has_die_fill_and_laps(&self) -> bool {
+        true
+    }
+}
+
+impl PublishedScene for SolidScene {
+    fn scene_name(&self) -> &str {
+        &self.name
+    }
+    fn scene_description(&self) -> &str {
+        &self.description
+    }
+    fn kinematics_name(&self) -> &'static str {
+        "3d"
+    }
+    fn integration_name(&self) -> &'static str {
+        self.discretization.integration.name()
+    }
+    fn time_spec(&self) -> &TimeSpec {
+        &self.time
+    }
+    fn grid(&self) -> Vec<(&'static str, String)> {
+        let w = &self.workpiece;
+        let (key, grid) = match w.shape {
+            ShapeKind::Cylinder => ("workpiece.cells", w.cells),
+            ShapeKind::Box => ("workpiece.particles", w.particles),
+        };
+        let text = grid.map_or_else(String::new, |g| g.map(|n| n.to_string()).join("x"));
+        vec![("resolution", text), ("resolution_key", key.to_owned())]
+    }
+    fn tool_list(&self) -> Vec<(&str, bool)> {
+        self.tools
+            .iter()
+            .map(|t| (t.name.as_str(), !matches!(t.motion, Motion::Fixed)))
+            .collect()
+    }
+    fn has_die_fill_and_laps(&self) -> bool {
+        false
+    }
+}
 
 /// A topic with its ROS 2 message type.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -64,25 +165,27 @@ pub fn validate_namespace(ns: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// The topics of a scene under namespace `ns`: first the published ones in the order of the
-/// messages of a [`frame::Sample`] (one wrench per tool in scene order, `tools`, `workpiece`,
-/// `tool_markers`, `die_fill`, `laps`, `energy`, `outputs`, `/clock`), then one `velocity_cmd`
-/// subscription per movable tool.
+/// The topics of a scene of either kind under namespace `ns`: first the published ones in
+/// the order of the messages of a [`frame::Sample`] (one wrench per tool in scene order,
+/// `tools`, `workpiece`, `tool_markers`, `die_fill` and `laps` (2D scenes only, see
+/// [`PublishedScene::has_die_fill_and_laps`]), `energy`, `outputs`, `/clock`), then one
+/// `velocity_cmd` subscription per movable tool.
 ///
 /// # Errors
 ///
 /// The namespace breaks the ROS 2 naming rules, or a tool name is not a valid topic token.
-pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
+pub fn topics<S: PublishedScene + ?Sized>(scene: &S, ns: &str) -> Result<Vec<Topic>, String> {
     validate_namespace(ns)?;
     let base = ns.trim_end_matches('/');
-    for tool in &scene.tools {
-        validate_namespace(&format!("/{}", tool.name))
-            .map_err(|e| format!("tool `{}` cannot name a ROS 2 topic: {e}", tool.name))?;
+    let tools = scene.tool_list();
+    for (name, _) in &tools {
+        validate_namespace(&format!("/{name}"))
+            .map_err(|e| format!("tool `{name}` cannot name a ROS 2 topic: {e}"))?;
     }
     let mut t = Vec::new();
-    for tool in &scene.tools {
+    for (name, _) in &tools {
         t.push(Topic {
-            name: format!("{base}/{}/wrench", tool.name),
+            name: format!("{base}/{name}/wrench"),
             message: msgs::WrenchStamped::TYPE_NAME,
             schema: msgs::WrenchStamped::SCHEMA,
             publish: true,
@@ -114,22 +217,24 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
         reliable: true,
         latched: true,
     });
-    t.push(Topic {
-        name: format!("{base}/die_fill"),
-        message: msgs::DieFill::TYPE_NAME,
-        schema: msgs::DieFill::SCHEMA,
-        publish: true,
-        reliable: true,
-        latched: true,
-    });
-    t.push(Topic {
-        name: format!("{base}/laps"),
-        message: msgs::Laps::TYPE_NAME,
-        schema: msgs::Laps::SCHEMA,
-        publish: true,
-        reliable: true,
-        latched: true,
-    });
+    if scene.has_die_fill_and_laps() {
+        t.push(Topic {
+            name: format!("{base}/die_fill"),
+            message: msgs::DieFill::TYPE_NAME,
+            schema: msgs::DieFill::SCHEMA,
+            publish: true,
+            reliable: true,
+            latched: true,
+        });
+        t.push(Topic {
+            name: format!("{base}/laps"),
+            message: msgs::Laps::TYPE_NAME,
+            schema: msgs::Laps::SCHEMA,
+            publish: true,
+            reliable: true,
+            latched: true,
+        });
+    }
     t.push(Topic {
         name: format!("{base}/energy"),
         message: msgs::Energy::TYPE_NAME,
@@ -154,13 +259,9 @@ pub fn topics(scene: &Scene, ns: &str) -> Result<Vec<Topic>, String> {
         reliable: true,
         latched: true,
     });
-    for tool in scene
-        .tools
-        .iter()
-        .filter(|t| !matches!(t.motion, Motion::Fixed))
-    {
+    for (name, _) in tools.iter().filter(|(_, moves)| *moves) {
         t.push(Topic {
-            name: format!("{base}/{}/velocity_cmd", tool.name),
+            name: format!("{base}/{name}/velocity_cmd"),
             message: msgs::Float64::TYPE_NAME,
             schema: msgs::Float64::SCHEMA,
             publish: false,
@@ -194,5 +295,37 @@ mod tests {
             .any(|t| t.name == "/rkforge/wall/wrench" && t.publish));
         assert!(!t.iter().any(|t| t.name.ends_with("velocity_cmd")));
         assert!(t.iter().any(|t| t.name == "/clock"));
+    }
+
+    /// A 3D scene publishes the topics of 2D but the die fill and the laps, and a command
+    /// topic for a tool that moves.
+    #[test]
+    fn a_3d_scene_has_no_die_fill_or_laps_topics() {
+        let text = include_str!("../../scenes/taylor_bar_3d.toml");
+        let scene = SolidScene::from_str_named(text, "t").unwrap();
+        let t = topics(&scene, "/rkforge").unwrap();
+        let names: Vec<&str> = t.iter().map(|t| t.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "/rkforge/wall/wrench",
+                "/rkforge/tools",
+                "/rkforge/workpiece",
+                "/rkforge/tool_markers",
+                "/rkforge/energy",
+                "/rkforge/outputs",
+                "/clock"
+            ]
+        );
+        assert!(t.iter().all(|t| t.publish));
+        let moving = text.replace(
+            r#"motion = { kind = "fixed" }"#,
+            r#"motion = { kind = "external" }"#,
+        );
+        let scene = SolidScene::from_str_named(&moving, "t").unwrap();
+        let t = topics(&scene, "/rkforge").unwrap();
+        let last = t.last().unwrap();
+        assert_eq!(last.name, "/rkforge/wall/velocity_cmd");
+        assert!(!last.publish && last.message == "std_msgs/msg/Float64");
     }
 }

@@ -4,7 +4,7 @@
 //!
 //! The file says what made it: a metadata record [`METADATA`] (scene, kinematics, integration
 //! rule, resolution, the scene's `[time]` table, rkforge version, the writing program) and the scene file as an
-//! attachment, both written first; at [`Recorder::finish`] a metadata record [`SUMMARY`]
+//! attachment, both written first, for a 2D and a 3D scene alike ([`PublishedScene`]); at [`Recorder::finish`] a metadata record [`SUMMARY`]
 //! with the run's summary figures (JSON).
 //!
 //! The file is chunked ([`Compression::Zstd`] by default, or uncompressed) and indexed.
@@ -15,10 +15,9 @@
 //! [`Recorder::finish`] writes the summary section and footer.
 
 use crate::frame::Sample;
-use crate::Topic;
+use crate::{PublishedScene, Topic};
 use mcap::records::{MessageHeader, Metadata};
 use mcap::{Attachment, WriteOptions, Writer};
-use rkforge_core::{Kinematics, Scene};
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -82,9 +81,9 @@ impl FromStr for Compression {
 /// Where a recording comes from: written into the file's [`METADATA`] record and attachment.
 #[derive(Debug, Clone, Copy)]
 pub struct Provenance<'a> {
-    /// The scene as run (its integration rule may differ from the file's, e.g. after
-    /// `rkforge run --integration`).
-    pub scene: &'a Scene,
+    /// The scene as run, 2D or 3D (its integration rule may differ from the file's, e.g.
+    /// after `rkforge run --integration`).
+    pub scene: &'a dyn PublishedScene,
     /// The scene file, attached as it is.
     pub scene_file: &'a Path,
     /// The program writing the file, e.g. `rkforge run`.
@@ -245,41 +244,30 @@ impl Recorder {
 
 /// The key-value pairs of the [`METADATA`] record.
 fn describe(
-    scene: &Scene,
+    scene: &dyn PublishedScene,
     scene_file: &str,
     writer: &str,
     compression: Compression,
 ) -> BTreeMap<String, String> {
-    let [nx, ny] = scene.workpiece.particles;
-    BTreeMap::from(
-        [
-            ("scene", scene.name.clone()),
-            ("scene_file", scene_file.to_owned()),
-            ("description", scene.description.clone()),
-            (
-                "kinematics",
-                match scene.model.kinematics {
-                    Kinematics::PlaneStrain => "plane_strain",
-                    Kinematics::Axisymmetric => "axisymmetric",
-                }
-                .to_owned(),
-            ),
-            (
-                "integration",
-                scene.discretization.integration.name().to_owned(),
-            ),
-            ("resolution", format!("{nx}x{ny}")),
-            // The scene's [time] table: end time, step or safety factor, mass scaling.
-            (
-                "time",
-                serde_json::to_string(&scene.time).unwrap_or_else(|e| e.to_string()),
-            ),
-            ("rkforge_version", env!("CARGO_PKG_VERSION").to_owned()),
-            ("writer", writer.to_owned()),
-            ("compression", compression.name().to_owned()),
-        ]
-        .map(|(k, v)| (k.to_owned(), v)),
-    )
+    [
+        ("scene", scene.scene_name().to_owned()),
+        ("scene_file", scene_file.to_owned()),
+        ("description", scene.scene_description().to_owned()),
+        ("kinematics", scene.kinematics_name().to_owned()),
+        ("integration", scene.integration_name().to_owned()),
+        // The scene's [time] table: end time, step or safety factor, mass scaling.
+        (
+            "time",
+            serde_json::to_string(scene.time_spec()).unwrap_or_else(|e| e.to_string()),
+        ),
+        ("rkforge_version", env!("CARGO_PKG_VERSION").to_owned()),
+        ("writer", writer.to_owned()),
+        ("compression", compression.name().to_owned()),
+    ]
+    .into_iter()
+    .chain(scene.grid())
+    .map(|(k, v)| (k.to_owned(), v))
+    .collect()
 }
 
 /// The `offered_qos_profiles` channel metadata rosbag2 writes (YAML), so that `ros2 bag play`
@@ -297,9 +285,11 @@ fn offered_qos(t: &Topic) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::sample;
+    use crate::frame::{sample, Published};
     use crate::msgs::{Outputs, RosMessage};
     use rkforge_core::outputs;
+    use rkforge_core::scene::SolidScene;
+    use rkforge_core::solver::SolidSimulation;
     use rkforge_core::{Scene, Simulation};
 
     /// Temporary file `rkforge_<name>_<pid>.<ext>`.
@@ -316,19 +306,35 @@ mod tests {
         compression: Compression,
     ) -> (Vec<u8>, Simulation) {
         let scene = Scene::from_str_named(text, "block").unwrap();
-        let topics = crate::topics(&scene, "/rkforge").unwrap();
-        let mut sim = Simulation::new(&scene).unwrap();
+        let sim = Simulation::new(&scene).unwrap();
+        record_run(&scene, sim, text, name, samples, compression, |s| {
+            s.step(None).unwrap();
+        })
+    }
+
+    /// [`record`] of the simulation `sim` of `scene` (of either kind, read from `text`),
+    /// `step` taking it from one sample to the next.
+    fn record_run<S: Published>(
+        scene: &S::Scene,
+        mut sim: S,
+        text: &str,
+        name: &str,
+        samples: usize,
+        compression: Compression,
+        step: impl Fn(&mut S),
+    ) -> (Vec<u8>, S) {
+        let topics = crate::topics(scene, "/rkforge").unwrap();
         let (path, scene_file) = (temp(name, "mcap"), temp(name, "toml"));
         std::fs::write(&scene_file, text).unwrap();
         let provenance = Provenance {
-            scene: &scene,
+            scene,
             scene_file: &scene_file,
             writer: "test",
         };
         let mut rec = Recorder::create(&path, &topics, &provenance, compression).unwrap();
         rec.write(&sample(&sim)).unwrap();
         for _ in 1..samples {
-            sim.step(None).unwrap();
+            step(&mut sim);
             rec.write(&sample(&sim)).unwrap();
         }
         rec.finish(r#"{"steps": 3}"#).unwrap();
@@ -336,6 +342,61 @@ mod tests {
         std::fs::remove_file(&path).unwrap();
         std::fs::remove_file(&scene_file).unwrap();
         (bytes, sim)
+    }
+
+    /// A 3D run's recording: the topics of a 3D scene (no die fill, no laps), the 3D
+    /// register's outputs, and the metadata of a 3D scene (its kinematics, its grid key).
+    #[test]
+    fn a_3d_recording_reads_back() {
+        let text = include_str!("../../scenes/taylor_bar_3d.toml")
+            .replace("cells = [8, 4, 60]", "cells = [4, 2, 8]");
+        let scene = SolidScene::from_str_named(&text, "bar").unwrap();
+        let sim = SolidSimulation::new(&scene).unwrap();
+        let (bytes, sim) = record_run(&scene, sim, &text, "rec3d", 3, Compression::Zstd, |s| {
+            s.run_toward(s.time() + 1e-6, u64::MAX, |_, _| true)
+                .unwrap();
+        });
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        let stats = summary.stats.unwrap();
+        assert_eq!((stats.message_count, stats.channel_count), (3 * 7, 7));
+        let topics: BTreeMap<&str, &str> = summary
+            .channels
+            .values()
+            .map(|c| (c.topic.as_str(), c.schema.as_ref().unwrap().name.as_str()))
+            .collect();
+        assert_eq!(topics["/rkforge/workpiece"], "sensor_msgs/msg/PointCloud2");
+        assert!(!topics.contains_key("/rkforge/laps") && !topics.contains_key("/rkforge/die_fill"));
+        let msgs: Vec<_> = mcap::MessageStream::new(&bytes)
+            .unwrap()
+            .map(Result::unwrap)
+            .collect();
+        let message = msgs.iter().rfind(|m| m.channel.topic == "/rkforge/outputs");
+        let o = Outputs::from_cdr(&message.unwrap().data).unwrap();
+        let now = outputs::Sample::new(&sim);
+        let values: Vec<u64> = outputs::solid_columns(sim.scene())
+            .iter()
+            .map(|c| c.value(&now).to_bits())
+            .collect();
+        assert_eq!(
+            o.values.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            values
+        );
+        assert_eq!(msgs.last().unwrap().log_time, 2000);
+        let run = summary
+            .metadata_indexes
+            .iter()
+            .map(|i| mcap::read::metadata(&bytes, i).unwrap())
+            .find(|m| m.name == METADATA)
+            .unwrap()
+            .metadata;
+        assert_eq!(run["scene"], "taylor_bar_3d");
+        assert_eq!(run["kinematics"], "3d");
+        assert_eq!(run["resolution"], "4x2x8");
+        assert_eq!(run["resolution_key"], "workpiece.cells");
+        assert_eq!(
+            run["time"],
+            r#"{"end_s":0.00008,"dt_s":null,"dt_safety":0.5}"#
+        );
     }
 
     fn small_block() -> String {

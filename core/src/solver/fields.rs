@@ -2,6 +2,7 @@
 //! of the workpiece, tool penetration, particle fields smoothed from the integration points,
 //! and the points' own data.
 
+use super::layout::Scatter;
 use super::simulation::Simulation;
 use crate::geometry::{bounds, enclosed_volume, Extents};
 use crate::math::Real;
@@ -25,6 +26,30 @@ pub struct Fields {
     /// The lap each particle took part in, numbered from 1 in the order they formed, 0 for
     /// none ([`crate::laps`]).
     pub lap: Vec<Real>,
+}
+
+/// Values per integration point smoothed to the `particles` particles, in 2D and 3D: at
+/// particle `I` the mean of the values of the points its shape function reaches, each
+/// weighted by `|N_I(x_p)| w_p` (the point's weight `w_p` in m^D, `N_I` from the points'
+/// shape functions in `scatter`); 0 at a particle no point reaches.
+pub(super) fn smoothed<const D: usize>(
+    scatter: &Scatter<D>,
+    weights: &[Real],
+    particles: usize,
+    values: &[Real],
+) -> Vec<Real> {
+    let (mut wsum, mut sum) = (vec![0.0; particles], vec![0.0; particles]);
+    for (p, (&weight, &value)) in weights.iter().zip(values).enumerate() {
+        for (i, n) in scatter.point_values(p) {
+            let w = (n * weight).abs();
+            wsum[i] += w;
+            sum[i] += w * value;
+        }
+    }
+    sum.iter()
+        .zip(&wsum)
+        .map(|(&s, &w)| s * if w > 0.0 { 1.0 / w } else { 0.0 })
+        .collect()
 }
 
 impl Simulation {
@@ -102,25 +127,14 @@ impl Simulation {
     /// weights `|N_I| w_p`.
     pub fn fields(&self) -> Fields {
         let np = self.disc.ref_pos.len();
+        let smooth = |values: &[Real]| smoothed(&self.disc.scatter, &self.disc.weights, np, values);
         let mut f = Fields {
             positions: self.positions(),
+            plastic_strain: smooth(&self.point_plastic_strain()),
+            von_mises: smooth(&self.point_von_mises()),
+            temperature: self.point_temperature().map(smooth),
             ..Default::default()
         };
-        let (mut wsum, mut ep, mut vm) = (vec![0.0; np], vec![0.0; np], vec![0.0; np]);
-        let temps = self.point_temperature();
-        let mut tp = vec![0.0; if temps.is_some() { np } else { 0 }];
-        for p in 0..self.disc.weights.len() {
-            let (eps_p, mises) = (self.st.points[p].eps_p, self.ws.out[p].von_mises);
-            for (i, [n, _, _]) in self.disc.scatter.point_row(p) {
-                let w = (n * self.disc.weights[p]).abs();
-                wsum[i] += w;
-                ep[i] += w * eps_p;
-                vm[i] += w * mises;
-                if let Some(t) = temps {
-                    tp[i] += w * t[p];
-                }
-            }
-        }
         for j in 0..np {
             f.displacement.push(match self.st.reference {
                 None => self.disc.nodal.interpolate(j, &self.st.d),
@@ -130,14 +144,7 @@ impl Simulation {
                 }
             });
             f.velocity.push(self.disc.nodal.interpolate(j, &self.st.v));
-            let w = if wsum[j] > 0.0 { 1.0 / wsum[j] } else { 0.0 };
-            f.plastic_strain.push(ep[j] * w);
-            f.von_mises.push(vm[j] * w);
-            if temps.is_some() {
-                tp[j] *= w;
-            }
         }
-        f.temperature = temps.map(|_| tp);
         f.lap = vec![0.0; np];
         for (l, lap) in self.st.laps.iter().enumerate() {
             for &k in &lap.ring {

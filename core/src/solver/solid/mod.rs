@@ -29,6 +29,7 @@ mod tests;
 
 use super::discretization::{MassScalingReport, Thermal};
 use super::energy::{Energy, StepEnergy};
+use super::fields::smoothed;
 use super::heat::{Heat, Heating};
 use super::heat_readings;
 use super::layout::Scatter;
@@ -608,6 +609,19 @@ impl SolidSimulation {
             .chunks(per_cell)
             .map(|c| c.iter().sum::<Real>() / c.len() as Real)
             .collect()
+    }
+    /// A value per integration point smoothed to each particle, as the 2D particle fields
+    /// are ([`super::Simulation::fields`]): the mean of the values of the points whose
+    /// shape functions reach the particle, each weighted by `|N_I(x_p)| w_p` (`w_p` the
+    /// point's weight, m^3), so a particle reads the points around it in proportion to how
+    /// much of them it carries; 0 at a particle no point reaches. In the unit of the value.
+    pub fn particle_means(&self, per_point: &[Real]) -> Vec<Real> {
+        smoothed(
+            &self.disc.scatter,
+            &self.disc.weights,
+            self.disc.ref_pos.len(),
+            per_point,
+        )
     }
     /// Equivalent plastic strain at each integration point (-).
     pub fn point_plastic_strain(&self) -> Vec<Real> {

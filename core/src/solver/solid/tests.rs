@@ -109,3 +109,37 @@ fn a_cells_points_are_one_group() {
         groups.len()
     );
 }
+
+/// The particle means of point values: a uniform value reads back at every particle (each
+/// particle is reached by points, the weights are a mean's) for both cell rules; a value
+/// growing along z gives particle means growing along z, the highest particles' above the
+/// lowest's.
+#[test]
+fn particle_means_are_weighted_means_of_the_points_around() {
+    for (scene, rule) in [
+        (quarter_bar([4, 2, 8], "q2", 1e-7), "q2"),
+        (quarter_bar([4, 2, 8], "q4", 1e-7), "q4"),
+    ] {
+        let sim = SolidSimulation::new(&scene).unwrap();
+        let uniform = sim.particle_means(&vec![2.5; sim.point_count()]);
+        assert_eq!(uniform.len(), sim.particle_count());
+        for (j, m) in uniform.iter().enumerate() {
+            assert!((m - 2.5).abs() < 1e-12, "{rule}: particle {j}: {m}");
+        }
+        let z: Vec<Real> = sim.point_positions().iter().map(|p| p[2]).collect();
+        let means = sim.particle_means(&z);
+        let x = sim.reference_positions();
+        let (low, high): (Vec<usize>, Vec<usize>) = (0..x.len())
+            .filter(|&j| x[j][2] < 1e-9 || x[j][2] > 0.0324 - 1e-9)
+            .partition(|&j| x[j][2] < 1e-9);
+        let top = high
+            .iter()
+            .map(|&j| means[j])
+            .fold(Real::INFINITY, Real::min);
+        let bottom = low.iter().map(|&j| means[j]).fold(0.0, Real::max);
+        assert!(
+            bottom > 0.0 && top > bottom && top < 0.0324,
+            "{rule}: {bottom} {top}"
+        );
+    }
+}
