@@ -6,6 +6,7 @@
 mod compare;
 mod fmu;
 mod output;
+mod recording;
 mod ring_chart;
 mod run;
 mod run_solid;
@@ -13,6 +14,7 @@ mod ssp;
 mod sweep;
 
 use clap::{Parser, Subcommand};
+use recording::McapOptions;
 use rkforge_core::scene::solid::is_solid;
 use rkforge_core::scene::Friction;
 use rkforge_core::scene::SolidScene;
@@ -239,8 +241,8 @@ fn solid_scene(path: &std::path::Path, sets: &[String]) -> Result<Option<SolidSc
     with_sets(source.map_err(|e| e.to_string())?, sets).map(Some)
 }
 
-/// `rkforge run` of a 3D scene: summary, history, frames and picture (the MCAP recording
-/// of 3D comes with the rest of issue 36).
+/// `rkforge run` of a 3D scene: summary, history, frames and picture, and with `--mcap` the
+/// recording of its topics.
 fn run_solid_command(a: &RunArgs, mut scene: SolidScene) -> Result<(), String> {
     if let Some(r) = a.integration.as_deref().and_then(IntegrationRule::parse) {
         scene.discretization.integration = r;
@@ -248,14 +250,11 @@ fn run_solid_command(a: &RunArgs, mut scene: SolidScene) -> Result<(), String> {
             return Err(format!("--integration: `{key}` {message}"));
         }
     }
-    if a.mcap.is_some() {
-        return Err("--mcap: recording a 3D run is not there yet (issue 36)".into());
-    }
     let out = a
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
-    let report = run_solid::run(&scene, &out, !a.no_frames)?;
+    let report = run_solid::run(&scene, &out, !a.no_frames, mcap_options(a).as_ref())?;
     println!(
         "{}",
         rkforge_runner::references_beside(&scene.name, &scene.reference, &report.summary)
@@ -275,6 +274,15 @@ fn run_solid_command(a: &RunArgs, mut scene: SolidScene) -> Result<(), String> {
     }
 }
 
+/// The recording `--mcap` asks for, if it does.
+fn mcap_options(a: &RunArgs) -> Option<McapOptions> {
+    a.mcap.as_ref().map(|path| McapOptions {
+        path: path.clone(),
+        scene_file: a.scene.clone(),
+        compression: a.mcap_compression,
+    })
+}
+
 fn run_command(a: RunArgs) -> Result<(), String> {
     set_threads(a.threads)?;
     if let Some(scene) = solid_scene(&a.scene, &a.set)? {
@@ -286,16 +294,13 @@ fn run_command(a: RunArgs) -> Result<(), String> {
     }
     let out = a
         .out
+        .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
     let opts = run::Options {
         out,
         progress: !a.quiet,
         frames: !a.no_frames,
-        mcap: a.mcap.map(|path| run::McapOptions {
-            path,
-            scene_file: a.scene.clone(),
-            compression: a.mcap_compression,
-        }),
+        mcap: mcap_options(&a),
     };
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());

@@ -1,14 +1,12 @@
 //! One run of a scene: the time loop, samples, frames and the files written.
 
 use crate::output::{plots, vtu, HistoryPlots};
+use crate::recording::{Mcap, McapOptions};
 use indicatif::{ProgressBar, ProgressStyle};
 use rkforge_core::{Kinematics, Scene, Simulation};
-use rkforge_messages::record::{Compression, Provenance, Recorder};
 use rkforge_runner::Observer;
 use serde_json::Value;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Instant;
 
 /// A frame's shape for the plots.
@@ -40,16 +38,6 @@ pub struct Options {
     /// Record the ROS 2 topics of `rkforge-ros` (namespace `/rkforge`) at every history
     /// sample to an MCAP file; SIGINT and SIGTERM then stop the run and finish the files.
     pub mcap: Option<McapOptions>,
-}
-
-/// Where and how to record MCAP.
-pub struct McapOptions {
-    /// The MCAP file.
-    pub path: PathBuf,
-    /// The scene file, attached to the recording.
-    pub scene_file: PathBuf,
-    /// Chunk compression.
-    pub compression: Compression,
 }
 
 /// What a finished run produced.
@@ -144,7 +132,7 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     std::fs::write(opts.out.join("summary.json"), &text)
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
     if let Some(m) = outputs.mcap.take() {
-        m.recorder.finish(&text)?;
+        m.finish(&text)?;
     }
     plotted?;
     match outcome.failure {
@@ -183,44 +171,12 @@ impl Observer for Outputs<'_> {
     }
 
     fn stop(&self, sim: &Simulation) -> Option<String> {
-        self.mcap.as_ref().and_then(|m| m.interrupted(sim))
+        self.mcap.as_ref().and_then(|m| m.interrupted(sim.time()))
     }
 
     fn progress(&mut self, sim: &Simulation) {
         let end = sim.scene().time.end_s;
         self.bar.set_position((sim.time() / end * 1000.0) as u64);
-    }
-}
-
-/// The MCAP recording of a run and the signal flag that stops it.
-struct Mcap {
-    recorder: Recorder,
-    stop: Arc<AtomicBool>,
-}
-
-impl Mcap {
-    fn start(opts: &McapOptions, scene: &Scene) -> Result<Mcap, String> {
-        let topics = rkforge_messages::topics(scene, "/rkforge")?;
-        let provenance = Provenance {
-            scene,
-            scene_file: &opts.scene_file,
-            writer: "rkforge run",
-        };
-        Ok(Mcap {
-            recorder: Recorder::create(&opts.path, &topics, &provenance, opts.compression)?,
-            stop: rkforge_messages::signals::stop_flag()?,
-        })
-    }
-
-    fn record(&mut self, sim: &Simulation) -> Result<(), String> {
-        self.recorder.write(&rkforge_messages::frame::sample(sim))
-    }
-
-    /// The failure to report if a signal asked the run to stop.
-    fn interrupted(&self, sim: &Simulation) -> Option<String> {
-        self.stop
-            .load(Ordering::SeqCst)
-            .then(|| format!("interrupted by a signal at t = {:e} s", sim.time()))
     }
 }
 

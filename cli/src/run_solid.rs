@@ -8,10 +8,13 @@
 //! `frames.pvd` for ParaView) and `stages.png`: the body at each frame seen from outside,
 //! and at the end from the other side, where a half or quarter model shows its sections on
 //! the symmetry planes; with `[thermal]`, `temperature.png`: the last frame's temperature
-//! from both sides.
+//! from both sides. With `--mcap`, the ROS 2 topics of a 3D scene at every history sample
+//! ([`crate::recording`]), SIGINT and SIGTERM stopping the run at the next sample with its
+//! files finished.
 
 use crate::output::plots::{solid_plot, SolidPanel, View};
 use crate::output::vtu::{write_pvd, write_vtu_3d};
+use crate::recording::{Mcap, McapOptions};
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::SolidSimulation;
 use rkforge_runner::{drive, solid_summary, Observer};
@@ -27,37 +30,64 @@ pub struct SolidReport {
     pub error: Option<String>,
 }
 
-/// Run `scene` to its end time, writing `summary.json` and `history.csv` into `out`. A run
-/// that fails midway still writes both, the summary with `"status": "error"` and the
-/// error.
-pub fn run(scene: &SolidScene, out: &Path, frames: bool) -> Result<SolidReport, String> {
+/// Run `scene` to its end time, writing `summary.json` and `history.csv` into `out`, and
+/// with `mcap` the recording (its summary record is summary.json's text). A run that fails
+/// midway, or that a signal stops while it records, still writes them, the summary with
+/// `"status": "error"` (or `"stopped"`) and the reason.
+pub fn run(
+    scene: &SolidScene,
+    out: &Path,
+    frames: bool,
+    mcap: Option<&McapOptions>,
+) -> Result<SolidReport, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let wall = Instant::now();
     let mut sim = SolidSimulation::new(scene).map_err(|e| e.to_string())?;
     let nframes = if frames { scene.output.frames } else { 0 };
-    let mut shots = Shots(Vec::new());
+    let mut shots = Shots {
+        frames: Vec::new(),
+        mcap: mcap.map(|m| Mcap::start(m, scene)).transpose()?,
+    };
     let outcome = drive(&mut sim, nframes, &mut shots)?;
-    if !shots.0.is_empty() {
-        write_frames(&sim, &shots.0, out, &scene.name)?;
+    if !shots.frames.is_empty() {
+        write_frames(&sim, &shots.frames, out, &scene.name)?;
     }
     outcome.history.write(&out.join("history.csv"))?;
     let summary = solid_summary(&sim, wall.elapsed().as_secs_f64(), outcome.ending());
-    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
-    std::fs::write(out.join("summary.json"), text + "\n")
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())? + "\n";
+    std::fs::write(out.join("summary.json"), &text)
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
+    if let Some(m) = shots.mcap {
+        m.finish(&text)?;
+    }
     Ok(SolidReport {
         summary,
         error: outcome.failure,
     })
 }
 
-/// The frames of a run, taken as it goes and written at its end.
-struct Shots(Vec<Frame>);
+/// What a 3D run adds to the bare run: the frames, taken as it goes and written at its end,
+/// and the MCAP recording of its samples.
+struct Shots {
+    frames: Vec<Frame>,
+    mcap: Option<Mcap>,
+}
 
 impl Observer<SolidSimulation> for Shots {
+    fn sample(&mut self, sim: &SolidSimulation) -> Result<(), String> {
+        match &mut self.mcap {
+            Some(m) => m.record(sim),
+            None => Ok(()),
+        }
+    }
+
     fn frame(&mut self, sim: &SolidSimulation) -> Result<(), String> {
-        self.0.push(Frame::of(sim));
+        self.frames.push(Frame::of(sim));
         Ok(())
+    }
+
+    fn stop(&self, sim: &SolidSimulation) -> Option<String> {
+        self.mcap.as_ref().and_then(|m| m.interrupted(sim.time()))
     }
 }
 

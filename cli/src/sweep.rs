@@ -159,7 +159,7 @@ impl Sweepable for SolidScene {
         }
     }
     fn run(&self, out: &Path) -> Result<Value, String> {
-        let report = run_solid::run(self, out, false)?;
+        let report = run_solid::run(self, out, false, None)?;
         match report.error {
             Some(e) => Err(e),
             None => Ok(report.summary),

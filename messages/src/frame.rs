@@ -78,10 +78,8 @@ pub struct ToolReading {
 /// [`SolidSimulation`]. Each reading is taken through an [`outputs::Sample`] of it (which
 /// dereferences to the simulation), so the measures the outputs share are taken once.
 pub trait Published: Body {
-    /// The scene the simulation runs.
+    /// The kind of scene the simulation runs.
     type Scene: PublishedScene;
-    /// The scene.
-    fn published_scene(&self) -> &Self::Scene;
     /// Each tool of the scene, in scene order.
     fn tool_readings(now: &outputs::Sample<'_, Self>) -> Vec<ToolReading>;
     /// The particles of the point cloud, and whether the cloud has the `temperature` field.
@@ -97,9 +95,6 @@ pub trait Published: Body {
 
 impl Published for Simulation {
     type Scene = rkforge_core::Scene;
-    fn published_scene(&self) -> &Self::Scene {
-        self.scene()
-    }
     fn tool_readings(now: &outputs::Sample<'_, Self>) -> Vec<ToolReading> {
         now.tools()
             .iter()
@@ -193,9 +188,6 @@ impl Published for Simulation {
 
 impl Published for SolidSimulation {
     type Scene = rkforge_core::scene::SolidScene;
-    fn published_scene(&self) -> &Self::Scene {
-        self.scene()
-    }
     fn tool_readings(now: &outputs::Sample<'_, Self>) -> Vec<ToolReading> {
         now.tools()
             .iter()

@@ -17,8 +17,7 @@ use crate::msgs::Float64;
 use crate::msgs::ResultMsg;
 use crate::params::{Parameters, Settings};
 use crate::service::ReplyReaders;
-use crate::Topic;
-use rkforge_core::Scene;
+use crate::{PublishedScene, Topic};
 use ros2_client::dds::rustdds::Topic as DdsTopic;
 use ros2_client::dds::{Context, ContextOptions, Node as RosNode, Publisher, Subscription};
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
@@ -157,12 +156,13 @@ fn qos_of(reliable: bool, latched: bool) -> QosProfile {
 
 impl Node {
     /// Join DDS domain `domain_id` as node `rkforge` in namespace `ns`, with a publisher for
-    /// every published topic of `scene` and a subscription for every command topic.
+    /// every published topic of `scene` (2D or 3D) and a subscription for every command
+    /// topic.
     ///
     /// # Errors
     ///
     /// A bad namespace or tool name, or DDS could not start (e.g. no network interface).
-    pub fn new(domain_id: u16, ns: &str, scene: &Scene) -> Result<Node, String> {
+    pub fn new(domain_id: u16, ns: &str, scene: &dyn PublishedScene) -> Result<Node, String> {
         let topics = crate::topics(scene, ns)?;
         let context = Context::with_options(ContextOptions::new().domain_id(domain_id))
             .map_err(|e| format!("cannot join DDS domain {domain_id}: {e:?}"))?;
@@ -188,9 +188,9 @@ impl Node {
                 publishers.push((t.name.clone(), p));
             } else {
                 let tool = scene
-                    .tools
+                    .tool_list()
                     .iter()
-                    .position(|s| t.name.ends_with(&format!("/{}/velocity_cmd", s.name)))
+                    .position(|(name, _)| t.name.ends_with(&format!("/{name}/velocity_cmd")))
                     .ok_or_else(|| format!("no tool for command topic {}", t.name))?;
                 let sub = node
                     .create_subscription::<Float64>(&topic, Some(qos(t)))

@@ -18,4 +18,6 @@ pub mod params;
 #[cfg(feature = "dds")]
 pub mod service;
 
-pub use rkforge_messages::{frame, msgs, record, signals, topics, validate_namespace, Topic};
+pub use rkforge_messages::{
+    frame, msgs, record, signals, topics, validate_namespace, PublishedScene, Topic,
+};

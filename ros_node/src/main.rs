@@ -1,4 +1,5 @@
-//! `rkforge-ros`: run a scene as a ROS 2 node. See the README's ROS 2 section.
+//! `rkforge-ros`: run a scene as a ROS 2 node, a 2D or a 3D one (`model.kinematics =
+//! "3d"`, [`NodeSim`]). See the README's ROS 2 section.
 //!
 //! Two threads: the simulation steps on a rayon worker and hands a [`Sample`] over at every
 //! publish instant; the main thread publishes it over DDS, records it to MCAP, paces the run,
@@ -6,16 +7,21 @@
 //! the parameters, the `simulation_interfaces` services and the `SimulateSteps` action.
 
 use clap::Parser;
+use rkforge_core::scene::solid::is_solid;
+use rkforge_core::scene::SolidScene;
+use rkforge_core::scene_overrides::Overridable;
+use rkforge_core::solver::SolidSimulation;
 use rkforge_core::{Scene, SceneSource, Simulation, MAX_SAMPLES};
 use rkforge_ros::action::{GoalId, GoalStatusEnum};
 use rkforge_ros::control::{self, check_reset, check_step, transition, Request, Transition};
 use rkforge_ros::dds::{domain_id_from_env, Command, Node};
-use rkforge_ros::frame::{sample, Sample};
+use rkforge_ros::frame::{sample, Published, Sample};
 use rkforge_ros::msgs::{ResultMsg, SimulationState};
 use rkforge_ros::params::Settings;
 use rkforge_ros::record::{Compression, Provenance, Recorder};
-use rkforge_runner::{Ending, Mark, Run, Until};
-use serde_json::json;
+use rkforge_ros::PublishedScene;
+use rkforge_runner::{Ending, Mark, Run, Runnable, Until};
+use serde_json::{json, Value};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -126,25 +132,87 @@ fn positive(name: &str, v: Option<f64>) -> Result<(), String> {
     }
 }
 
+/// A simulation the node runs: the 2D [`Simulation`] and the 3D [`SolidSimulation`].
+trait NodeSim: Runnable + Published<Scene: Overridable + Clone + Sync> {
+    /// A new simulation of `scene` at t = 0.
+    ///
+    /// # Errors
+    ///
+    /// The setup failed (the solver's reason).
+    fn start(scene: &Self::Scene) -> Result<Self, String>;
+    /// The end time of `scene` and the interval between its history rows (s).
+    fn sampling(scene: &Self::Scene) -> (f64, f64);
+    /// Set tool `tool`'s velocity along its axis (m/s), overriding the scene's motion.
+    ///
+    /// # Errors
+    ///
+    /// No such tool, a fixed tool, or a velocity that is not finite.
+    fn command_velocity(&mut self, tool: usize, velocity: f64) -> Result<(), String>;
+    /// The summary as `rkforge run` writes it (summary.json) after `wall_s` (s) of wall time.
+    fn run_summary(&self, wall_s: f64, ending: Ending<'_>) -> Value;
+}
+
+impl NodeSim for Simulation {
+    fn start(scene: &Scene) -> Result<Self, String> {
+        Simulation::new(scene).map_err(|e| e.to_string())
+    }
+    fn sampling(scene: &Scene) -> (f64, f64) {
+        (scene.time.end_s, scene.history_interval())
+    }
+    fn command_velocity(&mut self, tool: usize, velocity: f64) -> Result<(), String> {
+        self.set_tool_velocity(tool, velocity)
+            .map_err(|e| e.to_string())
+    }
+    fn run_summary(&self, wall_s: f64, ending: Ending<'_>) -> Value {
+        rkforge_runner::summary(self, wall_s, 0.0, ending)
+    }
+}
+
+impl NodeSim for SolidSimulation {
+    fn start(scene: &SolidScene) -> Result<Self, String> {
+        SolidSimulation::new(scene).map_err(|e| e.to_string())
+    }
+    fn sampling(scene: &SolidScene) -> (f64, f64) {
+        (scene.time.end_s, scene.history_interval())
+    }
+    fn command_velocity(&mut self, tool: usize, velocity: f64) -> Result<(), String> {
+        self.set_tool_velocity(tool, velocity)
+            .map_err(|e| e.to_string())
+    }
+    fn run_summary(&self, wall_s: f64, ending: Ending<'_>) -> Value {
+        rkforge_runner::solid_summary(self, wall_s, ending)
+    }
+}
+
 fn run(a: &Args) -> Result<(), String> {
     positive("--real-time-factor", a.real_time_factor)?;
     positive("--publish-rate", a.publish_rate)?;
     rkforge_core::set_threads(a.threads).map_err(|e| e.to_string())?;
-    let mut source = SceneSource::from_file(&a.scene).map_err(|e| e.to_string())?;
+    let text = std::fs::read_to_string(&a.scene)
+        .map_err(|e| format!("{}: cannot read: {e}", a.scene.display()))?;
+    if is_solid(&text) {
+        run_scene::<SolidSimulation>(a, &text)
+    } else {
+        run_scene::<Simulation>(a, &text)
+    }
+}
+
+/// Run the scene `text` (of the file `a.scene`) as a simulation of kind `S`.
+fn run_scene<S: NodeSim>(a: &Args, text: &str) -> Result<(), String> {
+    let file = a.scene.display().to_string();
+    let mut source =
+        SceneSource::<S::Scene>::of_text(text, &file, Vec::new()).map_err(|e| e.to_string())?;
     source.set_args(&a.set).map_err(|e| e.to_string())?;
     let scene = source.scene().clone();
     let topics = rkforge_ros::topics(&scene, &a.namespace)?;
     let domain = domain_id_from_env()?;
-    let end = scene.time.end_s;
-    let interval = match a.publish_rate {
-        Some(r) => 1.0 / r,
-        None => scene.history_interval(),
-    };
+    let (end, history_interval) = S::sampling(&scene);
+    let interval = a.publish_rate.map_or(history_interval, |r| 1.0 / r);
     let schedule = schedule(end, interval)?;
     let samples = schedule.len();
     // Wall time from scene setup on, as `rkforge run` counts it in summary.json.
     let wall = Instant::now();
-    let mut sim = Simulation::new(&scene).map_err(|e| e.to_string())?;
+    let mut sim = S::start(&scene)?;
     let mut node = Node::new(domain, &a.namespace, &scene)?;
     let mut recorder = match &a.record {
         Some(p) => Some(Recorder::create(
@@ -165,7 +233,7 @@ fn run(a: &Args) -> Result<(), String> {
     }
     eprintln!(
         "rkforge-ros: scene {} on ROS domain {domain}, namespace {}, {} samples every {interval:e} s of simulation time{}",
-        scene.name,
+        scene.scene_name(),
         a.namespace,
         samples + 1,
         if a.lockstep { ", lockstep" } else { "" }
@@ -220,7 +288,7 @@ fn run(a: &Args) -> Result<(), String> {
     let dropped = node.dropped();
     eprintln!(
         "rkforge-ros: published {published} samples up to t = {:e} s in {:.3} s wall{}{}",
-        sim.time(),
+        sim.time_now(),
         loop_wall,
         if dropped > 0 {
             format!(", {dropped} messages dropped (send window full)")
@@ -243,20 +311,20 @@ fn run(a: &Args) -> Result<(), String> {
 /// The run's summary for the recording: the runner's (`summary.json` of `rkforge run`:
 /// status `ok`, `stopped` by a signal or `error`), with the node's own figures under `ros`:
 /// samples published, messages dropped and the loop's wall time (s).
-fn summary(
-    sim: &Simulation,
+fn summary<S: NodeSim>(
+    sim: &S,
     outcome: &Result<u64, String>,
     stopped: bool,
     dropped: u64,
     loop_wall: f64,
 ) -> String {
-    let reason = format!("stopped by a signal at t = {:e} s", sim.time());
+    let reason = format!("stopped by a signal at t = {:e} s", sim.time_now());
     let ending = match (outcome, stopped) {
         (Err(e), _) => Ending::Failed(e),
         (Ok(_), true) => Ending::Stopped(&reason),
         (Ok(_), false) => Ending::Finished,
     };
-    let mut figures = rkforge_runner::summary(sim, loop_wall, 0.0, ending);
+    let mut figures = sim.run_summary(loop_wall, ending);
     figures["ros"] = json!({
         "samples_published": outcome.as_ref().ok(),
         "messages_dropped": dropped,
@@ -286,9 +354,9 @@ fn schedule(end: f64, interval: f64) -> Result<Vec<Mark>, String> {
 /// Commands apply between steps as they come; `progress` counts the steps of the order
 /// under way. Each sample records the runner's history row (penetration of every particle
 /// against its bound), as `rkforge run` does.
-fn simulate(
-    sim: &mut Simulation,
-    scene: &Scene,
+fn simulate<S: NodeSim>(
+    sim: &mut S,
+    scene: &S::Scene,
     schedule: Vec<Mark>,
     rx: &mut Receiver<ToSim>,
     tx: &Sender<FromSim>,
@@ -320,13 +388,13 @@ fn simulate(
             ToSim::Continue => Until::NextMark,
             ToSim::Step(n) => Until::Steps(n),
             ToSim::Reset => {
-                match Simulation::new(scene) {
+                match S::start(scene) {
                     Ok(s) => {
                         *sim = s;
                         run.restart(sim);
                     }
                     Err(e) => {
-                        let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
+                        let _ = tx.send(FromSim::Failed(e, Box::new(sample(sim))));
                         return;
                     }
                 }
@@ -339,7 +407,7 @@ fn simulate(
         // thread.
         let mut quit = false;
         let (orders, quitting) = (&mut *rx, &mut quit);
-        let between = move |sim: &mut Simulation, taken: u64| {
+        let between = move |sim: &mut S, taken: u64| {
             progress.store(taken, Ordering::Relaxed);
             while let Ok(msg) = orders.try_recv() {
                 match msg {
@@ -368,8 +436,8 @@ fn simulate(
 }
 
 /// Apply a velocity command (a bad one is reported and ignored).
-fn command(sim: &mut Simulation, c: Command) {
-    if let Err(e) = sim.set_tool_velocity(c.tool, c.velocity) {
+fn command<S: NodeSim>(sim: &mut S, c: Command) {
+    if let Err(e) = sim.command_velocity(c.tool, c.velocity) {
         eprintln!("warning: command ignored: {e}");
     }
 }
