@@ -612,6 +612,38 @@ def small_block(tmp_path, end="0.003", particles="[8, 8]", name="block_small.tom
     return p
 
 
+def small_bar_3d(tmp_path, cells="[2, 1, 8]", end="10.0e-6", name="bar3d_small.toml"):
+    """The quarter Taylor bar in 3D (scenes/taylor_bar_3d.toml: a fixed wall, no command
+    topic), coarse and short."""
+    p = tmp_path / name
+    p.write_text(scene_variant("taylor_bar_3d.toml", {
+        "cells = [8, 4, 60]": f"cells = {cells}",
+        "end_s = 80.0e-6": f"end_s = {end}",
+    }))
+    return p
+
+
+def upset_bar_3d(tmp_path, cells="[2, 1, 8]", end="10.0e-6", name="upset3d.toml"):
+    """The quarter bar of scenes/taylor_bar_3d.toml at rest on its wall, coarse and short,
+    upset by a second plane tool, `ram`, on its top face moving down at a constant 20 m/s
+    (a tool that takes velocity commands)."""
+    p = tmp_path / name
+    p.write_text(scene_variant("taylor_bar_3d.toml", {
+        "cells = [8, 4, 60]": f"cells = {cells}",
+        "end_s = 80.0e-6": f"end_s = {end}",
+        "initial_velocity_m_per_s = [0.0, 0.0, -227.0]": "initial_velocity_m_per_s = [0.0, 0.0, 0.0]",
+        "[output]": """[[tools]]
+name = "ram"
+point_m = [0.0, 0.0, 0.0324]
+normal = [0.0, 0.0, -1.0]
+axis = [0.0, 0.0, -1.0]
+motion = { kind = "constant", velocity_m_per_s = 20.0 }
+
+[output]""",
+    }))
+    return p
+
+
 def run_history(rkforge_bin, scene, out, *extra):
     """`rkforge run SCENE --no-frames` and its history rows."""
     subprocess.run([rkforge_bin, "run", str(scene), "--no-frames", "--quiet", "--out", str(out),

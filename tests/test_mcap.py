@@ -2,7 +2,8 @@
 readers, `mcap` + `mcap-ros2-support` and `rosbags`, zstd-compressed (the default) and
 uncompressed: every message decodes and the values match history.csv; the metadata and the
 attached scene read back equal to the run's scene and summary; SIGINT/SIGTERM finish the file;
-a killed process leaves a file readable up to its last chunk."""
+a killed process leaves a file readable up to its last chunk. A 3D run's recording (its own
+topics: no die fill, no laps) reads back the same way."""
 import json
 import math
 import signal
@@ -18,7 +19,9 @@ from mcap.records import Chunk, Message, Channel, Schema
 from mcap_ros2.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
 
-from ros_peer import ROOT, history, run_history, small_block, start_node
+from conftest import scene_variant
+from ros_peer import (ROOT, history, run_history, small_bar_3d, small_block, start_node,
+                      upset_bar_3d)
 
 TOPICS = {
     "/rkforge/top/wrench": "geometry_msgs/msg/WrenchStamped",
@@ -460,3 +463,200 @@ def test_the_foxglove_layout_shows_recorded_topics_and_fields(recorded):
         else:
             value = getattr(last[topic], field)
         assert isinstance(value, float), p
+
+
+# A 3D scene's topics: a wrench per plane tool, no die fill and no laps (2D only).
+TOPICS_3D = {
+    "/rkforge/wall/wrench": "geometry_msgs/msg/WrenchStamped",
+    "/rkforge/ram/wrench": "geometry_msgs/msg/WrenchStamped",
+    "/rkforge/tools": "sensor_msgs/msg/JointState",
+    "/rkforge/workpiece": "sensor_msgs/msg/PointCloud2",
+    "/rkforge/tool_markers": "visualization_msgs/msg/MarkerArray",
+    "/rkforge/energy": "rkforge_msgs/msg/Energy",
+    "/rkforge/outputs": "rkforge_msgs/msg/Outputs",
+    "/clock": "rosgraph_msgs/msg/Clock",
+}
+
+
+@pytest.fixture(scope="module", params=["zstd", "none"])
+def recorded_3d(request, rkforge_bin, tmp_path_factory):
+    """A 3D run with --mcap: the coarse quarter bar upset between its wall and a ram
+    (ros_peer.upset_bar_3d), in the chunk compression of the parameter: (history rows, MCAP
+    file, compression, output folder, scene file)."""
+    d = tmp_path_factory.mktemp("mcap3d")
+    scene = upset_bar_3d(d)
+    path = d / "run3d.mcap"
+    rows = run_history(rkforge_bin, scene, d / "out", "--mcap", str(path),
+                       "--mcap-compression", request.param)
+    return rows, path, request.param, d / "out", scene
+
+
+def cloud_points(cloud):
+    """The float32 fields of each point of a PointCloud2, as tuples in field order."""
+    n = len(cloud.fields)
+    data = bytes(cloud.data)
+    return [struct.unpack_from(f"<{n}f", data, k * cloud.point_step) for k in range(cloud.width)]
+
+
+def check_3d_against_history(msgs, rows, particles):
+    """The messages of a 3D recording match its history rows: the forces in x, y and z, the
+    joint states, the particles with three coordinates within the history's bounds, the
+    tools' patches, the energy account, and the register's outputs bit for bit."""
+    by_topic = {}
+    for topic, log_time, m in msgs:
+        by_topic.setdefault(topic, []).append((log_time, m))
+    assert set(by_topic) == set(TOPICS_3D)
+    for topic, seq in by_topic.items():
+        assert [t for t, _ in seq] == [ns(r["time_s"]) for r in rows], topic
+    for tool in ["wall", "ram"]:
+        for (_, w), row in zip(by_topic[f"/rkforge/{tool}/wrench"], rows):
+            f = w.wrench.force
+            assert (f.x, f.y, f.z) == (row[f"{tool}.force_x_N"], row[f"{tool}.force_y_N"],
+                                       row[f"{tool}.force_z_N"])
+            assert w.header.frame_id == "rkforge"
+    assert max(abs(r["ram.force_z_N"]) for r in rows) > 1e3, "the ram presses"
+    for (_, js), row in zip(by_topic["/rkforge/tools"], rows):
+        assert list(js.name) == ["wall", "ram"]
+        for k, tool in enumerate(js.name):
+            assert js.position[k] == row[f"{tool}.stroke_m"]
+            assert js.velocity[k] == row[f"{tool}.velocity_m_per_s"]
+            assert js.effort[k] == row[f"{tool}.force_N"]
+    for (_, c), row in zip(by_topic["/rkforge/workpiece"], rows):
+        assert [f.name for f in c.fields] == ["x", "y", "z", "plastic_strain", "von_mises"]
+        assert (c.height, c.width, c.point_step) == (1, particles, 20)
+        pts = cloud_points(c)
+        for k, axis in enumerate("xyz"):
+            assert min(p[k] for p in pts) == pytest.approx(row[f"workpiece.{axis}_min_m"], abs=1e-7)
+            assert max(p[k] for p in pts) == pytest.approx(row[f"workpiece.{axis}_max_m"], abs=1e-7)
+        assert max(p[3] for p in pts) <= row["workpiece.max_plastic_strain"] + 1e-7
+    last = cloud_points(by_topic["/rkforge/workpiece"][-1][1])
+    assert max(p[3] for p in last) > 0, "the upset bar has yielded"
+    for (_, m), row in zip(by_topic["/rkforge/tool_markers"], rows):
+        wall, ram = m.markers
+        assert (wall.text, ram.text) == ("wall", "ram")
+        assert [len(wall.points), len(ram.points)] == [5, 5]
+        assert {p.z for p in wall.points} == {0.0}
+        for p in ram.points:
+            assert p.z == pytest.approx(0.0324 - row["ram.stroke_m"], abs=1e-15)
+        assert {round(p.x, 12) for p in ram.points} == {
+            round(row["workpiece.x_min_m"], 12), round(row["workpiece.x_max_m"], 12)}
+    for (_, e), row in zip(by_topic["/rkforge/energy"], rows):
+        for field, column in ENERGY.items():
+            assert getattr(e, field) == row[f"energy.{column}"], field
+    for (_, o), row in zip(by_topic["/rkforge/outputs"], rows):
+        got = dict(zip(o.names, o.values))
+        assert {c: got[c] for c in row} == row
+        assert dict(zip(o.names, o.units))["ram.force_z_N"] == "N"
+        assert "ram.peak_force_N" in set(got) - set(row)
+    for (_, c), row in zip(by_topic["/clock"], rows):
+        assert c.clock.sec * 10**9 + c.clock.nanosec == ns(row["time_s"])
+
+
+def test_a_3d_recording_reads_back_with_the_mcap_reader(recorded_3d):
+    rows, path, compression, out, _ = recorded_3d
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary.statistics.message_count == len(rows) * len(TOPICS_3D)
+    expected = {"zstd": "zstd", "none": ""}[compression]
+    assert all(ci.compression == expected for ci in summary.chunk_indexes)
+    assert {c.topic: summary.schemas[c.schema_id].name
+            for c in summary.channels.values()} == TOPICS_3D
+    particles = json.loads((out / "summary.json").read_text())["particles"]
+    check_3d_against_history(decoded(path), rows, particles)
+
+
+def test_a_3d_recording_reads_back_with_rosbags(recorded_3d):
+    rows, path, _, out, _ = recorded_3d
+    msgs = []
+    with AnyReader([path]) as reader:
+        assert {c.topic: c.msgtype for c in reader.connections} == TOPICS_3D
+        for c, log_time, raw in reader.messages():
+            msgs.append((c.topic, log_time, reader.deserialize(raw, c.msgtype)))
+    msgs.sort(key=lambda m: (m[1], list(TOPICS_3D).index(m[0])))
+    particles = json.loads((out / "summary.json").read_text())["particles"]
+    check_3d_against_history(msgs, rows, particles)
+
+
+def test_a_3d_file_holds_its_scene_and_summary(recorded_3d):
+    rows, path, compression, out, scene = recorded_3d
+    meta = metadata(path)
+    run = meta["rkforge"]
+    assert (run["scene"], run["kinematics"], run["integration"]) == ("taylor_bar_3d", "3d", "q2")
+    assert (run["resolution"], run["resolution_key"]) == ("2x1x8", "workpiece.cells")
+    assert (run["writer"], run["compression"]) == ("rkforge run", compression)
+    assert json.loads(run["time"])["end_s"] == 10.0e-6
+    assert meta["rkforge_summary"] == {"summary_json": (out / "summary.json").read_text()}
+    summary = json.loads(meta["rkforge_summary"]["summary_json"])
+    assert summary["status"] == "ok" and summary["kinematics"] == "3d"
+    assert summary["end_time_s"] == rows[-1]["time_s"]
+    assert attachments(path) == {scene.name: ("application/toml", scene.read_bytes())}
+    last = [m for topic, _, m in decoded(path) if topic == "/rkforge/outputs"][-1]
+    got = dict(zip(last.names, last.values))
+    for tool in summary["tools"]:
+        assert got[f"{tool['name']}.peak_force_N"] == tool["peak_force_N"]
+    assert got["workpiece.height_m"] == summary["workpiece"]["height_m"]
+
+
+def test_the_node_records_the_3d_run_as_rkforge_run_does(recorded_3d, rkforge_ros_bin, tmp_path):
+    rows, path, compression, run_out, _ = recorded_3d
+    scene = upset_bar_3d(tmp_path)
+    out = tmp_path / "node3d.mcap"
+    p = start_node(rkforge_ros_bin, scene, 153, "--record", str(out),
+                   "--record-compression", compression)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 0, err
+    assert f"recorded {out}" in err
+
+    def raw(f):
+        with open(f, "rb") as fh:
+            return [(c.topic, m.log_time, m.data) for _, c, m in make_reader(fh).iter_messages()]
+
+    assert raw(out) == raw(path)
+    meta = metadata(out)
+    assert (meta["rkforge"]["writer"], meta["rkforge"]["kinematics"]) == ("rkforge-ros", "3d")
+    summary = json.loads(meta["rkforge_summary"]["summary_json"])
+    assert summary["status"] == "ok" and summary["ros"]["samples_published"] == len(rows)
+    run = json.loads((run_out / "summary.json").read_text())
+    volatile = ("wall_s", "stage_seconds", "us_per_particle_step", "ros")
+    assert {k: v for k, v in summary.items() if k not in volatile} == \
+        {k: v for k, v in run.items() if k not in volatile}
+
+
+def test_a_hot_3d_scene_records_the_temperature(rkforge_bin, tmp_path):
+    """The OFHC bar in 3D (adiabatic heating): its cloud has the `temperature` field, the
+    particles' temperatures (smoothed from the points) between the start's 22 C and
+    history.csv's largest point temperature, warmer at the end than at the start."""
+    scene = tmp_path / "ofhc3d.toml"
+    scene.write_text(scene_variant("taylor_ofhc_3d.toml", {"cells = [8, 4, 48]": "cells = [2, 1, 8]",
+                                                           "end_s = 100.0e-6": "end_s = 10.0e-6"}))
+    out, path = tmp_path / "out", tmp_path / "ofhc3d.mcap"
+    rows = run_history(rkforge_bin, scene, out, "--mcap", str(path))
+    clouds = [m for topic, _, m in decoded(path) if topic == "/rkforge/workpiece"]
+    assert len(clouds) == len(rows) == 11
+    for cloud, row in zip(clouds, rows):
+        assert [f.name for f in cloud.fields][5:] == ["temperature"]
+        assert cloud.point_step == 24
+        temps = [p[5] for p in cloud_points(cloud)]
+        assert 22.0 - 1e-4 <= min(temps) and max(temps) <= row["thermal.temperature_max_c"] + 1e-3
+    assert max(temps) > 30.0, "the foot heats"
+
+
+def test_sigint_finishes_the_file_of_a_3d_run(rkforge_bin, tmp_path):
+    scene = small_bar_3d(tmp_path, cells="[4, 2, 24]", end="80.0e-6")
+    path = tmp_path / "int3d.mcap"
+    p = subprocess.Popen([rkforge_bin, "run", str(scene), "--no-frames", "--quiet",
+                          "--out", str(tmp_path / "out"), "--mcap", str(path)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wait_for_chunks(p, path, 1)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=30)
+    assert p.returncode == 1 and "interrupted by a signal" in err, err
+    rows = history(tmp_path / "out" / "history.csv")
+    assert 1 < len(rows) < 81, "stopped midway"
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary.statistics.message_count == len(rows) * 7
+    meta = metadata(path)
+    s = json.loads(meta["rkforge_summary"]["summary_json"])
+    assert s["status"] == "stopped" and "interrupted by a signal" in s["error"]
+    assert s == json.loads((tmp_path / "out" / "summary.json").read_text())

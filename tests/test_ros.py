@@ -1,5 +1,7 @@
 """`rkforge-ros` seen by an independent ROS 2 peer: Cyclone DDS (PyPI `cyclonedds`, the DDS
-under rmw_cyclonedds_cpp) with the standard DDS type names. Each test uses its own ROS domain."""
+under rmw_cyclonedds_cpp) with the standard DDS type names, on 2D and 3D scenes. Each test uses
+its own ROS domain."""
+import json
 import math
 import struct
 import subprocess
@@ -21,32 +23,33 @@ from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest,
                       ServiceClient, SetParametersReply, SetParametersRequest, SimulateSteps,
                       Simulator, WrenchStamped,
                       parameter_value, qos, quit_node, run_history, running_node, small_block,
-                      stamp_ns, start_node, take, wait_matched, wait_readers_matched,
-                      wait_until)
+                      stamp_ns, start_node, take, upset_bar_3d, wait_matched,
+                      wait_readers_matched, wait_until)
 
 NS = "/rkforge"
 
 
 class LockstepController:
     """Answers each new joint state (by stamp) once with the velocities `command(k, js)` for
-    the top and bottom tools, and keeps what it read."""
+    the `commanded` tools (the block's top and bottom), reads the wrenches of the `tools`,
+    and keeps what it read."""
 
-    def __init__(self, domain, command, clouds=False):
+    def __init__(self, domain, command, tools=("top", "bottom"), commanded=("top", "bottom")):
         self.peer = Peer(domain)
         # Transient local, as the node offers them: samples published before a reader
         # matched still reach it.
         self.tools = self.peer.reader(f"{NS}/tools", JointState, latched=True)
         self.wrenches = {n: self.peer.reader(f"{NS}/{n}/wrench", WrenchStamped, latched=True)
-                         for n in ["top", "bottom"]}
+                         for n in tools}
         self.clock = self.peer.reader("/clock", Clock, latched=True)
         self.energy = self.peer.reader(f"{NS}/energy", Energy, latched=True)
         self.outputs = self.peer.reader(f"{NS}/outputs", Outputs, latched=True)
         self.cloud = self.peer.reader(f"{NS}/workpiece", PointCloud2, reliable=False)
-        self.cmd = {n: self.peer.writer(f"{NS}/{n}/velocity_cmd", Float64)
-                    for n in ["top", "bottom"]}
+        self.commanded = list(commanded)
+        self.cmd = {n: self.peer.writer(f"{NS}/{n}/velocity_cmd", Float64) for n in commanded}
         self.command = command
         self.states = {}
-        self.wrench = {"top": {}, "bottom": {}}
+        self.wrench = {n: {} for n in tools}
         self.clouds = {}
         self.clocks = set()
         self.energies = {}
@@ -65,7 +68,7 @@ class LockstepController:
                 if s in self.states:
                     continue  # republished while the node waits
                 self.states[s] = js
-                for name, v in zip(["top", "bottom"], self.command(len(self.states) - 1, js)):
+                for name, v in zip(self.commanded, self.command(len(self.states) - 1, js)):
                     wait_matched(self.cmd[name])
                     self.cmd[name].write(Float64(v))
             for n, r in self.wrenches.items():
@@ -630,3 +633,90 @@ def test_bad_arguments_are_named(rkforge_ros_bin, tmp_path, args, message):
                        capture_output=True, text=True, timeout=30)
     assert p.returncode == 1
     assert message in p.stderr
+
+
+def test_a_3d_scene_over_dds_gives_its_history(rkforge_bin, rkforge_ros_bin, tmp_path):
+    """A 3D scene (the coarse quarter bar upset between its wall and a ram) over DDS: in
+    lockstep, commanding the ram's own 20 m/s reproduces `rkforge run` bit for bit: the joint
+    states, the wrenches with their z parts, the energy account and the register's outputs
+    at history.csv's times; the point cloud has every particle with three coordinates."""
+    scene = upset_bar_3d(tmp_path)
+    rows = run_history(rkforge_bin, scene, tmp_path / "out")
+    particles = json.loads((tmp_path / "out" / "summary.json").read_text())["particles"]
+    ctl = LockstepController(176, lambda k, js: (20.0,), tools=("wall", "ram"),
+                             commanded=("ram",))
+    node = start_node(rkforge_ros_bin, scene, 176, "--lockstep")
+    _, err = ctl.serve(node)
+    assert node.returncode == 0, err
+    stamps = sorted(ctl.states)
+    assert stamps == [round(r["time_s"] * 1e9) for r in rows]
+    for s, row in zip(stamps, rows):
+        js = ctl.states[s]
+        assert list(js.name) == ["wall", "ram"]
+        for k, tool in enumerate(js.name):
+            assert js.position[k] == row[f"{tool}.stroke_m"]
+            assert js.velocity[k] == row[f"{tool}.velocity_m_per_s"]
+            assert js.effort[k] == row[f"{tool}.force_N"]
+    for tool, got in ctl.wrench.items():
+        assert set(got) == set(stamps), f"{tool}: reliable wrenches are all delivered"
+        for s, row in zip(stamps, rows):
+            f = got[s].wrench.force
+            assert (f.x, f.y, f.z) == (row[f"{tool}.force_x_N"], row[f"{tool}.force_y_N"],
+                                       row[f"{tool}.force_z_N"])
+    assert rows[-1]["ram.stroke_m"] > 1e-4 and abs(rows[-1]["ram.force_z_N"]) > 1e3
+    assert set(ctl.energies) == set(stamps)
+    for s, row in zip(stamps, rows):
+        e = ctl.energies[s]
+        assert (e.kinetic, e.plastic, e.tool_work) == (
+            row["energy.kinetic_J"], row["energy.plastic_J"], row["energy.tool_work_J"])
+    assert set(ctl.register) == set(stamps), "reliable outputs are all delivered"
+    for s, row in zip(stamps, rows):
+        got = dict(zip(ctl.register[s].names, ctl.register[s].values))
+        assert {c: got[c] for c in row} == row
+    assert ctl.clouds, "no point cloud arrived"
+    by_stamp = dict(zip(stamps, rows))
+    for s, c in ctl.clouds.items():
+        row = by_stamp[s]
+        assert (c.width, c.point_step) == (particles, 20)
+        data = bytes(c.data)
+        pts = [struct.unpack_from("<5f", data, 20 * k) for k in range(c.width)]
+        for k, axis in enumerate("xyz"):
+            assert min(p[k] for p in pts) == pytest.approx(row[f"workpiece.{axis}_min_m"], abs=1e-7)
+            assert max(p[k] for p in pts) == pytest.approx(row[f"workpiece.{axis}_max_m"], abs=1e-7)
+
+
+def test_a_3d_node_pauses_steps_resets_and_quits(rkforge_ros_bin, tmp_path):
+    """The simulation_interfaces services and SimulateSteps on a 3D scene (the coarse quarter
+    bar upset by a ram, its step set by the stable step; in lockstep with nobody commanding,
+    playing holds the first sample): paused, N steps move the time on, by the service and by
+    the action; a reset brings back t = 0."""
+    scene = upset_bar_3d(tmp_path)
+    with running_node(rkforge_ros_bin, scene, 177, "--lockstep", "--hold-at-end") as node:
+        peer = Peer(177)
+        sim = Simulator(peer)
+        assert sim.set(sim.PAUSED) == (1, "")
+        watch = StampWatch(peer)
+        assert watch.wait_for(0) == 0
+        assert sim.step(3) == (1, "")
+        t3 = wait_for_new_stamp(watch, 0)
+        assert 0 < t3 < 1000, "3 steps of about 170 ns"
+        action = SimulateSteps(peer)
+        action.wait_ready()
+        goal, accepted = action.send(5)
+        assert accepted
+        assert action.result(goal)[:2] == (action.SUCCEEDED, 1)
+        t8 = wait_for_new_stamp(watch, t3)
+        assert t8 > t3
+        assert sim.reset() == (1, "")
+        assert wait_for_new_stamp(watch, t8) == 0
+        assert sim.state() == sim.PAUSED
+        quit_node(sim, node)
+
+
+def wait_for_new_stamp(watch, previous):
+    """The first joint-state stamp other than `previous` that `watch` sees."""
+    seen = len(watch.stamps)
+    wait_until(lambda: watch.stamps.extend(stamp_ns(js.header) for js in take(watch.reader))
+               or any(s != previous for s in watch.stamps[seen:]), 60,
+               f"a joint state after {previous} ns")
+    return next(s for s in watch.stamps[seen:] if s != previous)
