@@ -111,15 +111,13 @@ fn a_cells_points_are_one_group() {
 }
 
 /// The particle means of point values: a uniform value reads back at every particle (each
-/// particle is reached by points, the weights are a mean's) for both cell rules; a value
-/// growing along z gives particle means growing along z, the highest particles' above the
-/// lowest's.
+/// particle is reached by points, the weights are a mean's) for the cell rules and SCNI's
+/// nodal points; a value growing along z gives particle means growing along z, the highest
+/// particles' above the lowest's.
 #[test]
 fn particle_means_are_weighted_means_of_the_points_around() {
-    for (scene, rule) in [
-        (quarter_bar([4, 2, 8], "q2", 1e-7), "q2"),
-        (quarter_bar([4, 2, 8], "q4", 1e-7), "q4"),
-    ] {
+    for rule in ["q2", "q4", "scni"] {
+        let scene = quarter_bar([4, 2, 8], rule, 1e-7);
         let sim = SolidSimulation::new(&scene).unwrap();
         let uniform = sim.particle_means(&vec![2.5; sim.point_count()]);
         assert_eq!(uniform.len(), sim.particle_count());
