@@ -321,10 +321,14 @@ impl<const D: usize> Scatter<D> {
     }
 }
 
-impl Scatter {
+impl<const D: usize> Scatter<D> {
     /// Point `p`'s entries in its group's block: each particle of the group's list with
-    /// `[N, dN/dX, dN/dY]`, zero where the particle is only in another point's list.
-    pub(super) fn point_row(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
+    /// `N` and its gradient `dN/dX_k` (1, 1/m), zero where the particle is only in another
+    /// point's list.
+    pub(super) fn point_entries(
+        &self,
+        p: usize,
+    ) -> impl Iterator<Item = (usize, Real, [Real; D])> + '_ {
         let first = (0..=p).rev().find(|&q| self.group[q] > 0).unwrap_or(0);
         let (g, q) = (self.group[first] as usize, p - first);
         let [a, b] = self.list_range[first];
@@ -334,8 +338,21 @@ impl Scatter {
             .iter()
             .enumerate()
             .map(move |(k, &i)| {
-                let v = &block[3 * g * k..3 * g * (k + 1)];
-                (base + i as usize, [v[q], v[g + q], v[2 * g + q]])
+                let v = &block[(D + 1) * g * k..(D + 1) * g * (k + 1)];
+                (
+                    base + i as usize,
+                    v[q],
+                    std::array::from_fn(|c| v[(c + 1) * g + q]),
+                )
             })
+    }
+}
+
+impl Scatter {
+    /// Point `p`'s entries in its group's block: each particle of the group's list with
+    /// `[N, dN/dX, dN/dY]`, zero where the particle is only in another point's list.
+    pub(super) fn point_row(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
+        self.point_entries(p)
+            .map(|(i, n, [nx, ny])| (i, [n, nx, ny]))
     }
 }
