@@ -439,15 +439,16 @@ fn heat_balance(values: [f64; 9]) -> f64 {
 /// (one e-folding, 0.087 s) the mode's amplitude (the points' temperatures projected on
 /// `cos(pi x / L)` with their weights) is within 0.5 % of the closed form's on 0.5 mm
 /// spacing (+0.40 %) and within 0.15 % on 0.25 mm (+0.09 %), the error falling more than 3
-/// times (4.3: second order), with q4 and q2; `thermal.dt_safety = 0.05` keeps the explicit
-/// step's own error (of the other sign, -0.1 % at the default 0.5) below the grid's. The
-/// mean stays at 500 C and the heat content at its start to round-off.
+/// times (4.3: second order), with q4 and q2; with SCNI (the nodal domains) within 0.8 % and
+/// 0.25 % (+0.65 %, +0.18 %). `thermal.dt_safety = 0.05` keeps the explicit step's own error
+/// (of the other sign, -0.1 % at the default 0.5) below the grid's. The mean stays at 500 C
+/// and the heat content at its start to round-off.
 #[test]
 fn conduction_alone_decays_a_cosine_as_the_closed_form() {
     let l: f64 = 0.01;
     let a = K_CU / RHO_C_CU;
     let end = l * l / (PI * PI * a);
-    for rule in ["q4", "q2"] {
+    for rule in ["q4", "q2", "scni"] {
         let mut errors = Vec::new();
         for n in [21, 41] {
             let scene = copper_box(
@@ -496,8 +497,14 @@ fn conduction_alone_decays_a_cosine_as_the_closed_form() {
                 100.0 * (amplitude / exact - 1.0)
             );
         }
+        // SCNI integrates over the nodal domains: less accurate, as in 2D.
+        let bounds = if rule == "scni" {
+            [0.008, 0.0025]
+        } else {
+            [0.005, 0.0015]
+        };
         assert!(
-            errors[0] < 0.005 && errors[1] < 0.0015,
+            errors[0] < bounds[0] && errors[1] < bounds[1],
             "{rule}: {errors:?}"
         );
         assert!(errors[0] / errors[1] > 3.0, "{rule}: {errors:?}");
@@ -521,7 +528,9 @@ fn conduction_alone_decays_a_cosine_as_the_closed_form() {
 /// within 0.5 % (at most 0.10 %); and against rkforge's 2D plane-strain run of the same bar
 /// (the same spacing and rule name), the heat per area within 0.2 % (at most 0.094 %) and the
 /// temperatures at the points of the same height within 0.6 % of the step (at most 0.49 %:
-/// 3D's q2 is not 2D's). q4 and q2; the heat balance closes to round-off.
+/// 3D's q2 is not 2D's). q4 and q2; SCNI within 0.8 % at the points (0.52 %), 0.5 % in the
+/// heat (0.16 %), against 2D 0.5 % in the heat (0.15 %) and 1.2 % at the points (0.79 %).
+/// The heat balance closes to round-off.
 #[test]
 fn a_3d_bar_on_a_hot_die_against_the_semi_infinite_solution_and_2d() {
     let (l, h, w) = (0.04, 5e4, 0.001);
@@ -538,7 +547,7 @@ temperature_c = 520.0
 heat_transfer_w_per_m2_k = {h}
 "#
     );
-    for rule in ["q4", "q2"] {
+    for rule in ["q4", "q2", "scni"] {
         let scene = copper_box([w, w, l], [3, 3, 81], 20.0, rule, 0.4, "", &die);
         let mut sim = SolidSimulation::new(&scene).unwrap();
         let plane = plane_bar(w, l, h, rule);
@@ -585,16 +594,25 @@ heat_transfer_w_per_m2_k = {h}
                 100.0 * (q / q_exact - 1.0),
                 100.0 * (q / q_flat - 1.0)
             );
-            assert!(worst < 0.005, "{rule}, t = {time}: {worst}");
+            // SCNI integrates over the nodal domains: less accurate, as in 2D.
+            let [points, heat, heat_2d, points_2d] = if rule == "scni" {
+                [0.008, 0.005, 0.005, 0.012]
+            } else {
+                [0.005, 0.005, 0.002, 0.006]
+            };
+            assert!(worst < points, "{rule}, t = {time}: {worst}");
             assert!(
-                (q / q_exact - 1.0).abs() < 0.005,
+                (q / q_exact - 1.0).abs() < heat,
                 "{rule}, t = {time}: {q} against {q_exact}"
             );
             assert!(
-                (q / q_flat - 1.0).abs() < 0.002,
+                (q / q_flat - 1.0).abs() < heat_2d,
                 "{rule}, t = {time}: {q} against 2D {q_flat}"
             );
-            assert!(flat_worst < 0.006, "{rule}, t = {time}: 2D {flat_worst}");
+            assert!(
+                flat_worst < points_2d,
+                "{rule}, t = {time}: 2D {flat_worst}"
+            );
             assert!(exact(l) - 20.0 < 0.5, "the far end is still cold");
             assert!(heat_balance(sim.thermal_values().unwrap()).abs() < 1e-9);
         }
@@ -646,10 +664,11 @@ heat_transfer_w_per_m2_k = {h}
 /// K), the anvil through a coefficient over the contact pressure ([[0, 5e3], [2e8, 5e4]]),
 /// the free surface to air at 20 C (convection 50 W/(m^2 K), emissivity 0.8): the heat
 /// held plus what left to the dies and the air equals the plastic work's heat (`beta W_p`)
-/// to round-off (`thermal.heat_balance_rel` below 1e-9), the heat made matches the energy
-/// account's plastic work within 1 %, heat left through every way (the anvil more than twice
+/// to round-off (`thermal.heat_balance_rel` below 1e-9, measured 7e-15), the heat made
+/// matches the energy account's plastic work within 0.1 % (3.6524 J both), heat left through
+/// every way (the anvil more than twice
 /// what it takes at the table's h(0): the contact pressure is read), and the chilled ends
-/// are the coldest.
+/// are the coldest. Restored from its state half way, it ends with the same bits.
 #[test]
 fn a_hot_upset_keeps_its_heat_account() {
     let text = r#"
@@ -710,15 +729,26 @@ heat_transfer_w_per_m2_k = 2.0e4
     low.run_toward(scene.time.end_s, u64::MAX, |_, _| true)
         .unwrap();
     let mut sim = SolidSimulation::new(&scene).unwrap();
+    sim.run_toward(0.5 * scene.time.end_s, u64::MAX, |_, _| true)
+        .unwrap();
+    let saved = sim.state().clone();
     sim.run_toward(scene.time.end_s, u64::MAX, |_, _| true)
         .unwrap();
+    // A saved state goes on to the same bits, its heat stage's included.
+    let mut again = SolidSimulation::new(&scene).unwrap();
+    again.restore(saved).unwrap();
+    again
+        .run_toward(scene.time.end_s, u64::MAX, |_, _| true)
+        .unwrap();
+    assert_eq!(again.state(), sim.state());
     let v = sim.thermal_values().unwrap();
     let names: Vec<&str> = rkforge_core::THERMAL_MEASURES.iter().map(|m| m.0).collect();
     let at = |name: &str| v[names.iter().position(|n| *n == name).unwrap()];
     let plastic = at("plastic_heat_J");
     let balance = heat_balance(v);
     println!(
-        "plastic heat {plastic:.4} J, content {:.4} J, to tools {:.4} J ({:?}), to air {:.4} J, balance {balance:.1e}; temperatures {:.1} to {:.1} C",
+        "plastic heat {plastic:.4} J (beta W_p of the energy account {:.4} J), content {:.4} J, to tools {:.4} J ({:?}), to air {:.4} J, balance {balance:.1e}; temperatures {:.1} to {:.1} C",
+        0.9 * sim.energy().plastic,
         at("heat_content_J"),
         at("heat_to_tools_J"),
         [sim.tool_heat(0).unwrap(), sim.tool_heat(1).unwrap()],

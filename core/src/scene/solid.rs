@@ -745,6 +745,18 @@ separation = false
                 26,
             ),
             (
+                "separation = false",
+                "separation = false\ntemperature_c = 20.0",
+                "tools[0].temperature_c",
+                26,
+            ),
+            (
+                "separation = false",
+                "separation = false\nheat_transfer_w_per_m2_k = 1e4\n[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0",
+                "tools[0].heat_transfer_w_per_m2_k",
+                26,
+            ),
+            (
                 "end_s = 1e-6",
                 "end_s = 1e-6\nmass_scaling = { factor = 0.5 }",
                 "time.mass_scaling.factor",
