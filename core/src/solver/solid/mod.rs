@@ -15,11 +15,12 @@
 //! Heat in 3D is 2D's: the stress stage's heating of each point by its plastic work
 //! ([`super::heat`]), and when the scene's heat moves the heat stage
 //! ([`super::conduction`], generic over the dimension; the surface of the hexahedral cells
-//! in `heat.rs`): conduction, the heat to the plane tools and the surroundings. Mass scaling, uniform or selective, is 2D's
-//! ([`super::mass_scaling`]). SCNI integrates a box over its particles' nodal domains
-//! ([`crate::integration::point_shapes`], the 2D code in three dimensions). Not in 3D yet
-//! (refused by the scene's validation): friction heat, elasticity over temperature, kernel re-referencing, SCNI on a cylinder
-//! and its stabilization, self-contact and curved or triangulated tools.
+//! in `heat.rs`): conduction, the heat to the plane tools and the surroundings. Mass
+//! scaling, uniform or selective, is 2D's ([`super::mass_scaling`]). SCNI integrates a box
+//! over its particles' nodal domains ([`crate::integration::point_shapes`], the 2D code in
+//! three dimensions). Not in 3D yet (refused by the scene's validation): friction heat,
+//! elasticity over temperature, kernel re-referencing, SCNI on a cylinder and its
+//! stabilization, self-contact and curved or triangulated tools.
 
 mod contact;
 mod heat;
