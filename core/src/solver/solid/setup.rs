@@ -235,11 +235,16 @@ impl SolidSimulation {
                 }
             }
         }
+        let heat_surface = if scene.transfers_heat() {
+            HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
+        } else {
+            HeatSurface::default()
+        };
         let mut disc = SolidDisc {
             inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
             mass,
             material,
-            ref_pos: p.positions.clone(),
+            ref_pos: p.positions,
             volumes: p.volumes,
             point_positions: p.points,
             weights: p.weights,
@@ -251,7 +256,7 @@ impl SolidSimulation {
             sum_abs,
             h_min: p.h_min,
             critical_dt0: p.h_min / wave_speed,
-            cells: p.cells.clone(),
+            cells: p.cells,
             scene_tools,
             mass_scaling: None,
             nodal_points: scene.discretization.integration == IntegrationRule::Scni,
@@ -264,11 +269,7 @@ impl SolidSimulation {
                     lambda0: 0.0,
                 }),
             }),
-            heat_surface: if scene.transfers_heat() {
-                HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
-            } else {
-                HeatSurface::default()
-            },
+            heat_surface,
         };
         update_eigenvalue(&mut disc)?;
         let temp0 = scene.thermal.as_ref().map(|t| t.initial_temperature_c);
