@@ -166,6 +166,9 @@ mod tests {
             },
             friction: Friction::default(),
             separation: true,
+            temperature_c: None,
+            heat_transfer_w_per_m2_k: 0.0,
+            heat_transfer_by_pressure: Vec::new(),
         };
         let mut t = PlaneTool::new(&spec, 0.5);
         assert_eq!(t.depth_of([3.0, -2.0, 0.75]), -0.25);

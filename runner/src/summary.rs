@@ -171,6 +171,9 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
             "integration": t.integration.as_secs_f64(),
         },
     });
+    if scene.transfers_heat() {
+        summary["stage_seconds"]["heat"] = json!(t.heat.as_secs_f64());
+    }
     place(&mut summary, &solid_columns(scene), &sample);
     summary
 }

@@ -658,7 +658,7 @@ impl<S: Body> Output<S> {
     }
 
     /// In group `group`.
-    const fn in_group(mut self, group: &'static str) -> Output<S> {
+    pub(super) const fn in_group(mut self, group: &'static str) -> Output<S> {
         self.group = group;
         self
     }

@@ -4,7 +4,7 @@
 //! 3D body has (a tool's force along z, the z bounds) or reads differently (the workpiece's
 //! bounds and radius over its particles, the penetration of the plane tools) is here.
 //! Not in 3D yet: the particle fields (2D smooths the points' values onto the particles),
-//! fill points, followed faces, laps and the tools' heat.
+//! fill points, followed faces and laps.
 
 use super::register::{energy, particles, points, scalar, thermal_measures, time, tool};
 use super::{expand, fields_of, At, Column, Kind, Output, Sample, Shown, When};
@@ -29,7 +29,7 @@ const ENERGY: [Output<SolidSimulation>; 10] = energy();
 const THERMAL: [Output<SolidSimulation>; 9] = thermal_measures();
 
 /// Each plane tool (the symmetry planes are not tools).
-const TOOLS: [Output<SolidSimulation>; 7] = [
+const TOOLS: [Output<SolidSimulation>; 9] = [
     tool::<SolidSimulation>(
         "stroke_m",
         "m",
@@ -77,6 +77,24 @@ const TOOLS: [Output<SolidSimulation>; 7] = [
         "largest magnitude of the force on tool {tool} so far",
         |s, k| s.tools()[k].state.peak_force,
     )
+    .showing(Shown::NOT_IN_HISTORY),
+    tool::<SolidSimulation>(
+        "heat_flow_W",
+        "W",
+        "heat flow from the workpiece into tool {tool} at the last heat stage",
+        |s, k| s.tool_heat_flows().map_or(Real::NAN, |f| f[k]),
+    )
+    .in_group("thermal")
+    .present(When::HeatedTool)
+    .showing(Shown::NOT_IN_SUMMARY),
+    tool::<SolidSimulation>(
+        "heat_J",
+        "J",
+        "heat that has flowed from the workpiece into tool {tool} since the start",
+        |s, k| s.tool_heat(k).unwrap_or(Real::NAN),
+    )
+    .in_group("thermal")
+    .present(When::Thermal)
     .showing(Shown::NOT_IN_HISTORY),
 ];
 
@@ -234,12 +252,17 @@ impl<'a> Sample<'a, SolidSimulation> {
 }
 
 impl When {
-    /// Whether a 3D scene has the output: every scene, or one with `[thermal]`; what only
-    /// 2D scenes have never.
-    pub fn holds_solid(self, scene: &SolidScene) -> bool {
+    /// Whether a 3D scene has the output at `at`: every scene, one with `[thermal]`, a tool
+    /// with a heat transfer coefficient (constant or over pressure) in one; what only 2D
+    /// scenes have never.
+    pub fn holds_solid(self, scene: &SolidScene, at: At) -> bool {
         match self {
             When::Always => true,
             When::Thermal => scene.thermal.is_some(),
+            When::HeatedTool => {
+                scene.thermal.is_some()
+                    && matches!(at, At::Tool(k) if scene.tools[k].heat_contact().transfers_heat())
+            }
             _ => false,
         }
     }
@@ -270,7 +293,7 @@ pub fn solid_columns(scene: &SolidScene) -> Vec<Column<SolidSimulation>> {
                 .collect(),
             _ => Vec::new(),
         },
-        |when, _| when.holds_solid(scene),
+        |when, at| when.holds_solid(scene, at),
     )
 }
 
@@ -278,5 +301,7 @@ pub fn solid_columns(scene: &SolidScene) -> Vec<Column<SolidSimulation>> {
 pub fn solid_fields(
     scene: &SolidScene,
 ) -> impl Iterator<Item = &'static Output<SolidSimulation>> + '_ {
-    fields_of(&SOLID_REGISTER, move |when| when.holds_solid(scene))
+    fields_of(&SOLID_REGISTER, move |when| {
+        when.holds_solid(scene, At::Whole)
+    })
 }

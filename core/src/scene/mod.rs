@@ -41,7 +41,7 @@ pub use reference::Reference;
 pub use self_contact::SelfContactSpec;
 pub use solid::{SceneFile, SolidScene};
 pub use time::{MassScaling, TimeSpec};
-pub use tools::{FillPoint, Motion, ToolSpec};
+pub use tools::{FillPoint, HeatContact, Motion, ToolSpec};
 pub use workpiece::Workpiece;
 
 use crate::error::{Error, Result};

@@ -5,12 +5,13 @@
 //! checks; what depends on the dimension (the workpiece, the tools, the discretisation's
 //! support) is here. [`SceneFile::from_file`] reads either kind and says which.
 //!
-//! What the 3D solver does not model yet is refused with the key that asks for it: the
-//! heat that moves (conduction, the surroundings, friction heat) and elasticity over
-//! temperature in `[thermal]` (3D heats adiabatically) and kernel re-referencing.
+//! What the 3D solver does not model yet is refused with the key that asks for it: friction
+//! heat and elasticity over temperature in `[thermal]` (3D heats by plastic work, conducts,
+//! and exchanges heat with the tools and the surroundings) and kernel re-referencing.
 
 use super::{
-    Checks, IntegrationRule, MaterialSpec, Motion, Reference, Scene, ThermalSpec, TimeSpec,
+    Checks, HeatContact, IntegrationRule, MaterialSpec, Motion, Reference, Scene, ThermalSpec,
+    TimeSpec,
 };
 use crate::error::Result;
 use crate::friction::Friction;
@@ -221,10 +222,40 @@ pub struct PlaneToolSpec {
     /// the finite-element benchmarks, holding every particle that reached it.
     #[serde(default = "default_separation")]
     pub separation: bool,
+    /// The tool's temperature (degrees C) in a scene with `[thermal]`; it stays at it (as
+    /// in 2D, [`super::ToolSpec::temperature_c`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub temperature_c: Option<Real>,
+    /// Heat transfer coefficient of the contact between the tool and the workpiece
+    /// (W/(m^2 K)), for a surface particle touching the tool; 0 (the default): no heat
+    /// crosses.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub heat_transfer_w_per_m2_k: Real,
+    /// Heat transfer coefficient rising with the contact pressure instead of the constant:
+    /// `[[p (Pa), h (W/(m^2 K))], ...]`, p increasing, linear between the points and held
+    /// beyond them; a particle's pressure is its normal contact force on the tool, averaged
+    /// over the time since the last heat stage, over its share of the contact.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub heat_transfer_by_pressure: Vec<[Real; 2]>,
 }
 
 fn default_separation() -> bool {
     true
+}
+
+fn is_zero(x: &Real) -> bool {
+    *x == 0.0
+}
+
+impl PlaneToolSpec {
+    /// The tool's temperature and heat transfer (the 2D tool's keys).
+    pub fn heat_contact(&self) -> HeatContact<'_> {
+        HeatContact {
+            temperature_c: self.temperature_c,
+            heat_transfer_w_per_m2_k: self.heat_transfer_w_per_m2_k,
+            heat_transfer_by_pressure: &self.heat_transfer_by_pressure,
+        }
+    }
 }
 
 /// The `[output]` section of a 3D scene.
@@ -267,9 +298,10 @@ pub struct SolidScene {
     pub workpiece: SolidWorkpiece,
     /// Its material.
     pub material: MaterialSpec,
-    /// Temperature and heat: the adiabatic heating of the plastic work, as in 2D
-    /// ([`ThermalSpec`]; the heat that moves and elasticity over temperature are refused,
-    /// [`SolidScene::check_adiabatic`]); a scene without it is isothermal.
+    /// Temperature and heat, as in 2D ([`ThermalSpec`]): the heating of the plastic work,
+    /// conduction, the heat to the tools and the surroundings; friction heat and elasticity
+    /// over temperature are refused ([`SolidScene::check_heat`]); a scene without it is
+    /// isothermal.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thermal: Option<ThermalSpec>,
     /// Speed/accuracy knobs of the discretisation.
@@ -311,9 +343,18 @@ impl SolidScene {
         match &self.thermal {
             Some(t) => {
                 t.check(&mut out);
-                self.check_adiabatic(t, &mut out);
+                self.check_heat(t, &mut out);
             }
-            None => super::across_sections::flow_stress_needs_heat(&self.material, &mut out),
+            None => {
+                super::across_sections::flow_stress_needs_heat(&self.material, &mut out);
+                for (i, tool) in self.tools.iter().enumerate() {
+                    out.check(
+                        tool.temperature_c.is_none() && !tool.heat_contact().transfers_heat(),
+                        &format!("tools[{i}].temperature_c"),
+                        "a tool's temperature and heat transfer need the [thermal] section".into(),
+                    );
+                }
+            }
         }
         let d = &self.discretization;
         out.check(
@@ -375,19 +416,13 @@ impl SolidScene {
         out.0
     }
 
-    /// The 3D solver's heat is adiabatic: each point keeps the heat of its plastic work,
-    /// `rho_0 c dT = beta dW_p` (`solver/heat.rs`), and nothing moves it. Conduction, the
-    /// surroundings (convection, radiation), elasticity over temperature and friction heat
-    /// (which needs the heat stage) are 2D only for now: each is refused with its key.
-    fn check_adiabatic(&self, t: &ThermalSpec, out: &mut validation::Checks) {
-        let moving = [
-            ("conductivity_w_per_m_k", t.conductivity_w_per_m_k != 0.0),
-            (
-                "conductivity_by_temperature",
-                !t.conductivity_by_temperature.is_empty(),
-            ),
-            ("convection_w_per_m2_k", t.convection_w_per_m2_k != 0.0),
-            ("emissivity", t.emissivity != 0.0),
+    /// Heat in 3D (`solver/conduction.rs`, `solver/solid/heat.rs`): the plastic work's
+    /// heat, conduction, and the heat to the tools and the surroundings, as in 2D; each
+    /// tool's temperature and heat transfer checked as a 2D tool's
+    /// ([`HeatContact::check`]). Elasticity over temperature and friction heat are 2D only
+    /// for now: each is refused with its key.
+    fn check_heat(&self, t: &ThermalSpec, out: &mut validation::Checks) {
+        let thermoelastic = [
             (
                 "modulus_factor_by_temperature",
                 !t.modulus_factor_by_temperature.is_empty(),
@@ -398,20 +433,45 @@ impl SolidScene {
                 !t.thermal_strain_by_temperature.is_empty(),
             ),
         ];
-        for (key, given) in moving {
+        for (key, given) in thermoelastic {
             out.check(
                 !given,
                 &format!("thermal.{key}"),
-                "the 3D solver heats adiabatically only for now (the plastic work's heat stays where it is made: no conduction, surroundings or elasticity over temperature); remove it or run the scene in 2D".into(),
+                "elasticity over temperature is 2D only for now (the 3D solver heats, conducts and exchanges heat with the tools and the surroundings, with a constant modulus and no thermal strain); remove it or run the scene in 2D".into(),
             );
         }
         for (i, tool) in self.tools.iter().enumerate() {
             out.check(
                 tool.friction.is_frictionless(),
                 &format!("tools[{i}].friction"),
-                "friction heat needs the heat stage, which is 2D only for now: a 3D scene with [thermal] takes frictionless tools".into(),
+                "friction heat is 2D only for now: a 3D scene with [thermal] takes frictionless tools".into(),
             );
+            tool.heat_contact()
+                .check(&tool.name, |k| format!("tools[{i}].{k}"), out);
         }
+    }
+
+    /// Whether heat moves in the workpiece or across its surface (the heat stage runs): a
+    /// `[thermal]` section with conduction, convection or radiation, or a tool with heat
+    /// transfer; otherwise heating is adiabatic.
+    pub fn transfers_heat(&self) -> bool {
+        self.thermal.as_ref().is_some_and(|t| {
+            t.conductivity_w_per_m_k > 0.0
+                || !t.conductivity_by_temperature.is_empty()
+                || t.convection_w_per_m2_k > 0.0
+                || t.emissivity > 0.0
+                || self.tools.iter().any(|t| t.heat_contact().transfers_heat())
+        })
+    }
+
+    /// Whether a tool's heat transfer depends on the contact pressure: the contact stage
+    /// then books each particle's normal impulse for the heat stage.
+    pub fn transfers_heat_by_pressure(&self) -> bool {
+        self.thermal.is_some()
+            && self
+                .tools
+                .iter()
+                .any(|t| !t.heat_transfer_by_pressure.is_empty())
     }
 
     fn check_workpiece(&self, out: &mut validation::Checks) {
@@ -662,8 +722,8 @@ separation = false
             ),
             (
                 "[time]",
-                "[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0\nconductivity_w_per_m_k = 390.0\n[time]",
-                "thermal.conductivity_w_per_m_k",
+                "[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0\nexpansion_per_k = 1.7e-5\n[time]",
+                "thermal.expansion_per_k",
                 20,
             ),
             (
@@ -676,6 +736,18 @@ separation = false
                 "separation = false",
                 "separation = false\nfriction = 0.1\n[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0",
                 "tools[0].friction",
+                26,
+            ),
+            (
+                "separation = false",
+                "separation = false\ntemperature_c = 20.0",
+                "tools[0].temperature_c",
+                26,
+            ),
+            (
+                "separation = false",
+                "separation = false\nheat_transfer_w_per_m2_k = 1e4\n[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0",
+                "tools[0].heat_transfer_w_per_m2_k",
                 26,
             ),
             (

@@ -84,26 +84,67 @@ fn default_separation() -> bool {
 }
 
 impl ToolSpec {
+    /// The tool's temperature and heat transfer.
+    pub fn heat_contact(&self) -> HeatContact<'_> {
+        HeatContact {
+            temperature_c: self.temperature_c,
+            heat_transfer_w_per_m2_k: self.heat_transfer_w_per_m2_k,
+            heat_transfer_by_pressure: &self.heat_transfer_by_pressure,
+        }
+    }
+
     /// Whether heat crosses the contact with this tool: a transfer coefficient, constant or
     /// over pressure.
     pub fn transfers_heat(&self) -> bool {
-        self.heat_transfer_w_per_m2_k > 0.0 || !self.heat_transfer_by_pressure.is_empty()
+        self.heat_contact().transfers_heat()
     }
 
     /// The transfer coefficient (W/(m^2 K)) at contact pressure `p` (Pa).
     pub fn heat_transfer_at(&self, p: Real) -> Real {
-        if self.heat_transfer_by_pressure.is_empty() {
-            self.heat_transfer_w_per_m2_k
-        } else {
-            interpolate(&self.heat_transfer_by_pressure, p)
-        }
+        self.heat_contact().heat_transfer_at(p)
     }
 
     /// The tool's temperature and heat transfer in a scene with `[thermal]`, under
-    /// `tools.<name>.*`: a temperature above absolute zero, one coefficient (a constant or
-    /// an increasing table over pressure), and a temperature wherever heat crosses.
+    /// `tools.<name>.*` ([`HeatContact::check`]).
     pub(crate) fn check_heat_transfer(&self, out: &mut Checks) {
-        let key = |k: &str| format!("tools.{}.{k}", self.name);
+        self.heat_contact()
+            .check(&self.name, |k| format!("tools.{}.{k}", self.name), out);
+    }
+}
+
+/// A tool's heat contact with the workpiece, the same keys for a 2D tool and a 3D plane
+/// tool: the tool's temperature (degrees C) and the transfer coefficient `h` of the
+/// contact, a constant (W/(m^2 K)) or a table over the contact pressure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeatContact<'a> {
+    /// `temperature_c`.
+    pub temperature_c: Option<Real>,
+    /// `heat_transfer_w_per_m2_k`.
+    pub heat_transfer_w_per_m2_k: Real,
+    /// `heat_transfer_by_pressure`, `[[p (Pa), h (W/(m^2 K))], ...]`.
+    pub heat_transfer_by_pressure: &'a [[Real; 2]],
+}
+
+impl HeatContact<'_> {
+    /// Whether heat crosses the contact: a transfer coefficient, constant or over pressure.
+    pub fn transfers_heat(&self) -> bool {
+        self.heat_transfer_w_per_m2_k > 0.0 || !self.heat_transfer_by_pressure.is_empty()
+    }
+
+    /// The transfer coefficient (W/(m^2 K)) at contact pressure `p` (Pa): the constant, or
+    /// the table linear between its points and held beyond them.
+    pub fn heat_transfer_at(&self, p: Real) -> Real {
+        if self.heat_transfer_by_pressure.is_empty() {
+            self.heat_transfer_w_per_m2_k
+        } else {
+            interpolate(self.heat_transfer_by_pressure, p)
+        }
+    }
+
+    /// The tool `name`'s temperature and heat transfer in a scene with `[thermal]`, each
+    /// under `key(k)`: a temperature above absolute zero, one coefficient (a constant or an
+    /// increasing table over pressure), and a temperature wherever heat crosses.
+    pub(crate) fn check(&self, name: &str, key: impl Fn(&str) -> String, out: &mut Checks) {
         if let Some(temp) = self.temperature_c {
             out.check(
                 above_absolute_zero(temp),
@@ -117,7 +158,7 @@ impl ToolSpec {
             &key("heat_transfer_w_per_m2_k"),
             format!("must be zero or positive, got {h}"),
         );
-        let table = &self.heat_transfer_by_pressure;
+        let table = self.heat_transfer_by_pressure;
         out.check(
             table.is_empty() || h == 0.0,
             &key("heat_transfer_by_pressure"),
@@ -136,10 +177,7 @@ impl ToolSpec {
         out.check(
             !self.transfers_heat() || self.temperature_c.is_some(),
             &key("heat_transfer_w_per_m2_k"),
-            format!(
-                "heat transfer to tool {} needs its temperature_c",
-                self.name
-            ),
+            format!("heat transfer to tool {name} needs its temperature_c"),
         );
     }
 }

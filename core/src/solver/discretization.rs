@@ -92,7 +92,8 @@ pub(super) struct Thermal {
 /// The heat stage's fixed inputs of a scene whose heat moves.
 #[derive(Debug, Clone)]
 pub(super) struct Transfer {
-    /// Particles on a constrained edge, adiabatic in the heat stage.
+    /// 2D: particles on a constrained edge, adiabatic in the heat stage (empty in 3D, whose
+    /// surface leaves out the faces on the symmetry planes).
     pub adiabatic_edge: Vec<bool>,
     /// Conduction's largest eigenvalue `lambda_max(C^-1 K)` on the undeformed body (1/s), 0
     /// without conduction (`conduction.rs`).

@@ -322,32 +322,35 @@ impl<const D: usize> Scatter<D> {
 }
 
 impl<const D: usize> Scatter<D> {
-    /// Point `p`'s place in its group's block: the group's size `g`, `p`'s index `q` in
-    /// it, and each particle of the group's list with the neighbour's `(D + 1) g` entries
-    /// (`N` of the group's points, then each gradient), zero where the particle is only in
-    /// another point's list.
-    fn point_entries(
+    /// Point `p`'s entries in its group's block: each particle of the group's list with
+    /// `N` and its gradient `dN/dX_k` (1, 1/m), zero where the particle is only in another
+    /// point's list.
+    pub(super) fn point_entries(
         &self,
         p: usize,
-    ) -> (usize, usize, impl Iterator<Item = (usize, &[Real])> + '_) {
+    ) -> impl Iterator<Item = (usize, Real, [Real; D])> + '_ {
         let first = (0..=p).rev().find(|&q| self.group[q] > 0).unwrap_or(0);
         let (g, q) = (self.group[first] as usize, p - first);
         let [a, b] = self.list_range[first];
         let block = &self.table[self.table_start[first] as usize..];
         let base = self.base[first] as usize + usize::from(self.strip[first] && q >= 2);
-        let width = (D + 1) * g;
-        let entries = self.lists[a as usize..b as usize]
+        self.lists[a as usize..b as usize]
             .iter()
             .enumerate()
-            .map(move |(k, &i)| (base + i as usize, &block[width * k..width * (k + 1)]));
-        (g, q, entries)
+            .map(move |(k, &i)| {
+                let v = &block[(D + 1) * g * k..(D + 1) * g * (k + 1)];
+                (
+                    base + i as usize,
+                    v[q],
+                    std::array::from_fn(|c| v[(c + 1) * g + q]),
+                )
+            })
     }
 
     /// Point `p`'s shape function values: each particle of its group's list with `N_I`
     /// (-) at the point, zero where the particle is only in another point's list.
     pub(super) fn point_values(&self, p: usize) -> impl Iterator<Item = (usize, Real)> + '_ {
-        let (_, q, entries) = self.point_entries(p);
-        entries.map(move |(i, v)| (i, v[q]))
+        self.point_entries(p).map(|(i, n, _)| (i, n))
     }
 }
 
@@ -355,7 +358,7 @@ impl Scatter {
     /// Point `p`'s entries in its group's block: each particle of the group's list with
     /// `[N, dN/dX, dN/dY]`, zero where the particle is only in another point's list.
     pub(super) fn point_row(&self, p: usize) -> impl Iterator<Item = (usize, [Real; 3])> + '_ {
-        let (g, q, entries) = self.point_entries(p);
-        entries.map(move |(i, v)| (i, [v[q], v[g + q], v[2 * g + q]]))
+        self.point_entries(p)
+            .map(|(i, n, [nx, ny])| (i, [n, nx, ny]))
     }
 }

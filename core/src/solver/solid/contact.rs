@@ -226,7 +226,17 @@ impl PlaneContact {
                 for (a, f) in plane.state.force.iter_mut().zip(f) {
                     *a -= f;
                 }
-                plane.state.normal_force += dot(&f, &pen.normal);
+                let normal = dot(&f, &pen.normal);
+                plane.state.normal_force += normal;
+                // The normal impulse on a scene tool, for a heat transfer over pressure.
+                if let Some(i) = st
+                    .heat
+                    .as_mut()
+                    .filter(|_| t < disc.scene_tools)
+                    .and_then(|h| h.normal_impulse.get_mut(j))
+                {
+                    *i += normal.abs() * dt_avg;
+                }
                 touch.tool_work += dt_avg * dot(&f, &vt);
                 self.force.spread(&disc.nodal, j, f);
                 touch.any = true;

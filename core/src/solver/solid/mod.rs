@@ -12,17 +12,20 @@
 //! cylinder (`setup.rs`), the contact of the plane tools and symmetry planes
 //! (`contact.rs`) and the readings of a 3D body.
 //!
-//! Heat in 3D is the 2D stress stage's adiabatic heating ([`super::heat`]): each point
-//! keeps the heat of its plastic work. Mass scaling, uniform or selective, is 2D's
-//! ([`super::mass_scaling`]). SCNI integrates a box over its particles' nodal domains
-//! ([`crate::integration::point_shapes`], the 2D code in three dimensions) and a cylinder
-//! over the O-grid's ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by
-//! the same [`crate::integration::smoothed`]). Not in 3D yet (refused by the scene's
-//! validation): the heat that moves (conduction, surroundings, friction heat), elasticity
-//! over temperature, kernel re-referencing, SCNI's stabilization, self-contact and curved
-//! or triangulated tools.
+//! Heat in 3D is 2D's: the stress stage's heating of each point by its plastic work
+//! ([`super::heat`]), and when the scene's heat moves the heat stage
+//! ([`super::conduction`], generic over the dimension; the surface of the hexahedral cells
+//! in `heat.rs`): conduction, the heat to the plane tools and the surroundings. Mass
+//! scaling, uniform or selective, is 2D's ([`super::mass_scaling`]). SCNI integrates a box
+//! over its particles' nodal domains ([`crate::integration::point_shapes`], the 2D code in
+//! three dimensions) and a cylinder over the O-grid's
+//! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
+//! [`crate::integration::smoothed`]). Not in 3D yet (refused by the scene's validation):
+//! friction heat, elasticity over temperature, kernel re-referencing, SCNI's
+//! stabilization, self-contact and curved or triangulated tools.
 
 mod contact;
+mod heat;
 mod setup;
 #[cfg(test)]
 mod tests;
@@ -101,8 +104,10 @@ pub(super) struct SolidDisc {
     cells: Vec<[u32; 8]>,
     /// The scene's tools come first among the planes, the symmetry planes after them.
     scene_tools: usize,
-    /// The heat settings of a scene with `[thermal]` (adiabatic: no transfer).
+    /// The heat settings of a scene with `[thermal]` (a transfer when its heat moves).
     thermal: Option<Thermal>,
+    /// The surface heat crosses (empty unless the scene's heat moves).
+    heat_surface: heat::HeatSurface,
     /// What mass scaling added, if the scene scales ([`super::mass_scaling`]).
     mass_scaling: Option<MassScalingReport>,
     /// The points are the particles' (SCNI: one per nodal domain, in particle order), not
@@ -282,7 +287,8 @@ impl SolidSimulation {
     /// One central-difference step, at most `max_dt` long (s), the 2D step's stages in the
     /// 2D order ([`super::Simulation::step`]): stress, step length, force gather and
     /// predictor, contact (the planes advance, penalty forces), corrector and the friction
-    /// carried, update with the energy sums, energy account and clock, and its check.
+    /// carried, update with the energy sums, energy account and clock, and its check; the
+    /// heat stage when due.
     ///
     /// # Errors
     ///
@@ -410,6 +416,9 @@ impl SolidSimulation {
                 dt,
                 st.stable_dt,
             )
+        })?;
+        timed(&mut times.heat, || {
+            heat::stage_if_due(scene, disc, tools, st, &mut ws.out, dt)
         })
     }
 
@@ -627,6 +636,10 @@ impl SolidSimulation {
     pub fn point_plastic_strain(&self) -> Vec<Real> {
         self.st.points.iter().map(|p| p.eps_p).collect()
     }
+    /// Reference volume weights `w_p` of the integration points (m^3).
+    pub fn point_weights(&self) -> &[Real] {
+        &self.disc.weights
+    }
     /// Integration point positions in the reference configuration (m).
     pub fn point_positions(&self) -> &[[Real; 3]] {
         &self.disc.point_positions
@@ -649,21 +662,45 @@ impl SolidSimulation {
         self.st.heat.as_ref().map(|h| &h.temperature_c[..])
     }
     /// The thermal measures now, `None` for an isothermal scene, as the 2D run's
-    /// ([`super::Simulation::thermal_values`], named by [`crate::THERMAL_MEASURES`]): no heat
-    /// crosses a 3D body's surface, so friction heat and the heat to the tools and the
-    /// surroundings are 0, and the balance compares the heat held with the plastic work's.
+    /// ([`super::Simulation::thermal_values`], named by [`crate::THERMAL_MEASURES`]): the
+    /// heat to the tools and the surroundings from the heat stage; no friction heat in 3D,
+    /// so the balance compares the heat held and lost with the plastic work's.
     pub fn thermal_values(&self) -> Option<[Real; 9]> {
         let (heat, th) = (self.st.heat.as_ref()?, self.disc.thermal.as_ref()?);
         let w = &self.disc.weights;
         Some(heat_readings::measures(
             heat_readings::temperatures(&heat.temperature_c, w),
             heat_readings::plastic_heat(&th.spec, heat, w),
-            0.0,
-            0.0,
+            heat.friction_heat_j,
+            th.spec.friction_heat_to_workpiece,
             heat_readings::heat_content(th, heat, w),
-            &[],
-            0.0,
+            &heat.to_tools_j,
+            heat.to_surroundings_j,
         ))
+    }
+    /// Heat that has flowed into scene tool `k` since the start (J), `None` for an
+    /// isothermal scene.
+    pub fn tool_heat(&self, k: usize) -> Option<Real> {
+        self.st.heat.as_ref().map(|h| h.to_tools_j[k])
+    }
+    /// Heat flow into each scene tool at the last heat stage (W), `None` for an isothermal
+    /// scene.
+    pub fn tool_heat_flows(&self) -> Option<&[Real]> {
+        self.st.heat.as_ref().map(|h| &h.tool_flow_w[..])
+    }
+    /// Time of the temperatures' conduction and surface flows (s): the last heat stage's,
+    /// up to one heat step before [`SolidSimulation::time`] (plastic heating is up to date).
+    pub fn heat_time(&self) -> Real {
+        self.st.time - self.st.heat.as_ref().map_or(0.0, |h| h.since_s)
+    }
+    /// The particles' temperatures (degrees C) the heat stage conducts, `None` unless the
+    /// scene's heat moves.
+    pub fn particle_temperature(&self) -> Option<&[Real]> {
+        self.st
+            .heat
+            .as_ref()
+            .filter(|h| !h.particle_c.is_empty())
+            .map(|h| &h.particle_c[..])
     }
     /// Mises stress at each integration point after the last stress stage (Pa).
     pub fn point_von_mises(&self) -> Vec<Real> {

@@ -4,6 +4,7 @@
 //! masses, the plane tools and symmetry planes, the critical step.
 
 use super::contact::PlaneContact;
+use super::heat::{update_eigenvalue, HeatSurface};
 use super::{SolidDisc, SolidSimulation, SolidState, SolidWorkspace};
 use crate::cylinder_grid::{CylinderGrid, Sector};
 use crate::error::{Error, Result};
@@ -15,7 +16,7 @@ use crate::rk_shape::{for_each_index, KernelCloud, Lattice, ShapeTable, Site};
 use crate::scene::solid::{CylinderPart, SolidScene, SolidShape};
 use crate::scene::IntegrationRule;
 use crate::solver::critical_step::critical_step;
-use crate::solver::discretization::Thermal;
+use crate::solver::discretization::{Thermal, Transfer};
 use crate::solver::energy::Energy;
 use crate::solver::heat::Heat;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
@@ -254,6 +255,11 @@ impl SolidSimulation {
                 }
             }
         }
+        let heat_surface = if scene.transfers_heat() {
+            HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
+        } else {
+            HeatSurface::default()
+        };
         let mut disc = SolidDisc {
             inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
             mass,
@@ -278,9 +284,14 @@ impl SolidSimulation {
                 spec: spec.clone(),
                 capacity: spec.heat_capacity(),
                 density: rho,
-                transfer: None,
+                transfer: scene.transfers_heat().then(|| Transfer {
+                    adiabatic_edge: Vec::new(),
+                    lambda0: 0.0,
+                }),
             }),
+            heat_surface,
         };
+        update_eigenvalue(&mut disc)?;
         let temp0 = scene.thermal.as_ref().map(|t| t.initial_temperature_c);
         let mut ws = SolidWorkspace {
             out: vec![PointOut::at(&disc.material, 0.0, temp0); npts],
@@ -306,10 +317,11 @@ impl SolidSimulation {
             stable_dt: disc.critical_dt0,
             anchor_time: 0.0,
             anchor_step: 0,
-            heat: scene
-                .thermal
-                .as_ref()
-                .map(|t| Heat::initial(t, npts, ntools, 0, false, false, None)),
+            heat: scene.thermal.as_ref().map(|t| {
+                let particles = if scene.transfers_heat() { np } else { 0 };
+                let pressure = scene.transfers_heat_by_pressure();
+                Heat::initial(t, npts, scene_tools, particles, false, pressure, None)
+            }),
         };
         disc.critical_dt0 = measure_critical_step(&disc, &mut st, &mut ws)?;
         if let Some(ms) = scene.time.mass_scaling {
