@@ -174,6 +174,16 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
     if scene.transfers_heat() {
         summary["stage_seconds"]["heat"] = json!(t.heat.as_secs_f64());
     }
+    // Only a scene that re-references the kernel has the entry, as in 2D.
+    if let Some(stretch) = scene.discretization.rereference_stretch {
+        summary["rereference"] = json!({
+            "stretch": stretch,
+            "count": sim.reference().map_or(0, |r| r.count),
+            "last_s": sim.reference().map(|r| r.time_s),
+            "remap_J": sim.energy().remap,
+            "velocity_fit_residual": sim.reference().map(|r| r.fit_residual),
+        });
+    }
     place(&mut summary, &solid_columns(scene), &sample);
     summary
 }

@@ -101,18 +101,7 @@ impl Discretization {
                 format!("support radii must lie in [1.05, 4] particle spacings (a linear basis needs more than 1), got {:?}", self.support),
             );
         }
-        if let Some(s) = self.rereference_stretch {
-            out.check(
-                s.is_finite() && (1.1..=10.0).contains(&s),
-                "discretization.rereference_stretch",
-                format!("must lie in [1.1, 10] (a principal stretch), got {s}"),
-            );
-            out.check(
-                self.integration != IntegrationRule::Scni,
-                "discretization.rereference_stretch",
-                "re-referencing works with the cell rules q2 and q4; scni's nodal domains are not rebuilt on the deformed particles".into(),
-            );
-        }
+        check_rereference(self.rereference_stretch, self.integration, out);
         if let Some(c) = self.scni_stabilization {
             out.check(
                 c.is_finite() && (0.0..=1.0).contains(&c),
@@ -120,5 +109,26 @@ impl Discretization {
                 format!("must lie in [0, 1] (a fraction of the shear modulus), got {c}"),
             );
         }
+    }
+}
+
+/// `discretization.rereference_stretch` (2D and 3D): a principal stretch in [1.1, 10], with
+/// a cell rule (q2, q4).
+pub(crate) fn check_rereference(
+    stretch: Option<Real>,
+    integration: IntegrationRule,
+    out: &mut Checks,
+) {
+    if let Some(s) = stretch {
+        out.check(
+            s.is_finite() && (1.1..=10.0).contains(&s),
+            "discretization.rereference_stretch",
+            format!("must lie in [1.1, 10] (a principal stretch), got {s}"),
+        );
+        out.check(
+            integration != IntegrationRule::Scni,
+            "discretization.rereference_stretch",
+            "re-referencing works with the cell rules q2 and q4; scni's nodal domains are not rebuilt on the deformed particles".into(),
+        );
     }
 }

@@ -7,7 +7,8 @@
 //!
 //! What the 3D solver does not model yet is refused with the key that asks for it: friction
 //! heat and elasticity over temperature in `[thermal]` (3D heats by plastic work, conducts,
-//! and exchanges heat with the tools and the surroundings) and kernel re-referencing.
+//! and exchanges heat with the tools and the surroundings) and kernel re-referencing of a
+//! body whose heat moves.
 
 use super::{
     Checks, HeatContact, IntegrationRule, MaterialSpec, Motion, Reference, Scene, ThermalSpec,
@@ -178,13 +179,19 @@ impl SolidWorkpiece {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SolidDiscretization {
-    /// `q4` (2 x 2 x 2 Gauss per cell), `q2` (its four alternate points, weight 2).
+    /// `q4` (2 x 2 x 2 Gauss per cell), `q2` (its four alternate points, weight 2), `scni`
+    /// (one point per particle over its nodal domain).
     #[serde(default)]
     pub integration: IntegrationRule,
     /// Kernel support radius in particle spacings (-): of the lattice spacing for a box, of
     /// each particle's own cells' extent for a cylinder.
     #[serde(default = "default_support")]
     pub support: Real,
+    /// Re-reference the kernel on the current configuration when a point's largest
+    /// principal stretch since the last reference reaches this value (-), as in 2D
+    /// (`solver/solid/rereference.rs`). Absent: the Lagrangian kernel throughout.
+    #[serde(default)]
+    pub rereference_stretch: Option<Real>,
 }
 
 fn default_support() -> Real {
@@ -196,6 +203,7 @@ impl Default for SolidDiscretization {
         SolidDiscretization {
             integration: IntegrationRule::default(),
             support: default_support(),
+            rereference_stretch: None,
         }
     }
 }
@@ -364,6 +372,12 @@ impl SolidScene {
                 "must lie in [1.05, 4] particle spacings (a linear basis needs more than 1), got {}",
                 d.support
             ),
+        );
+        super::discretization::check_rereference(d.rereference_stretch, d.integration, &mut out);
+        out.check(
+            d.rereference_stretch.is_none() || !self.transfers_heat(),
+            "discretization.rereference_stretch",
+            "re-referencing a 3D body whose heat moves (conduction, heat to the tools or the air) is not there yet: its particles' temperature field is not carried to the new shape functions".into(),
         );
         self.time.check(&mut out);
         if let Some(mass_scaling) = &self.time.mass_scaling {

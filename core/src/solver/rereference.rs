@@ -315,7 +315,10 @@ pub(super) fn install(
 /// equations (CGLS; Paige and Saunders 1982, Bjorck 1996 sec. 7.4), from `c = b`, each
 /// component on its own. Returns them with the relative residual `max |b - A c| / max |b|`
 /// reached (-).
-fn fit(nodal: &ShapeTable, target: &[[Real; 2]]) -> (Vec<[Real; 2]>, Real) {
+pub(super) fn fit<const D: usize>(
+    nodal: &ShapeTable<D>,
+    target: &[[Real; D]],
+) -> (Vec<[Real; D]>, Real) {
     let n = target.len();
     let apply = |x: &[Real]| -> Vec<Real> {
         (0..n)
@@ -340,7 +343,7 @@ fn fit(nodal: &ShapeTable, target: &[[Real; 2]]) -> (Vec<[Real; 2]>, Real) {
     let largest = |a: &[Real]| a.iter().fold(0.0 as Real, |m, x| m.max(x.abs()));
     let mut c = target.to_vec();
     let mut worst: Real = 0.0;
-    for k in 0..2 {
+    for k in 0..D {
         let b: Vec<Real> = target.iter().map(|v| v[k]).collect();
         let scale = largest(&b);
         if scale == 0.0 {

@@ -21,11 +21,13 @@
 //! three dimensions) and a cylinder over the O-grid's
 //! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
 //! [`crate::integration::smoothed`]). Not in 3D yet (refused by the scene's validation):
-//! friction heat, elasticity over temperature, kernel re-referencing, SCNI's
-//! stabilization, self-contact and curved or triangulated tools.
+//! friction heat, elasticity over temperature, kernel re-referencing of a body whose heat
+//! moves (re-referencing is `rereference.rs`), SCNI's stabilization, self-contact and
+//! curved or triangulated tools.
 
 mod contact;
 mod heat;
+mod rereference;
 mod setup;
 #[cfg(test)]
 mod tests;
@@ -49,6 +51,7 @@ use crate::rk_shape::ShapeTable;
 use crate::scene::solid::SolidScene;
 use crate::team::Team;
 use contact::PlaneContact;
+pub use rereference::SolidReference;
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
 
@@ -113,6 +116,11 @@ pub(super) struct SolidDisc {
     /// The points are the particles' (SCNI: one per nodal domain, in particle order), not
     /// the cells'.
     nodal_points: bool,
+    /// Each particle's cell extents at the start (m): the supports over
+    /// `discretization.support`, the cell a re-reference deforms.
+    extents: Vec<[Real; 3]>,
+    /// The stress stage measures the largest principal stretch (the scene re-references).
+    track_stretch: bool,
 }
 
 /// Everything that changes during a 3D run.
@@ -152,6 +160,13 @@ pub struct SolidState {
     pub anchor_step: u64,
     /// The points' temperatures and plastic work in a scene with `[thermal]`.
     pub heat: Option<Heat>,
+    /// Largest principal stretch of a point since the last reference (-), when the scene
+    /// re-references.
+    #[serde(default)]
+    pub max_stretch: Real,
+    /// The configuration of the last kernel re-reference, if there was one.
+    #[serde(default)]
+    pub reference: Option<SolidReference>,
 }
 
 /// The stages' working arrays.
@@ -208,7 +223,7 @@ fn stress_stage(
         weights: &disc.weights,
         inv_radius: &disc.inv_radius,
         reference_jacobian: &disc.reference_jacobian,
-        track_stretch: false,
+        track_stretch: disc.track_stretch,
         axi: false,
         spacing: [1.0; 3],
         avx2: has_avx2(),
@@ -243,6 +258,7 @@ fn stress_stage(
         ),
     })?;
     st.stable_dt = disc.critical_dt0 * sums.min_altitude;
+    st.max_stretch = sums.max_stretch;
     Ok((sums.elastic, sums.plastic))
 }
 
@@ -303,6 +319,7 @@ impl SolidSimulation {
             ws,
             times,
         } = self;
+        rereference::if_due(scene, disc, st, ws)?;
         let natural = scene
             .time
             .dt_s
@@ -485,6 +502,22 @@ impl SolidSimulation {
                 "the saved state belongs to another discretisation".into(),
             ));
         }
+        if st.reference != self.st.reference {
+            match &st.reference {
+                Some(r) => rereference::install(
+                    &self.scene,
+                    &mut self.disc,
+                    &mut self.st,
+                    &mut self.ws,
+                    r,
+                )?,
+                None => {
+                    let fresh = SolidSimulation::new(&self.scene)?;
+                    self.disc = fresh.disc;
+                    self.ws.buf = fresh.ws.buf;
+                }
+            }
+        }
         for (t, s) in self.tools.iter_mut().zip(&st.tools) {
             t.state = *s;
         }
@@ -643,6 +676,21 @@ impl SolidSimulation {
     /// Integration point positions in the reference configuration (m).
     pub fn point_positions(&self) -> &[[Real; 3]] {
         &self.disc.point_positions
+    }
+    /// The configuration the kernel was last re-referenced on, if it was
+    /// (`discretization.rereference_stretch`).
+    pub fn reference(&self) -> Option<&SolidReference> {
+        self.st.reference.as_ref()
+    }
+    /// Re-references the kernel now, on the positions of the current displacement
+    /// (`rereference.rs`); a run does it itself when `discretization.rereference_stretch`
+    /// is reached.
+    ///
+    /// # Errors
+    ///
+    /// The shape functions cannot be formed on the deformed particles.
+    pub fn rereference(&mut self) -> Result<()> {
+        rereference::now(&self.scene, &mut self.disc, &mut self.st, &mut self.ws)
     }
     /// `J = det F` at each integration point after the last stress stage (-).
     pub fn point_jacobian(&self) -> Vec<Real> {

@@ -44,6 +44,8 @@ struct Particles {
     h_min: Real,
     /// Points per layer of cells along z: the chunks of the stress stage are two layers.
     layer_points: usize,
+    /// Each particle's cell extents (m): its supports over `discretization.support`.
+    extents: Vec<[Real; 3]>,
 }
 
 /// The cylinder's O-grid ([`CylinderGrid`]) with each particle's own supports, `support`
@@ -98,6 +100,7 @@ fn cylinder(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
     nodal.drop_gradients();
     let h_min = smallest_edge(&grid.positions, &grid.cells);
     Ok(Particles {
+        extents: grid.supports(1.0),
         layer_points,
         positions: grid.positions.clone(),
         volumes: grid.volumes.clone(),
@@ -168,6 +171,7 @@ fn lattice(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
         cells,
         h_min: h[0].min(h[1]).min(h[2]),
         layer_points,
+        extents: vec![h; particles.iter().product()],
     })
 }
 
@@ -280,6 +284,8 @@ impl SolidSimulation {
             scene_tools,
             mass_scaling: None,
             nodal_points: scene.discretization.integration == IntegrationRule::Scni,
+            extents: p.extents,
+            track_stretch: scene.discretization.rereference_stretch.is_some(),
             thermal: scene.thermal.as_ref().map(|spec| Thermal {
                 spec: spec.clone(),
                 capacity: spec.heat_capacity(),
@@ -322,6 +328,8 @@ impl SolidSimulation {
                 let pressure = scene.transfers_heat_by_pressure();
                 Heat::initial(t, npts, scene_tools, particles, false, pressure, None)
             }),
+            max_stretch: 0.0,
+            reference: None,
         };
         disc.critical_dt0 = measure_critical_step(&disc, &mut st, &mut ws)?;
         if let Some(ms) = scene.time.mass_scaling {
@@ -388,7 +396,7 @@ impl SolidSimulation {
 /// The critical step `2 / omega_max` of the undeformed discretisation (s) by Lanczos
 /// ([`critical_step`]) on the internal force of a displacement of 1e-7 of the smallest
 /// spacing; the state is left undeformed.
-fn measure_critical_step(
+pub(super) fn measure_critical_step(
     disc: &SolidDisc,
     st: &mut SolidState,
     ws: &mut SolidWorkspace,
