@@ -262,19 +262,13 @@ pub(super) fn install(
         .iter()
         .map(|g| [s[0] * g[0].hypot(g[1]), s[1] * g[2].hypot(g[3])])
         .collect();
-    let cloud = KernelCloud::with_supports(
-        reference.particles.clone(),
-        reference.volumes.clone(),
+    let (cloud, pt, nodal) = shapes_on(
+        &reference.particles,
+        &reference.volumes,
         supports,
-    );
-    let count = reference.count;
-    let pt = cloud.shape_table(&reference.points, &|p| {
-        format!("integration point {p} at re-reference {count}")
-    })?;
-    let mut nodal = cloud.shape_table(&reference.particles, &|j| {
-        format!("particle {j} at re-reference {count}")
-    })?;
-    nodal.drop_gradients();
+        &reference.points,
+        reference.count,
+    )?;
     let np = reference.particles.len();
     disc.scatter = Scatter::new(&pt, np, disc.scatter.chunk, MAX_GROUP);
     ws.buf = disc.scatter.buffers();
@@ -308,6 +302,27 @@ pub(super) fn install(
     disc.critical_dt0 = measured?;
     // Conduction's largest eigenvalue on the new shape functions.
     conduction::update_eigenvalue(disc, st.step, st.time)
+}
+
+/// The shape functions of re-reference `count` (2D and 3D): the kernel cloud of the
+/// `particles` (m) with their kernel `volumes` (m^D) and support radii `supports` (m), the
+/// points' table at `points` (m) and the particles' own (values only).
+pub(super) fn shapes_on<const D: usize>(
+    particles: &[[Real; D]],
+    volumes: &[Real],
+    supports: Vec<[Real; D]>,
+    points: &[[Real; D]],
+    count: u32,
+) -> Result<(KernelCloud<D>, ShapeTable<D>, ShapeTable<D>)> {
+    let cloud = KernelCloud::with_supports(particles.to_vec(), volumes.to_vec(), supports);
+    let pt = cloud.shape_table(points, &|p| {
+        format!("integration point {p} at re-reference {count}")
+    })?;
+    let mut nodal = cloud.shape_table(particles, &|j| {
+        format!("particle {j} at re-reference {count}")
+    })?;
+    nodal.drop_gradients();
+    Ok((cloud, pt, nodal))
 }
 
 /// The coefficients `c` with `sum_I N_I(X_J) c_I = target_J` at every particle: the

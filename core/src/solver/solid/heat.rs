@@ -156,23 +156,9 @@ fn cross(a: [Real; 3], b: [Real; 3]) -> [Real; 3] {
 /// breadth-first search from the lowest particle of each connected part: the start of
 /// conduction's power iteration, the shortest wave the grid carries.
 pub(super) fn checkerboard(cells: &[[u32; 8]], np: usize) -> Vec<bool> {
-    const EDGES: [(usize, usize); 12] = [
-        (0, 1),
-        (1, 2),
-        (2, 3),
-        (3, 0),
-        (4, 5),
-        (5, 6),
-        (6, 7),
-        (7, 4),
-        (0, 4),
-        (1, 5),
-        (2, 6),
-        (3, 7),
-    ];
     let mut next: Vec<Vec<u32>> = vec![Vec::new(); np];
     for c in cells {
-        for (a, b) in EDGES {
+        for (a, b) in super::setup::HEX_EDGES {
             next[c[a] as usize].push(c[b]);
             next[c[b] as usize].push(c[a]);
         }

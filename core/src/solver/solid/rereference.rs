@@ -25,11 +25,10 @@ use crate::error::Result;
 use crate::material::simo1992_hencky_j2_3d::elastic_left_cauchy_green3;
 use crate::material::PointState3;
 use crate::math::Real;
-use crate::rk_shape::KernelCloud;
 use crate::scene::solid::SolidScene;
 use crate::solver::energy::kinetic_energy;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
-use crate::solver::rereference::{failed, fit};
+use crate::solver::rereference::{failed, fit, shapes_on};
 use serde::{Deserialize, Serialize};
 
 /// The configuration a 3D kernel was last re-referenced on.
@@ -215,19 +214,13 @@ pub(super) fn install(
         .iter()
         .map(|g| std::array::from_fn(|k| s * g[3 * k].hypot(g[3 * k + 1]).hypot(g[3 * k + 2])))
         .collect();
-    let cloud = KernelCloud::with_supports(
-        reference.particles.clone(),
-        reference.volumes.clone(),
+    let (_, pt, nodal) = shapes_on(
+        &reference.particles,
+        &reference.volumes,
         supports,
-    );
-    let count = reference.count;
-    let pt = cloud.shape_table(&reference.points, &|p| {
-        format!("integration point {p} at re-reference {count}")
-    })?;
-    let mut nodal = cloud.shape_table(&reference.particles, &|j| {
-        format!("particle {j} at re-reference {count}")
-    })?;
-    nodal.drop_gradients();
+        &reference.points,
+        reference.count,
+    )?;
     let np = reference.particles.len();
     disc.scatter = Scatter::new(&pt, np, disc.scatter.chunk, MAX_GROUP_3D);
     disc.neighbours = pt.entries() as Real / pt.rows() as Real;

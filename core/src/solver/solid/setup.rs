@@ -175,26 +175,29 @@ fn lattice(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
     })
 }
 
+/// The twelve edges of a hexahedral cell, as pairs of its corners (in the order of
+/// [`crate::cylinder_grid::CylinderGrid::cells`]).
+pub(super) const HEX_EDGES: [(usize, usize); 12] = [
+    (0, 1),
+    (1, 2),
+    (2, 3),
+    (3, 0),
+    (4, 5),
+    (5, 6),
+    (6, 7),
+    (7, 4),
+    (0, 4),
+    (1, 5),
+    (2, 6),
+    (3, 7),
+];
+
 /// The shortest edge of the hexahedral `cells` (m) over `positions`: the smallest spacing.
 fn smallest_edge(positions: &[[Real; 3]], cells: &[[u32; 8]]) -> Real {
-    const EDGES: [(usize, usize); 12] = [
-        (0, 1),
-        (1, 2),
-        (2, 3),
-        (3, 0),
-        (4, 5),
-        (5, 6),
-        (6, 7),
-        (7, 4),
-        (0, 4),
-        (1, 5),
-        (2, 6),
-        (3, 7),
-    ];
     cells
         .iter()
         .flat_map(|c| {
-            EDGES.iter().map(move |&(a, b)| {
+            HEX_EDGES.iter().map(move |&(a, b)| {
                 let (p, q) = (positions[c[a] as usize], positions[c[b] as usize]);
                 ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
             })
