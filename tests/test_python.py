@@ -308,6 +308,28 @@ def test_read_mcap_gives_the_history_columns_and_the_point_clouds(rkforge_bin, t
         assert cloud["plastic_strain"].max() <= row["workpiece.max_plastic_strain"] + 1e-6
 
 
+def test_read_mcap_gives_a_3d_runs_forces_in_three_directions(rkforge_bin, tmp_path):
+    """A 3D recording: the wrenches' z components are history columns as history.csv has
+    them (a 2D recording has none, the test above), the clouds carry three coordinates."""
+    from ros_peer import upset_bar_3d
+
+    scene = upset_bar_3d(tmp_path)
+    out, mcap = tmp_path / "out", tmp_path / "run3d.mcap"
+    proc = subprocess.run([rkforge_bin, "run", str(scene), "--out", str(out), "--quiet", "--no-frames",
+                           "--mcap", str(mcap)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    history = read_history(out / "history.csv")
+    rec = rkforge.read_mcap(mcap)
+    tools = [f"{t}.{c}" for t in ("wall", "ram")
+             for c in ("stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N", "force_z_N")]
+    assert list(rec.history.columns)[:len(tools) + 1] == ["time_s", *tools]
+    assert_same_history(rec.history[tools], history[tools])
+    assert rec.history["ram.force_z_N"].abs().max() > 1e3, "the ram presses"
+    last = rec.clouds[-1]
+    assert {"x", "y", "z"} <= set(last)
+    assert last["z"].max() == pytest.approx(history["workpiece.z_max_m"].iloc[-1], abs=1e-6)
+
+
 def test_outputs_come_from_the_register():
     """`Simulation.outputs()` and `Scene.outputs()`: every output of the register under its
     one name, the history's columns with the bits of `sample()`, the figures only the

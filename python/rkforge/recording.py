@@ -23,7 +23,8 @@ class Recording:
 
     ``history``: one row per sample, ``time_s`` and per tool the history's columns
     ``<tool>.stroke_m``, ``<tool>.velocity_m_per_s``, ``<tool>.force_N`` (along its axis),
-    ``<tool>.force_x_N``, ``<tool>.force_y_N``, ``<tool>.contact_fraction``, then per fill point
+    ``<tool>.force_x_N``, ``<tool>.force_y_N``, ``<tool>.force_z_N`` (a 3D scene's only),
+    ``<tool>.contact_fraction``, then per fill point
     ``<tool>.<point>.filled`` (0 or 1) where the recording has the die-fill topic,
     ``workpiece.laps`` (the laps formed so far) where it has the laps topic, then the energy
     account as history.csv names it
@@ -58,6 +59,19 @@ def _cloud(msg) -> Dict[str, np.ndarray]:
     return {name: points[name].copy() for name in dtype.names}
 
 
+def _kinematics(path) -> str:
+    """The recorded scene's ``model.kinematics`` from the file's ``rkforge`` metadata
+    record, read from the file's start (the record comes before the messages, so a file
+    cut short, a killed recording, is never read to its cut end)."""
+    from mcap.reader import NonSeekingReader
+
+    with open(path, "rb") as f:
+        for record in NonSeekingReader(f).iter_metadata():
+            if record.name == "rkforge":
+                return dict(record.metadata).get("kinematics", "")
+    return ""
+
+
 def read_mcap(path, namespace: str = "/rkforge") -> Recording:
     """Read a recording of the rkforge topics under ``namespace``: the tools' joint states
     and wrenches and the energy account as history columns, the register's outputs by name,
@@ -70,6 +84,7 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
     from mcap_ros2.decoder import DecoderFactory
 
     ns = namespace.rstrip("/")
+    solid = _kinematics(path) == "3d"
     rows: Dict[int, Dict[str, float]] = {}
     outputs: Dict[int, Dict[str, float]] = {}
     units: Dict[str, str] = {}
@@ -89,6 +104,8 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
                 row = rows.setdefault(message.log_time, {})
                 row[f"{name}.force_x_N"] = msg.wrench.force.x
                 row[f"{name}.force_y_N"] = msg.wrench.force.y
+                if solid:
+                    row[f"{name}.force_z_N"] = msg.wrench.force.z
             elif topic == f"{ns}/die_fill":
                 row = rows.setdefault(message.log_time, {})
                 for name, fraction in zip(msg.tools, msg.contact_fraction):
@@ -116,7 +133,8 @@ def read_mcap(path, namespace: str = "/rkforge") -> Recording:
             name = c.rsplit(".", 1)[0]
             if name not in tools and name not in ("energy", "workpiece") and c not in filled:
                 tools.append(name)
-        suffixes = ["stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N", "contact_fraction"]
+        suffixes = ["stroke_m", "velocity_m_per_s", "force_N", "force_x_N", "force_y_N", "force_z_N",
+                    "contact_fraction"]
         order = ["time_s"] + [f"{t}.{s}" for t in tools for s in suffixes if f"{t}.{s}" in history.columns]
         order += filled
         order += [c for c in ["workpiece.laps"] if c in history.columns]

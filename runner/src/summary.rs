@@ -98,17 +98,25 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
     for c in shown(scene).filter(|c| matches!(c.at, At::Whole | At::Face(_))) {
         *path(&mut summary, &c) = json!(c.value(&sample));
     }
-    // Only a scene that re-references the kernel has the entry.
     if let Some(stretch) = scene.discretization.rereference_stretch {
-        summary["rereference"] = json!({
-            "stretch": stretch,
-            "count": sim.reference().map_or(0, |r| r.count),
-            "last_s": sim.reference().map(|r| r.time_s),
-            "remap_J": sim.energy().remap,
-            "velocity_fit_residual": sim.reference().map(|r| r.fit_residual),
-        });
+        let last = sim.reference().map(|r| (r.count, r.time_s, r.fit_residual));
+        summary["rereference"] = rereference_entry(stretch, last, sim.energy().remap);
     }
     summary
+}
+
+/// The `rereference` entry of a scene that re-references the kernel (only such a scene
+/// has it, 2D or 3D): the stretch that triggers one, how many were made and the time of
+/// the last with its velocity fit's residual (`last`: count, s, -), and the kinetic energy
+/// the remaps changed (J).
+fn rereference_entry(stretch: f64, last: Option<(u32, f64, f64)>, remap_j: f64) -> Value {
+    json!({
+        "stretch": stretch,
+        "count": last.map_or(0, |l| l.0),
+        "last_s": last.map(|l| l.1),
+        "remap_J": remap_j,
+        "velocity_fit_residual": last.map(|l| l.2),
+    })
 }
 
 /// The summary of a 3D run (summary.json) that took `wall_s` (s) of wall time and ended
@@ -174,15 +182,9 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
     if scene.transfers_heat() {
         summary["stage_seconds"]["heat"] = json!(t.heat.as_secs_f64());
     }
-    // Only a scene that re-references the kernel has the entry, as in 2D.
     if let Some(stretch) = scene.discretization.rereference_stretch {
-        summary["rereference"] = json!({
-            "stretch": stretch,
-            "count": sim.reference().map_or(0, |r| r.count),
-            "last_s": sim.reference().map(|r| r.time_s),
-            "remap_J": sim.energy().remap,
-            "velocity_fit_residual": sim.reference().map(|r| r.fit_residual),
-        });
+        let last = sim.reference().map(|r| (r.count, r.time_s, r.fit_residual));
+        summary["rereference"] = rereference_entry(stretch, last, sim.energy().remap);
     }
     place(&mut summary, &solid_columns(scene), &sample);
     summary

@@ -99,7 +99,7 @@ const TOOLS: [Output<SolidSimulation>; 9] = [
 ];
 
 /// The workpiece as a whole, from its particles' physical positions.
-const WORKPIECE: [Output<SolidSimulation>; 11] = [
+const WORKPIECE: [Output<SolidSimulation>; 13] = [
     bound("x_min_m", "least x of the particles", 0, 0),
     bound("x_max_m", "largest x of the particles", 0, 1),
     bound("y_min_m", "least y of the particles", 1, 0),
@@ -119,6 +119,20 @@ const WORKPIECE: [Output<SolidSimulation>; 11] = [
         "m",
         "length of the workpiece along z, z_max - z_min",
         |s| s.readings().height(),
+    ),
+    scalar::<SolidSimulation>(
+        "workpiece",
+        "volume_change_rel",
+        "1",
+        "relative change of the volume its cells enclose through the particles' positions",
+        |s| s.volume() / s.reference_volume() - 1.0,
+    ),
+    scalar::<SolidSimulation>(
+        "workpiece",
+        "integrated_volume_change_rel",
+        "1",
+        "relative change of the integration points' own volume, sum J_p w_p",
+        |s| s.integrated_volume_change(),
     ),
     scalar::<SolidSimulation>(
         "workpiece",

@@ -31,6 +31,7 @@ mod rereference;
 mod setup;
 #[cfg(test)]
 mod tests;
+mod volume;
 
 use super::discretization::{MassScalingReport, Thermal};
 use super::energy::{Energy, StepEnergy};
