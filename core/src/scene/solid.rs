@@ -711,7 +711,7 @@ separation = false
             ),
             (
                 "[time]",
-                "[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0\nexpansion_per_k = 1.7e-5\n[time]",
+                "[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0\nexpansion_per_k = 1.7e-2\n[time]",
                 "thermal.expansion_per_k",
                 20,
             ),
@@ -723,7 +723,7 @@ separation = false
             ),
             (
                 "separation = false",
-                "separation = false\nfriction = 0.1\n[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0",
+                "separation = false\nfriction = -0.1\n[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0",
                 "tools[0].friction",
                 26,
             ),
