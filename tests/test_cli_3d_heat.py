@@ -2,8 +2,9 @@
 (scenes/taylor_ofhc_3d.toml, coarsened): Johnson-Cook with adiabatic heating in 3D, the heat
 it books against the energy account's plastic work, the softening heating gives (the sign
 the axisymmetric run shows), its files, friction heat and thermal strain in 3D, and the
-refusal of a tool's heat transfer without its temperature; and the shipped 3D hot upsetting (scenes/hot_upsetting_3d.toml, coarsened): the
-heat that moves, to the dies and the air, with its account and its picture."""
+refusal of a tool's heat transfer without its temperature; and the shipped 3D hot
+upsetting (scenes/hot_upsetting_3d.toml, coarsened): the heat that moves, to the dies and
+the air, with its account and its picture."""
 import csv
 import json
 import subprocess
