@@ -356,10 +356,10 @@ fn field_at_particles(sim: &SolidSimulation) -> Vec<Real> {
 /// balance closes to 1e-9 (8e-15); against the Lagrangian kernel's run the mechanics agree
 /// within 1 % (radius +0.02 %, ram force +0.8 %, plastic heat +0.03 %) and every point's
 /// temperature within 2 K (1.4 K), the heat to the dies within 10 % (+7.0 %) and the
-/// friction heat within 15 % (+10 %): the surface flows read the particles' temperature
-/// coefficients `T_I`, which the fit changes where the chill is steep (the field they
-/// interpolate it keeps), and the friction work the slip at the faces. A rollback across
-/// re-references repeats the bits.
+/// friction heat within 15 % (+10 %); likely (not isolated) because the surface flows read
+/// the particles' temperature coefficients `T_I`, which the fit changes where the chill is
+/// steep (the field they interpolate it keeps), and the friction work the slip at the
+/// faces. A rollback across re-references repeats the bits.
 #[test]
 fn a_rereference_carries_the_temperature_field() {
     let scene = hot_rereferenced_upset();
