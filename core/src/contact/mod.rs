@@ -49,7 +49,7 @@ use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::symmetry::SymmetryPlane;
 use crate::friction::Friction;
 use crate::geometry::{bounds_of, Extents};
-use crate::math::Real;
+use crate::math::{dot, Real};
 use crate::rk_shape::ShapeTable;
 use crate::scene::Kinematics;
 use crate::team::{part, particle_phase, Parts, Team};
@@ -65,6 +65,25 @@ pub struct Slip<'a> {
     pub tools: &'a [Tool],
     /// Friction work of each particle since the heat stage last took it (J).
     pub work: &'a mut [Real],
+}
+
+/// The friction work of a particle-tool pair over a step (J): the friction force `f_T` (N)
+/// on the particle against the slip the corrector realised, `W = max(0, -f_T . P_T v_rel)
+/// dt_avg`, with `v_rel = v_J - v_tool` the particle's velocity relative to the tool after
+/// the corrector (m/s), `P_T = I - n n` the projection on the tool's tangent (`normal` `n`)
+/// and `dt_avg` the corrector's step (s); none while the particle sticks. Coulomb friction
+/// `|f_T| = mu f_N` sliding at `s` books `mu f_N s dt_avg` (the friction law: Sidibe et al.
+/// 2009, eqs. 5-6). One source for the 2D tools and the 3D planes (`D` = 2, 3); summed from the first
+/// component on ([`dot`]), so 2D keeps its bits.
+pub(crate) fn slip_work<const D: usize>(
+    friction: &[Real; D],
+    v_rel: [Real; D],
+    normal: &[Real; D],
+    dt_avg: Real,
+) -> Real {
+    let rn = dot(&v_rel, normal);
+    let slide: [Real; D] = std::array::from_fn(|k| v_rel[k] - rn * normal[k]);
+    (-dot(friction, &slide)).max(0.0) * dt_avg
 }
 
 /// A particle-tool pair with friction that was in contact in the last contact stage.
@@ -779,17 +798,13 @@ impl Contact {
                 ],
             });
             if let Some(slip) = slip.as_mut() {
-                // The friction force's work against the realised slip, `-f_T . P_T (v_J -
-                // v_tool) dt_avg`: none while the particle sticks.
                 let tool = &slip.tools[touched.pair as usize % tools];
                 let vt = [
                     tool.axis[0] * tool.state.velocity,
                     tool.axis[1] * tool.state.velocity,
                 ];
                 let rel = [vj[0] - vt[0], vj[1] - vt[1]];
-                let rn = rel[0] * n[0] + rel[1] * n[1];
-                let slide = [rel[0] - rn * n[0], rel[1] - rn * n[1]];
-                slip.work[j] += (-(f[0] * slide[0] + f[1] * slide[1])).max(0.0) * dt_avg;
+                slip.work[j] += slip_work(&f, rel, &n, dt_avg);
             }
         }
     }

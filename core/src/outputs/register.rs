@@ -356,16 +356,22 @@ const ENERGY_RUN: [Output; 2] = [
         |s| s.kinetic_to_internal_max(),
     )
     .showing(Shown::NOT_IN_HISTORY),
-    scalar::<Simulation>(
+    thermoelastic::<Simulation>(),
+];
+
+/// The elastic energy changes of temperature put in, in either dimension (a scene with
+/// elasticity over temperature; summary only).
+pub(super) const fn thermoelastic<S: Body>() -> Output<S> {
+    scalar::<S>(
         "energy",
         "thermoelastic_J",
         "J",
         "elastic energy that changes of temperature put in (elasticity over temperature)",
-        |s| s.energy().thermoelastic,
+        |s| s.energy_now().thermoelastic,
     )
     .showing(Shown::NOT_IN_HISTORY)
-    .present(When::Thermoelastic),
-];
+    .present(When::Thermoelastic)
+}
 
 /// The temperatures and heat of a scene with `[thermal]`, in the order of
 /// [`crate::Simulation::thermal_values`].

@@ -6,7 +6,9 @@
 //! Not in 3D yet: the particle fields (2D smooths the points' values onto the particles),
 //! fill points, followed faces and laps.
 
-use super::register::{energy, particles, points, scalar, thermal_measures, time, tool};
+use super::register::{
+    energy, particles, points, scalar, thermal_measures, thermoelastic, time, tool,
+};
 use super::{expand, fields_of, At, Column, Kind, Output, Sample, Shown, When};
 use crate::math::Real;
 use crate::scene::solid::SolidScene;
@@ -14,11 +16,12 @@ use crate::solver::{BodyReadings, SolidSimulation};
 use std::cell::OnceCell;
 
 /// The register of a 3D run: its sections in order, each of outputs of one kind.
-pub static SOLID_REGISTER: [&[Output<SolidSimulation>]; 7] = [
+pub static SOLID_REGISTER: [&[Output<SolidSimulation>]; 8] = [
     &TIME,
     &TOOLS,
     &WORKPIECE,
     &ENERGY,
+    &ENERGY_THERMOELASTIC,
     &THERMAL,
     &PARTICLE_FIELDS,
     &POINT_FIELDS,
@@ -26,6 +29,7 @@ pub static SOLID_REGISTER: [&[Output<SolidSimulation>]; 7] = [
 
 const TIME: [Output<SolidSimulation>; 2] = time();
 const ENERGY: [Output<SolidSimulation>; 10] = energy();
+const ENERGY_THERMOELASTIC: [Output<SolidSimulation>; 1] = [thermoelastic()];
 const THERMAL: [Output<SolidSimulation>; 9] = thermal_measures();
 
 /// Each plane tool (the symmetry planes are not tools).
@@ -266,13 +270,17 @@ impl<'a> Sample<'a, SolidSimulation> {
 }
 
 impl When {
-    /// Whether a 3D scene has the output at `at`: every scene, one with `[thermal]`, a tool
-    /// with a heat transfer coefficient (constant or over pressure) in one; what only 2D
-    /// scenes have never.
+    /// Whether a 3D scene has the output at `at`: every scene, one with `[thermal]`, one
+    /// with elasticity over temperature, a tool with a heat transfer coefficient (constant
+    /// or over pressure) in one; what only 2D scenes have never.
     pub fn holds_solid(self, scene: &SolidScene, at: At) -> bool {
         match self {
             When::Always => true,
             When::Thermal => scene.thermal.is_some(),
+            When::Thermoelastic => scene
+                .thermal
+                .as_ref()
+                .is_some_and(|t| t.thermoelastic().is_some()),
             When::HeatedTool => {
                 scene.thermal.is_some()
                     && matches!(at, At::Tool(k) if scene.tools[k].heat_contact().transfers_heat())

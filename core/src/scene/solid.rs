@@ -5,10 +5,8 @@
 //! checks; what depends on the dimension (the workpiece, the tools, the discretisation's
 //! support) is here. [`SceneFile::from_file`] reads either kind and says which.
 //!
-//! What the 3D solver does not model yet is refused with the key that asks for it: friction
-//! heat and elasticity over temperature in `[thermal]` (3D heats by plastic work, conducts,
-//! and exchanges heat with the tools and the surroundings) and kernel re-referencing of a
-//! body whose heat moves.
+//! `[thermal]` is 2D's throughout: plastic and friction heat, conduction, the heat to the
+//! tools and the surroundings, and elasticity over temperature.
 
 use super::{
     Checks, HeatContact, IntegrationRule, MaterialSpec, Motion, Reference, Scene, ThermalSpec,
@@ -306,10 +304,9 @@ pub struct SolidScene {
     pub workpiece: SolidWorkpiece,
     /// Its material.
     pub material: MaterialSpec,
-    /// Temperature and heat, as in 2D ([`ThermalSpec`]): the heating of the plastic work,
-    /// conduction, the heat to the tools and the surroundings; friction heat and elasticity
-    /// over temperature are refused ([`SolidScene::check_heat`]); a scene without it is
-    /// isothermal.
+    /// Temperature and heat, as in 2D ([`ThermalSpec`]): the heating of the plastic work
+    /// and of friction at the tools, conduction, the heat to the tools and the
+    /// surroundings, elasticity over temperature; a scene without it is isothermal.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thermal: Option<ThermalSpec>,
     /// Speed/accuracy knobs of the discretisation.
@@ -351,7 +348,7 @@ impl SolidScene {
         match &self.thermal {
             Some(t) => {
                 t.check(&mut out);
-                self.check_heat(t, &mut out);
+                self.check_heat(&mut out);
             }
             None => {
                 super::across_sections::flow_stress_needs_heat(&self.material, &mut out);
@@ -374,11 +371,6 @@ impl SolidScene {
             ),
         );
         super::discretization::check_rereference(d.rereference_stretch, d.integration, &mut out);
-        out.check(
-            d.rereference_stretch.is_none() || !self.transfers_heat(),
-            "discretization.rereference_stretch",
-            "re-referencing a 3D body whose heat moves (conduction, heat to the tools or the air) is not there yet: its particles' temperature field is not carried to the new shape functions".into(),
-        );
         self.time.check(&mut out);
         if let Some(mass_scaling) = &self.time.mass_scaling {
             mass_scaling.check(&mut out);
@@ -431,43 +423,20 @@ impl SolidScene {
     }
 
     /// Heat in 3D (`solver/conduction.rs`, `solver/solid/heat.rs`): the plastic work's
-    /// heat, conduction, and the heat to the tools and the surroundings, as in 2D; each
-    /// tool's temperature and heat transfer checked as a 2D tool's
-    /// ([`HeatContact::check`]). Elasticity over temperature and friction heat are 2D only
-    /// for now: each is refused with its key.
-    fn check_heat(&self, t: &ThermalSpec, out: &mut validation::Checks) {
-        let thermoelastic = [
-            (
-                "modulus_factor_by_temperature",
-                !t.modulus_factor_by_temperature.is_empty(),
-            ),
-            ("expansion_per_k", t.expansion_per_k != 0.0),
-            (
-                "thermal_strain_by_temperature",
-                !t.thermal_strain_by_temperature.is_empty(),
-            ),
-        ];
-        for (key, given) in thermoelastic {
-            out.check(
-                !given,
-                &format!("thermal.{key}"),
-                "elasticity over temperature is 2D only for now (the 3D solver heats, conducts and exchanges heat with the tools and the surroundings, with a constant modulus and no thermal strain); remove it or run the scene in 2D".into(),
-            );
-        }
+    /// heat, friction heat, conduction, the heat to the tools and the surroundings and the
+    /// elasticity over temperature, as in 2D; each tool's temperature and heat transfer
+    /// checked as a 2D tool's ([`HeatContact::check`]).
+    fn check_heat(&self, out: &mut validation::Checks) {
         for (i, tool) in self.tools.iter().enumerate() {
-            out.check(
-                tool.friction.is_frictionless(),
-                &format!("tools[{i}].friction"),
-                "friction heat is 2D only for now: a 3D scene with [thermal] takes frictionless tools".into(),
-            );
             tool.heat_contact()
                 .check(&tool.name, |k| format!("tools[{i}].{k}"), out);
         }
     }
 
-    /// Whether heat moves in the workpiece or across its surface (the heat stage runs): a
-    /// `[thermal]` section with conduction, convection or radiation, or a tool with heat
-    /// transfer; otherwise heating is adiabatic.
+    /// Whether heat moves in the workpiece or across its surface, or is made at it (the
+    /// heat stage runs): a `[thermal]` section with conduction, convection or radiation, a
+    /// tool with heat transfer or with friction; otherwise heating is adiabatic (2D's
+    /// [`super::Scene::transfers_heat`]).
     pub fn transfers_heat(&self) -> bool {
         self.thermal.as_ref().is_some_and(|t| {
             t.conductivity_w_per_m_k > 0.0
@@ -475,7 +444,13 @@ impl SolidScene {
                 || t.convection_w_per_m2_k > 0.0
                 || t.emissivity > 0.0
                 || self.tools.iter().any(|t| t.heat_contact().transfers_heat())
-        })
+        }) || self.heats_by_friction()
+    }
+
+    /// Whether friction at a tool makes heat: a `[thermal]` section and a tool with
+    /// friction. The heat stage then takes it into the particles it was made at.
+    pub fn heats_by_friction(&self) -> bool {
+        self.thermal.is_some() && self.tools.iter().any(|t| !t.friction.is_frictionless())
     }
 
     /// Whether a tool's heat transfer depends on the contact pressure: the contact stage
@@ -736,7 +711,7 @@ separation = false
             ),
             (
                 "[time]",
-                "[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0\nexpansion_per_k = 1.7e-5\n[time]",
+                "[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0\nexpansion_per_k = 1.7e-2\n[time]",
                 "thermal.expansion_per_k",
                 20,
             ),
@@ -748,7 +723,7 @@ separation = false
             ),
             (
                 "separation = false",
-                "separation = false\nfriction = 0.1\n[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0",
+                "separation = false\nfriction = -0.1\n[thermal]\ninitial_temperature_c = 20.0\nspecific_heat_j_per_kg_k = 385.0",
                 "tools[0].friction",
                 26,
             ),

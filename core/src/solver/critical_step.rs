@@ -4,10 +4,12 @@
 //! stage itself, so the support, the rule and the lumping all enter.
 
 use super::discretization::Discretization;
+use super::heat::Heat;
 use super::state::State;
 use super::workspace::Workspace;
 use super::{stress, update};
 use crate::error::{Error, Result};
+use crate::material::HenckyJ2;
 use crate::math::{dot, Real};
 use crate::scene::Scene;
 
@@ -148,17 +150,7 @@ pub(super) fn measure_critical_step(
     st: &mut State,
     ws: &mut Workspace,
 ) -> Result<Real> {
-    let stiffening = match (&disc.material.thermoelastic, &st.heat) {
-        (Some(te), Some(h)) if !te.modulus_factor.is_empty() => {
-            let now = h
-                .temperature_c
-                .iter()
-                .map(|&t| te.modulus_factor_at(t))
-                .fold(Real::NEG_INFINITY, Real::max);
-            (now / te.modulus_factor_max()).sqrt()
-        }
-        _ => 1.0,
-    };
+    let stiffening = stiffening(&disc.material, st.heat.as_ref());
     let saved_points = st.points.clone();
     // The stress stage also heats the points and books the energy: neither is the run's.
     let (saved_heat, saved_energy) = (st.heat.clone(), st.energy);
@@ -175,6 +167,26 @@ pub(super) fn measure_critical_step(
     st.heat = saved_heat;
     st.energy = saved_energy;
     dt.map(|dt| dt * stiffening)
+}
+
+/// The factor `sqrt(f_now / f_max)` (-) on a critical step measured with the points at their
+/// temperatures now (2D and 3D): `f_now` the largest modulus factor `E(T_p) / E` of the
+/// points' temperatures, `f_max` the largest of the scene's table
+/// (`thermal.modulus_factor_by_temperature`), so that the step holds when the body cools
+/// stiffer (the critical step scales as `1 / sqrt(E)`); 1 without a modulus over
+/// temperature.
+pub(super) fn stiffening(material: &HenckyJ2, heat: Option<&Heat>) -> Real {
+    match (&material.thermoelastic, heat) {
+        (Some(te), Some(h)) if !te.modulus_factor.is_empty() => {
+            let now = h
+                .temperature_c
+                .iter()
+                .map(|&t| te.modulus_factor_at(t))
+                .fold(Real::NEG_INFINITY, Real::max);
+            (now / te.modulus_factor_max()).sqrt()
+        }
+        _ => 1.0,
+    }
 }
 
 #[cfg(test)]

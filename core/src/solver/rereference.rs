@@ -40,8 +40,9 @@
 use super::conduction;
 use super::contact_stage;
 use super::critical_step::measure_critical_step;
-use super::discretization::Discretization;
+use super::discretization::{Discretization, Thermal};
 use super::energy::kinetic_energy;
+use super::heat::Heat;
 use super::layout::{Scatter, MAX_GROUP};
 use super::outline::Outline;
 use super::state::{Reference, State};
@@ -156,23 +157,8 @@ pub(super) fn now(
         .map(|j| disc.nodal.interpolate(j, &ws.v_prev))
         .collect();
     let kinetic_before = kinetic_energy(&disc.mass, &st.v);
-    // The temperature field at the particles, `sum_I N_I(X_J) T_I`, before the shape
-    // functions change (a scene whose heat moves).
-    let temperature_now: Option<Vec<[Real; 2]>> = match (&st.heat, &disc.thermal) {
-        (Some(h), Some(th)) if !h.particle_c.is_empty() => Some(
-            (0..np)
-                .map(|j| {
-                    let row = disc.nodal.row(j);
-                    let t =
-                        th.capacity.interpolate(row.map(|e| {
-                            (disc.nodal.n[e], h.particle_c[disc.nodal.index[e] as usize])
-                        }));
-                    [t, 0.0]
-                })
-                .collect(),
-        ),
-        _ => None,
-    };
+    let temperature_now =
+        particle_temperatures(&disc.nodal, st.heat.as_ref(), disc.thermal.as_ref());
     let previous = st.reference.as_ref();
     let mut reference = Reference {
         count: previous.map_or(0, |r| r.count) + 1,
@@ -189,8 +175,7 @@ pub(super) fn now(
     let (v_prev, r2) = fit(&disc.nodal, &v_before);
     reference.fit_residual = r1.max(r2);
     if let (Some(t), Some(h)) = (temperature_now, st.heat.as_mut()) {
-        let (fitted, r3) = fit(&disc.nodal, &t);
-        h.particle_c = fitted.iter().map(|t| t[0]).collect();
+        let r3 = carry_temperatures(&disc.nodal, &t, h);
         reference.fit_residual = reference.fit_residual.max(r3);
     }
     st.v = v;
@@ -302,6 +287,47 @@ pub(super) fn install(
     disc.critical_dt0 = measured?;
     // Conduction's largest eigenvalue on the new shape functions.
     conduction::update_eigenvalue(disc, st.step, st.time)
+}
+
+/// The temperature field at the particles before the shape functions change (2D and 3D; a
+/// scene whose heat moves, `None` otherwise): `T_J = sum_I N_I(X_J) T_I` (degrees C; in
+/// enthalpy with a capacity table, [`crate::material::HeatCapacity::interpolate`]) with
+/// the `nodal` shape functions and the particles' temperature coefficients `T_I` of
+/// `heat`, each in the first component of a `D`-vector for [`fit`].
+pub(super) fn particle_temperatures<const D: usize>(
+    nodal: &ShapeTable<D>,
+    heat: Option<&Heat>,
+    thermal: Option<&Thermal>,
+) -> Option<Vec<[Real; D]>> {
+    match (heat, thermal) {
+        (Some(h), Some(th)) if !h.particle_c.is_empty() => Some(
+            (0..h.particle_c.len())
+                .map(|j| {
+                    let row = nodal.row(j);
+                    let t = th.capacity.interpolate(
+                        row.map(|e| (nodal.n[e], h.particle_c[nodal.index[e] as usize])),
+                    );
+                    std::array::from_fn(|k| if k == 0 { t } else { 0.0 })
+                })
+                .collect(),
+        ),
+        _ => None,
+    }
+}
+
+/// The temperature coefficients on the new `nodal` shape functions (2D and 3D): those whose
+/// interpolation at the particles reproduces `target` ([`particle_temperatures`] before
+/// the change), by the velocities' least-squares [`fit`], into `heat`'s `T_I`; the points
+/// keep their temperatures, and the next heat stage gathers what the fit missed into the
+/// particles (the heat kept exactly). Returns the fit's relative residual (-).
+pub(super) fn carry_temperatures<const D: usize>(
+    nodal: &ShapeTable<D>,
+    target: &[[Real; D]],
+    heat: &mut Heat,
+) -> Real {
+    let (fitted, residual) = fit(nodal, target);
+    heat.particle_c = fitted.iter().map(|t| t[0]).collect();
+    residual
 }
 
 /// The shape functions of re-reference `count` (2D and 3D): the kernel cloud of the

@@ -19,8 +19,8 @@
 //! [`Dim<3>`] (`F` of 9 components, groups of up to the 8 points of a q4 cell, the generic
 //! gather and scatter in the lanes, [`HenckyJ2::update_lanes3`]). [`run`] is the 2D solver's.
 
-use super::discretization::Discretization;
-use super::heat::Heating;
+use super::discretization::{Discretization, Thermal};
+use super::heat::{Heat, Heating};
 use super::layout::{Scatter, MAX_GROUP, MAX_GROUP_3D};
 use super::nodal_stabilization;
 use super::point_outputs::PointOut;
@@ -1089,17 +1089,7 @@ pub(super) fn run(
     st: &mut State,
     ws: &mut Workspace,
 ) -> Result<(Real, Real)> {
-    let heating = disc.thermal.as_ref().map(|th| {
-        let mut h = Heating::new(&th.spec, &th.capacity, th.density, st.dt_prev);
-        if let Some(heat) = &st.heat {
-            h.ramp = if heat.step_s > 0.0 {
-                (1.0 - heat.since_s / heat.step_s).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-        }
-        h
-    });
+    let heating = heating(disc.thermal.as_ref(), st.heat.as_ref(), st.dt_prev);
     let avx2 = ws.simd && has_avx2();
     let input = Inputs {
         d: &st.d,
@@ -1113,15 +1103,6 @@ pub(super) fn run(
         avx2,
         heating,
     };
-    let heat = st.heat.as_mut().map(|h| {
-        (
-            &mut h.temperature_c[..],
-            &mut h.plastic_work[..],
-            &mut h.plastic_rate[..],
-            (!h.elastic_state.is_empty())
-                .then_some((&mut h.elastic_state[..], &h.stage_change_k[..])),
-        )
-    });
     let sums = stage(
         &ws.team,
         &disc.scatter,
@@ -1129,7 +1110,7 @@ pub(super) fn run(
         &input,
         &mut st.points,
         &mut ws.out,
-        heat,
+        heat_slices(st.heat.as_mut()),
     )
     .map_err(|(p, m)| Error::Diverged {
         step: st.step,
@@ -1150,6 +1131,44 @@ pub(super) fn run(
         _ => 0.0,
     };
     Ok((sums.elastic + stabilization, sums.plastic))
+}
+
+/// What the stress stage needs to heat the points of a scene with `[thermal]` (2D and 3D):
+/// [`Heating`] from the scene's `thermal` settings and the last step `dt_prev` (s), with
+/// the share `1 - t_since / dt_heat` (-) of the last heat stage's change that the
+/// elasticity over temperature does not see yet ([`Heating::ramp`]; 0 before the first heat
+/// stage and when the heat does not move).
+pub(super) fn heating<'a>(
+    thermal: Option<&'a Thermal>,
+    heat: Option<&Heat>,
+    dt_prev: Real,
+) -> Option<Heating<'a>> {
+    thermal.map(|th| {
+        let mut h = Heating::new(&th.spec, &th.capacity, th.density, dt_prev);
+        if let Some(heat) = heat {
+            h.ramp = if heat.step_s > 0.0 {
+                (1.0 - heat.since_s / heat.step_s).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+        }
+        h
+    })
+}
+
+/// The points' arrays of `heat` that the stress stage writes (2D and 3D): temperatures,
+/// plastic work and rates, and with elasticity over temperature each point's elastic state
+/// and the last heat stage's change ([`HeatSlices`]).
+pub(super) fn heat_slices(heat: Option<&mut Heat>) -> Option<HeatSlices<'_>> {
+    heat.map(|h| {
+        (
+            &mut h.temperature_c[..],
+            &mut h.plastic_work[..],
+            &mut h.plastic_rate[..],
+            (!h.elastic_state.is_empty())
+                .then_some((&mut h.elastic_state[..], &h.stage_change_k[..])),
+        )
+    })
 }
 
 /// Runs the stress stage over all points on `team`: updates each point's history in

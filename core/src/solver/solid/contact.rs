@@ -10,7 +10,8 @@
 //! without separation (the FE wall, a symmetry plane) holds a particle once it reached it:
 //! its gap is then taken on either side. After the corrector, the friction force the
 //! corrector did not realise on the particle is carried to the next step's stick force, as
-//! in 2D ([`PlaneContact::carry`]).
+//! in 2D ([`PlaneContact::carry`]), and in a scene with `[thermal]` its work against the
+//! slip booked at the particle for the heat stage, as in 2D.
 //!
 //! Skipping, as in 2D: between two stages `x_J` moves at most `sqrt 3 S_J du` (`S_J =
 //! sum_I |N_I(X_J)|`, `du` the bound on the change of `d_I + dt v*_I` per component) and a
@@ -19,7 +20,7 @@
 
 use super::{SolidDisc, SolidState};
 use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
-use crate::contact::Forces;
+use crate::contact::{slip_work, Forces};
 use crate::math::{dot, Real};
 use crate::plane_tool::PlaneTool;
 use crate::team::{part, particle_phase, Parts, Team};
@@ -253,7 +254,10 @@ impl PlaneContact {
     /// realise on its particle, carried to the next step's stick force as `c = f_T + m_J P_T
     /// (v*_J - v_J) / dt_avg` (N), with `v*_J` the predicted velocity the force was computed
     /// from and `v_J = sum_I N_I(X_J) v_I` after the corrector (m/s), `P_T` the projection
-    /// on the plane (the 2D law, `crate::contact::Contact::carry`).
+    /// on the plane (the 2D law, `crate::contact::Contact::carry`). In a scene with
+    /// `[thermal]` each pair's friction work over the step, `max(0, -f_T . P_T (v_J -
+    /// v_tool)) dt_avg` (J, [`slip_work`]), is booked at its particle for the heat stage
+    /// (`Heat::friction_work`).
     pub(crate) fn carry(
         &self,
         disc: &SolidDisc,
@@ -262,6 +266,11 @@ impl PlaneContact {
         dt_avg: Real,
     ) {
         let nplanes = planes.len();
+        let mut work = st
+            .heat
+            .as_mut()
+            .map(|h| &mut h.friction_work[..])
+            .filter(|w| !w.is_empty());
         for touched in &self.touched {
             let (j, t) = (touched.j as usize, touched.t as usize);
             let vj = disc.nodal.interpolate(j, &st.v);
@@ -273,6 +282,11 @@ impl PlaneContact {
             let f = touched.friction;
             st.stick[j * nplanes + t] =
                 Some(std::array::from_fn(|k| f[k] + c * (dv[k] - dn * n[k])));
+            if let Some(work) = work.as_mut() {
+                let plane = &planes[t];
+                let rel = std::array::from_fn(|k| vj[k] - plane.axis[k] * plane.state.velocity);
+                work[j] += slip_work(&f, rel, &n, dt_avg);
+            }
         }
     }
 }

@@ -13,17 +13,20 @@
 //! (`contact.rs`) and the readings of a 3D body.
 //!
 //! Heat in 3D is 2D's: the stress stage's heating of each point by its plastic work
-//! ([`super::heat`]), and when the scene's heat moves the heat stage
+//! ([`super::heat`]) and its elasticity over temperature (the modulus factor and the
+//! thermal strain of `[thermal]`, the shared material update), the friction work the
+//! contact stage books at each particle (`contact.rs`, `crate::contact::slip_work`), and
+//! when the scene's heat moves or friction makes heat the heat stage
 //! ([`super::conduction`], generic over the dimension; the surface of the hexahedral cells
-//! in `heat.rs`): conduction, the heat to the plane tools and the surroundings. Mass
+//! in `heat.rs`): conduction, the friction heat's share into the particles, the heat to the
+//! plane tools and the surroundings. Mass
 //! scaling, uniform or selective, is 2D's ([`super::mass_scaling`]). SCNI integrates a box
 //! over its particles' nodal domains ([`crate::integration::point_shapes`], the 2D code in
 //! three dimensions) and a cylinder over the O-grid's
 //! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
-//! [`crate::integration::smoothed`]). Not in 3D yet (refused by the scene's validation):
-//! friction heat, elasticity over temperature, kernel re-referencing of a body whose heat
-//! moves (re-referencing is `rereference.rs`), SCNI's stabilization, self-contact and
-//! curved or triangulated tools.
+//! [`crate::integration::smoothed`]). Kernel re-referencing is `rereference.rs` (the
+//! temperature field carried as in 2D). Not in 3D yet (refused by the scene's validation):
+//! SCNI's stabilization, self-contact and curved or triangulated tools.
 
 mod contact;
 mod heat;
@@ -36,7 +39,7 @@ mod volume;
 use super::discretization::{MassScalingReport, Thermal};
 use super::energy::{Energy, StepEnergy};
 use super::fields::smoothed;
-use super::heat::{Heat, Heating};
+use super::heat::Heat;
 use super::heat_readings;
 use super::layout::Scatter;
 use super::point_outputs::PointOut;
@@ -209,7 +212,9 @@ fn timed<T>(into: &mut Duration, f: impl FnOnce() -> T) -> T {
 
 /// Stage 1: the stress stage ([`stress::stage`] with `D = 3`) on the points of `disc` with
 /// the coefficients of `st`, its buffers in `ws`, heating each point adiabatically in a
-/// scene with `[thermal]` (`dT_p = beta dW_p / (rho_0 c)`, [`Heating`]); sets the stable
+/// scene with `[thermal]` (`dT_p = beta dW_p / (rho_0 c)`, [`super::heat::Heating`]) and, with
+/// elasticity over temperature, booking the elastic energy its change of temperature put
+/// in (`Energy::thermoelastic`, J; the 2D stage's); sets the stable
 /// step estimate `dt_crit0 a_min` from the smallest deformed cell altitude `a_min` of a
 /// unit cell (-); returns the elastic and plastic energy (J). A point whose update fails
 /// stops the run naming it.
@@ -228,19 +233,8 @@ fn stress_stage(
         axi: false,
         spacing: [1.0; 3],
         avx2: has_avx2(),
-        heating: disc
-            .thermal
-            .as_ref()
-            .map(|th| Heating::new(&th.spec, &th.capacity, th.density, st.dt_prev)),
+        heating: stress::heating(disc.thermal.as_ref(), st.heat.as_ref(), st.dt_prev),
     };
-    let heat = st.heat.as_mut().map(|h| {
-        (
-            &mut h.temperature_c[..],
-            &mut h.plastic_work[..],
-            &mut h.plastic_rate[..],
-            None,
-        )
-    });
     let sums = stress::stage(
         &ws.team,
         &disc.scatter,
@@ -248,7 +242,7 @@ fn stress_stage(
         &input,
         &mut st.points,
         &mut ws.out,
-        heat,
+        stress::heat_slices(st.heat.as_mut()),
     )
     .map_err(|(p, m)| Error::Diverged {
         step: st.step,
@@ -260,6 +254,8 @@ fn stress_stage(
     })?;
     st.stable_dt = disc.critical_dt0 * sums.min_altitude;
     st.max_stretch = sums.max_stretch;
+    st.energy.thermoelastic += sums.thermoelastic;
+    st.energy.thermoelastic_abs += sums.thermoelastic.abs();
     Ok((sums.elastic, sums.plastic))
 }
 
@@ -712,8 +708,9 @@ impl SolidSimulation {
     }
     /// The thermal measures now, `None` for an isothermal scene, as the 2D run's
     /// ([`super::Simulation::thermal_values`], named by [`crate::THERMAL_MEASURES`]): the
-    /// heat to the tools and the surroundings from the heat stage; no friction heat in 3D,
-    /// so the balance compares the heat held and lost with the plastic work's.
+    /// heat to the tools and the surroundings from the heat stage, the friction heat the
+    /// heat stage took in (the workpiece's share `thermal.friction_heat_to_workpiece` of it
+    /// in the balance, as in 2D).
     pub fn thermal_values(&self) -> Option<[Real; 9]> {
         let (heat, th) = (self.st.heat.as_ref()?, self.disc.thermal.as_ref()?);
         let w = &self.disc.weights;

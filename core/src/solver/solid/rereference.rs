@@ -14,11 +14,17 @@
 //!   the Jacobian and Cauchy stress stay measured from the original configuration;
 //! - displacements `d' = 0`; velocities the least-squares coefficients whose interpolation
 //!   at the new reference reproduces the physical particle velocities (the 2D fit), the
-//!   kinetic energy this changes booked as `Energy::remap` (J);
-//! - masses, the planes' states, which particles are held and the friction carried are the
-//!   particles' own and stay; the critical step is measured again on the new shape
-//!   functions with unstressed points, as at the start.
+//!   kinetic energy this changes booked as `Energy::remap` (J); the temperature field of a
+//!   scene whose heat moves alike (2D's): the particle coefficients whose interpolation
+//!   reproduces the particles' temperatures `sum_I N_I(X_J) T_I`, the points keeping
+//!   theirs (the next heat stage gathers what the fit missed into the particles, the heat
+//!   kept exactly);
+//! - masses, the planes' states, which particles are held, the friction carried and the
+//!   heat surface's faces are the particles' own and stay; the critical step is measured
+//!   again on the new shape functions with unstressed points, as at the start, and
+//!   conduction's largest eigenvalue on them.
 
+use super::heat::update_eigenvalue;
 use super::setup::measure_critical_step;
 use super::{SolidDisc, SolidState, SolidWorkspace};
 use crate::error::Result;
@@ -28,7 +34,9 @@ use crate::math::Real;
 use crate::scene::solid::SolidScene;
 use crate::solver::energy::kinetic_energy;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
-use crate::solver::rereference::{failed, fit, shapes_on};
+use crate::solver::rereference::{
+    carry_temperatures, failed, fit, particle_temperatures, shapes_on,
+};
 use serde::{Deserialize, Serialize};
 
 /// The configuration a 3D kernel was last re-referenced on.
@@ -157,6 +165,8 @@ pub(super) fn now(
         .map(|j| disc.nodal.interpolate(j, &ws.v_prev))
         .collect();
     let kinetic_before = kinetic_energy(&disc.mass, &st.v);
+    let temperature_now =
+        particle_temperatures(&disc.nodal, st.heat.as_ref(), disc.thermal.as_ref());
     let mut reference = SolidReference {
         count: st.reference.as_ref().map_or(0, |r| r.count) + 1,
         time_s: st.time,
@@ -171,6 +181,10 @@ pub(super) fn now(
     let (v, r1) = fit(&disc.nodal, &v_now);
     let (v_prev, r2) = fit(&disc.nodal, &v_before);
     reference.fit_residual = r1.max(r2);
+    if let (Some(t), Some(h)) = (temperature_now, st.heat.as_mut()) {
+        let r3 = carry_temperatures(&disc.nodal, &t, h);
+        reference.fit_residual = reference.fit_residual.max(r3);
+    }
     st.v = v;
     ws.v_prev = v_prev;
     st.d = vec![[0.0; 3]; np];
@@ -249,5 +263,6 @@ pub(super) fn install(
     let measured = measure_critical_step(disc, st, ws);
     (st.points, ws.out, st.heat, st.dt_prev, st.d) = saved;
     disc.critical_dt0 = measured?;
-    Ok(())
+    // Conduction's largest eigenvalue on the new shape functions.
+    update_eigenvalue(disc)
 }

@@ -15,7 +15,7 @@ use crate::plane_tool::PlaneTool;
 use crate::rk_shape::{for_each_index, KernelCloud, Lattice, ShapeTable, Site};
 use crate::scene::solid::{CylinderPart, SolidScene, SolidShape};
 use crate::scene::IntegrationRule;
-use crate::solver::critical_step::critical_step;
+use crate::solver::critical_step::{critical_step, stiffening};
 use crate::solver::discretization::{Thermal, Transfer};
 use crate::solver::energy::Energy;
 use crate::solver::heat::Heat;
@@ -230,11 +230,12 @@ impl SolidSimulation {
         let npts = p.points.len();
         let chunk = (2 * p.layer_points).max(64);
         let scatter = Scatter::new(&p.pt, np, chunk, MAX_GROUP_3D);
-        let material = HenckyJ2::new(
+        let mut material = HenckyJ2::new(
             scene.material.youngs_modulus_pa,
             scene.material.poisson_ratio,
             scene.material.hardening.clone(),
         );
+        material.thermoelastic = scene.thermal.as_ref().and_then(|t| t.thermoelastic());
         let wave_speed = material.wave_speed(rho);
         let depth = SEARCH_DEPTH_SPACINGS * p.h_min;
         let mut tools: Vec<PlaneTool> = scene
@@ -328,8 +329,21 @@ impl SolidSimulation {
             anchor_step: 0,
             heat: scene.thermal.as_ref().map(|t| {
                 let particles = if scene.transfers_heat() { np } else { 0 };
+                let friction = scene.heats_by_friction();
                 let pressure = scene.transfers_heat_by_pressure();
-                Heat::initial(t, npts, scene_tools, particles, false, pressure, None)
+                // E(T) / E at the initial temperature, unstrained (2D's).
+                let thermoelastic = t
+                    .thermoelastic()
+                    .map(|te| [te.modulus_factor_at(t.initial_temperature_c), 0.0, 0.0, 0.0]);
+                Heat::initial(
+                    t,
+                    npts,
+                    scene_tools,
+                    particles,
+                    friction,
+                    pressure,
+                    thermoelastic,
+                )
             }),
             max_stretch: 0.0,
             reference: None,
@@ -398,13 +412,15 @@ impl SolidSimulation {
 
 /// The critical step `2 / omega_max` of the undeformed discretisation (s) by Lanczos
 /// ([`critical_step`]) on the internal force of a displacement of 1e-7 of the smallest
-/// spacing; the state is left undeformed.
+/// spacing, scaled by `sqrt(f_now / f_max)` with a modulus over temperature (2D's
+/// [`stiffening`]); the state (its heat included) is left as it was, undeformed.
 pub(super) fn measure_critical_step(
     disc: &SolidDisc,
     st: &mut SolidState,
     ws: &mut SolidWorkspace,
 ) -> Result<Real> {
-    let saved = (st.points.clone(), st.energy);
+    let stiffening = stiffening(&disc.material, st.heat.as_ref());
+    let saved = (st.points.clone(), st.energy, st.heat.clone());
     let inv_sqrt_m: Vec<Real> = disc.mass.iter().map(|m| 1.0 / m.sqrt()).collect();
     let dt = critical_step(&inv_sqrt_m, 1e-7 * disc.h_min, |d| {
         st.d = d;
@@ -413,6 +429,6 @@ pub(super) fn measure_critical_step(
         Ok(ws.f_int.clone())
     });
     st.d.fill([0.0; 3]);
-    (st.points, st.energy) = saved;
-    dt
+    (st.points, st.energy, st.heat) = saved;
+    dt.map(|dt| dt * stiffening)
 }
