@@ -46,11 +46,11 @@ use super::update::{self, Motion, Predictor};
 use crate::error::{Error, Result};
 use crate::material::{HenckyJ2, PointState3};
 use crate::math::Real;
-use crate::plane_tool::{PlaneTool, PlaneToolState};
 use crate::rk_shape::ShapeTable;
 use crate::scene::solid::SolidScene;
+use crate::solid_tool::{SolidTool, SolidToolState};
 use crate::team::Team;
-use contact::PlaneContact;
+use contact::ToolContact;
 pub use rereference::SolidReference;
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
@@ -139,7 +139,7 @@ pub struct SolidState {
     /// Integration point histories.
     pub points: Vec<PointState3>,
     /// The planes' states: the scene's tools, then the symmetry planes.
-    pub tools: Vec<PlaneToolState>,
+    pub tools: Vec<SolidToolState>,
     /// Energy account (J).
     pub energy: Energy,
     /// Which particles are held on which plane without separation (`[particle * planes +
@@ -176,7 +176,7 @@ pub(super) struct SolidWorkspace {
     buf: Vec<[Real; 3]>,
     f_int: Vec<[Real; 3]>,
     v_prev: Vec<[Real; 3]>,
-    contact: PlaneContact,
+    contact: ToolContact,
     team: Team,
 }
 
@@ -185,7 +185,7 @@ pub(super) struct SolidWorkspace {
 pub struct SolidSimulation {
     scene: SolidScene,
     disc: SolidDisc,
-    tools: Vec<PlaneTool>,
+    tools: Vec<SolidTool>,
     st: SolidState,
     ws: SolidWorkspace,
     /// Wall time per stage since setup.
@@ -522,7 +522,7 @@ impl SolidSimulation {
             t.state = *s;
         }
         self.ws.v_prev.clone_from(&st.v);
-        self.ws.contact = PlaneContact::new(st.d.len(), self.tools.len());
+        self.ws.contact = ToolContact::new(st.d.len(), self.tools.len());
         for (p, (out, point)) in self.ws.out.iter_mut().zip(&st.points).enumerate() {
             let temp = st.heat.as_ref().map(|h| h.temperature_c[p]);
             *out = PointOut::at(&self.disc.material, point.eps_p, temp);
@@ -592,7 +592,7 @@ impl SolidSimulation {
         &self.disc.cells
     }
     /// The scene's tools (the symmetry planes are not among them).
-    pub fn tools(&self) -> &[PlaneTool] {
+    pub fn tools(&self) -> &[SolidTool] {
         &self.tools[..self.disc.scene_tools]
     }
     /// Index of the scene tool named `name`.
@@ -610,7 +610,7 @@ impl SolidSimulation {
         crate::tools::command_velocity(&mut self.tools[..scene_tools], tool, v)
     }
     /// The symmetry planes.
-    pub fn symmetry_planes(&self) -> &[PlaneTool] {
+    pub fn symmetry_planes(&self) -> &[SolidTool] {
         &self.tools[self.disc.scene_tools..]
     }
     /// Physical particle positions `X_J + sum_I N_I(X_J) d_I` (m).
@@ -780,7 +780,7 @@ impl SolidSimulation {
         let mut worst = [(0.0 as Real, 0usize, 0usize); 2];
         for (j, p) in self.positions().iter().enumerate() {
             for (t, plane) in self.tools.iter().enumerate() {
-                let depth = plane.depth_of(*p);
+                let depth = plane.inside_by(*p);
                 let w = &mut worst[plane.symmetry as usize];
                 if depth > w.0 {
                     *w = (depth, j, t);
