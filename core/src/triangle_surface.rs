@@ -11,9 +11,10 @@
 //! faces' normals; on a vertex `sum_f alpha_f n_f` over its faces, `alpha_f` the face's
 //! angle at the vertex (rad). `s = sign((x - q) . N)`: the signed distance `phi = s |x - q|`
 //! (m) is negative inside the die and positive outside, exactly, for any closed, oriented
-//! surface (what [`crate::stl::TriangleMesh::check`] guarantees). On a face `phi` is
-//! computed as `n_f . (x - a)`, the plane's own formula, so a flat die gives the gap of the
-//! analytic plane through it to the bit.
+//! surface (what [`crate::stl::TriangleMesh::check`] guarantees). On a face, and on an edge
+//! or vertex inside a flat region (whose pseudo-normal is the face's normal: the diagonal
+//! of a die's flat face), `phi` is computed as `n_f . (x - a)`, the plane's own formula, so
+//! a flat die gives the gap of the analytic plane through it to the bit.
 //!
 //! Contact normal (out of the die, towards the point): `n_f` on a face, else `s (x - q) /
 //! |x - q|` (the pseudo-normal where `x = q`).
@@ -245,7 +246,14 @@ impl TriangleSurface {
         let (q, feature, _) = self.on_triangle(y, t);
         let tri = self.mesh.triangles[t];
         let n = self.face_normal[t];
-        if feature == Feature::Face {
+        let pseudo = match feature {
+            Feature::Edge(k) => self.edge_normal[t][k as usize],
+            Feature::Vertex(k) => self.vertex_normal[tri[k as usize] as usize],
+            Feature::Face => n,
+        };
+        // A face, or an edge or vertex inside a flat region (its pseudo-normal the face's):
+        // the distance to the plane of the face.
+        if feature == Feature::Face || unit(pseudo) == n {
             let a = self.mesh.vertices[tri[0] as usize];
             let rel: [Real; 3] = std::array::from_fn(|k| x[k] - a[k] - shift[k]);
             return Closest {
@@ -256,11 +264,6 @@ impl TriangleSurface {
                 feature,
             };
         }
-        let pseudo = match feature {
-            Feature::Edge(k) => self.edge_normal[t][k as usize],
-            Feature::Vertex(k) => self.vertex_normal[tri[k as usize] as usize],
-            Feature::Face => n,
-        };
         let d = sub(y, q);
         let dist = dot(d, d).sqrt();
         let s: Real = if dot(d, pseudo) < 0.0 { -1.0 } else { 1.0 };
@@ -692,7 +695,8 @@ mod tests {
     }
 
     /// The flat face of a box die, moved along an axis, gives the analytic plane's gap
-    /// to the bit: `n . (x - a - s axis)` with the plane through the face.
+    /// to the bit: `n . (x - a - s axis)` with the plane through the face, on the face's
+    /// triangles and on the diagonal between them.
     #[test]
     fn a_flat_face_is_the_analytic_plane_to_the_bit() {
         let top = 0.0324;
@@ -700,22 +704,29 @@ mod tests {
         let axis = [0.0, 0.0, -1.0];
         let normal = [0.0, 0.0, -1.0];
         let mut rng = Lcg(3);
+        let mut diagonal = 0;
         for i in 0..2000 {
             let stroke = 1e-3 * rng.next();
-            let x = [
+            let mut x = [
                 0.008 * rng.next(),
                 0.008 * rng.next(),
                 top - 2e-3 + 3e-3 * rng.next(),
             ];
+            // Every other point on the face's diagonal, the edge between its triangles.
+            if i % 2 == 0 {
+                x[1] = x[0];
+            }
             let shift = axis.map(|a| stroke * a);
             let plane_depth = {
                 let rel: [Real; 3] = std::array::from_fn(|k| x[k] - [0.0, 0.0, top][k] - shift[k]);
                 -dot(normal, rel)
             };
             let c = s.closest(x, shift);
-            assert_eq!(c.feature, Feature::Face, "{i}");
+            assert!(i % 2 == 0 || c.feature == Feature::Face, "{i}");
+            diagonal += usize::from(c.feature != Feature::Face);
             assert_eq!((-c.signed).to_bits(), plane_depth.to_bits(), "{i} {x:?}");
             assert_eq!(c.normal.map(|v| v + 0.0), normal);
         }
+        assert!(diagonal > 100, "{diagonal} points on the diagonal's edge");
     }
 }
