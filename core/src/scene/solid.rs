@@ -1,6 +1,7 @@
 //! Three-dimensional scenes (`model.kinematics = "3d"`): a box or a cylinder of particles,
-//! rigid plane tools and the symmetry planes of a half, quarter or eighth model, with what
-//! each must be ([`SolidScene::validate`]). The sections a 3D scene shares with a 2D one
+//! rigid tools (planes, or dies from STL files read and checked here, [`crate::stl`]) and
+//! the symmetry planes of a half, quarter or eighth model, with what each must be
+//! ([`SolidScene::validate`]). The sections a 3D scene shares with a 2D one
 //! (`[material]`, `[time]`, `[checks]`, `[[reference]]`) are the same types with the same
 //! checks; what depends on the dimension (the workpiece, the tools, the discretisation's
 //! support) is here. [`SceneFile::from_file`] reads either kind and says which.
@@ -233,10 +234,10 @@ pub struct SolidToolSpec {
     /// `plane` (the default) or `stl`.
     #[serde(default, skip_serializing_if = "is_plane")]
     pub shape: ToolShape,
-    /// Plane: a point of the plane with the tool at its start (m).
+    /// A point of the plane with the tool at its start (m).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub point_m: Option<[Real; 3]>,
-    /// Plane: unit normal, pointing out of the tool towards the workpiece.
+    /// Unit normal, pointing out of the tool towards the workpiece.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normal: Option<[Real; 3]>,
     /// STL: the file (binary or ASCII), relative to the scene file's folder; its

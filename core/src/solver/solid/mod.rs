@@ -9,8 +9,9 @@
 //! critical step ([`super::critical_step`]); shape functions, cell rules and lattices are
 //! [`crate::rk_shape`] and [`crate::integration`] in three dimensions, and the contact law
 //! is [`crate::contact::sidibe2009`]'s. What only 3D has is here: the setup of a box or a
-//! cylinder (`setup.rs`), the contact of the plane tools and symmetry planes
-//! (`contact.rs`) and the readings of a 3D body.
+//! cylinder (`setup.rs`), the contact of the tools (planes and triangle surfaces from STL
+//! files, [`crate::solid_tool`]) and symmetry planes (`contact.rs`) and the readings of a
+//! 3D body.
 //!
 //! Heat in 3D is 2D's: the stress stage's heating of each point by its plastic work
 //! ([`super::heat`]), and when the scene's heat moves the heat stage
@@ -22,8 +23,9 @@
 //! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
 //! [`crate::integration::smoothed`]). Not in 3D yet (refused by the scene's validation):
 //! friction heat, elasticity over temperature, kernel re-referencing of a body whose heat
-//! moves (re-referencing is `rereference.rs`), SCNI's stabilization, self-contact and
-//! curved or triangulated tools.
+//! moves (re-referencing is `rereference.rs`), SCNI's stabilization, self-contact, heat
+//! transfer to a tool from an STL file, and the pass of the tools' convex edges and vertices
+//! against the surface between particles.
 
 mod contact;
 mod heat;
