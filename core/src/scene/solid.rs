@@ -350,7 +350,7 @@ pub struct SolidScene {
     pub discretization: SolidDiscretization,
     /// Time span and step.
     pub time: TimeSpec,
-    /// Rigid plane tools.
+    /// Rigid tools: planes, or dies from STL files.
     #[serde(default)]
     pub tools: Vec<SolidToolSpec>,
     /// What to record.
