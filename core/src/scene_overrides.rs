@@ -188,6 +188,8 @@ pub trait Overridable: serde::Serialize + serde::de::DeserializeOwned {
     const SOLID: bool;
     /// Every non-physical or inconsistent value, as (key path, message).
     fn findings(&self) -> Vec<(String, String)>;
+    /// Records where the scene was read from (`file`), for the files it names.
+    fn read_from(&mut self, _file: &str) {}
 }
 
 impl Overridable for Scene {
@@ -201,6 +203,13 @@ impl Overridable for SolidScene {
     const SOLID: bool = true;
     fn findings(&self) -> Vec<(String, String)> {
         self.validate()
+    }
+    /// An STL tool's `file` is relative to the folder of the scene file.
+    fn read_from(&mut self, file: &str) {
+        self.folder = std::path::Path::new(file)
+            .parent()
+            .map(std::path::Path::to_path_buf)
+            .unwrap_or_default();
     }
 }
 
@@ -229,7 +238,8 @@ fn build<S: Overridable>(text: &str, file: &str, overrides: &[(String, Value)]) 
         });
     }
     if overrides.is_empty() {
-        let scene: S = toml::from_str(text).map_err(syntax)?;
+        let mut scene: S = toml::from_str(text).map_err(syntax)?;
+        scene.read_from(file);
         return match scene.findings().into_iter().next() {
             Some((key, message)) => Err(Error::SceneValue {
                 file: file.to_string(),
@@ -259,7 +269,8 @@ fn build<S: Overridable>(text: &str, file: &str, overrides: &[(String, Value)]) 
             })?,
         );
     }
-    let scene = scene.unwrap_or_else(|| unreachable!("overrides is not empty"));
+    let mut scene = scene.unwrap_or_else(|| unreachable!("overrides is not empty"));
+    scene.read_from(file);
     if let Some((key, message)) = scene.findings().into_iter().next() {
         let culprit = overrides
             .iter()

@@ -379,7 +379,7 @@ pub fn gap_within(
 
 /// A rigid tool driven along its axis, as the step's speed limit reads it
 /// (`solver/stable_step.rs`): its name, motion and the command from outside; the polyline
-/// tools of 2D and the plane tools of 3D ([`crate::plane_tool`]) both are.
+/// tools of 2D and the plane tools of 3D ([`crate::solid_tool`]) both are.
 pub trait Driven {
     /// Name from the scene.
     fn name(&self) -> &str;

@@ -42,6 +42,7 @@ use crate::msgs::{
 use crate::PublishedScene;
 use rkforge_core::math::{dot, Real};
 use rkforge_core::outputs::{self, Body, Column};
+use rkforge_core::solid_tool::Surface;
 use rkforge_core::solver::SolidSimulation;
 use rkforge_core::Simulation;
 
@@ -226,9 +227,18 @@ impl Published for SolidSimulation {
             .iter()
             .map(|t| {
                 let s = t.state.stroke;
-                let origin: [Real; 3] = std::array::from_fn(|k| t.point0[k] + s * t.axis[k]);
-                plane_patch(origin, t.normal, bounds)
-                    .iter()
+                let line: Vec<[Real; 3]> = match &t.surface {
+                    Surface::Plane { point0, normal } => {
+                        let origin: [Real; 3] = std::array::from_fn(|k| point0[k] + s * t.axis[k]);
+                        plane_patch(origin, *normal, bounds).to_vec()
+                    }
+                    Surface::Triangles(tri) => {
+                        let b = tri.mesh().bounds();
+                        box_outline(std::array::from_fn(|k| b[k].map(|x| x + s * t.axis[k])))
+                            .to_vec()
+                    }
+                };
+                line.iter()
                     .map(|p| Point {
                         x: p[0],
                         y: p[1],
@@ -246,6 +256,24 @@ impl Published for SolidSimulation {
     fn register_columns(&self) -> Vec<Column<Self>> {
         outputs::solid_columns(self.scene())
     }
+}
+
+/// A line through the box `bounds` (`[min, max]` of x, y, z; m) drawing its bottom and
+/// top loops and one upright edge: an STL tool's place, the bounds of its triangles.
+fn box_outline(bounds: [[Real; 2]; 3]) -> [[Real; 3]; 10] {
+    let c = |i: usize, z: usize| [bounds[0][i & 1], bounds[1][i >> 1], bounds[2][z]];
+    [
+        c(0, 0),
+        c(1, 0),
+        c(3, 0),
+        c(2, 0),
+        c(0, 0),
+        c(0, 1),
+        c(1, 1),
+        c(3, 1),
+        c(2, 1),
+        c(0, 1),
+    ]
 }
 
 /// The closed loop (five corners, the first repeated; m) round the patch of the plane

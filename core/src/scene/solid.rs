@@ -1,6 +1,7 @@
 //! Three-dimensional scenes (`model.kinematics = "3d"`): a box or a cylinder of particles,
-//! rigid plane tools and the symmetry planes of a half, quarter or eighth model, with what
-//! each must be ([`SolidScene::validate`]). The sections a 3D scene shares with a 2D one
+//! rigid tools (planes, or dies from STL files read and checked here, [`crate::stl`]) and
+//! the symmetry planes of a half, quarter or eighth model, with what each must be
+//! ([`SolidScene::validate`]). The sections a 3D scene shares with a 2D one
 //! (`[material]`, `[time]`, `[checks]`, `[[reference]]`) are the same types with the same
 //! checks; what depends on the dimension (the workpiece, the tools, the discretisation's
 //! support) is here. [`SceneFile::from_file`] reads either kind and says which.
@@ -15,9 +16,11 @@ use super::{
 use crate::error::Result;
 use crate::friction::Friction;
 use crate::math::Real;
+use crate::stl::{LengthUnit, TriangleMesh};
 use crate::validation::{self, is_name, pos};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
 
 /// The kinematics of a 3D scene: the one value `"3d"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
@@ -206,17 +209,43 @@ impl Default for SolidDiscretization {
     }
 }
 
-/// A rigid plane tool: the half-space behind the plane through `point_m` with the normal
-/// `normal` (pointing to the workpiece's side), moving along `axis`.
+/// The surface of a 3D tool.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ToolShape {
+    /// A plane (keys `point_m`, `normal`): the tool fills the half-space behind it.
+    #[default]
+    Plane,
+    /// A closed triangle surface from an STL file (keys `file`, `unit`): the tool is the
+    /// solid it encloses ([`crate::stl`]).
+    Stl,
+}
+
+/// A rigid 3D tool: the half-space behind the plane through `point_m` with the normal
+/// `normal` (pointing to the workpiece's side), or the solid an STL file's closed surface
+/// encloses (`shape = "stl"`, `file`), moving along `axis`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct PlaneToolSpec {
+pub struct SolidToolSpec {
     /// Name, used in outputs (`<name>.force_N`).
     pub name: String,
+    /// `plane` (the default) or `stl`.
+    #[serde(default, skip_serializing_if = "is_plane")]
+    pub shape: ToolShape,
     /// A point of the plane with the tool at its start (m).
-    pub point_m: [Real; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point_m: Option<[Real; 3]>,
     /// Unit normal, pointing out of the tool towards the workpiece.
-    pub normal: [Real; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal: Option<[Real; 3]>,
+    /// STL: the file (binary or ASCII), relative to the scene file's folder; its
+    /// coordinates place the die at its start, its triangles wound with normals out of the
+    /// die.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// STL: the unit of the file's coordinates, `m` (the default) or `mm`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit: Option<LengthUnit>,
     /// Unit direction along which stroke, velocity and force are measured.
     pub axis: [Real; 3],
     /// Motion along the axis.
@@ -249,11 +278,15 @@ fn default_separation() -> bool {
     true
 }
 
+fn is_plane(shape: &ToolShape) -> bool {
+    *shape == ToolShape::Plane
+}
+
 fn is_zero(x: &Real) -> bool {
     *x == 0.0
 }
 
-impl PlaneToolSpec {
+impl SolidToolSpec {
     /// The tool's temperature and heat transfer (the 2D tool's keys).
     pub fn heat_contact(&self) -> HeatContact<'_> {
         HeatContact {
@@ -314,9 +347,9 @@ pub struct SolidScene {
     pub discretization: SolidDiscretization,
     /// Time span and step.
     pub time: TimeSpec,
-    /// Rigid plane tools.
+    /// Rigid tools: planes, or dies from STL files.
     #[serde(default)]
-    pub tools: Vec<PlaneToolSpec>,
+    pub tools: Vec<SolidToolSpec>,
     /// What to record.
     #[serde(default)]
     pub output: SolidOutput,
@@ -326,6 +359,11 @@ pub struct SolidScene {
     /// Published results to print beside ours (not used by the solver).
     #[serde(default)]
     pub reference: Vec<Reference>,
+    /// The folder of the scene file, which an STL tool's `file` is relative to (set when
+    /// the scene is read; the working folder when it is not).
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub folder: PathBuf,
 }
 
 /// A workpiece key and whether the scene gives it.
@@ -386,16 +424,7 @@ impl SolidScene {
                     t.name
                 ),
             );
-            out.check(
-                t.point_m.iter().all(|x| x.is_finite()),
-                &key("point_m"),
-                format!("must be finite, got {:?}", t.point_m),
-            );
-            out.check(
-                unit(t.normal),
-                &key("normal"),
-                format!("must be a unit vector, got {:?}", t.normal),
-            );
+            self.check_tool_surface(i, &mut out);
             out.check(
                 unit(t.axis),
                 &key("axis"),
@@ -420,6 +449,117 @@ impl SolidScene {
         );
         self.checks.check(&mut out);
         out.0
+    }
+
+    /// Tool `i`'s surface: a plane's point and unit normal; an STL tool's file, read and
+    /// checked ([`SolidScene::tool_mesh`]) and its size and place against the
+    /// workpiece's ([`units_finding`]); each shape's keys, and no other's.
+    fn check_tool_surface(&self, i: usize, out: &mut validation::Checks) {
+        let t = &self.tools[i];
+        let key = |k: &str| format!("tools[{i}].{k}");
+        let (shape, needed, foreign): (&str, &[Given], &[Given]) = match t.shape {
+            ToolShape::Plane => (
+                "plane",
+                &[
+                    ("point_m", t.point_m.is_some()),
+                    ("normal", t.normal.is_some()),
+                ],
+                &[("file", t.file.is_some()), ("unit", t.unit.is_some())],
+            ),
+            ToolShape::Stl => (
+                "stl",
+                &[("file", t.file.is_some())],
+                &[
+                    ("point_m", t.point_m.is_some()),
+                    ("normal", t.normal.is_some()),
+                ],
+            ),
+        };
+        for (k, given) in needed {
+            out.check(*given, &key(k), format!("a {shape} tool needs `{k}`"));
+        }
+        for (k, given) in foreign {
+            out.check(
+                !*given,
+                &key(k),
+                format!("`{k}` is not a key of a {shape} tool"),
+            );
+        }
+        if let Some(p) = t.point_m {
+            out.check(
+                p.iter().all(|x| x.is_finite()),
+                &key("point_m"),
+                format!("must be finite, got {p:?}"),
+            );
+        }
+        if let Some(n) = t.normal {
+            out.check(
+                unit(n),
+                &key("normal"),
+                format!("must be a unit vector, got {n:?}"),
+            );
+        }
+        if t.shape != ToolShape::Stl || t.file.is_none() {
+            return;
+        }
+        out.check(
+            !t.heat_contact().transfers_heat(),
+            &key("heat_transfer_w_per_m2_k"),
+            "heat transfer to an STL tool is not there yet (the heat stage's contact area is a plane tool's); remove it or give the die as a plane".into(),
+        );
+        match self.tool_mesh(i) {
+            Err(message) => out.check(false, &key("file"), message),
+            Ok(mesh) => {
+                if let Some(message) = self
+                    .workpiece_bounds()
+                    .and_then(|w| units_finding(mesh.bounds(), w, t.unit.unwrap_or_default()))
+                {
+                    let path = self.tool_path(i).unwrap_or_default();
+                    out.check(
+                        false,
+                        &key("file"),
+                        format!("`{}` {message}", path.display()),
+                    );
+                }
+            }
+        }
+    }
+
+    /// The path of STL tool `i`'s file: its `file` in the scene's folder.
+    pub fn tool_path(&self, i: usize) -> Option<PathBuf> {
+        let file = self.tools.get(i)?.file.as_ref()?;
+        Some(self.folder.join(Path::new(file)))
+    }
+
+    /// STL tool `i`'s triangles in metres, read and checked ([`TriangleMesh::read`]).
+    ///
+    /// # Errors
+    ///
+    /// The tool has no file, or the file cannot be read or fails a check: the file's
+    /// path and the reason.
+    pub fn tool_mesh(&self, i: usize) -> std::result::Result<TriangleMesh, String> {
+        let path = self
+            .tool_path(i)
+            .ok_or_else(|| format!("tool {i} is not an STL tool"))?;
+        let unit = self.tools[i].unit.unwrap_or_default();
+        TriangleMesh::read(&path, unit).map_err(|reason| format!("`{}` {reason}", path.display()))
+    }
+
+    /// `[min, max]` of each coordinate of the undeformed workpiece (m), the whole
+    /// cylinder's for a part of one; `None` when the shape's keys are missing.
+    fn workpiece_bounds(&self) -> Option<[[Real; 2]; 3]> {
+        Some(match self.workpiece.shape()? {
+            SolidShape::Cylinder {
+                radius_m, length_m, ..
+            } => [
+                [-radius_m, radius_m],
+                [-radius_m, radius_m],
+                [0.0, length_m],
+            ],
+            SolidShape::Box {
+                origin_m, size_m, ..
+            } => std::array::from_fn(|k| [origin_m[k], origin_m[k] + size_m[k]]),
+        })
     }
 
     /// Heat in 3D (`solver/conduction.rs`, `solver/solid/heat.rs`): the plastic work's
@@ -600,6 +740,55 @@ impl SolidScene {
         self.output
             .history_interval_s
             .unwrap_or(self.time.end_s / super::DEFAULT_HISTORY_ROWS)
+    }
+}
+
+/// How many times larger (or smaller) than the workpiece an STL die may be, and how many
+/// workpiece sizes away it may lie, before its unit is suspect (-): a die in millimetres
+/// read as metres is 1000 times too large.
+pub const UNIT_SUSPECT: Real = 100.0;
+
+/// Whether an STL die with `die` bounds (m) fits a workpiece with `work` bounds (m), read in
+/// `unit`: a die more than [`UNIT_SUSPECT`] times the workpiece's largest extent, less than
+/// its inverse, or farther than that many extents from it, is refused with the likely
+/// mix-up of units.
+pub fn units_finding(
+    die: [[Real; 2]; 3],
+    work: [[Real; 2]; 3],
+    unit: LengthUnit,
+) -> Option<String> {
+    let largest = |b: [[Real; 2]; 3]| b.iter().map(|r| r[1] - r[0]).fold(0.0, Real::max);
+    let (d, w) = (largest(die), largest(work));
+    let gap = (0..3)
+        .map(|k| {
+            (die[k][0] - work[k][1])
+                .max(work[k][0] - die[k][1])
+                .max(0.0)
+        })
+        .map(|g| g * g)
+        .sum::<Real>()
+        .sqrt();
+    let hint = match unit {
+        LengthUnit::M => "millimetres given as metres? Set `unit = \"mm\"`",
+        LengthUnit::Mm => "is the file in millimetres?",
+    };
+    if d > UNIT_SUSPECT * w {
+        Some(format!(
+            "is {d:.4e} m across, {:.0} times the workpiece's {w:.4e} m: {hint}",
+            d / w
+        ))
+    } else if d * UNIT_SUSPECT < w {
+        Some(format!(
+            "is {d:.4e} m across, 1/{:.0} of the workpiece's {w:.4e} m: metres given as millimetres? Check `unit`",
+            w / d
+        ))
+    } else if gap > UNIT_SUSPECT * w {
+        Some(format!(
+            "lies {gap:.4e} m from the workpiece, {:.0} times its size {w:.4e} m: {hint}",
+            gap / w
+        ))
+    } else {
+        None
     }
 }
 

@@ -1,28 +1,34 @@
 //! The contact stage of the 3D solver: the paper's penalty contact (Sidibe et al. 2009,
 //! section II-3, eqs. 4-7, the force law [`penalty_force`] shared with 2D) of every
-//! particle against the plane tools and the symmetry planes ([`PlaneTool`]).
+//! particle against the tools and the symmetry planes ([`SolidTool`]: planes and closed
+//! triangle surfaces from STL files, one law for both).
 //!
-//! For each particle `J` that may reach a plane, the predicted physical position and
+//! For each particle `J` that may reach a tool, the predicted physical position and
 //! velocity are interpolated from the RK coefficients, `x_J = X_J + sum_I N_I(X_J) (d_I +
-//! dt v*_I)` (m) and `v_J = sum_I N_I(X_J) v*_I` (m/s); a particle behind a plane gets the
-//! penalty force `m_J g / dt^2` along the normal plus the friction of eqs. 5-6, spread to
-//! the coefficients by eq. 7 (`f_I += N_I(X_J) f_J`); the tool takes the reaction. A plane
+//! dt v*_I)` (m) and `v_J = sum_I N_I(X_J) v*_I` (m/s); a particle inside a tool by the gap
+//! `g` (m: behind a plane, or `-phi` of a triangle surface's signed distance) gets the
+//! penalty force `m_J g / dt^2` along the contact normal `n` (the plane's; the face's, or
+//! from the closest edge or vertex point to `x_J`) plus the friction of eqs. 5-6, spread to
+//! the coefficients by eq. 7 (`f_I += N_I(X_J) f_J`); the tool takes the reaction. A tool
 //! without separation (the FE wall, a symmetry plane) holds a particle once it reached it:
 //! its gap is then taken on either side. After the corrector, the friction force the
 //! corrector did not realise on the particle is carried to the next step's stick force, as
-//! in 2D ([`PlaneContact::carry`]), and in a scene with `[thermal]` its work against the
-//! slip booked at the particle for the heat stage, as in 2D.
+//! in 2D, in the tangent plane of the normal it was computed with ([`ToolContact::carry`]),
+//! and in a scene with `[thermal]` its work against the slip booked at the particle for the
+//! heat stage, as in 2D.
 //!
 //! Skipping, as in 2D: between two stages `x_J` moves at most `sqrt 3 S_J du` (`S_J =
 //! sum_I |N_I(X_J)|`, `du` the bound on the change of `d_I + dt v*_I` per component) and a
-//! plane at most its stroke change; a particle whose distance to every plane (its
-//! clearance) stays positive after those moves cannot touch one, and is not interpolated.
+//! tool at most its stroke change; a particle whose distance to every tool (its clearance,
+//! a triangle surface's lower bound from its bins when no triangle lies within the search
+//! depth, [`SolidTool::clearance`]) stays positive after those moves cannot touch one, and
+//! is not interpolated.
 
 use super::{SolidDisc, SolidState};
 use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::{slip_work, Forces};
 use crate::math::{dot, Real};
-use crate::plane_tool::PlaneTool;
+use crate::solid_tool::SolidTool;
 use crate::team::{part, particle_phase, Parts, Team};
 
 /// Particles interpolated by one task of the stage.
@@ -33,15 +39,17 @@ const BLOCK: usize = 64;
 struct Touched {
     /// Particle `j`.
     j: u32,
-    /// Plane `t`.
+    /// Tool or plane `t`.
     t: u32,
     /// The friction force on the particle (N).
     friction: [Real; 3],
+    /// The contact normal (out of the tool).
+    normal: [Real; 3],
 }
 
 /// What the contact stage keeps between steps to skip particles, and its forces.
 #[derive(Debug, Clone)]
-pub(crate) struct PlaneContact {
+pub(crate) struct ToolContact {
     /// Contact force on each RK coefficient (N), eq. 7.
     pub force: Forces<3>,
     /// Lower bound on how far each particle must move before a plane can act on it (m).
@@ -70,11 +78,11 @@ pub(crate) struct Touch {
     pub tool_work: Real,
 }
 
-impl PlaneContact {
+impl ToolContact {
     /// The stage for `particles` particles and `planes` planes: every particle is
     /// evaluated at the first step.
-    pub(crate) fn new(particles: usize, planes: usize) -> PlaneContact {
-        PlaneContact {
+    pub(crate) fn new(particles: usize, planes: usize) -> ToolContact {
+        ToolContact {
             force: Forces::new(particles),
             clearance: vec![0.0; particles],
             moves: [Real::INFINITY; 3],
@@ -97,13 +105,13 @@ impl PlaneContact {
     }
 
     /// The contact of the predicted positions (a natural step `dt` ahead, s) with `planes`
-    /// (paper eqs. 4-7), `dt_avg` the corrector's step (s). Fills [`PlaneContact::force`],
+    /// (paper eqs. 4-7), `dt_avg` the corrector's step (s). Fills [`ToolContact::force`],
     /// each plane's force and the held and friction states of `st`.
     pub(crate) fn stage(
         &mut self,
         team: &Team,
         disc: &SolidDisc,
-        planes: &mut [PlaneTool],
+        planes: &mut [SolidTool],
         st: &mut SolidState,
         dt: Real,
         dt_avg: Real,
@@ -138,7 +146,7 @@ impl PlaneContact {
                 self.evaluated.push(j as u32);
             }
         }
-        let planes_now: &[PlaneTool] = planes;
+        let planes_now: &[SolidTool] = planes;
         let held_now: &[bool] = &st.held;
         let (d, v) = (&st.d, &st.v);
         let evaluated = &self.evaluated;
@@ -169,7 +177,7 @@ impl PlaneContact {
                     .iter()
                     .enumerate()
                     .map(|(t, plane)| {
-                        let front = -plane.depth_of(x);
+                        let front = plane.clearance(x);
                         match held_now[j * nplanes + t] {
                             true => front - plane.depth,
                             false => front,
@@ -222,6 +230,7 @@ impl PlaneContact {
                         j: j as u32,
                         t: t as u32,
                         friction,
+                        normal: pen.normal,
                     });
                 }
                 for (a, f) in plane.state.force.iter_mut().zip(f) {
@@ -254,14 +263,14 @@ impl PlaneContact {
     /// realise on its particle, carried to the next step's stick force as `c = f_T + m_J P_T
     /// (v*_J - v_J) / dt_avg` (N), with `v*_J` the predicted velocity the force was computed
     /// from and `v_J = sum_I N_I(X_J) v_I` after the corrector (m/s), `P_T` the projection
-    /// on the plane (the 2D law, `crate::contact::Contact::carry`). In a scene with
-    /// `[thermal]` each pair's friction work over the step, `max(0, -f_T . P_T (v_J -
-    /// v_tool)) dt_avg` (J, [`slip_work`]), is booked at its particle for the heat stage
-    /// (`Heat::friction_work`).
+    /// on the contact's tangent plane (the 2D law, `crate::contact::Contact::carry`). In a
+    /// scene with `[thermal]` each pair's friction work over the step, `max(0, -f_T . P_T
+    /// (v_J - v_tool)) dt_avg` (J, [`slip_work`]), is booked at its particle for the heat
+    /// stage (`Heat::friction_work`).
     pub(crate) fn carry(
         &self,
         disc: &SolidDisc,
-        planes: &[PlaneTool],
+        planes: &[SolidTool],
         st: &mut SolidState,
         dt_avg: Real,
     ) {
@@ -276,15 +285,15 @@ impl PlaneContact {
             let vj = disc.nodal.interpolate(j, &st.v);
             let predicted = self.motion[j][1];
             let dv: [Real; 3] = std::array::from_fn(|k| predicted[k] - vj[k]);
-            let n = planes[t].normal;
+            let n = touched.normal;
             let dn = dot(&dv, &n);
             let c = disc.mass[j] / dt_avg;
             let f = touched.friction;
             st.stick[j * nplanes + t] =
                 Some(std::array::from_fn(|k| f[k] + c * (dv[k] - dn * n[k])));
             if let Some(work) = work.as_mut() {
-                let plane = &planes[t];
-                let rel = std::array::from_fn(|k| vj[k] - plane.axis[k] * plane.state.velocity);
+                let tool = &planes[t];
+                let rel = std::array::from_fn(|k| vj[k] - tool.axis[k] * tool.state.velocity);
                 work[j] += slip_work(&f, rel, &n, dt_avg);
             }
         }

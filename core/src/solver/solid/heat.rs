@@ -21,8 +21,8 @@
 use super::{SolidDisc, SolidSimulation, SolidState};
 use crate::error::{Error, Result};
 use crate::math::{dot, Real};
-use crate::plane_tool::PlaneTool;
-use crate::scene::solid::{PlaneToolSpec, SolidScene};
+use crate::scene::solid::{SolidScene, SolidToolSpec};
+use crate::solid_tool::SolidTool;
 use crate::solver::conduction::{self, Body, Patch, Stage, TOUCH_SPACINGS};
 use crate::solver::discretization::Thermal;
 use crate::solver::point_outputs::PointOut;
@@ -98,7 +98,7 @@ impl HeatSurface {
     /// Each surface particle's [`Patch`] at the displacement coefficients `d` (m): its
     /// quarters' areas (m^2), the scene tool among `tools` it touches and its contact area
     /// on it (m^2).
-    fn patches(&self, disc: &SolidDisc, tools: &[PlaneTool], d: &[[Real; 3]]) -> Vec<Patch> {
+    fn patches(&self, disc: &SolidDisc, tools: &[SolidTool], d: &[[Real; 3]]) -> Vec<Patch> {
         let touch = TOUCH_SPACINGS * disc.h_min;
         let x: Vec<[Real; 3]> = self
             .particles
@@ -109,9 +109,14 @@ impl HeatSurface {
                 std::array::from_fn(|k| disc.ref_pos[j][k] + u[k])
             })
             .collect();
-        let touched: Vec<Option<usize>> = x
+        let touched: Vec<Option<(usize, [Real; 3])>> = x
             .iter()
-            .map(|&x| tools.iter().position(|t| t.depth_of(x) >= -touch))
+            .map(|&x| {
+                tools
+                    .iter()
+                    .enumerate()
+                    .find_map(|(t, tool)| tool.touching(x, touch).map(|n| (t, n)))
+            })
             .collect();
         let (mut area, mut contact) = (vec![0.0; x.len()], vec![0.0; x.len()]);
         for face in &self.faces {
@@ -126,8 +131,8 @@ impl HeatSurface {
                 let a = cross(diagonal, across).map(|v| 0.5 * v);
                 let s = face[q] as usize;
                 area[s] += dot(&a, &a).sqrt();
-                if let Some(t) = touched[s] {
-                    contact[s] += dot(&a, &tools[t].normal).abs();
+                if let Some((_, n)) = touched[s] {
+                    contact[s] += dot(&a, &n).abs();
                 }
             }
         }
@@ -136,7 +141,7 @@ impl HeatSurface {
                 j: self.particles[s] as usize,
                 area: area[s],
                 contact: contact[s],
-                tool: touched[s],
+                tool: touched[s].map(|(t, _)| t),
             })
             .collect()
     }
@@ -229,7 +234,7 @@ pub(super) fn update_eigenvalue(disc: &mut SolidDisc) -> Result<()> {
 pub(super) fn stage_if_due(
     scene: &SolidScene,
     disc: &SolidDisc,
-    planes: &[PlaneTool],
+    planes: &[SolidTool],
     st: &mut SolidState,
     out: &mut [PointOut],
     dt: Real,
@@ -251,7 +256,7 @@ pub(super) fn stage_if_due(
         tools: scene
             .tools
             .iter()
-            .map(PlaneToolSpec::heat_contact)
+            .map(SolidToolSpec::heat_contact)
             .collect(),
         surface: || disc.heat_surface.patches(disc, tools, d),
         lambda0: transfer.lambda0,

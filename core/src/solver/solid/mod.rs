@@ -9,8 +9,9 @@
 //! critical step ([`super::critical_step`]); shape functions, cell rules and lattices are
 //! [`crate::rk_shape`] and [`crate::integration`] in three dimensions, and the contact law
 //! is [`crate::contact::sidibe2009`]'s. What only 3D has is here: the setup of a box or a
-//! cylinder (`setup.rs`), the contact of the plane tools and symmetry planes
-//! (`contact.rs`) and the readings of a 3D body.
+//! cylinder (`setup.rs`), the contact of the tools (planes and triangle surfaces from STL
+//! files, [`crate::solid_tool`]) and symmetry planes (`contact.rs`) and the readings of a
+//! 3D body.
 //!
 //! Heat in 3D is 2D's: the stress stage's heating of each point by its plastic work
 //! ([`super::heat`]) and its elasticity over temperature (the modulus factor and the
@@ -26,7 +27,8 @@
 //! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
 //! [`crate::integration::smoothed`]). Kernel re-referencing is `rereference.rs` (the
 //! temperature field carried as in 2D). Not in 3D yet (refused by the scene's validation):
-//! SCNI's stabilization, self-contact and curved or triangulated tools.
+//! SCNI's stabilization, self-contact, heat transfer to a tool from an STL file, and the
+//! pass of the tools' convex edges and vertices against the surface between particles.
 
 mod contact;
 mod heat;
@@ -50,11 +52,11 @@ use super::update::{self, Motion, Predictor};
 use crate::error::{Error, Result};
 use crate::material::{HenckyJ2, PointState3};
 use crate::math::Real;
-use crate::plane_tool::{PlaneTool, PlaneToolState};
 use crate::rk_shape::ShapeTable;
 use crate::scene::solid::SolidScene;
+use crate::solid_tool::{SolidTool, SolidToolState};
 use crate::team::Team;
-use contact::PlaneContact;
+use contact::ToolContact;
 pub use rereference::SolidReference;
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
@@ -143,7 +145,7 @@ pub struct SolidState {
     /// Integration point histories.
     pub points: Vec<PointState3>,
     /// The planes' states: the scene's tools, then the symmetry planes.
-    pub tools: Vec<PlaneToolState>,
+    pub tools: Vec<SolidToolState>,
     /// Energy account (J).
     pub energy: Energy,
     /// Which particles are held on which plane without separation (`[particle * planes +
@@ -180,7 +182,7 @@ pub(super) struct SolidWorkspace {
     buf: Vec<[Real; 3]>,
     f_int: Vec<[Real; 3]>,
     v_prev: Vec<[Real; 3]>,
-    contact: PlaneContact,
+    contact: ToolContact,
     team: Team,
 }
 
@@ -189,7 +191,7 @@ pub(super) struct SolidWorkspace {
 pub struct SolidSimulation {
     scene: SolidScene,
     disc: SolidDisc,
-    tools: Vec<PlaneTool>,
+    tools: Vec<SolidTool>,
     st: SolidState,
     ws: SolidWorkspace,
     /// Wall time per stage since setup.
@@ -519,7 +521,7 @@ impl SolidSimulation {
             t.state = *s;
         }
         self.ws.v_prev.clone_from(&st.v);
-        self.ws.contact = PlaneContact::new(st.d.len(), self.tools.len());
+        self.ws.contact = ToolContact::new(st.d.len(), self.tools.len());
         for (p, (out, point)) in self.ws.out.iter_mut().zip(&st.points).enumerate() {
             let temp = st.heat.as_ref().map(|h| h.temperature_c[p]);
             *out = PointOut::at(&self.disc.material, point.eps_p, temp);
@@ -589,7 +591,7 @@ impl SolidSimulation {
         &self.disc.cells
     }
     /// The scene's tools (the symmetry planes are not among them).
-    pub fn tools(&self) -> &[PlaneTool] {
+    pub fn tools(&self) -> &[SolidTool] {
         &self.tools[..self.disc.scene_tools]
     }
     /// Index of the scene tool named `name`.
@@ -607,7 +609,7 @@ impl SolidSimulation {
         crate::tools::command_velocity(&mut self.tools[..scene_tools], tool, v)
     }
     /// The symmetry planes.
-    pub fn symmetry_planes(&self) -> &[PlaneTool] {
+    pub fn symmetry_planes(&self) -> &[SolidTool] {
         &self.tools[self.disc.scene_tools..]
     }
     /// Physical particle positions `X_J + sum_I N_I(X_J) d_I` (m).
@@ -778,7 +780,7 @@ impl SolidSimulation {
         let mut worst = [(0.0 as Real, 0usize, 0usize); 2];
         for (j, p) in self.positions().iter().enumerate() {
             for (t, plane) in self.tools.iter().enumerate() {
-                let depth = plane.depth_of(*p);
+                let depth = plane.inside_by(*p);
                 let w = &mut worst[plane.symmetry as usize];
                 if depth > w.0 {
                     *w = (depth, j, t);

@@ -3,7 +3,7 @@
 //! functions (the same [`KernelCloud`] and [`Lattice`] as 2D, `D = 3`), the row-sum lumped
 //! masses, the plane tools and symmetry planes, the critical step.
 
-use super::contact::PlaneContact;
+use super::contact::ToolContact;
 use super::heat::{update_eigenvalue, HeatSurface};
 use super::{SolidDisc, SolidSimulation, SolidState, SolidWorkspace};
 use crate::cylinder_grid::{CylinderGrid, Sector};
@@ -11,10 +11,10 @@ use crate::error::{Error, Result};
 use crate::integration::{point_shapes, smoothed};
 use crate::material::{HenckyJ2, PointState3};
 use crate::math::Real;
-use crate::plane_tool::PlaneTool;
 use crate::rk_shape::{for_each_index, KernelCloud, Lattice, ShapeTable, Site};
-use crate::scene::solid::{CylinderPart, SolidScene, SolidShape};
+use crate::scene::solid::{CylinderPart, SolidScene, SolidShape, ToolShape};
 use crate::scene::IntegrationRule;
+use crate::solid_tool::SolidTool;
 use crate::solver::critical_step::{critical_step, stiffening};
 use crate::solver::discretization::{Thermal, Transfer};
 use crate::solver::energy::Energy;
@@ -238,16 +238,23 @@ impl SolidSimulation {
         material.thermoelastic = scene.thermal.as_ref().and_then(|t| t.thermoelastic());
         let wave_speed = material.wave_speed(rho);
         let depth = SEARCH_DEPTH_SPACINGS * p.h_min;
-        let mut tools: Vec<PlaneTool> = scene
-            .tools
-            .iter()
-            .map(|t| PlaneTool::new(t, depth))
-            .collect();
+        let mut tools = Vec::with_capacity(scene.tools.len() + p.planes.len());
+        for (i, t) in scene.tools.iter().enumerate() {
+            let mesh = match t.shape {
+                ToolShape::Plane => None,
+                ToolShape::Stl => Some(
+                    scene
+                        .tool_mesh(i)
+                        .map_err(|m| Error::Request(format!("tools[{i}].file: {m}")))?,
+                ),
+            };
+            tools.push(SolidTool::new(t, mesh, depth));
+        }
         let scene_tools = tools.len();
         tools.extend(
             p.planes
                 .iter()
-                .map(|&(axis, at)| PlaneTool::symmetry(axis, at, depth)),
+                .map(|&(axis, at)| SolidTool::symmetry(axis, at, depth)),
         );
         let (v, initial) = initial_motion(scene.workpiece.initial_velocity_m_per_s, None, &mass);
         let sum_abs: Vec<Real> = (0..np)
@@ -308,7 +315,7 @@ impl SolidSimulation {
             buf: disc.scatter.buffers(),
             f_int: vec![[0.0; 3]; np],
             v_prev: v.clone(),
-            contact: PlaneContact::new(np, ntools),
+            contact: ToolContact::new(np, ntools),
             team: Team::default(),
         };
         let mut st = SolidState {

@@ -1,0 +1,246 @@
+//! Rigid tools from STL files in 3D against the plane tools they replace.
+
+use rkforge_core::scene::{SceneFile, SolidScene};
+use rkforge_core::solver::SolidSimulation;
+use std::path::{Path, PathBuf};
+
+/// The closed box `lo..hi` (in the file's unit) as 12 triangles with outward normals,
+/// reversed when `inverted`, less its last triangle when `open`.
+fn cuboid(lo: [f32; 3], hi: [f32; 3], inverted: bool, open: bool) -> Vec<[[f32; 3]; 3]> {
+    let corner = |i: usize| -> [f32; 3] {
+        std::array::from_fn(|k| if i >> k & 1 == 1 { hi[k] } else { lo[k] })
+    };
+    // Corner i has bit k set where coordinate k is at `hi`; each quad wound outward.
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut t: Vec<[[f32; 3]; 3]> = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .map(|tri: [usize; 3]| tri.map(corner))
+        .collect();
+    if inverted {
+        for tri in &mut t {
+            tri.swap(1, 2);
+        }
+    }
+    if open {
+        t.pop();
+    }
+    t
+}
+
+/// Writes `triangles` as an ASCII STL file.
+fn write_ascii(path: &Path, triangles: &[[[f32; 3]; 3]]) {
+    let mut s = String::from("solid die\n");
+    for t in triangles {
+        s += "  facet normal 0 0 0\n    outer loop\n";
+        for v in t {
+            s += &format!("      vertex {} {} {}\n", v[0], v[1], v[2]);
+        }
+        s += "    endloop\n  endfacet\n";
+    }
+    s += "endsolid die\n";
+    std::fs::write(path, s).unwrap();
+}
+
+/// Writes `triangles` as a binary STL file.
+fn write_binary(path: &Path, triangles: &[[[f32; 3]; 3]]) {
+    let t: Vec<stl_io::Triangle> = triangles
+        .iter()
+        .map(|t| stl_io::Triangle {
+            normal: stl_io::Normal::new([0.0; 3]),
+            vertices: t.map(stl_io::Vertex::new),
+        })
+        .collect();
+    stl_io::write_stl(&mut std::fs::File::create(path).unwrap(), t.iter()).unwrap();
+}
+
+/// A folder of this test's own.
+fn folder(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rkforge_stl_{name}_{}", std::process::id()));
+    std::fs::create_dir_all(d.join("dies")).unwrap();
+    d
+}
+
+/// A quarter cylinder (radius 5 mm, height 7.5 mm) of steel upset by 0.6 mm at 10 m/s
+/// between a fixed anvil and a ram with Coulomb friction 0.1, the dies given by `dies`
+/// (the `[[tools]]` keys of each after its name).
+fn upset_text(anvil: &str, ram: &str) -> String {
+    format!(
+        r#"
+name = "upset_stl"
+[model]
+kinematics = "3d"
+[workpiece]
+shape = "cylinder"
+radius_m = 0.005
+length_m = 0.0075
+part = "quarter"
+cells = [4, 2, 6]
+[material]
+density_kg_per_m3 = 7800.0
+youngs_modulus_pa = 200e9
+poisson_ratio = 0.3
+hardening = {{ law = "linear", yield_stress_pa = 300e6, modulus_pa = 1e9 }}
+[time]
+end_s = 60e-6
+[[tools]]
+name = "anvil"
+axis = [0.0, 0.0, -1.0]
+motion = {{ kind = "fixed" }}
+friction = 0.1
+{anvil}
+[[tools]]
+name = "ram"
+axis = [0.0, 0.0, -1.0]
+motion = {{ kind = "constant", velocity_m_per_s = 10.0 }}
+friction = 0.1
+{ram}
+"#
+    )
+}
+
+const ANVIL_PLANE: &str = "point_m = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]";
+const RAM_PLANE: &str = "point_m = [0.0, 0.0, 0.0075]\nnormal = [0.0, 0.0, -1.0]";
+
+fn scene(text: &str, file: &Path) -> Result<SolidScene, String> {
+    match SceneFile::from_str_named(text, &file.display().to_string()) {
+        Ok(SceneFile::Solid(s)) => Ok(*s),
+        Ok(SceneFile::Plane(_)) => panic!("read as 2D"),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// The ram's stroke and axial force (m, N) at every step, and the simulation at the end.
+fn run(scene: &SolidScene) -> (Vec<[f64; 2]>, SolidSimulation) {
+    let mut sim = SolidSimulation::new(scene).unwrap();
+    let mut curve = Vec::new();
+    sim.run_toward(scene.time.end_s, u64::MAX, |s, _| {
+        let ram = &s.tools()[1];
+        curve.push([ram.state.stroke, ram.axial_force()]);
+        true
+    })
+    .unwrap();
+    (curve, sim)
+}
+
+/// The anvil and the ram as STL boxes (the anvil ASCII, the ram binary, both in
+/// millimetres, wider than the bulging workpiece and reaching past the symmetry planes)
+/// give the plane dies' force-stroke curve to the bit: on a face the triangle surface's gap
+/// is the plane's formula, the contact normal its normal. The particles' physical positions
+/// measured against the triangles lie no deeper than against the planes.
+#[test]
+fn stl_box_dies_give_the_plane_dies_force_stroke() {
+    let dir = folder("upset");
+    write_ascii(
+        &dir.join("dies/anvil.stl"),
+        &cuboid([-5.0, -5.0, -5.0], [15.0, 15.0, 0.0], false, false),
+    );
+    write_binary(
+        &dir.join("dies/ram.stl"),
+        &cuboid([-5.0, -5.0, 7.5], [15.0, 15.0, 12.5], false, false),
+    );
+    let scene_file = dir.join("upset.toml");
+    let planes = scene(&upset_text(ANVIL_PLANE, RAM_PLANE), &scene_file).unwrap();
+    let stl = |f: &str| format!("shape = \"stl\"\nfile = \"dies/{f}.stl\"\nunit = \"mm\"");
+    let dies = scene(&upset_text(&stl("anvil"), &stl("ram")), &scene_file).unwrap();
+    let (by_planes, mut sim_planes) = run(&planes);
+    let (by_stl, mut sim_stl) = run(&dies);
+    let last = by_planes[by_planes.len() - 1];
+    assert!(last[0] > 5.9e-4 && last[1] < -1e3, "{last:?}");
+    assert_eq!(by_planes.len(), by_stl.len());
+    for (a, b) in by_planes.iter().zip(&by_stl) {
+        assert_eq!(a[0].to_bits(), b[0].to_bits());
+        assert_eq!(a[1].to_bits(), b[1].to_bits(), "{a:?} {b:?}");
+    }
+    assert_eq!(sim_planes.state().d, sim_stl.state().d);
+    let (pen_planes, _) = sim_planes.measure_penetration().unwrap();
+    let (pen_stl, _) = sim_stl.measure_penetration().unwrap();
+    eprintln!(
+        "steps {} stroke {:.4e} m force {:.4e} N; penetration {:.3e} of a spacing (planes {:.3e})",
+        by_stl.len(),
+        last[0],
+        last[1],
+        pen_stl / sim_stl.h_min(),
+        pen_planes / sim_planes.h_min()
+    );
+    assert_eq!(pen_stl.to_bits(), pen_planes.to_bits());
+    assert!(pen_stl < 0.05 * sim_stl.h_min());
+}
+
+/// A square punch (6 x 6 mm, a quarter modelled) indents the cylinder's top face: its
+/// edges and corner touch the workpiece. The run keeps every particle's physical position
+/// within the run's penetration bound against the triangles, the punch takes a load, and
+/// the energy account closes.
+#[test]
+fn a_punch_with_edges_indents_with_bounded_penetration() {
+    let dir = folder("punch");
+    write_ascii(
+        &dir.join("dies/anvil.stl"),
+        &cuboid([-5.0, -5.0, -5.0], [15.0, 15.0, 0.0], false, false),
+    );
+    write_binary(
+        &dir.join("dies/punch.stl"),
+        &cuboid([-5.0, -5.0, 7.5], [3.0, 3.0, 12.5], false, false),
+    );
+    let scene_file = dir.join("punch.toml");
+    let punch = "shape = \"stl\"\nfile = \"dies/punch.stl\"\nunit = \"mm\"";
+    let anvil = "shape = \"stl\"\nfile = \"dies/anvil.stl\"\nunit = \"mm\"";
+    let s = scene(&upset_text(anvil, punch), &scene_file).unwrap();
+    let mut sim = SolidSimulation::new(&s).unwrap();
+    let mut deepest: f64 = 0.0;
+    sim.run_toward(s.time.end_s, u64::MAX, |s, step| {
+        if step % 20 == 0 {
+            deepest = deepest.max(s.measure_penetration().unwrap().0);
+        }
+        true
+    })
+    .unwrap();
+    let force = sim.tools()[1].axial_force();
+    let e = sim.energy();
+    eprintln!(
+        "punch force {force:.4e} N, deepest particle {:.3e} of a spacing, balance {:.2e}",
+        deepest / sim.h_min(),
+        e.balance_error_rel()
+    );
+    assert!(force < -1e3, "{force}");
+    assert!(deepest < 0.05 * sim.h_min(), "{deepest}");
+    assert!(e.balance_error_rel() < 0.01, "{e:?}");
+}
+
+/// A bad STL is refused naming the key, the file and the reason: an open surface, normals
+/// pointing into the die, a die in millimetres read as metres.
+#[test]
+fn bad_stl_files_are_refused_with_the_file_and_reason() {
+    let dir = folder("bad");
+    let box_mm = |inverted, open| cuboid([-5.0, -5.0, 7.5], [15.0, 15.0, 12.5], inverted, open);
+    write_binary(&dir.join("dies/open.stl"), &box_mm(false, true));
+    write_binary(&dir.join("dies/flipped.stl"), &box_mm(true, false));
+    write_ascii(&dir.join("dies/in_mm.stl"), &box_mm(false, false));
+    let scene_file = dir.join("bad.toml");
+    for (file, unit, reason) in [
+        ("open", "mm", "open surface"),
+        ("flipped", "mm", "inverted"),
+        ("in_mm", "m", "millimetres given as metres"),
+        ("missing", "mm", "cannot be read"),
+    ] {
+        let ram = format!("shape = \"stl\"\nfile = \"dies/{file}.stl\"\nunit = \"{unit}\"");
+        let e = scene(&upset_text(ANVIL_PLANE, &ram), &scene_file).unwrap_err();
+        assert!(
+            e.contains("tools[1].file") && e.contains(&format!("{file}.stl")) && e.contains(reason),
+            "{e}"
+        );
+    }
+    let e = scene(
+        &upset_text(ANVIL_PLANE, "shape = \"stl\"\npoint_m = [0.0, 0.0, 0.0]"),
+        &scene_file,
+    )
+    .unwrap_err();
+    assert!(e.contains("tools[1].file") && e.contains("needs"), "{e}");
+}
