@@ -11,6 +11,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from conftest import scene_variant
+from ros_peer import upset_bar_3d
 from test_fmu3 import Slave3, pack
 
 # The Taylor bar in 3D, coarse and 10 us long (history rows every 1 us).
@@ -123,3 +124,58 @@ def test_a_3d_fmu3_returns_early_where_its_intermediate_updates_see_the_event(ba
     assert early and last == expected, (last, expected)
     assert abs(forced.get("wall.force_N")[0]) >= level
     forced.fmu.freeInstance()
+
+
+def stl_box(path, lo, hi):
+    """The closed box lo..hi (mm) as an ASCII STL, its 12 triangles wound outward."""
+    corner = lambda i: [hi[k] if i >> k & 1 else lo[k] for k in range(3)]
+    quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+    lines = ["solid die"]
+    for q in quads:
+        for tri in ([q[0], q[1], q[2]], [q[0], q[2], q[3]]):
+            lines += ["  facet normal 0 0 0", "    outer loop"]
+            lines += ["      vertex %r %r %r" % tuple(corner(i)) for i in tri]
+            lines += ["    endloop", "  endfacet"]
+    path.write_text("\n".join(lines + ["endsolid die", ""]))
+
+
+@pytest.mark.parametrize("fmi", ["2", "3"])
+def test_an_fmu_carries_its_stl_dies(rkforge_bin, tmp_path, fmi):
+    """A 3D scene whose ram is an STL file (dies/ram.stl beside the scene, in mm): the FMU
+    holds the file in resources/ where the scene names it, and pressed by fmpy it gives the
+    history of `rkforge run` to the bit; a die file outside the scene's folder is refused by
+    its key when packing."""
+    import zipfile
+
+    (tmp_path / "dies").mkdir()
+    stl_box(tmp_path / "dies" / "ram.stl", [-2.0, -2.0, 32.4], [10.0, 10.0, 40.0])
+    ram_plane = """point_m = [0.0, 0.0, 0.0324]
+normal = [0.0, 0.0, -1.0]
+"""
+    scene = tmp_path / "upset_stl.toml"
+    scene.write_text(upset_bar_3d(tmp_path).read_text().replace(
+        ram_plane, 'shape = "stl"\nfile = "dies/ram.stl"\nunit = "mm"\n'))
+    assert 'file = "dies/ram.stl"' in scene.read_text()
+    out = tmp_path / "out"
+    subprocess.run([rkforge_bin, "run", str(scene), "--out", str(out), "--quiet", "--no-frames"],
+                   check=True, capture_output=True, text=True, timeout=300)
+    with open(out / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    path = pack(rkforge_bin, scene, tmp_path / f"upset{fmi}.fmu", fmi)
+    with zipfile.ZipFile(path) as z:
+        assert z.read("resources/dies/ram.stl") == (tmp_path / "dies" / "ram.stl").read_bytes()
+    assert validate_fmu(path) == []
+    names = ["ram.force_z_N", "workpiece.height_m"]
+    res = simulate_fmu(path, stop_time=10.0e-6, output_interval=1.0e-6, output=names)
+    assert len(res) == len(rows) == 11
+    for r, row in zip(res, rows):
+        for n in names:
+            assert r[n] == float(row[n]), (n, row["time_s"])
+    assert res["ram.force_z_N"][-1] > 1e3, "the STL ram presses"
+    # A die outside the scene's folder cannot sit in resources/ at the path the scene gives.
+    outside = tmp_path / "sub"
+    outside.mkdir()
+    (outside / "upset.toml").write_text(scene.read_text().replace("dies/ram.stl", "../dies/ram.stl"))
+    proc = subprocess.run([rkforge_bin, "fmu", str(outside / "upset.toml"), "--out", str(tmp_path / "x.fmu")],
+                          capture_output=True, text=True)
+    assert proc.returncode != 0 and "tools[1].file" in proc.stderr and ".." in proc.stderr, proc.stderr

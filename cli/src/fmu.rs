@@ -123,7 +123,7 @@ pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, S
     let file = scene_path.display().to_string();
     // The scene of either kind (the same fields by the same names) and its header.
     macro_rules! pack_as {
-        ($kind:ty) => {{
+        ($kind:ty, $files:expr) => {{
             let scene = <$kind>::from_str_named(&text, &file).map_err(|e| e.to_string())?;
             let about = About {
                 name: &scene.name,
@@ -131,21 +131,53 @@ pub fn pack(scene_path: &Path, out: &Path, version: Version) -> Result<String, S
                 stop_time: scene.time.end_s,
                 step_size: scene.history_interval(),
             };
-            pack_scene(&scene, &about, &text, out, version)
+            let files = $files(&scene)?;
+            pack_scene(&scene, &about, &text, &files, out, version)
         }};
     }
     if is_solid(&text) {
-        pack_as!(SolidScene)
+        pack_as!(SolidScene, die_files)
     } else {
-        pack_as!(Scene)
+        pack_as!(Scene, |_: &Scene| Ok::<_, String>(Vec::new()))
     }
 }
 
-/// Write the FMU of `scene` (its text `text`) to `out`; returns the model identifier.
+/// The files a 3D scene's STL tools name, as FMU resources: each at `resources/<file>`, so
+/// the FMU, which reads its scene from `resources/scene.toml`, finds it where the scene
+/// says (a tool's `file` is relative to the scene's folder).
+///
+/// # Errors
+///
+/// A `file` that is absolute or leaves the scene's folder (`..`), which the archive could
+/// not hold at the same relative path, or a file that cannot be read; named by its key.
+fn die_files(scene: &SolidScene) -> Result<Vec<(String, Vec<u8>)>, String> {
+    let mut files = Vec::new();
+    for (i, tool) in scene.tools.iter().enumerate() {
+        let (Some(file), Some(path)) = (&tool.file, scene.tool_path(i)) else {
+            continue;
+        };
+        let inside = Path::new(file)
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_)));
+        if !inside {
+            return Err(format!(
+                "tools[{i}].file = \"{file}\": an FMU carries a die's file in resources/ at the path the scene gives, so it must lie in the scene's folder or below it (no absolute path, no ..)"
+            ));
+        }
+        let data = std::fs::read(&path)
+            .map_err(|e| format!("tools[{i}].file: cannot read {}: {e}", path.display()))?;
+        files.push((format!("resources/{file}"), data));
+    }
+    Ok(files)
+}
+
+/// Write the FMU of `scene` (its text `text`, the files it names `files`: archive name and
+/// bytes) to `out`; returns the model identifier.
 fn pack_scene<S: FmuScene>(
     scene: &S,
     about: &About<'_>,
     text: &str,
+    files: &[(String, Vec<u8>)],
     out: &Path,
     version: Version,
 ) -> Result<String, String> {
@@ -183,19 +215,25 @@ fn pack_scene<S: FmuScene>(
         out,
         &md,
         &format!("binaries/{platform}/{id}.so"),
-        ("resources/scene.toml", text.as_bytes()),
+        &std::iter::once(("resources/scene.toml", text.as_bytes()))
+            .chain(
+                files
+                    .iter()
+                    .map(|(name, data)| (name.as_str(), data.as_slice())),
+            )
+            .collect::<Vec<_>>(),
         &doc,
     )?;
     Ok(id)
 }
 
-/// Write an FMU archive: the model description, the shared library at `library`, one
-/// resource file and the documentation.
+/// Write an FMU archive: the model description, the shared library at `library`, the
+/// resource files (archive name and bytes) and the documentation.
 fn write_archive(
     out: &Path,
     md: &str,
     library: &str,
-    resource: (&str, &[u8]),
+    resources: &[(&str, &[u8])],
     doc: &str,
 ) -> Result<(), String> {
     let lib =
@@ -209,12 +247,10 @@ fn write_archive(
     let mut zip = zip::ZipWriter::new(file);
     let opts = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated);
-    let entries: [(&str, &[u8]); 4] = [
-        ("modelDescription.xml", md.as_bytes()),
-        (library, &lib),
-        resource,
-        ("documentation/index.html", doc.as_bytes()),
-    ];
+    let entries = [("modelDescription.xml", md.as_bytes()), (library, &lib)]
+        .into_iter()
+        .chain(resources.iter().copied())
+        .chain([("documentation/index.html", doc.as_bytes())]);
     for (name, data) in entries {
         zip.start_file(name, opts)
             .map_err(|e| format!("zip {name}: {e}"))?;
@@ -244,7 +280,7 @@ pub fn pack_press(name: &str, out: &Path) -> Result<String, String> {
         out,
         &md,
         &format!("binaries/linux64/{id}.so"),
-        ("resources/press.toml", resource.as_bytes()),
+        &[("resources/press.toml", resource.as_bytes())],
         &doc,
     )?;
     Ok(id)
