@@ -115,7 +115,8 @@ pub(super) struct SolidDisc {
     scene_tools: usize,
     /// The heat settings of a scene with `[thermal]` (a transfer when its heat moves).
     thermal: Option<Thermal>,
-    /// The surface heat crosses (empty unless the scene's heat moves).
+    /// The surface heat crosses and the friction laws that need a flow stress take their
+    /// contact area on (empty unless the scene's heat moves or a tool has such a law).
     heat_surface: heat::HeatSurface,
     /// What mass scaling added, if the scene scales ([`super::mass_scaling`]).
     mass_scaling: Option<MassScalingReport>,
@@ -366,7 +367,9 @@ impl SolidSimulation {
             for t in tools.iter_mut() {
                 t.state.stroke += (full - dt) * t.state.velocity;
             }
-            let touch = ws.contact.stage(&ws.team, disc, tools, st, full, step.avg);
+            let touch = ws
+                .contact
+                .stage(&ws.team, disc, tools, st, &ws.out, full, step.avg);
             for (t, s) in tools.iter_mut().zip(at_end) {
                 t.state.stroke = s;
             }
