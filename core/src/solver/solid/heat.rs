@@ -2,7 +2,7 @@
 //! generic over the dimension) on the 3D body, when the scene's heat moves
 //! ([`SolidScene::transfers_heat`]): lumped thermal masses, total-Lagrangian conduction
 //! with the mechanics' shape functions at the integration points, the surface flows to the
-//! plane tools and to the surroundings, sub-cycled explicit steps within the
+//! tools and to the surroundings, sub-cycled explicit steps within the
 //! power-iteration stable step, the enthalpy form. What is 3D's is the surface, here.
 //!
 //! The surface is the faces of the hexahedral cells that belong to one cell only and do
@@ -12,12 +12,14 @@
 //! particle `x_0`, the midpoints `m_1`, `m_2` of its two edges there and the face's centre
 //! `c`, with the area vector `a = (c - x_0) x (m_2 - m_1) / 2` (half the cross product of
 //! the quarter's diagonals: the vector area of the bilinear patch, its area `|a|` for a
-//! flat face and the projected area of a warped one). A particle touches a plane tool when
-//! it lies within [`TOUCH_SPACINGS`] smallest spacings in front of the plane or behind it
-//! (2D's distance); its contact area is then `sum |a . n|` over its quarters, `n` the
-//! tool's normal (the quarters on faces across the tool, such as the sides of a billet on
-//! a die, have none), and the rest of its share is free surface to the surroundings.
-
+//! flat face and the projected area of a warped one). A particle touches a tool when it
+//! lies within [`TOUCH_SPACINGS`] smallest spacings in front of it or behind it (2D's
+//! distance; a plane's distance or a triangle surface's signed distance,
+//! [`SolidTool::touching`]); its contact area is then `sum |a . n|` over its quarters, `n`
+//! the contact normal (a plane's; a triangle surface's at the closest point), the quarters
+//! on faces across the tool, such as the sides of a billet on a die, having none; the rest
+//! of its share is free surface to the surroundings. The contact stage reads the same
+//! contact area for the friction laws that need one ([`HeatSurface::contact_area`]).
 use super::{SolidDisc, SolidSimulation, SolidState};
 use crate::error::{Error, Result};
 use crate::math::{dot, Real};

@@ -20,14 +20,14 @@
 //! when the scene's heat moves or friction makes heat the heat stage
 //! ([`super::conduction`], generic over the dimension; the surface of the hexahedral cells
 //! in `heat.rs`): conduction, the friction heat's share into the particles, the heat to the
-//! plane tools and the surroundings. Mass
+//! tools (planes and triangle surfaces) and the surroundings. Mass
 //! scaling, uniform or selective, is 2D's ([`super::mass_scaling`]). SCNI integrates a box
 //! over its particles' nodal domains ([`crate::integration::point_shapes`], the 2D code in
 //! three dimensions) and a cylinder over the O-grid's
 //! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
 //! [`crate::integration::smoothed`]). Kernel re-referencing is `rereference.rs` (the
 //! temperature field carried as in 2D). Not in 3D yet (refused by the scene's validation):
-//! SCNI's stabilization, self-contact, heat transfer to a tool from an STL file, and the
+//! SCNI's stabilization and self-contact; not yet done either, without a refusal: the
 //! pass of the tools' convex edges and vertices against the surface between particles.
 
 mod contact;
