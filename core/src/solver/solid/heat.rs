@@ -182,9 +182,9 @@ impl HeatSurface {
         let (mut area, mut contact) = (vec![0.0; x.len()], vec![0.0; x.len()]);
         for face in &self.faces {
             let c = face.map(|s| x[s as usize]);
-            for q in 0..4 {
+            for (q, &s) in face.iter().enumerate() {
                 let a = quarter(&c, q);
-                let s = face[q] as usize;
+                let s = s as usize;
                 area[s] += dot(&a, &a).sqrt();
                 if let Some((_, n)) = touched[s] {
                     contact[s] += dot(&a, &n).abs();
