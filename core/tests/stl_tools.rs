@@ -244,3 +244,64 @@ fn bad_stl_files_are_refused_with_the_file_and_reason() {
     .unwrap_err();
     assert!(e.contains("tools[1].file") && e.contains("needs"), "{e}");
 }
+
+/// The heat balance and the heat to each tool (J) of a thermal run.
+fn heat_readings(sim: &SolidSimulation) -> (f64, Vec<f64>) {
+    let v = sim.thermal_values().unwrap();
+    let at = |name: &str| {
+        v[rkforge_core::THERMAL_MEASURES
+            .iter()
+            .position(|m| m.0 == name)
+            .unwrap()]
+    };
+    let heat = sim.state().heat.as_ref().unwrap();
+    (at("heat_balance_rel"), heat.to_tools_j.clone())
+}
+
+/// Heat to STL dies: the upset of [`upset_text`] with the workpiece at 600 C, conduction
+/// (k 40 W/(m K)) and the dies at 20 C, the anvil through 5e4 W/(m^2 K) and the ram through
+/// a pressure-dependent coefficient ([[0, 1e4], [1e9, 1e5]] W/(m^2 K) over Pa), run for 60
+/// us, the dies as planes and as the STL boxes of
+/// `stl_box_dies_give_the_plane_dies_force_stroke`. The heat stage's contact is the same for
+/// either kind of surface (`SolidTool::touching`: a surface particle within 0.05 spacings
+/// of the die, its quarters' area projected on the contact normal, on a box's face its
+/// normal): the heat each die took, the temperatures and the positions are the same bits,
+/// and the heat balance closes to round-off.
+#[test]
+fn stl_box_dies_take_the_plane_dies_heat() {
+    let dir = folder("heat");
+    write_ascii(
+        &dir.join("dies/anvil.stl"),
+        &cuboid([-5.0, -5.0, -5.0], [15.0, 15.0, 0.0], false, false),
+    );
+    write_binary(
+        &dir.join("dies/ram.stl"),
+        &cuboid([-5.0, -5.0, 7.5], [15.0, 15.0, 12.5], false, false),
+    );
+    let hot = |anvil: &str, ram: &str| {
+        format!(
+            "{}\n[thermal]\ninitial_temperature_c = 600.0\nspecific_heat_j_per_kg_k = 460.0\nconductivity_w_per_m_k = 40.0\n",
+            upset_text(
+                &format!("{anvil}\ntemperature_c = 20.0\nheat_transfer_w_per_m2_k = 5.0e4"),
+                &format!("{ram}\ntemperature_c = 20.0\nheat_transfer_by_pressure = [[0.0, 1.0e4], [1.0e9, 1.0e5]]"),
+            )
+        )
+    };
+    let scene_file = dir.join("upset.toml");
+    let stl = |f: &str| format!("shape = \"stl\"\nfile = \"dies/{f}.stl\"\nunit = \"mm\"");
+    let planes = scene(&hot(ANVIL_PLANE, RAM_PLANE), &scene_file).unwrap();
+    let dies = scene(&hot(&stl("anvil"), &stl("ram")), &scene_file).unwrap();
+    assert_eq!(dies.validate(), vec![]);
+    let (_, sim_planes) = run(&planes);
+    let (_, sim_stl) = run(&dies);
+    let (balance_planes, to_planes) = heat_readings(&sim_planes);
+    let (balance_stl, to_stl) = heat_readings(&sim_stl);
+    eprintln!(
+        "heat to the dies: STL {to_stl:?} J, planes {to_planes:?} J; balance {balance_stl:.1e} (planes {balance_planes:.1e})"
+    );
+    assert!(to_stl.iter().all(|&q| q > 0.0), "{to_stl:?}");
+    assert_eq!(to_stl, to_planes);
+    assert_eq!(sim_stl.point_temperature(), sim_planes.point_temperature());
+    assert_eq!(sim_stl.state().d, sim_planes.state().d);
+    assert!(balance_stl.abs() < 1e-9, "{balance_stl:e}");
+}

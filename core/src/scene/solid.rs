@@ -502,11 +502,6 @@ impl SolidScene {
         if t.shape != ToolShape::Stl || t.file.is_none() {
             return;
         }
-        out.check(
-            !t.heat_contact().transfers_heat(),
-            &key("heat_transfer_w_per_m2_k"),
-            "heat transfer to an STL tool is not there yet (the heat stage's contact area is a plane tool's); remove it or give the die as a plane".into(),
-        );
         match self.tool_mesh(i) {
             Err(message) => out.check(false, &key("file"), message),
             Ok(mesh) => {

@@ -8,7 +8,9 @@
 //! dt v*_I)` (m) and `v_J = sum_I N_I(X_J) v*_I` (m/s); a particle inside a tool by the gap
 //! `g` (m: behind a plane, or `-phi` of a triangle surface's signed distance) gets the
 //! penalty force `m_J g / dt^2` along the contact normal `n` (the plane's; the face's, or
-//! from the closest edge or vertex point to `x_J`) plus the friction of eqs. 5-6, spread to
+//! from the closest edge or vertex point to `x_J`) plus the friction of eqs. 5-6 (the tool's
+//! law, [`crate::friction`]: Coulomb, or the shear friction factor and capped laws with the
+//! particle's flow stress and contact area, [`interface`], as in 2D), spread to
 //! the coefficients by eq. 7 (`f_I += N_I(X_J) f_J`); the tool takes the reaction. A tool
 //! without separation (the FE wall, a symmetry plane) holds a particle once it reached it:
 //! its gap is then taken on either side. After the corrector, the friction force the
@@ -29,10 +31,52 @@ use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::{slip_work, Forces};
 use crate::math::{dot, Real};
 use crate::solid_tool::SolidTool;
+use crate::solver::fields::smoothed;
+use crate::solver::point_outputs::PointOut;
 use crate::team::{part, particle_phase, Parts, Team};
 
 /// Particles interpolated by one task of the stage.
 const BLOCK: usize = 64;
+
+/// The predicted physical position of particle `j` a step `dt` (s) ahead, `x_J = X_J +
+/// sum_I N_I(X_J) (d_I + dt v_I)` (m), from the coefficients `d` (m) and `v` (m/s).
+fn predicted(disc: &SolidDisc, d: &[[Real; 3]], v: &[[Real; 3]], dt: Real, j: usize) -> [Real; 3] {
+    let mut x = disc.ref_pos[j];
+    for e in disc.nodal.row(j) {
+        let (i, n) = (disc.nodal.index[e] as usize, disc.nodal.n[e]);
+        for k in 0..3 {
+            x[k] += n * (d[i][k] + dt * v[i][k]);
+        }
+    }
+    x
+}
+
+/// What the shear and capped friction laws read of particle `j` on a tool with contact
+/// normal `n` ([`Interface`], 2D's `crate::contact::Contact::interface` in 3D): its flow
+/// stress `flow` (Pa: the static flow stress `sigma_y(eps_p, T)` of the points smoothed to
+/// the particle, the `|N_I(x_p)| w_p`-weighted mean of [`smoothed`]) and its contact area
+/// (m^2): on the body's surface the projection of its quarters on the tool's tangent
+/// plane at the predicted positions `position(i)` (m), `A_J = sum |a . n|`
+/// ([`super::heat::HeatSurface::contact_area`], the heat stage's contact area); a
+/// particle off the surface `V_J^(2/3)` (`V_J` its volume, m^3), as 2D gives one the area
+/// of its spacing. The bound is then `m sigma_y A_J / sqrt 3` ([`crate::friction`];
+/// Wanheim and Bay 1978).
+fn interface(
+    disc: &SolidDisc,
+    j: usize,
+    flow: Real,
+    n: [Real; 3],
+    position: impl Fn(usize) -> [Real; 3],
+) -> Interface {
+    let area = disc
+        .heat_surface
+        .contact_area(j, &n, position)
+        .unwrap_or_else(|| disc.volumes[j].powf(2.0 / 3.0));
+    Interface {
+        flow_stress: flow,
+        area,
+    }
+}
 
 /// A particle-plane pair with friction in contact at the last stage.
 #[derive(Debug, Clone, Copy)]
@@ -105,14 +149,17 @@ impl ToolContact {
     }
 
     /// The contact of the predicted positions (a natural step `dt` ahead, s) with `planes`
-    /// (paper eqs. 4-7), `dt_avg` the corrector's step (s). Fills [`ToolContact::force`],
-    /// each plane's force and the held and friction states of `st`.
+    /// (paper eqs. 4-7), `dt_avg` the corrector's step (s), the points' flow stresses in
+    /// `out` for the friction laws that need one ([`interface`]). Fills
+    /// [`ToolContact::force`], each plane's force and the held and friction states of `st`.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn stage(
         &mut self,
         team: &Team,
         disc: &SolidDisc,
         planes: &mut [SolidTool],
         st: &mut SolidState,
+        out: &[PointOut],
         dt: Real,
         dt_avg: Real,
     ) -> Touch {
@@ -164,15 +211,8 @@ impl ToolContact {
                         &mut clearance.get(j..j + 1)[0],
                     )
                 };
-                let (mut x, mut vj) = (disc.ref_pos[j], [0.0; 3]);
-                for e in disc.nodal.row(j) {
-                    let (i, n) = (disc.nodal.index[e] as usize, disc.nodal.n[e]);
-                    for k in 0..3 {
-                        x[k] += n * (d[i][k] + dt * v[i][k]);
-                        vj[k] += n * v[i][k];
-                    }
-                }
-                *m = [x, vj];
+                let x = predicted(disc, d, v, dt, j);
+                *m = [x, disc.nodal.interpolate(j, v)];
                 *c = planes_now
                     .iter()
                     .enumerate()
@@ -188,6 +228,8 @@ impl ToolContact {
             }
         });
         let mut touch = Touch::default();
+        // The particles' flow stresses, smoothed from the points when a law first needs one.
+        let mut flow_stress: Option<Vec<Real>> = None;
         for &j in &self.evaluated {
             let j = j as usize;
             let stick = &mut st.stick[j * nplanes..(j + 1) * nplanes];
@@ -215,14 +257,19 @@ impl ToolContact {
                     v_rel: std::array::from_fn(|k| vj[k] - vt[k]),
                     carried: stick[t].unwrap_or([0.0; 3]),
                 };
-                let SlaveForce { force: f, friction } = penalty_force(
-                    slave,
-                    pen,
-                    &plane.friction,
-                    Interface::default(),
-                    dt,
-                    dt_avg,
-                );
+                let at = if plane.friction.needs_flow_stress() {
+                    let flow = flow_stress.get_or_insert_with(|| {
+                        let values: Vec<Real> = out.iter().map(|o| o.flow_stress).collect();
+                        smoothed(&disc.scatter, &disc.weights, np, &values)
+                    });
+                    interface(disc, j, flow[j], pen.normal, |i| {
+                        predicted(disc, d, v, dt, i)
+                    })
+                } else {
+                    Interface::default()
+                };
+                let SlaveForce { force: f, friction } =
+                    penalty_force(slave, pen, &plane.friction, at, dt, dt_avg);
                 if plane.friction.is_frictionless() {
                     stick[t] = None;
                 } else {

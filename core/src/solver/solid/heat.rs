@@ -2,7 +2,7 @@
 //! generic over the dimension) on the 3D body, when the scene's heat moves
 //! ([`SolidScene::transfers_heat`]): lumped thermal masses, total-Lagrangian conduction
 //! with the mechanics' shape functions at the integration points, the surface flows to the
-//! plane tools and to the surroundings, sub-cycled explicit steps within the
+//! tools and to the surroundings, sub-cycled explicit steps within the
 //! power-iteration stable step, the enthalpy form. What is 3D's is the surface, here.
 //!
 //! The surface is the faces of the hexahedral cells that belong to one cell only and do
@@ -12,12 +12,14 @@
 //! particle `x_0`, the midpoints `m_1`, `m_2` of its two edges there and the face's centre
 //! `c`, with the area vector `a = (c - x_0) x (m_2 - m_1) / 2` (half the cross product of
 //! the quarter's diagonals: the vector area of the bilinear patch, its area `|a|` for a
-//! flat face and the projected area of a warped one). A particle touches a plane tool when
-//! it lies within [`TOUCH_SPACINGS`] smallest spacings in front of the plane or behind it
-//! (2D's distance); its contact area is then `sum |a . n|` over its quarters, `n` the
-//! tool's normal (the quarters on faces across the tool, such as the sides of a billet on
-//! a die, have none), and the rest of its share is free surface to the surroundings.
-
+//! flat face and the projected area of a warped one). A particle touches a tool when it
+//! lies within [`TOUCH_SPACINGS`] smallest spacings in front of it or behind it (2D's
+//! distance; a plane's distance or a triangle surface's signed distance,
+//! [`SolidTool::touching`]); its contact area is then `sum |a . n|` over its quarters, `n`
+//! the contact normal (a plane's; a triangle surface's at the closest point), the quarters
+//! on faces across the tool, such as the sides of a billet on a die, having none; the rest
+//! of its share is free surface to the surroundings. The contact stage reads the same
+//! contact area for the friction laws that need one ([`HeatSurface::contact_area`]).
 use super::{SolidDisc, SolidSimulation, SolidState};
 use crate::error::{Error, Result};
 use crate::math::{dot, Real};
@@ -39,13 +41,36 @@ const FACES: [[usize; 4]; 6] = [
     [3, 0, 4, 7],
 ];
 
-/// The surface heat crosses, fixed at setup (see the module doc).
+/// The surface heat crosses, fixed at setup (see the module doc); the contact stage reads
+/// a particle's contact area on it for the friction laws that need one
+/// ([`HeatSurface::contact_area`]).
 #[derive(Debug, Clone, Default)]
 pub(super) struct HeatSurface {
     /// The particles on its faces, ascending.
     particles: Vec<u32>,
     /// Each face's corners in order around it, as indices into `particles`.
     faces: Vec<[u32; 4]>,
+    /// Each particle's index into `particles`, [`OFF_SURFACE`] for a particle not on it.
+    slot: Vec<u32>,
+    /// The quarters at each surface particle, as (face, corner), those of `particles[s]`
+    /// from `first[s]` to `first[s + 1]`.
+    quarters: Vec<(u32, u8)>,
+    first: Vec<u32>,
+}
+
+/// [`HeatSurface::slot`] of a particle not on the surface.
+const OFF_SURFACE: u32 = u32::MAX;
+
+/// The area vector of the quarter at corner `q` of the face with corners `c` in order
+/// around it (m, m^2): `a = (m - x_q) x (x_{q+1} - x_{q-1}) / 4`, `m` the face's centre
+/// (see the module doc).
+fn quarter(c: &[[Real; 3]; 4], q: usize) -> [Real; 3] {
+    let (x0, next, prev) = (c[q], c[(q + 1) % 4], c[(q + 3) % 4]);
+    let centre: [Real; 3] = std::array::from_fn(|k| 0.25 * (c[0][k] + c[1][k] + c[2][k] + c[3][k]));
+    // The quarter's diagonals: x_0 to the centre, and m_prev to m_next.
+    let diagonal: [Real; 3] = std::array::from_fn(|k| centre[k] - x0[k]);
+    let across: [Real; 3] = std::array::from_fn(|k| 0.5 * (next[k] - prev[k]));
+    cross(diagonal, across).map(|v| 0.5 * v)
 }
 
 impl HeatSurface {
@@ -89,10 +114,46 @@ impl HeatSurface {
             .enumerate()
             .map(|(s, &j)| (j, s as u32))
             .collect();
-        HeatSurface {
-            faces: outer.iter().map(|f| f.map(|j| slot[&j])).collect(),
-            particles,
+        let faces: Vec<[u32; 4]> = outer.iter().map(|f| f.map(|j| slot[&j])).collect();
+        let mut at: Vec<Vec<(u32, u8)>> = vec![Vec::new(); particles.len()];
+        for (f, face) in faces.iter().enumerate() {
+            for (q, &s) in face.iter().enumerate() {
+                at[s as usize].push((f as u32, q as u8));
+            }
         }
+        let mut first = vec![0];
+        for quarters in &at {
+            first.push(first[first.len() - 1] + quarters.len() as u32);
+        }
+        let mut by_particle = vec![OFF_SURFACE; positions.len()];
+        for (s, &j) in particles.iter().enumerate() {
+            by_particle[j as usize] = s as u32;
+        }
+        HeatSurface {
+            faces,
+            particles,
+            slot: by_particle,
+            quarters: at.concat(),
+            first,
+        }
+    }
+
+    /// The contact area (m^2) of particle `j` on a tool surface with unit normal `n`, the
+    /// corners at `position(particle)` (m): `A_J = sum |a . n|` over its quarters (the
+    /// area of its share of the surface projected on the tool's tangent plane, as the
+    /// heat stage's contact area), `None` for a particle not on the surface.
+    pub(super) fn contact_area(
+        &self,
+        j: usize,
+        n: &[Real; 3],
+        position: impl Fn(usize) -> [Real; 3],
+    ) -> Option<Real> {
+        let s = *self.slot.get(j).filter(|&&s| s != OFF_SURFACE)? as usize;
+        let quarters = &self.quarters[self.first[s] as usize..self.first[s + 1] as usize];
+        Some(quarters.iter().fold(0.0, |area, &(f, q)| {
+            let c = self.faces[f as usize].map(|s| position(self.particles[s as usize] as usize));
+            area + dot(&quarter(&c, q as usize), n).abs()
+        }))
     }
 
     /// Each surface particle's [`Patch`] at the displacement coefficients `d` (m): its
@@ -121,15 +182,9 @@ impl HeatSurface {
         let (mut area, mut contact) = (vec![0.0; x.len()], vec![0.0; x.len()]);
         for face in &self.faces {
             let c = face.map(|s| x[s as usize]);
-            let centre: [Real; 3] =
-                std::array::from_fn(|k| 0.25 * (c[0][k] + c[1][k] + c[2][k] + c[3][k]));
-            for q in 0..4 {
-                let (x0, next, prev) = (c[q], c[(q + 1) % 4], c[(q + 3) % 4]);
-                // The quarter's diagonals: x_0 to the centre, and m_prev to m_next.
-                let diagonal: [Real; 3] = std::array::from_fn(|k| centre[k] - x0[k]);
-                let across: [Real; 3] = std::array::from_fn(|k| 0.5 * (next[k] - prev[k]));
-                let a = cross(diagonal, across).map(|v| 0.5 * v);
-                let s = face[q] as usize;
+            for (q, &s) in face.iter().enumerate() {
+                let a = quarter(&c, q);
+                let s = s as usize;
                 area[s] += dot(&a, &a).sqrt();
                 if let Some((_, n)) = touched[s] {
                     contact[s] += dot(&a, &n).abs();

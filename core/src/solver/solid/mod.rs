@@ -20,14 +20,14 @@
 //! when the scene's heat moves or friction makes heat the heat stage
 //! ([`super::conduction`], generic over the dimension; the surface of the hexahedral cells
 //! in `heat.rs`): conduction, the friction heat's share into the particles, the heat to the
-//! plane tools and the surroundings. Mass
+//! tools (planes and triangle surfaces) and the surroundings. Mass
 //! scaling, uniform or selective, is 2D's ([`super::mass_scaling`]). SCNI integrates a box
 //! over its particles' nodal domains ([`crate::integration::point_shapes`], the 2D code in
 //! three dimensions) and a cylinder over the O-grid's
 //! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
 //! [`crate::integration::smoothed`]). Kernel re-referencing is `rereference.rs` (the
 //! temperature field carried as in 2D). Not in 3D yet (refused by the scene's validation):
-//! SCNI's stabilization, self-contact, heat transfer to a tool from an STL file, and the
+//! SCNI's stabilization and self-contact; not yet done either, without a refusal: the
 //! pass of the tools' convex edges and vertices against the surface between particles.
 
 mod contact;
@@ -115,7 +115,8 @@ pub(super) struct SolidDisc {
     scene_tools: usize,
     /// The heat settings of a scene with `[thermal]` (a transfer when its heat moves).
     thermal: Option<Thermal>,
-    /// The surface heat crosses (empty unless the scene's heat moves).
+    /// The surface heat crosses and the friction laws that need a flow stress take their
+    /// contact area on (empty unless the scene's heat moves or a tool has such a law).
     heat_surface: heat::HeatSurface,
     /// What mass scaling added, if the scene scales ([`super::mass_scaling`]).
     mass_scaling: Option<MassScalingReport>,
@@ -366,7 +367,9 @@ impl SolidSimulation {
             for t in tools.iter_mut() {
                 t.state.stroke += (full - dt) * t.state.velocity;
             }
-            let touch = ws.contact.stage(&ws.team, disc, tools, st, full, step.avg);
+            let touch = ws
+                .contact
+                .stage(&ws.team, disc, tools, st, &ws.out, full, step.avg);
             for (t, s) in tools.iter_mut().zip(at_end) {
                 t.state.stroke = s;
             }

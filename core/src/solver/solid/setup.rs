@@ -270,11 +270,12 @@ impl SolidSimulation {
                 }
             }
         }
-        let heat_surface = if scene.transfers_heat() {
-            HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
-        } else {
-            HeatSurface::default()
-        };
+        let heat_surface =
+            if scene.transfers_heat() || tools.iter().any(|t| t.friction.needs_flow_stress()) {
+                HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
+            } else {
+                HeatSurface::default()
+            };
         let mut disc = SolidDisc {
             inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
             mass,
