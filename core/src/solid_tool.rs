@@ -147,12 +147,12 @@ impl SolidTool {
     }
 
     /// A lower bound on how far `x` (m) lies in front of the tool (m), its distance for a
-    /// plane; negative inside. A triangle surface answers from its bins alone when no
-    /// triangle lies within the search depth.
+    /// plane; negative inside. A triangle surface answers from its bins alone (the bound
+    /// of [`TriangleSurface::locate`]) unless the point's own bin holds a triangle.
     pub fn clearance(&self, x: [Real; 3]) -> Real {
         match &self.surface {
             Surface::Plane { .. } => -self.depth_of(x),
-            Surface::Triangles(t) => match t.locate(x, self.shift(), self.depth) {
+            Surface::Triangles(t) => match t.locate(x, self.shift(), 0.0) {
                 Proximity::Far { distance, inside } => match inside {
                     true => -distance,
                     false => distance,
@@ -184,7 +184,14 @@ impl SolidTool {
     pub fn gap_above(&self, x: [Real; 3], below: Real) -> Option<Penetration<3>> {
         let (gap, normal) = match &self.surface {
             Surface::Plane { normal, .. } => (self.depth_of(x), *normal),
-            Surface::Triangles(t) => match t.locate(x, self.shift(), self.depth.max(-below)) {
+            Surface::Triangles(t) => match t.locate(x, self.shift(), (-below).max(0.0)) {
+                Proximity::Far {
+                    inside: true,
+                    distance,
+                } if distance <= self.depth => {
+                    let c = t.closest(x, self.shift());
+                    (-c.signed, c.normal)
+                }
                 Proximity::Far { .. } => return None,
                 Proximity::Near(c) => (-c.signed, c.normal),
             },

@@ -281,40 +281,41 @@ impl TriangleSurface {
         }
     }
 
-    /// The exact closest point to `y = x - shift` (m), searching the bins within `reach`
-    /// (m) and widening the search until the nearest triangle found lies within it.
-    fn nearest(&self, x: [Real; 3], shift: [Real; 3], reach: Real) -> Closest {
+    /// The exact closest point to `y = x - shift` (m): the nearest triangle among those
+    /// listed in the bins within `r` of `y`, `r` one bin side at first; when the nearest
+    /// found lies farther than `r`, the search widens to its distance once more (every
+    /// triangle nearer than it lies in those bins), or doubles when none was found. Ties go
+    /// to the lowest triangle index, so the answer does not depend on where the search
+    /// stopped.
+    fn nearest(&self, x: [Real; 3], shift: [Real; 3]) -> Closest {
         let y: [Real; 3] = std::array::from_fn(|k| x[k] - shift[k]);
         let b = &self.bins;
-        let mut r = reach.max(b.size.iter().copied().fold(Real::INFINITY, Real::min));
-        let mut seen = Vec::new();
+        let mut r = b.size.iter().copied().fold(Real::INFINITY, Real::min);
         loop {
             let lo = b.cell(y.map(|v| v - r));
             let hi = b.cell(std::array::from_fn(|k| y[k] + r));
-            seen.clear();
+            let mut best: Option<(Real, u32)> = None;
             for i2 in lo[2]..=hi[2] {
                 for i1 in lo[1]..=hi[1] {
                     for i0 in lo[0]..=hi[0] {
                         let bin = b.index([i0, i1, i2]);
-                        seen.extend_from_slice(
-                            &b.items[b.offsets[bin] as usize..b.offsets[bin + 1] as usize],
-                        );
+                        for &t in &b.items[b.offsets[bin] as usize..b.offsets[bin + 1] as usize] {
+                            let d2 = self.on_triangle(y, t as usize).2;
+                            if best.is_none_or(|(e2, u)| d2 < e2 || (d2 == e2 && t < u)) {
+                                best = Some((d2, t));
+                            }
+                        }
                     }
                 }
             }
-            seen.sort_unstable();
-            seen.dedup();
-            let best = seen
-                .iter()
-                .map(|&t| (self.on_triangle(y, t as usize).2, t))
-                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             let whole = lo == [0; 3] && hi == b.dims.map(|n| n - 1);
-            if let Some((d2, t)) = best {
-                if d2 <= r * r || whole {
-                    return self.signed(x, shift, y, t as usize);
+            match best {
+                Some((d2, t)) if d2 <= r * r || whole => {
+                    return self.signed(x, shift, y, t as usize)
                 }
+                Some((d2, _)) => r = d2.sqrt() * (1.0 + 1e-12),
+                None => r *= 2.0,
             }
-            r *= 2.0;
         }
     }
 
@@ -352,13 +353,13 @@ impl TriangleSurface {
                 }
             }
         }
-        Proximity::Near(self.nearest(x, shift, reach))
+        Proximity::Near(self.nearest(x, shift))
     }
 
     /// The exact signed distance and closest point of `x` (m), the surface translated by
     /// `shift` (m).
     pub fn closest(&self, x: [Real; 3], shift: [Real; 3]) -> Closest {
-        self.nearest(x, shift, 0.0)
+        self.nearest(x, shift)
     }
 
     /// Sets which empty bins lie inside the die: each face-connected set of empty bins by
