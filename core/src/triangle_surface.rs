@@ -153,6 +153,12 @@ struct Bins {
     inside: Vec<bool>,
 }
 
+/// The most bins along one side of a triangle surface's grid.
+const MAX_BINS_PER_SIDE: usize = 256;
+
+/// About the most bins of a triangle surface's grid (some 10 bytes each).
+const MAX_BINS: usize = 1 << 21;
+
 impl Bins {
     fn index(&self, i: [usize; 3]) -> usize {
         i[0] + self.dims[0] * (i[1] + self.dims[1] * i[2])
@@ -411,7 +417,9 @@ impl TriangleSurface {
 }
 
 impl Bins {
-    /// Bins of about the mean triangle extent, at most 64 along a side; the triangles
+    /// Bins of about the median triangle extent (a die's few large faces, as its flat
+    /// back, do not coarsen them), at most [`MAX_BINS_PER_SIDE`] along a side and about
+    /// [`MAX_BINS`] in all; the triangles
     /// listed in every bin their bounds overlap; the Chebyshev counts by a breadth-first
     /// sweep from the occupied bins.
     fn new(mesh: &TriangleMesh) -> Bins {
@@ -429,14 +437,19 @@ impl Bins {
                 })
             })
             .collect();
-        let mean = tri_bounds
+        let mut extents: Vec<Real> = tri_bounds
             .iter()
             .map(|b| (0..3).map(|k| b[k][1] - b[k][0]).fold(0.0, Real::max))
-            .sum::<Real>()
-            / tri_bounds.len() as Real;
-        let h = mean.max(largest / 64.0);
-        let dims: [usize; 3] =
-            std::array::from_fn(|k| ((extent[k] / h).ceil() as usize).clamp(1, 64));
+            .collect();
+        extents.sort_unstable_by(Real::total_cmp);
+        let median = extents[extents.len() / 2];
+        let mut h = median.max(largest / MAX_BINS_PER_SIDE as Real);
+        let count = |h: Real| extent.map(|e| ((e / h).ceil() as usize).clamp(1, MAX_BINS_PER_SIDE));
+        let total = count(h).iter().product::<usize>();
+        if total > MAX_BINS {
+            h *= (total as Real / MAX_BINS as Real).cbrt();
+        }
+        let dims = count(h);
         let pad = 1e-9 * largest;
         let lo: [Real; 3] = std::array::from_fn(|k| bounds[k][0] - pad);
         let hi: [Real; 3] = std::array::from_fn(|k| bounds[k][1] + pad);
