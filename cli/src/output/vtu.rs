@@ -1,5 +1,6 @@
 //! VTK XML output for ParaView: one `.vtu` file per frame plus a `.pvd` collection. 2D frames
-//! ([`write_vtu`]) hold quads, 3D frames ([`write_vtu_3d`]) hexahedra with cell data as well.
+//! ([`write_vtu`]) hold quads, 3D frames ([`write_vtu_3d`]) hexahedra with cell data as well,
+//! a die's surface ([`write_vtu_triangles`]) triangles with cell data.
 //!
 //! Files are written in ASCII so they stay diff-able and easy to inspect. Floating-point values
 //! use Rust's shortest round-trip representation in exponent form (`{:e}`), so reading a file
@@ -13,6 +14,9 @@ use std::path::Path;
 
 /// VTK cell type id of a linear quadrilateral (`VTK_QUAD`).
 const VTK_QUAD: u8 = 9;
+
+/// VTK cell type id of a linear triangle (`VTK_TRIANGLE`).
+const VTK_TRIANGLE: u8 = 5;
 
 /// VTK cell type id of a linear hexahedron (`VTK_HEXAHEDRON`).
 const VTK_HEXAHEDRON: u8 = 12;
@@ -79,6 +83,30 @@ pub fn write_vtu_3d(
         cell_kind: ("hex", VTK_HEXAHEDRON),
         point_scalars,
         point_vectors,
+        cell_scalars,
+    };
+    grid.write(path)
+}
+
+/// Write a triangulated surface (a die) as a VTK XML UnstructuredGrid (.vtu), ASCII,
+/// VTK_TRIANGLE (type 5) cells, `cell_scalars` as cell data arrays. Conventions and errors as
+/// [`write_vtu_3d`].
+///
+/// # Errors
+///
+/// As [`write_vtu_3d`]'s, for triangles.
+pub fn write_vtu_triangles(
+    path: &Path,
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    cell_scalars: &[(&str, &[f64])],
+) -> io::Result<()> {
+    let grid = Grid {
+        positions,
+        cells: triangles,
+        cell_kind: ("triangle", VTK_TRIANGLE),
+        point_scalars: &[],
+        point_vectors: &[],
         cell_scalars,
     };
     grid.write(path)

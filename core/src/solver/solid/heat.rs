@@ -138,6 +138,28 @@ impl HeatSurface {
         }
     }
 
+    /// The particles on the surface, ascending.
+    pub(super) fn particles(&self) -> &[u32] {
+        &self.particles
+    }
+
+    /// The surface's area (m^2), `sum |a|` over every quarter, the corners at
+    /// `position(particle)` (m).
+    pub(super) fn area(&self, position: impl Fn(usize) -> [Real; 3]) -> Real {
+        self.faces
+            .iter()
+            .map(|face| {
+                let c = face.map(|s| position(self.particles[s as usize] as usize));
+                (0..4)
+                    .map(|q| {
+                        let a = quarter(&c, q);
+                        dot(&a, &a).sqrt()
+                    })
+                    .sum::<Real>()
+            })
+            .sum()
+    }
+
     /// The contact area (m^2) of particle `j` on a tool surface with unit normal `n`, the
     /// corners at `position(particle)` (m): `A_J = sum |a . n|` over its quarters (the
     /// area of its share of the surface projected on the tool's tangent plane, as the
