@@ -727,6 +727,35 @@ mod tests {
     }
 
     #[test]
+    fn die_triangles_round_trip_with_their_pressure() {
+        let positions = [[0.0, 0.0, 0.1], [1e-3, 0.0, 0.1], [0.0, 2e-3, 0.1 + 1e-9]];
+        let triangles = [[0, 1, 2], [2, 1, 0]];
+        let pressure = [1.25e8, 0.0];
+        let path = temp_dir("die").join("die_ram_0000.vtu");
+        write_vtu_triangles(&path, &positions, &triangles, &[("pressure_Pa", &pressure)])
+            .expect("write vtu");
+        let root = parse(&path);
+        let piece = root.child("UnstructuredGrid").child("Piece");
+        assert_eq!(piece.attr("NumberOfPoints"), "3");
+        assert_eq!(piece.attr("NumberOfCells"), "2");
+        let xyz: Vec<f64> = piece.child("Points").array("Points").values();
+        assert_eq!(bits(&xyz), bits(&positions.concat()));
+        let cells = piece.child("Cells");
+        let connectivity: Vec<u32> = cells.array("connectivity").values();
+        assert_eq!(connectivity, triangles.concat());
+        let offsets: Vec<u64> = cells.array("offsets").values();
+        assert_eq!(offsets, [3, 6]);
+        let types: Vec<u8> = cells.array("types").values();
+        assert_eq!(types, [5, 5]);
+        let cell_data = piece.child("CellData");
+        assert_eq!(cell_data.attr("Scalars"), "pressure_Pa");
+        let values: Vec<f64> = cell_data.array("pressure_Pa").values();
+        assert_eq!(bits(&values), bits(&pressure));
+        let bad = write_vtu_triangles(&path, &positions, &[[0, 1, 3]], &[]);
+        assert_eq!(bad.unwrap_err().kind(), io::ErrorKind::InvalidInput);
+    }
+
+    #[test]
     fn frames_without_cell_data_have_no_cell_data_element() {
         let (positions, hexes) = block();
         let path = temp_dir("hex_no_cells").join("frame.vtu");
