@@ -234,9 +234,10 @@ fill_distance_rel = 0.1
 
 
 def test_an_stl_die_is_written_with_its_pressure_and_its_fill_points(rkforge_bin, tmp_path):
-    """A quarter block pressed by an STL ram from 0.5 mm above it by 0.8 mm (2 m/s, 400 us):
-    the frames hold the ram's triangles where it is with the pressure on each, integrating to
-    the ram's normal force (its axial force: a flat frictionless face); the summary says which
+    """A quarter block pressed by an STL ram from 0.5 mm above it by 0.8 mm (2 m/s, 400 us)
+    onto a plane anvil: the frames hold the ram's triangles where it is with the pressure on
+    each, and the anvil's contact patch, each integrating to its tool's normal force (the
+    axial force: flat frictionless faces); the summary says which
     fill point filled, when and at which stroke (0.375 mm: 0.5 mm less the fill distance of
     0.1 spacings), and the history has the contact area, its share and the mean pressure."""
     (tmp_path / "dies").mkdir()
@@ -268,7 +269,11 @@ def test_an_stl_die_is_written_with_its_pressure_and_its_fill_points(rkforge_bin
     force = [float(v) for v in piece.find("CellData/DataArray[@Name='force_N']").text.split()]
     assert sum(force) == pytest.approx(abs(ram["axial_force_N"]), rel=1e-9)
     assert max(pressure) > 0.0
-    assert not (out / "die_anvil.pvd").exists(), "a plane tool has no die frames"
+    anvil_pvd = ET.parse(out / "die_anvil.pvd").getroot()
+    last = [d.get("file") for d in anvil_pvd.iter("DataSet")][-1]
+    piece = ET.parse(out / last).getroot().find("UnstructuredGrid/Piece")
+    force = [float(v) for v in piece.find("CellData/DataArray[@Name='force_N']").text.split()]
+    assert sum(force) == pytest.approx(anvil["axial_force_N"], rel=1e-9), "the anvil's contact patch"
     with open(out / "history.csv") as f:
         rows = list(csv.DictReader(f))
     assert float(rows[-1]["ram.contact_area_m2"]) == ram["contact_area_m2"]

@@ -5,10 +5,10 @@
 //! the scene's references print beside them), and
 //! with frames the VTK frames of the body (`frames/frame_NNNN.vtu`, hexahedra with the
 //! plastic strain of each cell, and its temperature in a scene with `[thermal]`, and
-//! `frames.pvd` for ParaView), each STL die's surface where it is with the contact pressure
-//! on its triangles (`frames/die_<tool>_NNNN.vtu`, `pressure_Pa` and `force_N` per
-//! triangle, [`SolidSimulation::die_pressure`], and `die_<tool>.pvd`; plane tools have none)
-//! and `stages.png`: the body at each frame seen from outside,
+//! `frames.pvd` for ParaView), each tool's surface where it is with the contact pressure on
+//! its triangles (an STL die's, a plane's patch under the workpiece:
+//! `frames/die_<tool>_NNNN.vtu`, `pressure_Pa` and `force_N` per triangle,
+//! [`SolidSimulation::die_pressure`], and `die_<tool>.pvd`) and `stages.png`: the body at each frame seen from outside,
 //! and at the end from the other side, where a half or quarter model shows its sections on
 //! the symmetry planes; with `[thermal]`, `temperature.png`: the last frame's temperature
 //! from both sides. With `--mcap`, the ROS 2 topics of a 3D scene at every history sample
@@ -102,7 +102,7 @@ struct Frame {
     positions: Vec<[f64; 3]>,
     plastic_strain: Vec<f64>,
     temperature: Option<Vec<f64>>,
-    /// Each STL die's pressure, with its tool's name.
+    /// Each tool's pressure, with its name.
     dies: Vec<(String, DiePressure)>,
 }
 
@@ -114,13 +114,13 @@ impl Frame {
             plastic_strain: sim.cell_means(&sim.point_plastic_strain()),
             temperature: sim.point_temperature().map(|t| sim.cell_means(t)),
             dies: (0..sim.tools().len())
-                .filter_map(|k| Some((sim.tools()[k].name.clone(), sim.die_pressure(k)?)))
+                .map(|k| (sim.tools()[k].name.clone(), sim.die_pressure(k)))
                 .collect(),
         }
     }
 }
 
-/// Each STL die's frames (`frames/die_<tool>_NNNN.vtu`: its triangles where the die is, the
+/// Each tool's frames (`frames/die_<tool>_NNNN.vtu`: its triangles where the tool is, the
 /// contact pressure and force on each) and their collection `die_<tool>.pvd`.
 fn write_dies(shots: &[Frame], out: &Path) -> Result<(), String> {
     let Some(first) = shots.first() else {

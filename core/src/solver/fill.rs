@@ -1,6 +1,8 @@
 //! The die-fill check of the step: which named points of each tool (cavity corners,
 //! `[[tools]] fill_points`) the material has reached and when (read out, with how much of
-//! each tool's length the workpiece touches, in `tool_readings.rs`).
+//! each tool's length the workpiece touches, in `tool_readings.rs`). The test itself,
+//! [`reach_points`], is generic over the dimension: the 3D solver's check
+//! (`solid/fill.rs`) calls it on the body's surface particles.
 //!
 //! A fill point is reached at the first step after which a surface particle (of the
 //! boundary ring, or any particle in contact with a tool) lies, at its physical position

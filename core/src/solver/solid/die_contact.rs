@@ -18,24 +18,32 @@
 //! 2D's contact length stops at that particle). Its share is `A_t / A_s`, `A_s = sum |a_q|`
 //! over every quarter: the workpiece's own surface less its faces on symmetry planes.
 //!
-//! Pressure on an STL die (Pa), per triangle: each pressed particle's normal force
-//! `f_J = f . n` (N) goes to the triangle of the die closest to the particle's physical
-//! position now (the die where it is now; on a shared edge or vertex the lowest-numbered
-//! of the nearest triangles), and `p_k = sum_{J -> k} f_J / A_k`, `A_k` the triangle's area
-//! (m^2). So `sum_k p_k A_k = sum_J f_J`, the tool's normal force, to round-off. The field is
-//! as fine as the die's triangles: a flat face of two triangles carries its mean pressure.
+//! Pressure on a tool (Pa), per triangle. On an STL die, over the die's own triangles: each
+//! pressed particle's normal force `f_J = f . n` (N) goes to the triangle of the die closest
+//! to the particle's physical position now (the die where it is now; on a shared edge or
+//! vertex the lowest-numbered of the nearest triangles), and `p_k = sum_{J -> k} f_J / A_k`,
+//! `A_k` the triangle's area (m^2). The field is as fine as the die's triangles: a flat face
+//! exported as two triangles carries its mean pressure. On a plane, over the contact patch
+//! itself: each pressed particle's surface quarters projected on the plane, two triangles
+//! each, quarter `q` carrying `f_J |a_q . n| / A_J` of the particle's force (`A_J = sum_q
+//! |a_q . n|`, its share of the contact area) split over its two triangles by their areas:
+//! the particle's pressure `p_J = f_J / A_J` on a flat quarter. Either way `sum_k p_k A_k =
+//! sum_J f_J`, the tool's normal force, to round-off (on a plane less the force of a pressed
+//! particle with no area on it: one whose quarters all stand edge-on to the plane, which a
+//! flat die pressing a face does not have).
 
 use super::{SolidSimulation, SolidState};
 use crate::math::Real;
 use crate::solid_tool::Surface;
 use crate::stl::{cross, dot, sub};
 
-/// The contact pressure on an STL die over its triangles, the die where it is now.
+/// The contact pressure on a tool over its triangles (an STL die's, or a plane's patch under
+/// the workpiece), where the tool is now.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DiePressure {
-    /// The die's vertices, moved with it (m).
+    /// The triangles' vertices (m).
     pub vertices: Vec<[Real; 3]>,
-    /// Its triangles, indices into `vertices`.
+    /// The triangles, indices into `vertices`, wound with their normal out of the tool.
     pub triangles: Vec<[u32; 3]>,
     /// Each triangle's area (m^2).
     pub areas: Vec<Real>,
@@ -43,6 +51,39 @@ pub struct DiePressure {
     pub forces: Vec<Real>,
     /// The contact pressure on each triangle, its force over its area (Pa).
     pub pressure: Vec<Real>,
+}
+
+impl DiePressure {
+    /// The triangles with no force on them yet.
+    fn unloaded(vertices: Vec<[Real; 3]>, triangles: Vec<[u32; 3]>) -> DiePressure {
+        let areas: Vec<Real> = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| vertices[v as usize]);
+                let n = cross(sub(b, a), sub(c, a));
+                0.5 * dot(n, n).sqrt()
+            })
+            .collect();
+        DiePressure {
+            vertices,
+            triangles,
+            forces: vec![0.0; areas.len()],
+            pressure: Vec::new(),
+            areas,
+        }
+    }
+
+    /// The pressures from the forces, 0 on a triangle of no area (a quarter edge-on to a
+    /// plane).
+    fn loaded(mut self) -> DiePressure {
+        self.pressure = self
+            .forces
+            .iter()
+            .zip(&self.areas)
+            .map(|(f, &a)| if a > 0.0 { f / a } else { 0.0 })
+            .collect();
+        self
+    }
 }
 
 impl SolidSimulation {
@@ -67,39 +108,72 @@ impl SolidSimulation {
             .sum()
     }
 
-    /// The contact pressure on scene tool `t`'s triangles (see the module doc), `None` for
-    /// a plane tool.
-    pub fn die_pressure(&self, t: usize) -> Option<DiePressure> {
+    /// The contact pressure on scene tool `t`'s triangles, an STL die's or a plane's patch
+    /// under the workpiece (see the module doc).
+    pub fn die_pressure(&self, t: usize) -> DiePressure {
         let tool = &self.tools()[t];
-        let Surface::Triangles(surface) = &tool.surface else {
-            return None;
-        };
         let shift: [Real; 3] = tool.axis.map(|a| a * tool.state.stroke);
-        let mesh = surface.mesh();
-        let areas: Vec<Real> = (0..mesh.triangles.len())
-            .map(|k| {
-                let [a, b, c] = mesh.corners(k);
-                let n = cross(sub(b, a), sub(c, a));
-                0.5 * dot(n, n).sqrt()
-            })
-            .collect();
-        let mut forces = vec![0.0; areas.len()];
         let x = self.positions();
-        for p in pressed_on(&self.st, t) {
-            let k = surface.closest(x[p.particle as usize], shift).triangle as usize;
-            forces[k] += p.force_n;
+        match &tool.surface {
+            Surface::Triangles(surface) => {
+                let mesh = surface.mesh();
+                let vertices = mesh
+                    .vertices
+                    .iter()
+                    .map(|v| std::array::from_fn(|k| v[k] + shift[k]))
+                    .collect();
+                let mut die = DiePressure::unloaded(vertices, mesh.triangles.clone());
+                for p in pressed_on(&self.st, t) {
+                    let k = surface.closest(x[p.particle as usize], shift).triangle as usize;
+                    die.forces[k] += p.force_n;
+                }
+                die.loaded()
+            }
+            Surface::Plane { point0, normal } => {
+                let origin: [Real; 3] = std::array::from_fn(|k| point0[k] + shift[k]);
+                let on_plane = |y: [Real; 3]| -> [Real; 3] {
+                    let off = dot(sub(y, origin), *normal);
+                    std::array::from_fn(|k| y[k] - off * normal[k])
+                };
+                let (mut vertices, mut triangles, mut shares) =
+                    (Vec::new(), Vec::new(), Vec::new());
+                let surface = &self.disc.heat_surface;
+                for p in pressed_on(&self.st, t) {
+                    let quads = surface.quarters_at(p.particle as usize, |i| x[i]);
+                    // Each quarter's projected area `|a . n|`, `a = (c - x_0) x (m_next -
+                    // m_prev) / 2`, and the particle's, their sum.
+                    let projected: Vec<Real> = quads
+                        .iter()
+                        .map(|q| 0.5 * dot(cross(sub(q[2], q[0]), sub(q[1], q[3])), *normal).abs())
+                        .collect();
+                    let area: Real = projected.iter().sum();
+                    if area <= 0.0 {
+                        continue;
+                    }
+                    for (quad, a) in quads.iter().zip(projected) {
+                        let c = quad.map(on_plane);
+                        let first = vertices.len() as u32;
+                        // Wound with the normal out of the tool.
+                        let out = dot(cross(sub(c[1], c[0]), sub(c[2], c[0])), *normal) >= 0.0;
+                        let order: [u32; 4] = if out { [0, 1, 2, 3] } else { [0, 3, 2, 1] };
+                        vertices.extend(c);
+                        triangles.push([order[0], order[1], order[2]].map(|v| first + v));
+                        triangles.push([order[0], order[2], order[3]].map(|v| first + v));
+                        shares.push(p.force_n * a / area);
+                    }
+                }
+                let mut die = DiePressure::unloaded(vertices, triangles);
+                // A quarter's force over its two triangles by their areas.
+                for (q, f) in shares.iter().enumerate() {
+                    let (a1, a2) = (die.areas[2 * q], die.areas[2 * q + 1]);
+                    if a1 + a2 > 0.0 {
+                        die.forces[2 * q] = f * a1 / (a1 + a2);
+                        die.forces[2 * q + 1] = f * a2 / (a1 + a2);
+                    }
+                }
+                die.loaded()
+            }
         }
-        Some(DiePressure {
-            vertices: mesh
-                .vertices
-                .iter()
-                .map(|v| std::array::from_fn(|k| v[k] + shift[k]))
-                .collect(),
-            triangles: mesh.triangles.clone(),
-            pressure: forces.iter().zip(&areas).map(|(f, a)| f / a).collect(),
-            areas,
-            forces,
-        })
     }
 }
 

@@ -26,7 +26,10 @@
 //! three dimensions) and a cylinder over the O-grid's
 //! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
 //! [`crate::integration::smoothed`]). Kernel re-referencing is `rereference.rs` (the
-//! temperature field carried as in 2D). Not in 3D yet (refused by the scene's validation):
+//! temperature field carried as in 2D). Die fill (`fill.rs`: 2D's test on the surface
+//! particles) and what the dies feel (`die_contact.rs`: each tool's contact area on the
+//! surface patches, its share of the surface, the pressure over an STL die's triangles)
+//! are read from the state. Not in 3D yet (refused by the scene's validation):
 //! SCNI's stabilization and self-contact; not yet done either, without a refusal: the
 //! pass of the tools' convex edges and vertices against the surface between particles.
 
@@ -583,6 +586,8 @@ impl SolidSimulation {
             + npts * (r3 + 3 * 8 + size_of::<PointState3>() + size_of::<PointOut>())
             + st.held.len() * size_of::<bool>()
             + st.stick.len() * size_of::<Option<[Real; 3]>>()
+            + st.pressed.len() * size_of::<Pressed>()
+            + st.fill.len() * size_of::<Option<Filled>>()
             + d.cells.len() * size_of::<[u32; 8]>()
             + heat
     }
