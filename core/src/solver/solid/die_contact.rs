@@ -1,6 +1,6 @@
 //! What the dies feel in 3D: the area of the workpiece's surface in contact with each tool,
-//! its share of the surface, and the contact pressure on an STL die as a field over its
-//! triangles. All three are read from the state alone (the normal forces the last contact
+//! its share of the surface, and the contact pressure on the tool as a field over
+//! triangles (an STL die's own, a plane's contact patch). All three are read from the state alone (the normal forces the last contact
 //! stage booked, [`SolidState::pressed`], and the displacements), so a restored state reports
 //! them as first computed.
 //!
@@ -37,8 +37,8 @@ use crate::math::Real;
 use crate::solid_tool::Surface;
 use crate::stl::{cross, dot, sub};
 
-/// The contact pressure on a tool over its triangles (an STL die's, or a plane's patch under
-/// the workpiece), where the tool is now.
+/// The contact pressure on a tool over triangles (an STL die's own, or a plane's contact
+/// patch), where the tool is now.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DiePressure {
     /// The triangles' vertices (m).
@@ -108,8 +108,8 @@ impl SolidSimulation {
             .sum()
     }
 
-    /// The contact pressure on scene tool `t`'s triangles, an STL die's or a plane's patch
-    /// under the workpiece (see the module doc).
+    /// The contact pressure on scene tool `t` over triangles, an STL die's own or a plane's
+    /// contact patch (see the module doc).
     pub fn die_pressure(&self, t: usize) -> DiePressure {
         let tool = &self.tools()[t];
         let shift: [Real; 3] = tool.axis.map(|a| a * tool.state.stroke);

@@ -28,7 +28,8 @@
 //! [`crate::integration::smoothed`]). Kernel re-referencing is `rereference.rs` (the
 //! temperature field carried as in 2D). Die fill (`fill.rs`: 2D's test on the surface
 //! particles) and what the dies feel (`die_contact.rs`: each tool's contact area on the
-//! surface patches, its share of the surface, the pressure over an STL die's triangles)
+//! surface patches, its share of the surface, the pressure over an STL die's triangles or
+//! a plane's contact patch)
 //! are read from the state. Not in 3D yet (refused by the scene's validation):
 //! SCNI's stabilization and self-contact; not yet done either, without a refusal: the
 //! pass of the tools' convex edges and vertices against the surface between particles.
