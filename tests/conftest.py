@@ -49,3 +49,16 @@ def force_controller_bin(rkforge_ros_bin):
         subprocess.run(["cargo", "build", "--release", "-p", "rkforge-ros", "--examples"],
                        cwd=ROOT, check=True)
     return str(path)
+
+
+def stl_box(path, lo, hi):
+    """The closed box lo..hi (mm) as an ASCII STL, its 12 triangles wound outward."""
+    corner = lambda i: [hi[k] if i >> k & 1 else lo[k] for k in range(3)]
+    quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+    lines = ["solid die"]
+    for q in quads:
+        for tri in ([q[0], q[1], q[2]], [q[0], q[2], q[3]]):
+            lines += ["  facet normal 0 0 0", "    outer loop"]
+            lines += ["      vertex %r %r %r" % tuple(corner(i)) for i in tri]
+            lines += ["    endloop", "  endfacet"]
+    path.write_text("\n".join(lines + ["endsolid die", ""]))

@@ -10,7 +10,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from conftest import ROOT, scene_variant
+from conftest import ROOT, scene_variant, stl_box
 
 COARSE = {"cells = [8, 4, 60]": "cells = [4, 2, 24]"}
 
@@ -187,3 +187,94 @@ def test_sweep_refuses_a_grid_or_rule_of_the_other_kind(rkforge_bin, tmp_path, s
     for e in expected:
         assert e in proc.stderr, (e, proc.stderr)
     assert not (tmp_path / "o" / "sweep.csv").exists()
+
+
+BLOCK_STL = """
+name = "block_stl"
+[model]
+kinematics = "3d"
+[workpiece]
+shape = "box"
+origin_m = [0.0, 0.0, 0.0]
+size_m = [0.005, 0.005, 0.01]
+particles = [5, 5, 9]
+symmetry = ["x_min", "y_min"]
+[material]
+density_kg_per_m3 = 2700.0
+youngs_modulus_pa = 70e9
+poisson_ratio = 0.33
+hardening = { law = "linear", yield_stress_pa = 100e6, modulus_pa = 500e6 }
+[discretization]
+integration = "q2"
+[time]
+end_s = 400e-6
+[[tools]]
+name = "anvil"
+point_m = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+axis = [0.0, 0.0, -1.0]
+motion = { kind = "fixed" }
+[[tools]]
+name = "ram"
+shape = "stl"
+file = "dies/ram.stl"
+unit = "mm"
+axis = [0.0, 0.0, -1.0]
+motion = { kind = "constant", velocity_m_per_s = 2.0 }
+[[tools.fill_points]]
+name = "corner"
+at_m = [0.005, 0.005, 0.0105]
+[[tools.fill_points]]
+name = "beyond"
+at_m = [0.012, 0.0, 0.0105]
+[output]
+frames = 2
+fill_distance_rel = 0.1
+"""
+
+
+def test_an_stl_die_is_written_with_its_pressure_and_its_fill_points(rkforge_bin, tmp_path):
+    """A quarter block pressed by an STL ram from 0.5 mm above it by 0.8 mm (2 m/s, 400 us)
+    onto a plane anvil: the frames hold the ram's triangles where it is with the pressure on
+    each, and the anvil's contact patch, each integrating to its tool's normal force (the
+    axial force: flat frictionless faces); the summary says which
+    fill point filled, when and at which stroke (0.375 mm: 0.5 mm less the fill distance of
+    0.1 spacings), and the history has the contact area, its share and the mean pressure."""
+    (tmp_path / "dies").mkdir()
+    stl_box(tmp_path / "dies" / "ram.stl", [-5.0, -5.0, 10.5], [15.0, 15.0, 15.5])
+    scene = tmp_path / "block_stl.toml"
+    scene.write_text(BLOCK_STL)
+    out = tmp_path / "out"
+    subprocess.run([rkforge_bin, "run", str(scene), "--out", str(out), "--quiet"],
+                   check=True, capture_output=True, text=True, timeout=300)
+    s = json.loads((out / "summary.json").read_text())
+    anvil, ram = s["tools"]
+    assert anvil["fill_points"] == []
+    corner, beyond = ram["fill_points"]
+    assert corner["name"] == "corner" and corner["filled"]
+    assert 0.375e-3 <= corner["filled_stroke_m"] < 0.376e-3, corner
+    assert abs(corner["filled_s"] - corner["filled_stroke_m"] / 2.0) < 1e-12
+    assert not beyond["filled"] and beyond["filled_s"] is None
+    assert ram["contact_area_m2"] > 0.99 * 25e-6 and 0.1 < ram["surface_fraction"] < 0.3
+    assert abs(ram["pressure_mean_Pa"] * ram["contact_area_m2"] / abs(ram["axial_force_N"]) - 1) < 1e-3
+    pvd = ET.parse(out / "die_ram.pvd").getroot()
+    files = [d.get("file") for d in pvd.iter("DataSet")]
+    assert len(files) == 3
+    piece = ET.parse(out / files[-1]).getroot().find("UnstructuredGrid/Piece")
+    assert int(piece.get("NumberOfCells")) == 12
+    assert set(piece.find("Cells/DataArray[@Name='types']").text.split()) == {"5"}
+    z = [float(v) for v in piece.find("Points/DataArray").text.split()][2::3]
+    assert min(z) == pytest.approx(10.5e-3 - 0.8e-3, abs=1e-9)
+    pressure = [float(v) for v in piece.find("CellData/DataArray[@Name='pressure_Pa']").text.split()]
+    force = [float(v) for v in piece.find("CellData/DataArray[@Name='force_N']").text.split()]
+    assert sum(force) == pytest.approx(abs(ram["axial_force_N"]), rel=1e-9)
+    assert max(pressure) > 0.0
+    anvil_pvd = ET.parse(out / "die_anvil.pvd").getroot()
+    last = [d.get("file") for d in anvil_pvd.iter("DataSet")][-1]
+    piece = ET.parse(out / last).getroot().find("UnstructuredGrid/Piece")
+    force = [float(v) for v in piece.find("CellData/DataArray[@Name='force_N']").text.split()]
+    assert sum(force) == pytest.approx(anvil["axial_force_N"], rel=1e-9), "the anvil's contact patch"
+    with open(out / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert float(rows[-1]["ram.contact_area_m2"]) == ram["contact_area_m2"]
+    assert float(rows[0]["ram.corner.filled"]) == 0.0 and float(rows[-1]["ram.corner.filled"]) == 1.0

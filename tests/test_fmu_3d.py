@@ -10,7 +10,7 @@ import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from conftest import scene_variant
+from conftest import scene_variant, stl_box
 from ros_peer import upset_bar_3d
 from test_fmu3 import Slave3, pack
 
@@ -124,19 +124,6 @@ def test_a_3d_fmu3_returns_early_where_its_intermediate_updates_see_the_event(ba
     assert early and last == expected, (last, expected)
     assert abs(forced.get("wall.force_N")[0]) >= level
     forced.fmu.freeInstance()
-
-
-def stl_box(path, lo, hi):
-    """The closed box lo..hi (mm) as an ASCII STL, its 12 triangles wound outward."""
-    corner = lambda i: [hi[k] if i >> k & 1 else lo[k] for k in range(3)]
-    quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
-    lines = ["solid die"]
-    for q in quads:
-        for tri in ([q[0], q[1], q[2]], [q[0], q[2], q[3]]):
-            lines += ["  facet normal 0 0 0", "    outer loop"]
-            lines += ["      vertex %r %r %r" % tuple(corner(i)) for i in tri]
-            lines += ["    endloop", "  endfacet"]
-    path.write_text("\n".join(lines + ["endsolid die", ""]))
 
 
 @pytest.mark.parametrize("fmi", ["2", "3"])

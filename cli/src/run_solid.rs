@@ -5,7 +5,10 @@
 //! the scene's references print beside them), and
 //! with frames the VTK frames of the body (`frames/frame_NNNN.vtu`, hexahedra with the
 //! plastic strain of each cell, and its temperature in a scene with `[thermal]`, and
-//! `frames.pvd` for ParaView) and `stages.png`: the body at each frame seen from outside,
+//! `frames.pvd` for ParaView), each tool's surface where it is with the contact pressure on
+//! its triangles (an STL die's, a plane's patch under the workpiece:
+//! `frames/die_<tool>_NNNN.vtu`, `pressure_Pa` and `force_N` per triangle,
+//! [`SolidSimulation::die_pressure`], and `die_<tool>.pvd`) and `stages.png`: the body at each frame seen from outside,
 //! and at the end from the other side, where a half or quarter model shows its sections on
 //! the symmetry planes; with `[thermal]`, `temperature.png`: the last frame's temperature
 //! from both sides. With `--mcap`, the ROS 2 topics of a 3D scene at every history sample
@@ -13,10 +16,10 @@
 //! files finished.
 
 use crate::output::plots::{solid_plot, SolidPanel, View};
-use crate::output::vtu::{write_pvd, write_vtu_3d};
+use crate::output::vtu::{write_pvd, write_vtu_3d, write_vtu_triangles};
 use crate::recording::{Mcap, McapOptions};
 use rkforge_core::scene::SolidScene;
-use rkforge_core::solver::SolidSimulation;
+use rkforge_core::solver::{DiePressure, SolidSimulation};
 use rkforge_runner::{drive, solid_summary, Observer};
 use serde_json::Value;
 use std::path::Path;
@@ -99,6 +102,8 @@ struct Frame {
     positions: Vec<[f64; 3]>,
     plastic_strain: Vec<f64>,
     temperature: Option<Vec<f64>>,
+    /// Each tool's pressure, with its name.
+    dies: Vec<(String, DiePressure)>,
 }
 
 impl Frame {
@@ -108,8 +113,37 @@ impl Frame {
             positions: sim.positions(),
             plastic_strain: sim.cell_means(&sim.point_plastic_strain()),
             temperature: sim.point_temperature().map(|t| sim.cell_means(t)),
+            dies: (0..sim.tools().len())
+                .map(|k| (sim.tools()[k].name.clone(), sim.die_pressure(k)))
+                .collect(),
         }
     }
+}
+
+/// Each tool's frames (`frames/die_<tool>_NNNN.vtu`: its triangles where the tool is, the
+/// contact pressure and force on each) and their collection `die_<tool>.pvd`.
+fn write_dies(shots: &[Frame], out: &Path) -> Result<(), String> {
+    let Some(first) = shots.first() else {
+        return Ok(());
+    };
+    for (d, (name, _)) in first.dies.iter().enumerate() {
+        let mut listed = Vec::new();
+        for (k, f) in shots.iter().enumerate() {
+            let die = &f.dies[d].1;
+            let file = format!("die_{name}_{k:04}.vtu");
+            write_vtu_triangles(
+                &out.join("frames").join(&file),
+                &die.vertices,
+                &die.triangles,
+                &[("pressure_Pa", &die.pressure), ("force_N", &die.forces)],
+            )
+            .map_err(|e| format!("cannot write {file}: {e}"))?;
+            listed.push((f.time, format!("frames/{file}")));
+        }
+        let pvd = format!("die_{name}.pvd");
+        write_pvd(&out.join(&pvd), &listed).map_err(|e| format!("cannot write {pvd}: {e}"))?;
+    }
+    Ok(())
 }
 
 /// The VTK frames with their collection and the picture of the frames.
@@ -141,6 +175,7 @@ fn write_frames(
     }
     write_pvd(&out.join("frames.pvd"), &listed)
         .map_err(|e| format!("cannot write frames.pvd: {e}"))?;
+    write_dies(shots, out)?;
     let panel = |f: &Frame, values: &[f64], label: &str, view: View| SolidPanel {
         time: f.time,
         positions: f.positions.clone(),

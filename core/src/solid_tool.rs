@@ -263,6 +263,7 @@ mod tests {
             temperature_c: None,
             heat_transfer_w_per_m2_k: 0.0,
             heat_transfer_by_pressure: Vec::new(),
+            fill_points: Vec::new(),
         };
         let mut t = SolidTool::new(&spec, None, 0.5);
         assert_eq!(t.depth_of([3.0, -2.0, 0.75]), -0.25);

@@ -86,6 +86,7 @@ impl Doc {
 fn unit_base(unit: &str) -> &'static [(&'static str, &'static str)] {
     match unit {
         "m" => &[("m", "1")],
+        "m2" => &[("m", "2")],
         "s" => &[("s", "1")],
         "m/s" => &[("m", "1"), ("s", "-1")],
         "N" => &[("kg", "1"), ("m", "1"), ("s", "-2")],

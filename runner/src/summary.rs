@@ -12,7 +12,7 @@
 
 use rkforge_core::outputs::{columns, solid_columns, At, Body, Column, Sample};
 use rkforge_core::scene::Reference;
-use rkforge_core::solver::SolidSimulation;
+use rkforge_core::solver::{FillPoint, SolidSimulation};
 use rkforge_core::{Kinematics, Scene, Simulation};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -165,10 +165,11 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
             "max_beyond_plane_m": st.max_beyond_plane,
             "max_beyond_plane_rel": st.max_beyond_plane / sim.h_min(),
         },
-        "tools": sim.tools().iter().map(|t| json!({
+        "tools": sim.tools().iter().enumerate().map(|(k, t)| json!({
             "name": t.name,
             "force_N": t.state.force,
             "axial_force_N": t.axial_force(),
+            "fill_points": fill_json(sim.fill_points(), k),
         })).collect::<Vec<_>>(),
         "stage_seconds": {
             "setup": t.setup.as_secs_f64(),
@@ -324,25 +325,11 @@ pub fn tool_json(sim: &Simulation, k: usize) -> Value {
 /// [`tool_json`] of a sample.
 fn tool_in(sample: &Sample<'_>, k: usize) -> Value {
     let t = &sample.tools()[k];
-    let fill: Vec<Value> = sample
-        .fill_points()
-        .into_iter()
-        .filter(|p| p.tool == k)
-        .map(|p| {
-            json!({
-                "name": p.name,
-                "at_m": p.at_m,
-                "filled": p.filled.is_some(),
-                "filled_s": p.filled.map(|f| f.time_s),
-                "filled_stroke_m": p.filled.map(|f| f.stroke_m),
-            })
-        })
-        .collect();
     let mut tool = json!({
         "name": t.name,
         "force_N": t.state.force,
         "axial_force_N": t.axial_force(),
-        "fill_points": fill,
+        "fill_points": fill_json(sample.fill_points(), k),
     });
     for c in shown(sample.scene()) {
         match c.at {
@@ -361,6 +348,24 @@ fn tool_in(sample: &Sample<'_>, k: usize) -> Value {
         tool["heat_flow_W"] = json!(flows[k]);
     }
     tool
+}
+
+/// Tool `k`'s fill points among `points` (either dimension's) in the summary: each with
+/// where it is now, whether, when and at which stroke the material reached it.
+fn fill_json<const D: usize>(points: Vec<FillPoint<D>>, k: usize) -> Vec<Value> {
+    points
+        .into_iter()
+        .filter(|p| p.tool == k)
+        .map(|p| {
+            json!({
+                "name": p.name,
+                "at_m": p.at_m.as_slice(),
+                "filled": p.filled.is_some(),
+                "filled_s": p.filled.map(|f| f.time_s),
+                "filled_stroke_m": p.filled.map(|f| f.stroke_m),
+            })
+        })
+        .collect()
 }
 
 /// The register's columns of `scene` shown in the summary.

@@ -1,5 +1,6 @@
 //! VTK XML output for ParaView: one `.vtu` file per frame plus a `.pvd` collection. 2D frames
-//! ([`write_vtu`]) hold quads, 3D frames ([`write_vtu_3d`]) hexahedra with cell data as well.
+//! ([`write_vtu`]) hold quads, 3D frames ([`write_vtu_3d`]) hexahedra with cell data as well,
+//! a die's surface ([`write_vtu_triangles`]) triangles with cell data.
 //!
 //! Files are written in ASCII so they stay diff-able and easy to inspect. Floating-point values
 //! use Rust's shortest round-trip representation in exponent form (`{:e}`), so reading a file
@@ -13,6 +14,9 @@ use std::path::Path;
 
 /// VTK cell type id of a linear quadrilateral (`VTK_QUAD`).
 const VTK_QUAD: u8 = 9;
+
+/// VTK cell type id of a linear triangle (`VTK_TRIANGLE`).
+const VTK_TRIANGLE: u8 = 5;
 
 /// VTK cell type id of a linear hexahedron (`VTK_HEXAHEDRON`).
 const VTK_HEXAHEDRON: u8 = 12;
@@ -79,6 +83,30 @@ pub fn write_vtu_3d(
         cell_kind: ("hex", VTK_HEXAHEDRON),
         point_scalars,
         point_vectors,
+        cell_scalars,
+    };
+    grid.write(path)
+}
+
+/// Write a triangulated surface (a die) as a VTK XML UnstructuredGrid (.vtu), ASCII,
+/// VTK_TRIANGLE (type 5) cells, `cell_scalars` as cell data arrays. Conventions and errors as
+/// [`write_vtu_3d`].
+///
+/// # Errors
+///
+/// As [`write_vtu_3d`]'s, for triangles.
+pub fn write_vtu_triangles(
+    path: &Path,
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    cell_scalars: &[(&str, &[f64])],
+) -> io::Result<()> {
+    let grid = Grid {
+        positions,
+        cells: triangles,
+        cell_kind: ("triangle", VTK_TRIANGLE),
+        point_scalars: &[],
+        point_vectors: &[],
         cell_scalars,
     };
     grid.write(path)
@@ -696,6 +724,35 @@ mod tests {
             assert_eq!(array.attr("NumberOfComponents"), "1");
             assert_eq!(bits(&array.values::<f64>()), bits(data), "array {name}");
         }
+    }
+
+    #[test]
+    fn die_triangles_round_trip_with_their_pressure() {
+        let positions = [[0.0, 0.0, 0.1], [1e-3, 0.0, 0.1], [0.0, 2e-3, 0.1 + 1e-9]];
+        let triangles = [[0, 1, 2], [2, 1, 0]];
+        let pressure = [1.25e8, 0.0];
+        let path = temp_dir("die").join("die_ram_0000.vtu");
+        write_vtu_triangles(&path, &positions, &triangles, &[("pressure_Pa", &pressure)])
+            .expect("write vtu");
+        let root = parse(&path);
+        let piece = root.child("UnstructuredGrid").child("Piece");
+        assert_eq!(piece.attr("NumberOfPoints"), "3");
+        assert_eq!(piece.attr("NumberOfCells"), "2");
+        let xyz: Vec<f64> = piece.child("Points").array("Points").values();
+        assert_eq!(bits(&xyz), bits(&positions.concat()));
+        let cells = piece.child("Cells");
+        let connectivity: Vec<u32> = cells.array("connectivity").values();
+        assert_eq!(connectivity, triangles.concat());
+        let offsets: Vec<u64> = cells.array("offsets").values();
+        assert_eq!(offsets, [3, 6]);
+        let types: Vec<u8> = cells.array("types").values();
+        assert_eq!(types, [5, 5]);
+        let cell_data = piece.child("CellData");
+        assert_eq!(cell_data.attr("Scalars"), "pressure_Pa");
+        let values: Vec<f64> = cell_data.array("pressure_Pa").values();
+        assert_eq!(bits(&values), bits(&pressure));
+        let bad = write_vtu_triangles(&path, &positions, &[[0, 1, 3]], &[]);
+        assert_eq!(bad.unwrap_err().kind(), io::ErrorKind::InvalidInput);
     }
 
     #[test]

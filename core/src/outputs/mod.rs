@@ -47,7 +47,7 @@ pub use solid::{solid_columns, solid_fields, SolidCache, SOLID_REGISTER};
 use crate::geometry::Extents;
 use crate::math::Real;
 use crate::scene::{Edge, Kinematics, Scene};
-use crate::solver::{Depths, Energy, Fields, Simulation, SolidSimulation};
+use crate::solver::{Depths, Energy, Fields, Filled, Simulation, SolidSimulation};
 use std::cell::OnceCell;
 use std::ops::Deref;
 
@@ -66,6 +66,8 @@ pub trait Body: Sized + 'static {
     /// The thermal measures in the order of [`THERMAL_MEASURES`], `None` for an isothermal
     /// scene.
     fn thermal_now(&self) -> Option<[Real; 9]>;
+    /// When each fill point was reached, tool by tool (the state's).
+    fn fill_state(&self) -> &[Option<Filled>];
 }
 
 impl Body for Simulation {
@@ -82,6 +84,9 @@ impl Body for Simulation {
     fn thermal_now(&self) -> Option<[Real; 9]> {
         self.thermal_values()
     }
+    fn fill_state(&self) -> &[Option<Filled>] {
+        &self.state().fill
+    }
 }
 
 impl Body for SolidSimulation {
@@ -97,6 +102,9 @@ impl Body for SolidSimulation {
     }
     fn thermal_now(&self) -> Option<[Real; 9]> {
         self.thermal_values()
+    }
+    fn fill_state(&self) -> &[Option<Filled>] {
+        &self.state().fill
     }
 }
 
@@ -394,28 +402,12 @@ fn instances(scene: &Scene, kind: Kind) -> Vec<(At, String)> {
         Kind::PerTool => (0..scene.tools.len())
             .map(|k| (At::Tool(k), scene.tools[k].name.clone()))
             .collect(),
-        Kind::PerFillPoint => scene
-            .tools
-            .iter()
-            .enumerate()
-            .flat_map(|(tool, t)| {
-                t.fill_points
-                    .iter()
-                    .enumerate()
-                    .map(move |(within, p)| (tool, within, format!("{}.{}", t.name, p.name)))
-            })
-            .enumerate()
-            .map(|(index, (tool, within, name))| {
-                (
-                    At::FillPoint {
-                        tool,
-                        index,
-                        within,
-                    },
-                    name,
-                )
-            })
-            .collect(),
+        Kind::PerFillPoint => fill_instances(
+            scene
+                .tools
+                .iter()
+                .map(|t| (&t.name[..], t.fill_points.iter().map(|p| &p.name[..]))),
+        ),
         Kind::PerFace => scene
             .output
             .faces
@@ -424,6 +416,32 @@ fn instances(scene: &Scene, kind: Kind) -> Vec<(At, String)> {
             .collect(),
         Kind::PerParticle | Kind::PerPoint => Vec::new(),
     }
+}
+
+/// The fill points of either dimension's tools, given as (tool name, its points' names) in
+/// scene order, as instances `<tool>.<point>`.
+fn fill_instances<'a, P: Iterator<Item = &'a str>>(
+    tools: impl Iterator<Item = (&'a str, P)>,
+) -> Vec<(At, String)> {
+    tools
+        .enumerate()
+        .flat_map(|(tool, (t, points))| {
+            points
+                .enumerate()
+                .map(move |(within, p)| (tool, within, format!("{t}.{p}")))
+        })
+        .enumerate()
+        .map(|(index, (tool, within, name))| {
+            (
+                At::FillPoint {
+                    tool,
+                    index,
+                    within,
+                },
+                name,
+            )
+        })
+        .collect()
 }
 
 impl<S: Body> Output<S> {

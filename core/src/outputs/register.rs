@@ -106,18 +106,24 @@ const TOOLS: [Output; 9] = [
 ];
 
 /// Each fill point of a tool (die fill).
-const FILL: [Output; 1] = [Output {
-    name: "filled",
-    group: "",
-    unit: "1",
-    description: "1 once the material has reached point {point} of tool {tool} (die fill), else 0",
-    when: When::Always,
-    shown: Shown::NOT_IN_SUMMARY,
-    read: Read::FillPoint(|s, i| match s.fill_points()[i].filled {
-        Some(_) => 1.0,
-        None => 0.0,
-    }),
-}];
+const FILL: [Output; 1] = [filled()];
+
+/// Whether a fill point of a tool has been reached, in either dimension.
+pub(super) const fn filled<S: Body>() -> Output<S> {
+    Output {
+        name: "filled",
+        group: "",
+        unit: "1",
+        description:
+            "1 once the material has reached point {point} of tool {tool} (die fill), else 0",
+        when: When::Always,
+        shown: Shown::NOT_IN_SUMMARY,
+        read: Read::FillPoint(|s, i| match s.fill_state()[i] {
+            Some(_) => 1.0,
+            None => 0.0,
+        }),
+    }
+}
 
 /// The workpiece as a whole.
 const WORKPIECE: [Output; 15] = [

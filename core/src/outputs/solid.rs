@@ -3,22 +3,25 @@
 //! thermal measures are the 2D register's own sections, generic over [`Body`]; what only a
 //! 3D body has (a tool's force along z, the z bounds) or reads differently (the workpiece's
 //! bounds and radius over its particles, the penetration of the plane tools) is here.
-//! Not in 3D yet: the particle fields (2D smooths the points' values onto the particles),
-//! fill points, followed faces and laps.
+//! The contact figures of a tool (`contact_area_m2`, `surface_fraction`, `pressure_mean_Pa`)
+//! are over the workpiece's surface patches (`solver/solid/die_contact.rs`); the fill
+//! points are 2D's section. Not in 3D yet: the particle fields (2D smooths the points'
+//! values onto the particles), followed faces and laps.
 
 use super::register::{
-    energy, particles, points, scalar, thermal_measures, thermoelastic, time, tool,
+    energy, filled, particles, points, scalar, thermal_measures, thermoelastic, time, tool,
 };
-use super::{expand, fields_of, At, Column, Kind, Output, Sample, Shown, When};
+use super::{expand, fields_of, fill_instances, At, Column, Kind, Output, Sample, Shown, When};
 use crate::math::Real;
 use crate::scene::solid::SolidScene;
 use crate::solver::{BodyReadings, SolidSimulation};
 use std::cell::OnceCell;
 
 /// The register of a 3D run: its sections in order, each of outputs of one kind.
-pub static SOLID_REGISTER: [&[Output<SolidSimulation>]; 8] = [
+pub static SOLID_REGISTER: [&[Output<SolidSimulation>]; 9] = [
     &TIME,
     &TOOLS,
+    &FILL,
     &WORKPIECE,
     &ENERGY,
     &ENERGY_THERMOELASTIC,
@@ -31,9 +34,10 @@ const TIME: [Output<SolidSimulation>; 2] = time();
 const ENERGY: [Output<SolidSimulation>; 10] = energy();
 const ENERGY_THERMOELASTIC: [Output<SolidSimulation>; 1] = [thermoelastic()];
 const THERMAL: [Output<SolidSimulation>; 9] = thermal_measures();
+const FILL: [Output<SolidSimulation>; 1] = [filled()];
 
-/// Each plane tool (the symmetry planes are not tools).
-const TOOLS: [Output<SolidSimulation>; 9] = [
+/// Each tool (the symmetry planes are not tools).
+const TOOLS: [Output<SolidSimulation>; 12] = [
     tool::<SolidSimulation>(
         "stroke_m",
         "m",
@@ -75,6 +79,31 @@ const TOOLS: [Output<SolidSimulation>; 9] = [
         |s, k| s.tools()[k].state.force[2],
     )
     .showing(Shown::NOT_IN_SUMMARY),
+    tool::<SolidSimulation>(
+        "contact_area_m2",
+        "m2",
+        "area of the workpiece's surface in contact with tool {tool}, projected on the tool",
+        |s, k| s.contact_area(k),
+    ),
+    tool::<SolidSimulation>(
+        "surface_fraction",
+        "1",
+        "share of the workpiece's surface (less its faces on symmetry planes) in contact with tool {tool}",
+        |s, k| s.contact_area(k) / s.surface_area(),
+    ),
+    tool::<SolidSimulation>(
+        "pressure_mean_Pa",
+        "Pa",
+        "mean contact pressure on tool {tool}: the normal contact force over the contact area",
+        |s, k| {
+            let area = s.contact_area(k);
+            if area > 0.0 {
+                s.tools()[k].state.normal_force / area
+            } else {
+                0.0
+            }
+        },
+    ),
     tool::<SolidSimulation>(
         "peak_force_N",
         "N",
@@ -298,6 +327,13 @@ impl Column<SolidSimulation> {
                 .output
                 .description
                 .replace("{tool}", &scene.tools[k].name),
+            At::FillPoint { tool, within, .. } => {
+                let t = &scene.tools[tool];
+                self.output
+                    .description
+                    .replace("{tool}", &t.name)
+                    .replace("{point}", &t.fill_points[within].name)
+            }
             _ => self.output.description.to_string(),
         }
     }
@@ -313,6 +349,12 @@ pub fn solid_columns(scene: &SolidScene) -> Vec<Column<SolidSimulation>> {
             Kind::PerTool => (0..scene.tools.len())
                 .map(|k| (At::Tool(k), scene.tools[k].name.clone()))
                 .collect(),
+            Kind::PerFillPoint => fill_instances(
+                scene
+                    .tools
+                    .iter()
+                    .map(|t| (&t.name[..], t.fill_points.iter().map(|p| &p.name[..]))),
+            ),
             _ => Vec::new(),
         },
         |when, at| when.holds_solid(scene, at),

@@ -46,7 +46,7 @@ fn default_frames() -> usize {
     5
 }
 
-fn default_fill_distance() -> Real {
+pub(super) fn default_fill_distance() -> Real {
     1.0
 }
 

@@ -272,6 +272,23 @@ pub struct SolidToolSpec {
     /// over the time since the last heat stage, over its share of the contact.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub heat_transfer_by_pressure: Vec<[Real; 2]>,
+    /// Named points of the tool's surface (die fill, as in 2D): the material has reached
+    /// one once a surface particle lies within `output.fill_distance_rel` smallest spacings
+    /// of it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fill_points: Vec<SolidFillPoint>,
+}
+
+/// A named point of a 3D tool's surface, [`super::FillPoint`] with three coordinates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SolidFillPoint {
+    /// Name, used in outputs (`<tool>.<name>.filled`).
+    pub name: String,
+    /// Position with the tool at its start (m); it moves with the tool. It must lie on the
+    /// tool's surface, within the fill distance (checked at setup, where the spacing is
+    /// known).
+    pub at_m: [Real; 3],
 }
 
 fn default_separation() -> bool {
@@ -307,6 +324,10 @@ pub struct SolidOutput {
     /// Number of VTK frames over the run (0 for none).
     #[serde(default = "default_frames")]
     pub frames: usize,
+    /// How near, in smallest particle spacings, a surface particle must come to one of a
+    /// tool's `fill_points` to have filled it (as in 2D, `output.fill_distance_rel`).
+    #[serde(default = "super::output::default_fill_distance")]
+    pub fill_distance_rel: Real,
 }
 
 fn default_frames() -> usize {
@@ -318,6 +339,7 @@ impl Default for SolidOutput {
         SolidOutput {
             history_interval_s: None,
             frames: default_frames(),
+            fill_distance_rel: super::output::default_fill_distance(),
         }
     }
 }
@@ -433,6 +455,8 @@ impl SolidScene {
             for (suffix, message) in t.friction.validate() {
                 out.check(false, &key(&format!("friction{suffix}")), message);
             }
+            let points = t.fill_points.iter().map(|p| (&p.name[..], &p.at_m[..]));
+            super::tools::check_fill_points(points, &key, &mut out);
             t.motion.check(&key, &mut out);
         }
         let interval = self
@@ -446,6 +470,11 @@ impl SolidScene {
                 "must be positive and at most time.end_s ({}), got {interval}",
                 self.time.end_s
             ),
+        );
+        out.check(
+            pos(self.output.fill_distance_rel),
+            "output.fill_distance_rel",
+            format!("must be positive, got {}", self.output.fill_distance_rel),
         );
         self.checks.check(&mut out);
         out.0

@@ -246,20 +246,31 @@ pub(crate) fn check(tools: &[ToolSpec], out: &mut Checks) {
         for (suffix, message) in tool.friction.validate() {
             out.check(false, &key(&format!("friction{suffix}")), message);
         }
-        let mut points = BTreeSet::new();
-        for (k, f) in tool.fill_points.iter().enumerate() {
-            out.check(
-                is_name(&f.name) && points.insert(f.name.clone()),
-                &key(&format!("fill_points[{k}].name")),
-                format!("`{}` must be a new name of letters, digits and `_`", f.name),
-            );
-            out.check(
-                f.at_m.iter().all(|c| c.is_finite()),
-                &key(&format!("fill_points[{k}].at_m")),
-                "must be finite".into(),
-            );
-        }
+        let points = tool.fill_points.iter().map(|p| (&p.name[..], &p.at_m[..]));
+        check_fill_points(points, &key, out);
         tool.motion.check(&key, out);
+    }
+}
+
+/// A tool's fill points, as (name, position), in 2D or 3D, under `key("fill_points[k]...")`:
+/// each a name of its own among the tool's, its coordinates finite.
+pub(crate) fn check_fill_points<'a>(
+    points: impl Iterator<Item = (&'a str, &'a [Real])>,
+    key: &dyn Fn(&str) -> String,
+    out: &mut Checks,
+) {
+    let mut names = BTreeSet::new();
+    for (k, (name, at)) in points.enumerate() {
+        out.check(
+            is_name(name) && names.insert(name.to_string()),
+            &key(&format!("fill_points[{k}].name")),
+            format!("`{name}` must be a new name of letters, digits and `_`"),
+        );
+        out.check(
+            at.iter().all(|c| c.is_finite()),
+            &key(&format!("fill_points[{k}].at_m")),
+            "must be finite".into(),
+        );
     }
 }
 

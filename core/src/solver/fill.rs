@@ -1,6 +1,8 @@
 //! The die-fill check of the step: which named points of each tool (cavity corners,
 //! `[[tools]] fill_points`) the material has reached and when (read out, with how much of
-//! each tool's length the workpiece touches, in `tool_readings.rs`).
+//! each tool's length the workpiece touches, in `tool_readings.rs`). The test itself,
+//! [`reach_points`], is generic over the dimension: the 3D solver's check
+//! (`solid/fill.rs`) calls it on the body's surface particles.
 //!
 //! A fill point is reached at the first step after which a surface particle (of the
 //! boundary ring, or any particle in contact with a tool) lies, at its physical position
@@ -41,30 +43,69 @@ pub(super) fn check(
         return;
     }
     let h = disc.h_min();
-    let reach = scene.output.fill_distance_rel * h;
     let open: Vec<(usize, [Real; 2], usize)> = points_now(scene, tools)
         .filter(|&(k, _, _)| st.fill[k].is_none())
         .collect();
-    let near = |x: [Real; 2], at: [Real; 2], r: Real| (x[0] - at[0]).hypot(x[1] - at[1]) <= r;
     let touching = ws.contact.near().map(|n| (n.0, n.2));
-    let particles: Vec<usize> = ws
-        .contact
-        .ring_predicted()
-        .chain(touching)
-        .filter(|&(_, x)| open.iter().any(|&(_, at, _)| near(x, at, reach + h)))
+    let d = &st.d;
+    reach_points(
+        &open,
+        ws.contact.ring_predicted().chain(touching),
+        |j| disc.position(d, j),
+        Reach {
+            reach: scene.output.fill_distance_rel * h,
+            h,
+            time: st.time,
+        },
+        &mut st.fill,
+        |t| tools[t].state.stroke,
+    );
+}
+
+/// How near a particle must come to fill a point, and when.
+pub(crate) struct Reach {
+    /// The fill distance (m): `output.fill_distance_rel` smallest spacings.
+    pub reach: Real,
+    /// The smallest spacing (m), the margin the candidates' predicted positions get.
+    pub h: Real,
+    /// The time a point reached now is recorded with (s).
+    pub time: Real,
+}
+
+/// The fill check of either dimension: of the `open` points (index in `fill`, position now
+/// (m), tool), those a particle reaches are recorded in `fill` with the time and the tool's
+/// `stroke` (m). The `candidates` (particle, a position near its physical one, m) within
+/// `reach + h` of an open point are picked; their physical positions `position(j)` (m)
+/// decide: a point is reached when `|x_J - p| <= reach`.
+pub(crate) fn reach_points<const D: usize>(
+    open: &[(usize, [Real; D], usize)],
+    candidates: impl Iterator<Item = (usize, [Real; D])>,
+    position: impl Fn(usize) -> [Real; D],
+    at: Reach,
+    fill: &mut [Option<Filled>],
+    stroke: impl Fn(usize) -> Real,
+) {
+    let near = |x: [Real; D], p: [Real; D], r: Real| distance(x, p) <= r;
+    let particles: Vec<usize> = candidates
+        .filter(|&(_, x)| open.iter().any(|&(_, p, _)| near(x, p, at.reach + at.h)))
         .map(|(j, _)| j)
         .collect();
     for j in particles {
-        let x = disc.position(&st.d, j);
-        for &(k, at, t) in &open {
-            if st.fill[k].is_none() && near(x, at, reach) {
-                st.fill[k] = Some(Filled {
-                    time_s: st.time,
-                    stroke_m: tools[t].state.stroke,
+        let x = position(j);
+        for &(k, p, t) in open {
+            if fill[k].is_none() && near(x, p, at.reach) {
+                fill[k] = Some(Filled {
+                    time_s: at.time,
+                    stroke_m: stroke(t),
                 });
             }
         }
     }
+}
+
+/// `|a - b|` (m) by repeated `hypot` (in 2D `hypot(a_x - b_x, a_y - b_y)`).
+fn distance<const D: usize>(a: [Real; D], b: [Real; D]) -> Real {
+    (0..D).fold(0.0, |r: Real, k| r.hypot(a[k] - b[k]))
 }
 
 /// Every fill point of `scene` as (index in [`State::fill`], position now (m), tool), tool

@@ -82,6 +82,6 @@ pub use heat::{Heat, Temperatures};
 pub use penetration::{Depths, Penetrated, Within};
 pub use quasi_static::QUASI_STATIC_WARNING;
 pub use simulation::{Ran, Simulation, StageTimes};
-pub use solid::{BodyReadings, SolidSimulation, SolidState};
+pub use solid::{BodyReadings, DiePressure, Pressed, SolidSimulation, SolidState};
 pub use state::{Filled, Reference, State};
 pub use tool_readings::FillPoint;

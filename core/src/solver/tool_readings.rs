@@ -15,15 +15,15 @@ use super::state::Filled;
 use crate::math::Real;
 use crate::scene::Kinematics;
 
-/// A tool's fill point with its state.
+/// A tool's fill point with its state, in 2D or (`D = 3`) 3D.
 #[derive(Debug, Clone, PartialEq)]
-pub struct FillPoint {
+pub struct FillPoint<const D: usize = 2> {
     /// The tool's index.
     pub tool: usize,
     /// The point's name.
     pub name: String,
     /// Its position now (m).
-    pub at_m: [Real; 2],
+    pub at_m: [Real; D],
     /// When the material first reached it, if it has.
     pub filled: Option<Filled>,
 }

@@ -26,7 +26,7 @@
 //! depth, [`SolidTool::clearance`]) stays positive after those moves cannot touch one, and
 //! is not interpolated.
 
-use super::{SolidDisc, SolidState};
+use super::{Pressed, SolidDisc, SolidState};
 use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::{slip_work, Forces};
 use crate::math::{dot, Real};
@@ -169,6 +169,7 @@ impl ToolContact {
         }
         self.force.clear();
         self.touched.clear();
+        st.pressed.clear();
         if planes.is_empty() {
             return Touch::default();
         }
@@ -285,6 +286,14 @@ impl ToolContact {
                 }
                 let normal = dot(&f, &pen.normal);
                 plane.state.normal_force += normal;
+                if t < disc.scene_tools {
+                    st.pressed.push(Pressed {
+                        particle: j as u32,
+                        tool: t as u32,
+                        force_n: normal,
+                        normal: pen.normal,
+                    });
+                }
                 // The normal impulse on a scene tool, for a heat transfer over pressure.
                 if let Some(i) = st
                     .heat

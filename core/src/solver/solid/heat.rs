@@ -138,6 +138,60 @@ impl HeatSurface {
         }
     }
 
+    /// The particles on the surface, ascending.
+    pub(super) fn particles(&self) -> &[u32] {
+        &self.particles
+    }
+
+    /// The quarters at particle `j`, each as its corners `x_0, m_next, c, m_prev` in order
+    /// around it (the particle, the middle of the next edge, the face's centre, the middle
+    /// of the previous edge; m), the particles at `position(particle)` (m); none off the
+    /// surface.
+    pub(super) fn quarters_at(
+        &self,
+        j: usize,
+        position: impl Fn(usize) -> [Real; 3],
+    ) -> Vec<[[Real; 3]; 4]> {
+        let Some(&s) = self.slot.get(j).filter(|&&s| s != OFF_SURFACE) else {
+            return Vec::new();
+        };
+        let s = s as usize;
+        self.quarters[self.first[s] as usize..self.first[s + 1] as usize]
+            .iter()
+            .map(|&(f, q)| {
+                let c =
+                    self.faces[f as usize].map(|s| position(self.particles[s as usize] as usize));
+                let q = q as usize;
+                let mid = |a: [Real; 3], b: [Real; 3]| std::array::from_fn(|k| 0.5 * (a[k] + b[k]));
+                let centre =
+                    std::array::from_fn(|k| 0.25 * (c[0][k] + c[1][k] + c[2][k] + c[3][k]));
+                [
+                    c[q],
+                    mid(c[q], c[(q + 1) % 4]),
+                    centre,
+                    mid(c[q], c[(q + 3) % 4]),
+                ]
+            })
+            .collect()
+    }
+
+    /// The surface's area (m^2), `sum |a|` over every quarter, the corners at
+    /// `position(particle)` (m).
+    pub(super) fn area(&self, position: impl Fn(usize) -> [Real; 3]) -> Real {
+        self.faces
+            .iter()
+            .map(|face| {
+                let c = face.map(|s| position(self.particles[s as usize] as usize));
+                (0..4)
+                    .map(|q| {
+                        let a = quarter(&c, q);
+                        dot(&a, &a).sqrt()
+                    })
+                    .sum::<Real>()
+            })
+            .sum()
+    }
+
     /// The contact area (m^2) of particle `j` on a tool surface with unit normal `n`, the
     /// corners at `position(particle)` (m): `A_J = sum |a . n|` over its quarters (the
     /// area of its share of the surface projected on the tool's tangent plane, as the

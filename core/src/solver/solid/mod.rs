@@ -26,11 +26,17 @@
 //! three dimensions) and a cylinder over the O-grid's
 //! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
 //! [`crate::integration::smoothed`]). Kernel re-referencing is `rereference.rs` (the
-//! temperature field carried as in 2D). Not in 3D yet (refused by the scene's validation):
+//! temperature field carried as in 2D). Die fill (`fill.rs`: 2D's test on the surface
+//! particles) and what the dies feel (`die_contact.rs`: each tool's contact area on the
+//! surface patches, its share of the surface, the pressure over an STL die's triangles or
+//! a plane's contact patch)
+//! are read from the state. Not in 3D yet (refused by the scene's validation):
 //! SCNI's stabilization and self-contact; not yet done either, without a refusal: the
 //! pass of the tools' convex edges and vertices against the surface between particles.
 
 mod contact;
+mod die_contact;
+mod fill;
 mod heat;
 mod rereference;
 mod setup;
@@ -47,6 +53,7 @@ use super::layout::Scatter;
 use super::point_outputs::PointOut;
 use super::simulation::{stepping_loop, Ran, StageTimes, Stepping};
 use super::stable_step::{landing_step, tool_step_limit, StepLength};
+use super::state::Filled;
 use super::stress::{self, has_avx2, Inputs};
 use super::update::{self, Motion, Predictor};
 use crate::error::{Error, Result};
@@ -57,6 +64,7 @@ use crate::scene::solid::SolidScene;
 use crate::solid_tool::{SolidTool, SolidToolState};
 use crate::team::Team;
 use contact::ToolContact;
+pub use die_contact::DiePressure;
 pub use rereference::SolidReference;
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
@@ -174,6 +182,28 @@ pub struct SolidState {
     /// The configuration of the last kernel re-reference, if there was one.
     #[serde(default)]
     pub reference: Option<SolidReference>,
+    /// When each fill point of the scene's tools was reached, tool by tool in scene order
+    /// (2D's `State::fill`).
+    #[serde(default)]
+    pub fill: Vec<Option<Filled>>,
+    /// The normal contact forces of the last contact stage on the scene tools, one per
+    /// particle and tool in contact, in the stage's order (the pressure on the dies).
+    #[serde(default)]
+    pub pressed: Vec<Pressed>,
+}
+
+/// The normal contact force of one particle on one scene tool at a contact stage.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Pressed {
+    /// The particle.
+    pub particle: u32,
+    /// The scene tool.
+    pub tool: u32,
+    /// The normal part of the contact force `f_J` on the particle, `f_J . n` (N), positive
+    /// pressing (the stage adds it to the tool's `normal_force`).
+    pub force_n: Real,
+    /// The contact normal, out of the tool towards the particle.
+    pub normal: [Real; 3],
 }
 
 /// The stages' working arrays.
@@ -428,6 +458,9 @@ impl SolidSimulation {
             for (t, s) in tools.iter().zip(st.tools.iter_mut()) {
                 *s = t.state;
             }
+            if touch.any {
+                fill::check(scene, disc, tools, st);
+            }
             st.energy.check(
                 scene.checks.energy_balance_tol,
                 st.step,
@@ -498,6 +531,7 @@ impl SolidSimulation {
             && st.tools.len() == self.st.tools.len()
             && st.held.len() == self.st.held.len()
             && st.stick.len() == self.st.stick.len()
+            && st.fill.len() == self.st.fill.len()
             && st.heat.is_some() == self.st.heat.is_some();
         if !same {
             return Err(Error::State(
@@ -553,6 +587,8 @@ impl SolidSimulation {
             + npts * (r3 + 3 * 8 + size_of::<PointState3>() + size_of::<PointOut>())
             + st.held.len() * size_of::<bool>()
             + st.stick.len() * size_of::<Option<[Real; 3]>>()
+            + st.pressed.len() * size_of::<Pressed>()
+            + st.fill.len() * size_of::<Option<Filled>>()
             + d.cells.len() * size_of::<[u32; 8]>()
             + heat
     }

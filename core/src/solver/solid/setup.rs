@@ -4,6 +4,7 @@
 //! masses, the plane tools and symmetry planes, the critical step.
 
 use super::contact::ToolContact;
+use super::fill;
 use super::heat::{update_eigenvalue, HeatSurface};
 use super::{SolidDisc, SolidSimulation, SolidState, SolidWorkspace};
 use crate::cylinder_grid::{CylinderGrid, Sector};
@@ -251,6 +252,7 @@ impl SolidSimulation {
             tools.push(SolidTool::new(t, mesh, depth));
         }
         let scene_tools = tools.len();
+        fill::check_points(scene, &tools, p.h_min)?;
         tools.extend(
             p.planes
                 .iter()
@@ -270,12 +272,13 @@ impl SolidSimulation {
                 }
             }
         }
-        let heat_surface =
-            if scene.transfers_heat() || tools.iter().any(|t| t.friction.needs_flow_stress()) {
-                HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
-            } else {
-                HeatSurface::default()
-            };
+        // The surface the heat stage, the friction laws that need a contact area and the
+        // contact readings (`readings.rs`) take their areas on.
+        let heat_surface = if scene_tools > 0 || scene.transfers_heat() {
+            HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
+        } else {
+            HeatSurface::default()
+        };
         let mut disc = SolidDisc {
             inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
             mass,
@@ -335,6 +338,8 @@ impl SolidSimulation {
             stable_dt: disc.critical_dt0,
             anchor_time: 0.0,
             anchor_step: 0,
+            fill: vec![None; scene.tools.iter().map(|t| t.fill_points.len()).sum()],
+            pressed: Vec::new(),
             heat: scene.thermal.as_ref().map(|t| {
                 let particles = if scene.transfers_heat() { np } else { 0 };
                 let friction = scene.heats_by_friction();

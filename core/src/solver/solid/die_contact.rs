@@ -1,0 +1,183 @@
+//! What the dies feel in 3D: the area of the workpiece's surface in contact with each tool,
+//! its share of the surface, and the contact pressure on the tool as a field over
+//! triangles (an STL die's own, a plane's contact patch). All three are read from the state alone (the normal forces the last contact
+//! stage booked, [`SolidState::pressed`], and the displacements), so a restored state reports
+//! them as first computed.
+//!
+//! Contact area of tool `t` (m^2): `A_t = sum_J sum_q |a_q . n_J|` over the particles `J` the
+//! last contact stage pressed on `t`, `q` over the quarters of the surface's faces at `J`
+//! (`heat.rs`: the quarter's area vector `a_q` at the particles' physical positions now),
+//! `n_J` the contact normal the stage used. The projection on the tool's tangent plane,
+//! rather than the quarter's full area `|a_q|`, is what a pressure acts over: a uniform
+//! pressure `p` on a patch gives the normal force `p sum |a . n|`, and a particle on the
+//! edge of a block's face pressed on a die brings its quarters on the side faces with
+//! `a . n = 0` instead of their full area, which would count the free sides as contact. It
+//! is the area the heat stage and the friction laws that need one take
+//! ([`super::heat::HeatSurface::contact_area`]), here over the particles the stage pressed
+//! (each particle's tributary share, half a cell past the last particle in contact, where
+//! 2D's contact length stops at that particle). Its share is `A_t / A_s`, `A_s = sum |a_q|`
+//! over every quarter: the workpiece's own surface less its faces on symmetry planes.
+//!
+//! Pressure on a tool (Pa), per triangle. On an STL die, over the die's own triangles: each
+//! pressed particle's normal force `f_J = f . n` (N) goes to the triangle of the die closest
+//! to the particle's physical position now (the die where it is now; on a shared edge or
+//! vertex the lowest-numbered of the nearest triangles), and `p_k = sum_{J -> k} f_J / A_k`,
+//! `A_k` the triangle's area (m^2). The field is as fine as the die's triangles: a flat face
+//! exported as two triangles carries its mean pressure. On a plane, over the contact patch
+//! itself: each pressed particle's surface quarters projected on the plane, two triangles
+//! each, quarter `q` carrying `f_J |a_q . n| / A_J` of the particle's force (`A_J = sum_q
+//! |a_q . n|`, its share of the contact area) split over its two triangles by their areas:
+//! the particle's pressure `p_J = f_J / A_J` on a flat quarter. Either way `sum_k p_k A_k =
+//! sum_J f_J`, the tool's normal force, to round-off (on a plane less the force of a pressed
+//! particle with no area on it: one whose quarters all stand edge-on to the plane, which a
+//! flat die pressing a face does not have).
+
+use super::{SolidSimulation, SolidState};
+use crate::math::Real;
+use crate::solid_tool::Surface;
+use crate::stl::{cross, dot, sub};
+
+/// The contact pressure on a tool over triangles (an STL die's own, or a plane's contact
+/// patch), where the tool is now.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiePressure {
+    /// The triangles' vertices (m).
+    pub vertices: Vec<[Real; 3]>,
+    /// The triangles, indices into `vertices`, wound with their normal out of the tool.
+    pub triangles: Vec<[u32; 3]>,
+    /// Each triangle's area (m^2).
+    pub areas: Vec<Real>,
+    /// The normal contact force on each triangle (N).
+    pub forces: Vec<Real>,
+    /// The contact pressure on each triangle, its force over its area (Pa).
+    pub pressure: Vec<Real>,
+}
+
+impl DiePressure {
+    /// The triangles with no force on them yet.
+    fn unloaded(vertices: Vec<[Real; 3]>, triangles: Vec<[u32; 3]>) -> DiePressure {
+        let areas: Vec<Real> = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| vertices[v as usize]);
+                let n = cross(sub(b, a), sub(c, a));
+                0.5 * dot(n, n).sqrt()
+            })
+            .collect();
+        DiePressure {
+            vertices,
+            triangles,
+            forces: vec![0.0; areas.len()],
+            pressure: Vec::new(),
+            areas,
+        }
+    }
+
+    /// The pressures from the forces, 0 on a triangle of no area (a quarter edge-on to a
+    /// plane).
+    fn loaded(mut self) -> DiePressure {
+        self.pressure = self
+            .forces
+            .iter()
+            .zip(&self.areas)
+            .map(|(f, &a)| if a > 0.0 { f / a } else { 0.0 })
+            .collect();
+        self
+    }
+}
+
+impl SolidSimulation {
+    /// The area of the workpiece's surface now (m^2), `A_s = sum |a_q|` over the quarters of
+    /// its faces (the faces on symmetry planes not among them).
+    pub fn surface_area(&self) -> Real {
+        let x = self.positions();
+        self.disc.heat_surface.area(|j| x[j])
+    }
+
+    /// The area of the workpiece's surface in contact with scene tool `t` now (m^2), `A_t =
+    /// sum |a_q . n_J|` over the particles the last contact stage pressed on it (see the
+    /// module doc).
+    pub fn contact_area(&self, t: usize) -> Real {
+        let x = self.positions();
+        pressed_on(&self.st, t)
+            .filter_map(|p| {
+                self.disc
+                    .heat_surface
+                    .contact_area(p.particle as usize, &p.normal, |j| x[j])
+            })
+            .sum()
+    }
+
+    /// The contact pressure on scene tool `t` over triangles, an STL die's own or a plane's
+    /// contact patch (see the module doc).
+    pub fn die_pressure(&self, t: usize) -> DiePressure {
+        let tool = &self.tools()[t];
+        let shift: [Real; 3] = tool.axis.map(|a| a * tool.state.stroke);
+        let x = self.positions();
+        match &tool.surface {
+            Surface::Triangles(surface) => {
+                let mesh = surface.mesh();
+                let vertices = mesh
+                    .vertices
+                    .iter()
+                    .map(|v| std::array::from_fn(|k| v[k] + shift[k]))
+                    .collect();
+                let mut die = DiePressure::unloaded(vertices, mesh.triangles.clone());
+                for p in pressed_on(&self.st, t) {
+                    let k = surface.closest(x[p.particle as usize], shift).triangle as usize;
+                    die.forces[k] += p.force_n;
+                }
+                die.loaded()
+            }
+            Surface::Plane { point0, normal } => {
+                let origin: [Real; 3] = std::array::from_fn(|k| point0[k] + shift[k]);
+                let on_plane = |y: [Real; 3]| -> [Real; 3] {
+                    let off = dot(sub(y, origin), *normal);
+                    std::array::from_fn(|k| y[k] - off * normal[k])
+                };
+                let (mut vertices, mut triangles, mut shares) =
+                    (Vec::new(), Vec::new(), Vec::new());
+                let surface = &self.disc.heat_surface;
+                for p in pressed_on(&self.st, t) {
+                    let quads = surface.quarters_at(p.particle as usize, |i| x[i]);
+                    // Each quarter's projected area `|a . n|`, `a = (c - x_0) x (m_next -
+                    // m_prev) / 2`, and the particle's, their sum.
+                    let projected: Vec<Real> = quads
+                        .iter()
+                        .map(|q| 0.5 * dot(cross(sub(q[2], q[0]), sub(q[1], q[3])), *normal).abs())
+                        .collect();
+                    let area: Real = projected.iter().sum();
+                    if area <= 0.0 {
+                        continue;
+                    }
+                    for (quad, a) in quads.iter().zip(projected) {
+                        let c = quad.map(on_plane);
+                        let first = vertices.len() as u32;
+                        // Wound with the normal out of the tool.
+                        let out = dot(cross(sub(c[1], c[0]), sub(c[2], c[0])), *normal) >= 0.0;
+                        let order: [u32; 4] = if out { [0, 1, 2, 3] } else { [0, 3, 2, 1] };
+                        vertices.extend(c);
+                        triangles.push([order[0], order[1], order[2]].map(|v| first + v));
+                        triangles.push([order[0], order[2], order[3]].map(|v| first + v));
+                        shares.push(p.force_n * a / area);
+                    }
+                }
+                let mut die = DiePressure::unloaded(vertices, triangles);
+                // A quarter's force over its two triangles by their areas.
+                for (q, f) in shares.iter().enumerate() {
+                    let (a1, a2) = (die.areas[2 * q], die.areas[2 * q + 1]);
+                    if a1 + a2 > 0.0 {
+                        die.forces[2 * q] = f * a1 / (a1 + a2);
+                        die.forces[2 * q + 1] = f * a2 / (a1 + a2);
+                    }
+                }
+                die.loaded()
+            }
+        }
+    }
+}
+
+/// The normal forces of the last contact stage on scene tool `t`.
+fn pressed_on(st: &SolidState, t: usize) -> impl Iterator<Item = &super::Pressed> {
+    st.pressed.iter().filter(move |p| p.tool as usize == t)
+}
