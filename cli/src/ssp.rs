@@ -314,7 +314,9 @@ fn check_tool<S: FmuScene>(scene: &S, tool: &str) -> Result<(), String> {
 /// ([`press::model_copies`] over the workpiece's symmetry planes).
 fn solid_copies(scene: &SolidScene, tool: &str) -> Result<f64, String> {
     let Some(spec) = scene.tools.iter().find(|t| t.name == tool) else {
-        return Err(format!("--tool {tool}: the scene has no tool named `{tool}`"));
+        return Err(format!(
+            "--tool {tool}: the scene has no tool named `{tool}`"
+        ));
     };
     let planes: Vec<usize> = match scene.workpiece.shape() {
         Some(SolidShape::Cylinder { part, .. }) => match part {

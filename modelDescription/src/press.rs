@@ -310,3 +310,37 @@ pub fn header(kind: PressKind, model_identifier: &str) -> xml::Header {
         step_size: 1.0e-4,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_plane_along_the_axis_doubles_the_force_and_one_across_it_does_not() {
+        let down = [0.0, 0.0, -1.0];
+        assert_eq!(model_copies(&[], down), Ok(1.0));
+        assert_eq!(model_copies(&[0], down), Ok(2.0));
+        assert_eq!(model_copies(&[0, 1], down), Ok(4.0));
+        // A box's z_min face on a symmetry plane: its mirror image is pressed by a mirrored
+        // ram, not by this one.
+        assert_eq!(model_copies(&[0, 1, 2], down), Ok(4.0));
+        assert_eq!(model_copies(&[1], [2.0, 0.0, 0.0]), Ok(2.0));
+        let oblique = model_copies(&[0], [1.0, 0.0, -1.0]).unwrap_err();
+        assert!(oblique.contains("x = 0"), "{oblique}");
+    }
+
+    #[test]
+    fn every_press_has_model_copies_at_the_start_given() {
+        for kind in [
+            PressKind::Hydraulic,
+            PressKind::Crank,
+            PressKind::Hammer,
+            PressKind::Screw,
+        ] {
+            let table = variable_table(kind, 4.0);
+            let copies = table.iter().find(|v| v.name == "model_copies").unwrap();
+            assert_eq!(copies.causality, Causality::Parameter);
+            assert_eq!(copies.kind, Kind::Real(Some(4.0)));
+        }
+    }
+}

@@ -448,6 +448,13 @@ impl SolidScene {
             ),
         );
         self.checks.check(&mut out);
+        out.check(
+            self.checks.kinetic_to_internal_max.is_none(),
+            "checks.kinetic_to_internal_max",
+            "the quasi-static watch does not stop a 3D run yet (its history has \
+             `energy.kinetic_to_internal` to read); leave the key out"
+                .into(),
+        );
         out.0
     }
 
