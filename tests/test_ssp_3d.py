@@ -155,3 +155,29 @@ def test_the_work_booked_is_the_whole_force_over_the_stroke(runs):
     print(f"work: {work:.1f} J booked, {integral:.1f} J integrated")
     assert work == pytest.approx(integral, rel=0.01)
     assert np.array_equal(r["press.ram.tool_work_J"], r["forging.energy.tool_work_J"])
+
+
+@pytest.mark.parametrize("src, changes, copies", [
+    ("block_upsetting_3d.toml", {}, "4"),
+    ("block_upsetting_3d.toml", {'symmetry = ["x_min", "y_min"]': 'symmetry = ["x_min"]'}, "2"),
+    ("press_upsetting_3d.toml", {'part = "quarter"': 'part = "half"'}, "2"),
+    ("press_upsetting_3d.toml", {'part = "quarter"': 'part = "full"'}, "1"),
+])
+def test_model_copies_follow_the_symmetry_planes(rkforge_bin, tmp_path, src, changes, copies):
+    """Each symmetry plane along the ram's axis (z) doubles what the ram feels: the box
+    with two planes and with one, the half and the whole cylinder."""
+    ssd = read_ssd(system(rkforge_bin, tmp_path, "s", scene_variant(src, changes)), validate=True)
+    assert bound(ssd, "press", "model_copies") == copies
+
+
+def test_a_ram_oblique_to_a_symmetry_plane_is_refused(rkforge_bin, tmp_path):
+    """A ram whose axis leans against the plane x = 0 has no whole force that is a multiple
+    of the model's: `rkforge ssp` refuses it, naming the tool and the plane."""
+    scene = tmp_path / "oblique.toml"
+    scene.write_text(scene_variant("block_upsetting_3d.toml", {
+        "axis = [0.0, 0.0, -1.0]          # moves down":
+        "axis = [0.6, 0.0, -0.8]          # moves down"}))
+    p = subprocess.run([rkforge_bin, "ssp", str(scene), "--press", "hydraulic", "--out",
+                        str(tmp_path / "o.ssp")], capture_output=True, text=True)
+    assert p.returncode != 0
+    assert "--tool ram" in p.stderr and "x = 0" in p.stderr, p.stderr
