@@ -644,6 +644,15 @@ motion = { kind = "constant", velocity_m_per_s = 20.0 }
     return p
 
 
+def block_3d(tmp_path, end="0.05", name="block3d.toml"):
+    """The rectangular block of scenes/block_upsetting_3d.toml (a 3D forging: the quarter
+    7 x 5 x 9 particles between an anvil and a ram at 20 mm/s, mass-scaled), `end` s long
+    (0.05 s: 1 mm of stroke, history rows every 10 ms)."""
+    p = tmp_path / name
+    p.write_text(scene_variant("block_upsetting_3d.toml", {"end_s = 1.0 ": f"end_s = {end} "}))
+    return p
+
+
 def run_history(rkforge_bin, scene, out, *extra):
     """`rkforge run SCENE --no-frames` and its history rows."""
     subprocess.run([rkforge_bin, "run", str(scene), "--no-frames", "--quiet", "--out", str(out),

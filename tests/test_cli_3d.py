@@ -88,6 +88,17 @@ def test_bad_3d_scene_is_refused_with_key_and_line(rkforge_bin, tmp_path, old, n
     assert proc.returncode != 0 and expected in proc.stderr, proc.stderr
 
 
+def test_a_quasi_static_bound_is_refused_in_3d_rather_than_ignored(rkforge_bin, tmp_path):
+    """A 3D run does not watch the kinetic energy against the internal one yet: a bound on
+    it is refused by its key, not silently left unchecked (the mass-scaled 3D block)."""
+    proc = subprocess.run(
+        [rkforge_bin, "run", str(ROOT / "scenes" / "block_upsetting_3d.toml"), "--out",
+         str(tmp_path / "o"), "--set", "checks.kinetic_to_internal_max=0.05"],
+        capture_output=True, text=True, timeout=60)
+    assert proc.returncode != 0, proc.stderr
+    assert "checks.kinetic_to_internal_max" in proc.stderr and "3D" in proc.stderr, proc.stderr
+
+
 def test_3d_overrides_name_the_dotted_key(rkforge_bin, tmp_path):
     proc = subprocess.run(
         [rkforge_bin, "run", str(ROOT / "scenes" / "taylor_bar_3d.toml"), "--out", str(tmp_path / "o"),

@@ -166,3 +166,39 @@ normal = [0.0, 0.0, -1.0]
     proc = subprocess.run([rkforge_bin, "fmu", str(outside / "upset.toml"), "--out", str(tmp_path / "x.fmu")],
                           capture_output=True, text=True)
     assert proc.returncode != 0 and "tools[1].file" in proc.stderr and ".." in proc.stderr, proc.stderr
+
+
+@pytest.mark.parametrize("fmi", ["2", "3"])
+def test_a_3d_forging_fmu_at_press_speed_gives_the_bits_of_rkforge_run(rkforge_bin, tmp_path, fmi):
+    """The rectangular block of scenes/block_upsetting_3d.toml, mass-scaled at its press
+    speed, 50 ms (1 mm of stroke, history rows every 10 ms): the FMU validates, the ram is an
+    input and the mass scaling's target a parameter; simulated by fmpy with the target step
+    changed to 10 us (`time.mass_scaling.target_dt_s`), its outputs at the communication
+    points are the rows of `rkforge run --set time.mass_scaling.target_dt_s=1e-5`, bit for bit,
+    and the scaling changed the run (other forces than at 20 us)."""
+    scene = tmp_path / "block3d.toml"
+    scene.write_text(scene_variant("block_upsetting_3d.toml", {"end_s = 1.0 ": "end_s = 0.05 "}))
+    rows = {}
+    for target in ("2e-5", "1e-5"):
+        out = tmp_path / f"run{target}"
+        subprocess.run([rkforge_bin, "run", str(scene), "--out", str(out), "--quiet", "--no-frames",
+                        f"--set=time.mass_scaling.target_dt_s={target}"],
+                       check=True, capture_output=True, text=True, timeout=300)
+        with open(out / "history.csv") as f:
+            rows[target] = list(csv.DictReader(f))
+    path = pack(rkforge_bin, scene, tmp_path / f"block{fmi}.fmu", fmi)
+    assert validate_fmu(path) == []
+    by = {v.name: v for v in read_model_description(path).modelVariables}
+    assert by["ram.velocity_m_per_s"].causality == "input"
+    assert by["time.mass_scaling.target_dt_s"].causality == "parameter"
+    names = ["ram.force_N", "anvil.force_N", "ram.stroke_m", "workpiece.height_m",
+             "workpiece.x_max_m", "energy.kinetic_J"]
+    res = simulate_fmu(path, stop_time=0.05, output_interval=0.01, output=names,
+                       start_values={"time.mass_scaling.target_dt_s": 1e-5})
+    assert len(res) == len(rows["1e-5"]) == 6
+    for r, row in zip(res, rows["1e-5"]):
+        for n in names:
+            assert r[n] == float(row[n]), (n, row["time_s"])
+    assert res["ram.stroke_m"][-1] == pytest.approx(1e-3, rel=1e-9)
+    assert res["ram.force_N"][-1] < -5e4
+    assert float(rows["2e-5"][-1]["ram.force_N"]) != res["ram.force_N"][-1]

@@ -20,8 +20,8 @@ from mcap_ros2.decoder import DecoderFactory
 from rosbags.highlevel import AnyReader
 
 from conftest import scene_variant
-from ros_peer import (ROOT, history, run_history, small_bar_3d, small_block, start_node,
-                      upset_bar_3d)
+from ros_peer import (ROOT, block_3d, history, run_history, small_bar_3d, small_block,
+                      start_node, upset_bar_3d)
 
 TOPICS = {
     "/rkforge/top/wrench": "geometry_msgs/msg/WrenchStamped",
@@ -660,3 +660,66 @@ def test_sigint_finishes_the_file_of_a_3d_run(rkforge_bin, tmp_path):
     s = json.loads(meta["rkforge_summary"]["summary_json"])
     assert s["status"] == "stopped" and "interrupted by a signal" in s["error"]
     assert s == json.loads((tmp_path / "out" / "summary.json").read_text())
+
+
+def test_a_3d_forging_run_records_its_forces_and_the_node_records_the_same(
+        rkforge_bin, rkforge_ros_bin, tmp_path):
+    """The rectangular block forged in 3D at press speed (mass-scaled, 1 mm of stroke):
+    `rkforge run --mcap` records the anvil's and the ram's wrenches, the joint states and the
+    register's outputs with the bits of history.csv, the ram's patch where its stroke puts
+    it, every particle within the history's bounds; `rkforge.read_mcap` gives the history's
+    tool columns back; and the node's own recording holds the same messages."""
+    import rkforge
+
+    scene = block_3d(tmp_path)
+    path = tmp_path / "block3d.mcap"
+    rows = run_history(rkforge_bin, scene, tmp_path / "out", "--mcap", str(path))
+    assert len(rows) == 6
+    particles = json.loads((tmp_path / "out" / "summary.json").read_text())["particles"]
+    assert particles == 7 * 5 * 9
+    by_topic = {}
+    for topic, log_time, m in decoded(path):
+        by_topic.setdefault(topic, []).append((log_time, m))
+    tools = ["anvil", "ram"]
+    assert set(by_topic) == {t.replace("wall", "anvil") for t in TOPICS_3D}
+    for tool in tools:
+        seq = by_topic[f"/rkforge/{tool}/wrench"]
+        assert [t for t, _ in seq] == [ns(r["time_s"]) for r in rows]
+        for (_, w), row in zip(seq, rows):
+            f = w.wrench.force
+            assert (f.x, f.y, f.z) == (row[f"{tool}.force_x_N"], row[f"{tool}.force_y_N"],
+                                       row[f"{tool}.force_z_N"])
+    for (_, js), row in zip(by_topic["/rkforge/tools"], rows):
+        assert list(js.name) == tools
+        assert list(js.position) == [row[f"{t}.stroke_m"] for t in tools]
+        assert list(js.effort) == [row[f"{t}.force_N"] for t in tools]
+    for (_, o), row in zip(by_topic["/rkforge/outputs"], rows):
+        got = dict(zip(o.names, o.values))
+        assert {c: got[c] for c in row} == row
+    for (_, m), row in zip(by_topic["/rkforge/tool_markers"], rows):
+        anvil, ram = m.markers
+        assert {p.z for p in anvil.points} == {0.0}
+        for p in ram.points:
+            assert p.z == pytest.approx(0.040 - row["ram.stroke_m"], abs=1e-15)
+    for (_, c), row in zip(by_topic["/rkforge/workpiece"], rows):
+        assert c.width == particles
+        pts = cloud_points(c)
+        for k, axis in enumerate("xyz"):
+            assert min(p[k] for p in pts) == pytest.approx(row[f"workpiece.{axis}_min_m"], abs=1e-7)
+            assert max(p[k] for p in pts) == pytest.approx(row[f"workpiece.{axis}_max_m"], abs=1e-7)
+    last = rows[-1]
+    assert last["ram.stroke_m"] == pytest.approx(1e-3, rel=1e-9) and last["ram.force_z_N"] > 5e4
+    rec = rkforge.read_mcap(path)
+    columns = [f"{t}.{c}" for t in tools for c in ("stroke_m", "force_N", "force_z_N")]
+    for c in columns:
+        assert list(rec.history[c]) == [r[c] for r in rows], c
+    node_path = tmp_path / "node.mcap"
+    p = start_node(rkforge_ros_bin, scene, 154, "--record", str(node_path))
+    _, err = p.communicate(timeout=300)
+    assert p.returncode == 0, err
+
+    def raw(f):
+        with open(f, "rb") as fh:
+            return [(c.topic, m.log_time, m.data) for _, c, m in make_reader(fh).iter_messages()]
+
+    assert raw(node_path) == raw(path)

@@ -28,6 +28,9 @@ SCENES = {
     # 3D: the quarter OFHC bar with Johnson-Cook and adiabatic heating, the 3D register.
     "ofhc3d": ("taylor_ofhc_3d.toml", {"cells = [8, 4, 48]": "cells = [4, 2, 16]",
                                        "end_s = 100.0e-6": "end_s = 20.0e-6"}),
+    # 3D forging: the rectangular block upset between flat dies with friction, mass-scaled
+    # at press speed, 1 mm of its stroke.
+    "block3d": ("block_upsetting_3d.toml", {"end_s = 1.0 ": "end_s = 0.05 "}),
 }
 
 

@@ -22,7 +22,8 @@ from ros_peer import (Clock, DescribeParametersReply, DescribeParametersRequest,
                       PointCloud2,
                       ServiceClient, SetParametersReply, SetParametersRequest, SimulateSteps,
                       Simulator, WrenchStamped,
-                      parameter_value, qos, quit_node, run_history, running_node, small_block,
+                      block_3d, parameter_value, qos, quit_node, run_history, running_node,
+                      small_block,
                       stamp_ns, start_node, take, upset_bar_3d, wait_matched,
                       wait_readers_matched, wait_until)
 
@@ -635,24 +636,29 @@ def test_bad_arguments_are_named(rkforge_ros_bin, tmp_path, args, message):
     assert message in p.stderr
 
 
-def test_a_3d_scene_over_dds_gives_its_history(rkforge_bin, rkforge_ros_bin, tmp_path):
-    """A 3D scene (the coarse quarter bar upset between its wall and a ram) over DDS: in
-    lockstep, commanding the ram's own 20 m/s reproduces `rkforge run` bit for bit: the joint
+@pytest.mark.parametrize("make, tools, speed, domain", [
+    (upset_bar_3d, ("wall", "ram"), 20.0, 176),
+    (block_3d, ("anvil", "ram"), 0.020, 178),
+], ids=["upset_bar", "forging_block"])
+def test_a_3d_scene_over_dds_gives_its_history(rkforge_bin, rkforge_ros_bin, tmp_path, make, tools,
+                                               speed, domain):
+    """A 3D scene over DDS, the coarse quarter bar upset between its wall and a ram, and the
+    3D forging of the rectangular block at press speed (mass-scaled, 1 mm of stroke): in
+    lockstep, commanding the ram's own speed reproduces `rkforge run` bit for bit: the joint
     states, the wrenches with their z parts, the energy account and the register's outputs
     at history.csv's times; the point cloud has every particle with three coordinates."""
-    scene = upset_bar_3d(tmp_path)
+    scene = make(tmp_path)
     rows = run_history(rkforge_bin, scene, tmp_path / "out")
     particles = json.loads((tmp_path / "out" / "summary.json").read_text())["particles"]
-    ctl = LockstepController(176, lambda k, js: (20.0,), tools=("wall", "ram"),
-                             commanded=("ram",))
-    node = start_node(rkforge_ros_bin, scene, 176, "--lockstep")
+    ctl = LockstepController(domain, lambda k, js: (speed,), tools=tools, commanded=("ram",))
+    node = start_node(rkforge_ros_bin, scene, domain, "--lockstep")
     _, err = ctl.serve(node)
     assert node.returncode == 0, err
     stamps = sorted(ctl.states)
     assert stamps == [round(r["time_s"] * 1e9) for r in rows]
     for s, row in zip(stamps, rows):
         js = ctl.states[s]
-        assert list(js.name) == ["wall", "ram"]
+        assert list(js.name) == list(tools)
         for k, tool in enumerate(js.name):
             assert js.position[k] == row[f"{tool}.stroke_m"]
             assert js.velocity[k] == row[f"{tool}.velocity_m_per_s"]
@@ -663,7 +669,8 @@ def test_a_3d_scene_over_dds_gives_its_history(rkforge_bin, rkforge_ros_bin, tmp
             f = got[s].wrench.force
             assert (f.x, f.y, f.z) == (row[f"{tool}.force_x_N"], row[f"{tool}.force_y_N"],
                                        row[f"{tool}.force_z_N"])
-    assert rows[-1]["ram.stroke_m"] > 1e-4 and abs(rows[-1]["ram.force_z_N"]) > 1e3
+    assert rows[-1]["ram.stroke_m"] == pytest.approx(speed * rows[-1]["time_s"], rel=1e-9)
+    assert abs(rows[-1]["ram.force_z_N"]) > 1e3
     assert set(ctl.energies) == set(stamps)
     for s, row in zip(stamps, rows):
         e = ctl.energies[s]

@@ -1,6 +1,7 @@
 """`rkforge.study`: parameter studies run locally and on a Dask cluster whose scheduler and
 two workers are separate processes started with the `dask` command-line tools on the
 loopback interface; the same rows bit for bit, and a worker killed mid-study loses nothing."""
+import csv
 import json
 import os
 import pathlib
@@ -169,3 +170,62 @@ def test_a_worker_killed_mid_study_loses_no_case(cluster, local):
     assert len(cluster.client.scheduler_info()["workers"]) == 1
     pd.testing.assert_frame_equal(results(remote), results(local), check_exact=True)
     assert_same_histories(remote, local)
+
+
+#: The 3D block of scenes/block_upsetting_3d.toml (the quarter model, 7 x 5 x 9 particles,
+#: mass-scaled), 50 ms of its press stroke: 1 mm.
+BLOCK_3D = {"end_s = 1.0 ": "end_s = 0.05 "}
+
+#: Friction of both dies and a coarser grid, and two cases that cannot run.
+CASES_3D = [
+    {"tools.anvil.friction": 0.1, "tools.ram.friction": 0.1},
+    {"tools.anvil.friction": 0.5, "tools.ram.friction": 0.5},
+    {"workpiece.particles": [5, 3, 7]},
+    {"tools.ram.friction": -0.1},
+    {"workpiece.particles": [7, 5]},
+]
+
+
+def cli_case(rkforge_bin, scene, case, out):
+    """`rkforge run` of the scene file with the case's keys as `--set` overrides: its
+    summary and history."""
+    sets = [f"--set={k}={json.dumps(v)}" for k, v in case.items()]
+    subprocess.run([rkforge_bin, "run", str(scene), "--out", str(out), "--quiet", "--no-frames",
+                    *sets], check=True, capture_output=True, text=True, timeout=TIMEOUT)
+    summary = json.loads((out / "summary.json").read_text())
+    with open(out / "history.csv") as f:
+        rows = list(csv.reader(f))
+    return summary, pd.DataFrame([[float(x) for x in r] for r in rows[1:]], columns=rows[0])
+
+
+def test_a_3d_forging_study_on_the_cluster_gives_rkforge_runs_figures(cluster, rkforge_bin,
+                                                                      tmp_path):
+    """A study of the rectangular block in 3D on the cluster of separate processes: each
+    case's row has the figures of `rkforge run` with the same overrides, bit for bit, and its
+    history; the cases that cannot run are rows with their errors; more friction on the dies
+    takes more force at the same stroke."""
+    from rkforge.study import figures
+
+    text = scene_variant("block_upsetting_3d.toml", BLOCK_3D)
+    path = tmp_path / "block3d.toml"
+    path.write_text(text)
+    table = rkforge.study(rkforge.Scene.from_toml(text, str(path)), CASES_3D,
+                          client=cluster.client, progress=False, timeout=TIMEOUT)
+    assert list(table["status"]) == ["ok", "ok", "ok", "error", "error"]
+    assert "must be zero or positive" in table["error"][3]
+    assert "workpiece.particles" in table["error"][4]
+    assert table["history"][3] is None and table["history"][4] is None
+    for i, case in enumerate(CASES_3D[:3]):
+        summary, history = cli_case(rkforge_bin, path, case, tmp_path / f"cli{i}")
+        expected = {k: v for k, v in figures(summary).items()
+                    if not k.startswith(("stage_seconds", "wall_s", "threads",
+                                         "us_per_particle_step"))}
+        row = table.iloc[i]
+        got = {k: row[k] for k in expected}
+        assert got == expected, i
+        pd.testing.assert_frame_equal(table["history"][i], history, check_exact=True)
+    # 1 mm of stroke at 20 mm/s, and the whole history to the end.
+    assert table["tools.ram.stroke_m"][0] == pytest.approx(1e-3, rel=1e-9)
+    force = table["history"][0]["ram.force_N"].iloc[-1], table["history"][1]["ram.force_N"].iloc[-1]
+    print(f"3D block at 1 mm: ram force {force[0]:.4g} N (mu 0.1), {force[1]:.4g} N (mu 0.5)")
+    assert force[1] < force[0] < 0.0, "pressing: more friction, more force"

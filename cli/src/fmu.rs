@@ -262,12 +262,13 @@ fn write_archive(
 }
 
 /// Write the FMI 2.0 FMU of the press plant `name` (hydraulic, crank, hammer, screw) to
-/// `out`; returns the model identifier (`<name>_press`).
-pub fn pack_press(name: &str, out: &Path) -> Result<String, String> {
+/// `out`, its `model_copies` starting at `copies` (1: the forging FMU models the whole
+/// workpiece); returns the model identifier (`<name>_press`).
+pub fn pack_press(name: &str, copies: f64, out: &Path) -> Result<String, String> {
     let kind = press::parse(name).ok_or_else(|| format!("--press {name}: no such press"))?;
     let id = format!("{name}_press");
     let header = press::header(kind, &id);
-    let vars = press::variable_table(kind);
+    let vars = press::variable_table(kind, copies);
     let md = xml::write(&header, &vars)?;
     let doc = documentation(
         &header.model_name,
@@ -275,7 +276,7 @@ pub fn pack_press(name: &str, out: &Path) -> Result<String, String> {
         &vars,
         Version::Fmi2,
     );
-    let resource = format!("press = \"{name}\"\n");
+    let resource = format!("press = \"{name}\"\nmodel_copies = {copies}\n");
     write_archive(
         out,
         &md,

@@ -193,7 +193,7 @@ fn main() -> ExitCode {
         Some(Command::RingChart(a)) => ring_chart_command(a),
         Some(Command::Fmu(a)) => match (&a.scene, &a.press) {
             (Some(scene), _) => fmu::pack(scene, &a.out, fmu::Version::from_arg(&a.fmi)),
-            (None, Some(press)) if a.fmi == "2" => fmu::pack_press(press, &a.out),
+            (None, Some(press)) if a.fmi == "2" => fmu::pack_press(press, 1.0, &a.out),
             (None, Some(_)) => Err("--press packs an FMI 2.0 FMU (leave out --fmi 3)".into()),
             (None, None) => Err("give a scene file or --press".into()),
         }

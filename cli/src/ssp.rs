@@ -6,12 +6,19 @@
 //! `workpiece.height_m` to the press's `ram.force_N`, `ram.stroke_m`, `ram.tool_work_J` and
 //! `workpiece.height_m`. Each component's parameters are bound inline at their start values
 //! (the press's defaults, the scene's own keys with the scene's values).
+//!
+//! The scene may be 2D or 3D (the same forging FMU interface). A 3D scene with symmetry
+//! planes models part of the workpiece: the press's `model_copies` is bound to the number of
+//! copies of the model the driven tool feels (4 for the quarter models, planes x = 0 and
+//! y = 0 with a ram along z), so the press works against the whole billet's force.
 
 use crate::fmu;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
+use rkforge_core::scene::solid::{is_solid, CylinderPart, SolidShape};
+use rkforge_core::scene::SolidScene;
 use rkforge_core::Scene;
-use rkforge_model_description::{press, variable_table, Causality, Kind, Variable};
+use rkforge_model_description::{press, variable_table, Causality, FmuScene, Kind, Variable};
 use std::io::Write;
 use std::path::Path;
 
@@ -147,8 +154,22 @@ fn bindings(w: &mut Writer<Vec<u8>>, name: &str, vars: &[Variable]) -> Result<()
     Ok(())
 }
 
+/// What the system takes from the scene besides its forging FMU's table: its name, its end
+/// time (s) and how many copies of its model make the whole workpiece for the press.
+struct About<'a> {
+    name: &'a str,
+    end_s: f64,
+    copies: f64,
+}
+
 /// The system description.
-fn ssd(scene: &Scene, kind: press::PressKind, name: &str, tool: &str) -> Result<String, String> {
+fn ssd<S: FmuScene>(
+    scene: &S,
+    about: &About<'_>,
+    kind: press::PressKind,
+    name: &str,
+    tool: &str,
+) -> Result<String, String> {
     let mut w = Writer::new_with_indent(Vec::new(), b' ', 2);
     w.write_event(Event::Decl(BytesDecl::new("1.0", Some("UTF-8"), None)))
         .map_err(err)?;
@@ -166,7 +187,7 @@ fn ssd(scene: &Scene, kind: press::PressKind, name: &str, tool: &str) -> Result<
         "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
     ));
     root.push_attribute(("version", "1.0"));
-    let system_name = format!("{name}_press_{}", scene.name);
+    let system_name = format!("{name}_press_{}", about.name);
     root.push_attribute(("name", system_name.as_str()));
     root.push_attribute((
         "generationTool",
@@ -182,7 +203,7 @@ fn ssd(scene: &Scene, kind: press::PressKind, name: &str, tool: &str) -> Result<
         &mut w,
         "press",
         &format!("resources/{name}.fmu"),
-        &press::variable_table(kind),
+        &press::variable_table(kind, about.copies),
     )?;
     component(
         &mut w,
@@ -208,43 +229,44 @@ fn ssd(scene: &Scene, kind: press::PressKind, name: &str, tool: &str) -> Result<
         .map_err(err)?;
     let mut de = BytesStart::new("ssd:DefaultExperiment");
     de.push_attribute(("startTime", "0"));
-    de.push_attribute(("stopTime", scene.time.end_s.to_string().as_str()));
+    de.push_attribute(("stopTime", about.end_s.to_string().as_str()));
     w.write_event(Event::Empty(de)).map_err(err)?;
     w.write_event(Event::End(BytesEnd::new("ssd:SystemStructureDescription")))
         .map_err(err)?;
     String::from_utf8(w.into_inner()).map_err(|e| e.to_string())
 }
 
-/// Write the SSP of the press `name` driving the tool `tool` of the scene file `scene_path`.
+/// Write the SSP of the press `name` driving the tool `tool` of the scene file `scene_path`
+/// (2D or 3D).
 pub fn pack(scene_path: &Path, name: &str, tool: &str, out: &Path) -> Result<(), String> {
     let kind = press::parse(name).ok_or_else(|| format!("--press {name}: no such press"))?;
     let text = std::fs::read_to_string(scene_path)
         .map_err(|e| format!("{}: cannot read: {e}", scene_path.display()))?;
-    let scene = Scene::from_str_named(&text, &scene_path.display().to_string())
-        .map_err(|e| e.to_string())?;
-    let table = variable_table(&scene);
-    // The velocity an input (a moving tool), the force and stroke outputs.
-    let needed = [
-        ("velocity_m_per_s", Causality::Input),
-        ("force_N", Causality::Output),
-        ("stroke_m", Causality::Output),
-    ];
-    for (needed, causality) in needed.map(|(v, c)| (format!("{tool}.{v}"), c)) {
-        if !table
-            .iter()
-            .any(|v| v.name == needed && v.causality == causality)
-        {
-            return Err(format!(
-                "--tool {tool}: the scene's FMU has no variable `{needed}` (the press drives a tool of the scene that is not fixed)"
-            ));
-        }
-    }
+    let file = scene_path.display().to_string();
+    let (ssd, copies) = if is_solid(&text) {
+        let scene = SolidScene::from_str_named(&text, &file).map_err(|e| e.to_string())?;
+        check_tool(&scene, tool)?;
+        let about = About {
+            name: &scene.name,
+            end_s: scene.time.end_s,
+            copies: solid_copies(&scene, tool)?,
+        };
+        (ssd(&scene, &about, kind, name, tool)?, about.copies)
+    } else {
+        let scene = Scene::from_str_named(&text, &file).map_err(|e| e.to_string())?;
+        check_tool(&scene, tool)?;
+        let about = About {
+            name: &scene.name,
+            end_s: scene.time.end_s,
+            copies: 1.0,
+        };
+        (ssd(&scene, &about, kind, name, tool)?, about.copies)
+    };
     let dir = tempfile_dir(out)?;
     let press_fmu = dir.join(format!("{name}.fmu"));
     let forging_fmu = dir.join("forging.fmu");
-    fmu::pack_press(name, &press_fmu)?;
+    fmu::pack_press(name, copies, &press_fmu)?;
     fmu::pack(scene_path, &forging_fmu, fmu::Version::Fmi2)?;
-    let ssd = ssd(&scene, kind, name, tool)?;
     let file =
         std::fs::File::create(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let mut zip = zip::ZipWriter::new(file);
@@ -264,6 +286,48 @@ pub fn pack(scene_path: &Path, name: &str, tool: &str, out: &Path) -> Result<(),
     zip.finish().map_err(|e| format!("zip: {e}"))?;
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())
+}
+
+/// The tool's velocity an input of the scene's FMU (a moving tool), its force and stroke
+/// outputs.
+fn check_tool<S: FmuScene>(scene: &S, tool: &str) -> Result<(), String> {
+    let table = variable_table(scene);
+    let needed = [
+        ("velocity_m_per_s", Causality::Input),
+        ("force_N", Causality::Output),
+        ("stroke_m", Causality::Output),
+    ];
+    for (needed, causality) in needed.map(|(v, c)| (format!("{tool}.{v}"), c)) {
+        if !table
+            .iter()
+            .any(|v| v.name == needed && v.causality == causality)
+        {
+            return Err(format!(
+                "--tool {tool}: the scene's FMU has no variable `{needed}` (the press drives a tool of the scene that is not fixed)"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// How many copies of a 3D scene's model the press's ram feels through the tool `tool`
+/// ([`press::model_copies`] over the workpiece's symmetry planes).
+fn solid_copies(scene: &SolidScene, tool: &str) -> Result<f64, String> {
+    let Some(spec) = scene.tools.iter().find(|t| t.name == tool) else {
+        return Err(format!(
+            "--tool {tool}: the scene has no tool named `{tool}`"
+        ));
+    };
+    let planes: Vec<usize> = match scene.workpiece.shape() {
+        Some(SolidShape::Cylinder { part, .. }) => match part {
+            CylinderPart::Full => vec![],
+            CylinderPart::Half => vec![0],
+            CylinderPart::Quarter => vec![0, 1],
+        },
+        Some(SolidShape::Box { symmetry, .. }) => symmetry.iter().map(|f| f.axis()).collect(),
+        None => Vec::new(),
+    };
+    press::model_copies(&planes, spec.axis).map_err(|e| format!("--tool {tool}: {e}"))
 }
 
 fn read(p: &Path) -> Result<Vec<u8>, String> {

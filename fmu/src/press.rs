@@ -7,7 +7,9 @@
 //! ram's axis, the forging FMU's `<tool>.force`, negative while pressing), `ram.stroke_m` (m),
 //! `ram.tool_work_J` (J) and `workpiece.height_m` (m), and the output `ram.velocity_m_per_s` (m/s along the
 //! axis, the forging FMU's `<tool>.velocity` input), so the two connect name to name in an
-//! SSP. Stepped as the Python examples' `co_simulate` steps its plant (the forging FMU
+//! SSP. The parameter `model_copies` (default 1) is how many copies of the forging FMU's
+//! model make the whole workpiece (4 for a 3D quarter model): the press feels that many times
+//! `ram.force_N`. Stepped as the Python examples' `co_simulate` steps its plant (the forging FMU
 //! first, then the press with the forging outputs at the end of the step), a press FMU gives
 //! the examples' histories: the same bits for the hydraulic press, the hammer and the screw
 //! press. The crank press gives, after each step, the velocity that moves the ram along the
@@ -19,7 +21,9 @@ use crate::instance::Phase;
 use crate::slave::Saved;
 use rkforge_core::Error;
 use rkforge_core::Result;
-pub use rkforge_model_description::press::{header, parse, variable_table, PressKind};
+pub use rkforge_model_description::press::{
+    header, parse, variable_table, PressKind, MODEL_COPIES,
+};
 use rkforge_model_description::{Causality, Kind, Variable};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -68,9 +72,9 @@ fn request(msg: String) -> Error {
 }
 
 impl Press {
-    /// A press of `kind` with the defaults.
-    pub fn new(kind: PressKind) -> Press {
-        let table = variable_table(kind);
+    /// A press of `kind` with the defaults, `model_copies` at `copies`.
+    pub fn new(kind: PressKind, copies: f64) -> Press {
+        let table = variable_table(kind, copies);
         let values = table
             .iter()
             .map(|v| match v.kind {
@@ -224,7 +228,7 @@ impl Press {
             self.state.v = 0.0;
             return;
         }
-        let force = -self.value("ram.force_N");
+        let force = -self.value("ram.force_N") * self.value("model_copies");
         match self.kind {
             PressKind::Hydraulic => {
                 // Semi-implicit Euler in `substeps` steps, the pressure capped by the valve.
@@ -370,7 +374,14 @@ impl crate::slave::Slave for Press {
         Ok(())
     }
     fn reset(&mut self) {
-        *self = Press::new(self.kind);
+        let copies = match self.table.iter().find(|v| v.name == MODEL_COPIES.0) {
+            Some(Variable {
+                kind: Kind::Real(Some(x)),
+                ..
+            }) => *x,
+            _ => 1.0,
+        };
+        *self = Press::new(self.kind, copies);
     }
     fn get_real(&mut self, vr: u32) -> Result<f64> {
         let (k, v) = self.variable(vr)?;

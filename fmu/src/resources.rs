@@ -15,8 +15,9 @@ pub fn scene_instance(folder: &Path) -> Result<Instance, String> {
     Instance::new(&scene, &path.display().to_string()).map_err(|e| e.to_string())
 }
 
-/// The slave `folder` describes: a press plant (`press.toml`: `press = "crank"`) or a
-/// forging scene (`scene.toml`).
+/// The slave `folder` describes: a press plant (`press.toml`: `press = "crank"`, and
+/// `model_copies = 4` when its forging FMU models a quarter of the workpiece) or a forging
+/// scene (`scene.toml`).
 pub fn slave(folder: &Path) -> Result<Box<dyn Slave>, String> {
     let press = folder.join("press.toml");
     if press.is_file() {
@@ -33,7 +34,24 @@ pub fn slave(folder: &Path) -> Result<Box<dyn Slave>, String> {
                 press.display()
             )
         })?;
-        return Ok(Box::new(press::Press::new(kind)));
+        let copies = match text
+            .lines()
+            .find_map(|l| l.trim().strip_prefix("model_copies = "))
+        {
+            None => 1.0,
+            Some(v) => v
+                .trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|x| *x >= 1.0 && x.is_finite())
+                .ok_or_else(|| {
+                    format!(
+                        "{}: `model_copies = {v}` is not a number of at least 1",
+                        press.display()
+                    )
+                })?,
+        };
+        return Ok(Box::new(press::Press::new(kind, copies)));
     }
     Ok(Box::new(scene_instance(folder)?))
 }

@@ -145,6 +145,44 @@ pub fn parameters(kind: PressKind) -> &'static [Param] {
     }
 }
 
+/// The parameter every press has: how many copies of the forging FMU's model make the whole
+/// workpiece. A 3D quarter model (symmetry planes x = 0 and y = 0, the ram along z) gives the
+/// force and work of a quarter of the billet; the ram feels four times that. `rkforge ssp`
+/// binds it from the scene's symmetry planes ([`model_copies`]).
+pub const MODEL_COPIES: Param = (
+    "model_copies",
+    1.0,
+    None,
+    "copies of the forging FMU's model in the whole workpiece (4 for a quarter model, 2 for a half): the ram feels this times the forging FMU's ram.force_N (-)",
+);
+
+/// How many copies of a model with symmetry planes normal to the coordinate axes
+/// `plane_axes` (0 = x, 1 = y, 2 = z) make the whole workpiece as the tool moving along
+/// `axis` feels it: a plane parallel to the axis doubles the tool's force (its mirror image
+/// presses the same tool), a plane across it does not (its mirror image presses a mirrored
+/// tool). A plane neither along nor across the axis has no such factor.
+///
+/// # Errors
+///
+/// The plane named by its axis when the tool's axis is oblique to it.
+pub fn model_copies(plane_axes: &[usize], axis: [f64; 3]) -> Result<f64, String> {
+    let length = axis.iter().map(|a| a * a).sum::<f64>().sqrt();
+    let mut copies = 1.0;
+    for &k in plane_axes {
+        let across = axis[k].abs() / length;
+        if across <= 1e-12 {
+            copies *= 2.0;
+        } else if across < 1.0 - 1e-12 {
+            return Err(format!(
+                "the symmetry plane {} = 0 is neither along nor across the tool's axis {axis:?}: \
+                 the whole workpiece's force on the tool is not a multiple of the model's",
+                ["x", "y", "z"][k]
+            ));
+        }
+    }
+    Ok(copies)
+}
+
 /// The outputs of each press besides `ram.velocity_m_per_s`: name, unit, description.
 pub fn outputs(kind: PressKind) -> &'static [(&'static str, Option<&'static str>, &'static str)] {
     match kind {
@@ -192,8 +230,9 @@ const INPUTS: [(&str, &str, &str); 4] = [
     ("workpiece.height_m", "m", "workpiece height (the forging FMU's workpiece.height_m)"),
 ];
 
-/// The variable table of a press: inputs, `ram.velocity_m_per_s`, its outputs, its parameters.
-pub fn variable_table(kind: PressKind) -> Vec<Variable> {
+/// The variable table of a press: inputs, `ram.velocity_m_per_s`, its outputs, its parameters,
+/// `model_copies` starting at `copies` (1 for a forging FMU of the whole workpiece).
+pub fn variable_table(kind: PressKind, copies: f64) -> Vec<Variable> {
     let mut t = Vec::new();
     let mut push = |name: String, causality, variability, kind, unit, description: String| {
         let value_reference = t.len() as u32;
@@ -244,7 +283,9 @@ pub fn variable_table(kind: PressKind) -> Vec<Variable> {
             (*d).into(),
         );
     }
-    for (name, default, unit, d) in parameters(kind) {
+    let (copies_name, _, copies_unit, copies_description) = MODEL_COPIES;
+    let copies = [(copies_name, copies, copies_unit, copies_description)];
+    for (name, default, unit, d) in parameters(kind).iter().chain(&copies) {
         push(
             (*name).into(),
             Causality::Parameter,
@@ -267,5 +308,39 @@ pub fn header(kind: PressKind, model_identifier: &str) -> xml::Header {
         description: format!("rkforge {name} press plant (examples/presses/{name}.py)"),
         stop_time: 1.0,
         step_size: 1.0e-4,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_plane_along_the_axis_doubles_the_force_and_one_across_it_does_not() {
+        let down = [0.0, 0.0, -1.0];
+        assert_eq!(model_copies(&[], down), Ok(1.0));
+        assert_eq!(model_copies(&[0], down), Ok(2.0));
+        assert_eq!(model_copies(&[0, 1], down), Ok(4.0));
+        // A box's z_min face on a symmetry plane: its mirror image is pressed by a mirrored
+        // ram, not by this one.
+        assert_eq!(model_copies(&[0, 1, 2], down), Ok(4.0));
+        assert_eq!(model_copies(&[1], [2.0, 0.0, 0.0]), Ok(2.0));
+        let oblique = model_copies(&[0], [1.0, 0.0, -1.0]).unwrap_err();
+        assert!(oblique.contains("x = 0"), "{oblique}");
+    }
+
+    #[test]
+    fn every_press_has_model_copies_at_the_start_given() {
+        for kind in [
+            PressKind::Hydraulic,
+            PressKind::Crank,
+            PressKind::Hammer,
+            PressKind::Screw,
+        ] {
+            let table = variable_table(kind, 4.0);
+            let copies = table.iter().find(|v| v.name == "model_copies").unwrap();
+            assert_eq!(copies.causality, Causality::Parameter);
+            assert_eq!(copies.kind, Kind::Real(Some(4.0)));
+        }
     }
 }
