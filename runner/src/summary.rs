@@ -154,6 +154,7 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
         "smallest_spacing_m": sim.h_min(),
         "critical_dt_s": sim.critical_dt0(),
         "mass_scaling": sim.mass_scaling(),
+        "warnings": sim.quasi_static_warning().into_iter().collect::<Vec<_>>(),
         "workpiece": {
             "x_range_m": b.extents[0],
             "y_range_m": b.extents[1],

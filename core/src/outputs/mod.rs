@@ -63,6 +63,8 @@ pub trait Body: Sized + 'static {
     fn last_step(&self) -> Real;
     /// Energy account (J).
     fn energy_now(&self) -> Energy;
+    /// Largest ratio of kinetic to internal energy since the quasi-static watch began (-).
+    fn kinetic_to_internal_max(&self) -> Real;
     /// The thermal measures in the order of [`THERMAL_MEASURES`], `None` for an isothermal
     /// scene.
     fn thermal_now(&self) -> Option<[Real; 9]>;
@@ -80,6 +82,9 @@ impl Body for Simulation {
     }
     fn energy_now(&self) -> Energy {
         self.energy()
+    }
+    fn kinetic_to_internal_max(&self) -> Real {
+        self.kinetic_to_internal_max()
     }
     fn thermal_now(&self) -> Option<[Real; 9]> {
         self.thermal_values()
@@ -99,6 +104,9 @@ impl Body for SolidSimulation {
     }
     fn energy_now(&self) -> Energy {
         self.energy()
+    }
+    fn kinetic_to_internal_max(&self) -> Real {
+        self.kinetic_to_internal_max()
     }
     fn thermal_now(&self) -> Option<[Real; 9]> {
         self.thermal_values()

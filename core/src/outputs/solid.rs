@@ -9,7 +9,8 @@
 //! values onto the particles), followed faces and laps.
 
 use super::register::{
-    energy, filled, particles, points, scalar, thermal_measures, thermoelastic, time, tool,
+    energy, filled, kinetic_to_internal_max, particles, points, scalar, thermal_measures,
+    thermoelastic, time, tool,
 };
 use super::{expand, fields_of, fill_instances, At, Column, Kind, Output, Sample, Shown, When};
 use crate::math::Real;
@@ -18,12 +19,13 @@ use crate::solver::{BodyReadings, SolidSimulation};
 use std::cell::OnceCell;
 
 /// The register of a 3D run: its sections in order, each of outputs of one kind.
-pub static SOLID_REGISTER: [&[Output<SolidSimulation>]; 9] = [
+pub static SOLID_REGISTER: [&[Output<SolidSimulation>]; 10] = [
     &TIME,
     &TOOLS,
     &FILL,
     &WORKPIECE,
     &ENERGY,
+    &ENERGY_RUN,
     &ENERGY_THERMOELASTIC,
     &THERMAL,
     &PARTICLE_FIELDS,
@@ -33,6 +35,7 @@ pub static SOLID_REGISTER: [&[Output<SolidSimulation>]; 9] = [
 const TIME: [Output<SolidSimulation>; 2] = time();
 const ENERGY: [Output<SolidSimulation>; 10] = energy();
 const ENERGY_THERMOELASTIC: [Output<SolidSimulation>; 1] = [thermoelastic()];
+const ENERGY_RUN: [Output<SolidSimulation>; 1] = [kinetic_to_internal_max()];
 const THERMAL: [Output<SolidSimulation>; 9] = thermal_measures();
 const FILL: [Output<SolidSimulation>; 1] = [filled()];
 

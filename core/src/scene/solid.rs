@@ -477,13 +477,6 @@ impl SolidScene {
             format!("must be positive, got {}", self.output.fill_distance_rel),
         );
         self.checks.check(&mut out);
-        out.check(
-            self.checks.kinetic_to_internal_max.is_none(),
-            "checks.kinetic_to_internal_max",
-            "the quasi-static watch does not stop a 3D run yet (its history has \
-             `energy.kinetic_to_internal` to read); leave the key out"
-                .into(),
-        );
         out.0
     }
 

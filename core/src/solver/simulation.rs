@@ -7,7 +7,7 @@ use super::contact_stage;
 use super::discretization::{Discretization, MassScalingReport};
 use super::energy::{Energy, StepEnergy};
 use super::point_outputs::PointOut;
-use super::quasi_static::{self, QUASI_STATIC_WARNING};
+use super::quasi_static;
 use super::state::{Reference, State};
 use super::workspace::Workspace;
 use super::{conduction, fill, penetration, rereference, stable_step, stress, update};
@@ -194,7 +194,13 @@ impl Simulation {
             let tol = scene.checks.energy_balance_tol;
             st.energy
                 .check(tol, st.step, st.time, dt.dt, st.stable_dt)?;
-            quasi_static::watch(scene, tools.is_empty(), st, touch.tools)
+            quasi_static::watch(
+                &scene.checks,
+                scene.time.end_s,
+                tools.is_empty(),
+                st,
+                touch.tools,
+            )
         })?;
         timed(&mut times.heat, || {
             conduction::stage_if_due(scene, disc, tools, st, &mut ws.out, dt.dt)
@@ -502,18 +508,13 @@ impl Simulation {
         self.st.kinetic_to_internal_max
     }
 
-    /// A warning when a mass-scaled run's kinetic energy exceeded
-    /// [`QUASI_STATIC_WARNING`] of its internal energy after the start-up: the inertia that
-    /// mass scaling adds is no longer negligible, and forces and shapes carry it.
+    /// A warning when a mass-scaled run's inertia was not negligible
+    /// ([`quasi_static::warning`]).
     pub fn quasi_static_warning(&self) -> Option<String> {
-        let ratio = self.st.kinetic_to_internal_max;
-        (self.disc.mass_scaling.is_some() && ratio > QUASI_STATIC_WARNING).then(|| {
-            format!(
-                "the kinetic energy reached {:.1} % of the internal energy (above {:.0} %): the added mass is not negligible; scale less or set checks.kinetic_to_internal_max to stop such runs",
-                100.0 * ratio,
-                100.0 * QUASI_STATIC_WARNING
-            )
-        })
+        quasi_static::warning(
+            self.disc.mass_scaling.is_some(),
+            self.st.kinetic_to_internal_max,
+        )
     }
 
     /// A warning when the boundary ring crossed itself at a sample: the surface passed

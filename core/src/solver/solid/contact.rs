@@ -118,6 +118,8 @@ pub(crate) struct ToolContact {
 pub(crate) struct Touch {
     /// Some contact force acts.
     pub any: bool,
+    /// A scene's tool (not a symmetry plane) presses the workpiece.
+    pub tools: bool,
     /// The work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
     pub tool_work: Real,
 }
@@ -306,6 +308,7 @@ impl ToolContact {
                 touch.tool_work += dt_avg * dot(&f, &vt);
                 self.force.spread(&disc.nodal, j, f);
                 touch.any = true;
+                touch.tools |= t < disc.scene_tools;
             }
         }
         for t in planes.iter_mut() {

@@ -51,6 +51,7 @@ use super::heat::Heat;
 use super::heat_readings;
 use super::layout::Scatter;
 use super::point_outputs::PointOut;
+use super::quasi_static;
 use super::simulation::{stepping_loop, Ran, StageTimes, Stepping};
 use super::stable_step::{landing_step, tool_step_limit, StepLength};
 use super::state::Filled;
@@ -167,6 +168,10 @@ pub struct SolidState {
     pub max_penetration: Real,
     /// Deepest a particle's physical position lay beyond a symmetry plane at a sample (m).
     pub max_beyond_plane: Real,
+    /// When a scene's tool first pressed the workpiece (s), for the quasi-static watch.
+    pub first_contact_s: Option<Real>,
+    /// Largest ratio of kinetic to internal energy since the watch began (-).
+    pub kinetic_to_internal_max: Real,
     /// Stable step estimate on the deformation (s).
     pub stable_dt: Real,
     /// Time (s) and step count at the last step that was not a full fixed step.
@@ -467,6 +472,13 @@ impl SolidSimulation {
                 st.time,
                 dt,
                 st.stable_dt,
+            )?;
+            quasi_static::watch(
+                &scene.checks,
+                scene.time.end_s,
+                scene.tools.is_empty(),
+                st,
+                touch.tools,
             )
         })?;
         timed(&mut times.heat, || {
@@ -608,6 +620,21 @@ impl SolidSimulation {
     /// What mass scaling added, `None` without it.
     pub fn mass_scaling(&self) -> Option<MassScalingReport> {
         self.disc.mass_scaling
+    }
+
+    /// Largest ratio of the workpiece's kinetic to internal energy (-) since the
+    /// quasi-static watch began (`checks.kinetic_to_internal_from`); 0 before.
+    pub fn kinetic_to_internal_max(&self) -> Real {
+        self.st.kinetic_to_internal_max
+    }
+
+    /// A warning when a mass-scaled run's inertia was not negligible, as in 2D
+    /// ([`quasi_static::warning`]).
+    pub fn quasi_static_warning(&self) -> Option<String> {
+        quasi_static::warning(
+            self.disc.mass_scaling.is_some(),
+            self.st.kinetic_to_internal_max,
+        )
     }
     /// Stable step estimate on the current deformation (s).
     pub fn stable_dt(&self) -> Real {

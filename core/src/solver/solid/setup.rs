@@ -335,6 +335,8 @@ impl SolidSimulation {
             stick: vec![None; np * ntools],
             max_penetration: 0.0,
             max_beyond_plane: 0.0,
+            first_contact_s: None,
+            kinetic_to_internal_max: 0.0,
             stable_dt: disc.critical_dt0,
             anchor_time: 0.0,
             anchor_step: 0,
