@@ -33,6 +33,7 @@
 mod contact;
 mod heat;
 mod rereference;
+mod self_contact;
 mod setup;
 #[cfg(test)]
 mod tests;
@@ -56,7 +57,9 @@ use crate::rk_shape::ShapeTable;
 use crate::scene::solid::SolidScene;
 use crate::solid_tool::{SolidTool, SolidToolState};
 use crate::team::Team;
+use crate::laps::{SolidLap, SolidLapReport};
 use contact::ToolContact;
+use self_contact::{SelfStage, SolidSelfContact};
 pub use rereference::SolidReference;
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
@@ -174,6 +177,13 @@ pub struct SolidState {
     /// The configuration of the last kernel re-reference, if there was one.
     #[serde(default)]
     pub reference: Option<SolidReference>,
+    /// Which surface particles were in contact with the surface at the last stage, by slot
+    /// ([`crate::contact::self_contact_3d`]; empty when the scene turns self-contact off).
+    #[serde(default)]
+    pub self_touching: Vec<bool>,
+    /// The laps (folds of the surface onto itself) found so far, in the order they formed.
+    #[serde(default)]
+    pub laps: Vec<SolidLap>,
 }
 
 /// The stages' working arrays.
@@ -184,6 +194,7 @@ pub(super) struct SolidWorkspace {
     f_int: Vec<[Real; 3]>,
     v_prev: Vec<[Real; 3]>,
     contact: ToolContact,
+    self_contact: SolidSelfContact,
     team: Team,
 }
 
@@ -367,9 +378,19 @@ impl SolidSimulation {
             for t in tools.iter_mut() {
                 t.state.stroke += (full - dt) * t.state.velocity;
             }
-            let touch = ws
+            let mut touch = ws
                 .contact
                 .stage(&ws.team, disc, tools, st, &ws.out, full, step.avg);
+            let on_itself = SelfStage {
+                tools: &tools[..disc.scene_tools],
+                out: &ws.out,
+                du: ws.contact.move_bound(),
+                dt: full,
+                dt_avg: step.avg,
+            };
+            touch.any |= ws
+                .self_contact
+                .stage(disc, st, &mut ws.contact.force, &on_itself);
             for (t, s) in tools.iter_mut().zip(at_end) {
                 t.state.stroke = s;
             }
@@ -498,6 +519,7 @@ impl SolidSimulation {
             && st.tools.len() == self.st.tools.len()
             && st.held.len() == self.st.held.len()
             && st.stick.len() == self.st.stick.len()
+            && st.self_touching.len() == self.st.self_touching.len()
             && st.heat.is_some() == self.st.heat.is_some();
         if !same {
             return Err(Error::State(
@@ -525,6 +547,7 @@ impl SolidSimulation {
         }
         self.ws.v_prev.clone_from(&st.v);
         self.ws.contact = ToolContact::new(st.d.len(), self.tools.len());
+        self.ws.self_contact.forget();
         for (p, (out, point)) in self.ws.out.iter_mut().zip(&st.points).enumerate() {
             let temp = st.heat.as_ref().map(|h| h.temperature_c[p]);
             *out = PointOut::at(&self.disc.material, point.eps_p, temp);
@@ -791,6 +814,31 @@ impl SolidSimulation {
             }
         }
         worst
+    }
+
+    /// The laps found so far ([`crate::laps::SolidLap`]), in the order they formed, with
+    /// where their material is now.
+    pub fn laps(&self) -> Vec<SolidLapReport> {
+        if self.st.laps.is_empty() {
+            return Vec::new();
+        }
+        self.ws.self_contact.laps(&self.st, &self.positions())
+    }
+
+    /// How many laps formed so far.
+    pub fn lap_count(&self) -> usize {
+        self.st.laps.len()
+    }
+
+    /// The deepest a surface particle's physical position lies behind a face of the
+    /// workpiece's own surface that is not its neighbours' (within one smallest spacing of
+    /// it; [`crate::contact::self_contact_3d::Surface::deepest_behind`]), whether the
+    /// scene's self-contact is on or off: `(depth (m), particle)`, depth 0 when none does.
+    /// How far the surface passed through itself.
+    pub fn self_penetration_now(&self) -> (Real, usize) {
+        self.ws
+            .self_contact
+            .deepest_behind(&self.positions(), self.disc.h_min)
     }
 
     /// [`SolidSimulation::penetration_now`] recorded in the state's maxima; a depth past

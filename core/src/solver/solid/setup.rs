@@ -5,6 +5,7 @@
 
 use super::contact::ToolContact;
 use super::heat::{update_eigenvalue, HeatSurface};
+use super::self_contact::SolidSelfContact;
 use super::{SolidDisc, SolidSimulation, SolidState, SolidWorkspace};
 use crate::cylinder_grid::{CylinderGrid, Sector};
 use crate::error::{Error, Result};
@@ -270,8 +271,12 @@ impl SolidSimulation {
                 }
             }
         }
+        let self_contact =
+            SolidSelfContact::new(scene, &p.cells, &p.positions, &p.extents, &p.planes, p.h_min);
+        let needs_area = tools.iter().any(|t| t.friction.needs_flow_stress())
+            || (scene.self_contact.enabled && scene.self_contact.friction.needs_flow_stress());
         let heat_surface =
-            if scene.transfers_heat() || tools.iter().any(|t| t.friction.needs_flow_stress()) {
+            if scene.transfers_heat() || needs_area {
                 HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
             } else {
                 HeatSurface::default()
@@ -317,6 +322,7 @@ impl SolidSimulation {
             f_int: vec![[0.0; 3]; np],
             v_prev: v.clone(),
             contact: ToolContact::new(np, ntools),
+            self_contact,
             team: Team::default(),
         };
         let mut st = SolidState {
@@ -355,6 +361,8 @@ impl SolidSimulation {
             }),
             max_stretch: 0.0,
             reference: None,
+            self_touching: vec![false; ws.self_contact.slots()],
+            laps: Vec::new(),
         };
         disc.critical_dt0 = measure_critical_step(&disc, &mut st, &mut ws)?;
         if let Some(ms) = scene.time.mass_scaling {
