@@ -22,11 +22,13 @@
 //! feature `q` lies on: the triangle's normal on its interior, the sum of the two
 //! triangles' normals on an edge, `sum alpha_t n_t` over the triangles at a vertex,
 //! `alpha_t` the triangle's angle there; Baerentzen and Aanaes 2005, as
-//! [`crate::triangle_surface`] signs a die's distance) within the search depth `D` (one
-//! smallest spacing, [`SEARCH_DEPTH_SPACINGS`]), and either it was in contact at the last
-//! stage or its gap is within twice its displacement relative to the master point over the
-//! step, `g <= 2 dt |v_k - v_q|` (m): 2D's rule, which keeps the two faces of a thin part
-//! and a particle next to a convex edge (behind a far face by a spacing) out of contact.
+//! [`crate::triangle_surface`] signs a die's distance; the faces left out as the slave's
+//! neighbours' count in the pseudo-normals, as 2D's vertex normals count both segments)
+//! within the search depth `D` (one smallest spacing, [`SEARCH_DEPTH_SPACINGS`]), and
+//! either it was in contact at the last stage or its gap is within twice its displacement
+//! relative to the master point over the step, `g <= 2 dt |v_k - v_q|` (m): 2D's rule,
+//! which keeps the two faces of a thin part and a particle next to a convex edge (behind a
+//! far face by a spacing) out of contact.
 //!
 //! The force on the slave is 2D's: eq. 4's normal penalty with half the pair's reduced mass
 //! (a symmetric two-pass treatment, each face a slave of the other), `f_n = mu g / (2 dt
@@ -52,6 +54,11 @@ use crate::stl::{cross, dot, sub};
 use crate::tools::Penetration;
 use crate::triangle_surface::{closest_on_triangle, Feature};
 use std::collections::HashMap;
+
+/// The winding number above which a surface particle has passed through another part of
+/// the surface ([`Surface::passed_through`]): halfway between a surface point's 1/2 and a
+/// passed-through point's 3/2, with room for a bent neighbourhood.
+pub const PASSED: Real = 1.0;
 
 /// No face across an edge (an edge on a symmetry plane).
 const NONE: u32 = u32::MAX;
@@ -149,6 +156,13 @@ impl Surface {
             let cell = self.extents[a][c].max(self.extents[b][c]);
             (xa[c] - xb[c]).abs() <= s as Real * cell * (1.0 + 1e-9)
         })
+    }
+
+    /// Whether the reference point `r` (m) lies within `s` cells of slot `k` along every
+    /// axis (cells of the slot's extents).
+    fn near_point(&self, k: usize, r: [Real; 3], s: usize) -> bool {
+        let xk = self.reference[k];
+        (0..3).all(|c| (xk[c] - r[c]).abs() <= s as Real * self.extents[k][c] * (1.0 + 1e-9))
     }
 
     /// Whether face `f` has a corner within `s` cells of slot `k` ([`Surface::near`]).
@@ -304,28 +318,104 @@ impl Surface {
         w
     }
 
-    /// The deepest a surface particle lies behind a face of the surface that is not its
-    /// neighbours' (`s` cells), within `reach` (m) of it, at the positions `x` (m, by
-    /// slot): `(depth (m), slot)`, depth 0 when none lies behind one. The measure of
-    /// interpenetration the contact's own checks cannot see (no begin rule).
-    pub fn deepest_behind(&self, x: &[[Real; 3]], reach: Real, s: usize) -> (Real, usize) {
+    /// The deepest a surface particle has passed through another part of the surface, at
+    /// the positions `x` (m, by slot), the body mirrored on its symmetry planes `mirrors`
+    /// (`(axis, coordinate)`): `(depth (m), slot)`, depth 0 when none has. The measure the
+    /// contact's own checks cannot see. A particle has passed through when the winding
+    /// number at it of the surface (the faces and their mirror images) less its neighbours'
+    /// faces (`s` cells) exceeds [`PASSED`], `w = sum_t Omega_t / (4 pi)` over the faces'
+    /// triangles, `Omega_t` the signed solid angle of triangle `t` (sr; Van Oosterom and
+    /// Strackee 1983): a point on the closed surface has `w` in [0, 1] (1/2 on a smooth
+    /// part, less at a convex edge, more at a concave one), a point on one part's surface
+    /// and inside another `3/2`; leaving out the neighbours' faces (which pass near the point
+    /// or through it) changes that by their solid angle, zero for a flat neighbourhood, and
+    /// leaves out a fold shorter than the support (which the contact does not hold either).
+    /// Its depth is then its distance to the nearest face not its neighbours'.
+    pub fn passed_through(
+        &self,
+        x: &[[Real; 3]],
+        mirrors: &[(usize, Real)],
+        s: usize,
+    ) -> (Real, usize) {
         let mut geo = Geometry::default();
-        let mut bins = Bins::default();
         self.geometry(x, &mut geo);
-        self.bin(x, reach, &mut bins);
         let mut worst = (0.0, 0);
-        for k in 0..self.len() {
-            let Some(b) = self.closest(k, x, &geo, &bins, s) else {
+        for (k, &p) in x.iter().enumerate().take(self.len()) {
+            if self.at[self.first[k] as usize..self.first[k + 1] as usize].is_empty() {
                 continue;
-            };
-            let d = b.d2.sqrt();
-            if d <= reach && d > worst.0 && dot(sub(x[k], b.point), self.pseudo_normal(x, &geo, &b)) < 0.0
-            {
-                worst = (d, k);
+            }
+            let mut w = 0.0;
+            // A particle held on a symmetry plane (within a hundredth of its cell: the plane's
+            // penalty holds it a small fraction of a spacing beyond) is read on the plane, so
+            // that its own faces' mirror images pass through it as its own faces do.
+            let cell = self.extents[k].iter().copied().fold(Real::INFINITY, Real::min);
+            let mut p = p;
+            for &(axis, at) in mirrors {
+                if (p[axis] - at).abs() <= 0.01 * cell {
+                    p[axis] = at;
+                }
+            }
+            // A mirror image of a face, turned outward again, subtends at `p` the face's
+            // solid angle at the mirror image of `p`.
+            for mask in 0..1usize << mirrors.len() {
+                let mut m = p;
+                for (i, &(axis, at)) in mirrors.iter().enumerate() {
+                    if mask >> i & 1 == 1 {
+                        m[axis] = 2.0 * at - m[axis];
+                    }
+                }
+                // The copy's faces within `s` cells of the slave in the reference
+                // configuration are its neighbours': left out.
+                let mirrored = |a: u32| {
+                    let mut r = self.reference[a as usize];
+                    for (i, &(axis, at)) in mirrors.iter().enumerate() {
+                        if mask >> i & 1 == 1 {
+                            r[axis] = 2.0 * at - r[axis];
+                        }
+                    }
+                    r
+                };
+                for (f, c) in self.faces.iter().enumerate() {
+                    if c.iter().any(|&a| self.near_point(k, mirrored(a), s)) {
+                        continue;
+                    }
+                    for q in 0..4 {
+                        w += solid_angle(m, self.triangle(x, &geo, f, q));
+                    }
+                }
+            }
+            w /= 4.0 * std::f64::consts::PI;
+            if w <= PASSED {
+                continue;
+            }
+            let depth = (0..self.faces.len())
+                .filter(|&f| !self.excluded(k, f, s))
+                .flat_map(|f| (0..4).map(move |q| (f, q)))
+                .map(|(f, q)| {
+                    let d = sub(p, closest_on_triangle(p, self.triangle(x, &geo, f, q)).0);
+                    dot(d, d)
+                })
+                .fold(Real::INFINITY, Real::min)
+                .sqrt();
+            if depth.is_finite() && depth > worst.0 {
+                worst = (depth, k);
             }
         }
         worst
     }
+}
+
+/// The signed solid angle of the triangle `t` seen from `p` (sr), positive when `p` lies
+/// behind it (on the side its normal points away from): Van Oosterom and Strackee, IEEE
+/// Trans. Biomed. Eng. 30(2), 1983, `tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a . b)|c|
+/// + (a . c)|b| + (b . c)|a|)`, `a`, `b`, `c` the corners relative to `p`. Zero when `p` is
+/// a corner.
+fn solid_angle(p: [Real; 3], t: [[Real; 3]; 3]) -> Real {
+    let [a, b, c] = t.map(|v| sub(v, p));
+    let (la, lb, lc) = (dot(a, a).sqrt(), dot(b, b).sqrt(), dot(c, c).sqrt());
+    let num = dot(a, cross(b, c));
+    let den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+    2.0 * num.atan2(den)
 }
 
 /// `v / |v|`, zero for a zero vector.
@@ -591,13 +681,37 @@ mod tests {
         let (x, surface) = lattice_box([6, 5, 7]);
         let v = vec![[0.0, 0.0, 1.0]; x.len()];
         assert!(search(&x, &surface, &v, &mut vec![false; x.len()]).is_empty());
-        assert_eq!(surface.deepest_behind(&x, 2.0, 2), (0.0, 0));
+        assert_eq!(surface.passed_through(&x, &[], 2), (0.0, 0));
         // A plate one spacing thick, pressed to half of it: its faces are neighbours.
         let (mut x, surface) = lattice_box([8, 6, 2]);
         for p in &mut x {
             p[2] *= 0.5;
         }
         assert!(search(&x, &surface, &v, &mut vec![false; x.len()]).is_empty());
+    }
+
+    #[test]
+    fn a_half_box_mirrored_on_its_symmetry_plane_has_passed_nowhere() {
+        let (x, surface) = lattice_box([5, 3, 4]);
+        let keep: Vec<[u32; 4]> = surface
+            .faces
+            .iter()
+            .copied()
+            .filter(|f| !f.iter().all(|&a| x[a as usize][1] == 0.0))
+            .collect();
+        let half = Surface::new(
+            surface.particles.clone(),
+            keep,
+            surface.reference.clone(),
+            surface.extents.clone(),
+        );
+        let mut moved = x.clone();
+        for p in &mut moved {
+            if p[1] == 0.0 {
+                p[1] = -1e-7;
+            }
+        }
+        assert_eq!(half.passed_through(&moved, &[(1, 0.0)], 2), (0.0, 0));
     }
 
     #[test]
@@ -634,7 +748,20 @@ mod tests {
             }
         }
         assert!(up > 0 && down > 0, "{pairs:?}");
-        let (deep, _) = surface.deepest_behind(&x, 2.0, 2);
+        let (deep, _) = surface.passed_through(&x, &[], 2);
+        assert!((deep - 0.05).abs() < 1e-12, "{deep}");
+        // The same strip as the half y >= 1 of itself, mirrored on the plane y = 1.
+        let keep: Vec<usize> = (0..surface.faces.len())
+            .filter(|&f| surface.faces[f].iter().all(|&a| x[a as usize][1] >= 1.0))
+            .collect();
+        let half = Surface::new(
+            surface.particles.clone(),
+            keep.iter().map(|&f| surface.faces[f]).collect(),
+            surface.reference.clone(),
+            surface.extents.clone(),
+        );
+        let on_half: Vec<[Real; 3]> = x.iter().map(|p| [p[0], p[1].max(1.0), p[2]]).collect();
+        let (deep, _) = half.passed_through(&on_half, &[(1, 1.0)], 2);
         assert!((deep - 0.05).abs() < 1e-12, "{deep}");
         // A contact does not begin so deep when the faces close slowly, but goes on.
         let slow: Vec<[Real; 3]> = v.iter().map(|w| w.map(|c| c * 0.1)).collect();

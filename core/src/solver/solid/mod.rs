@@ -178,7 +178,7 @@ pub struct SolidState {
     #[serde(default)]
     pub reference: Option<SolidReference>,
     /// Which surface particles were in contact with the surface at the last stage, by slot
-    /// ([`crate::contact::self_contact_3d`]; empty when the scene turns self-contact off).
+    /// ([`crate::contact::self_contact_3d`]; all false when the scene turns it off).
     #[serde(default)]
     pub self_touching: Vec<bool>,
     /// The laps (folds of the surface onto itself) found so far, in the order they formed.
@@ -830,15 +830,12 @@ impl SolidSimulation {
         self.st.laps.len()
     }
 
-    /// The deepest a surface particle's physical position lies behind a face of the
-    /// workpiece's own surface that is not its neighbours' (within one smallest spacing of
-    /// it; [`crate::contact::self_contact_3d::Surface::deepest_behind`]), whether the
-    /// scene's self-contact is on or off: `(depth (m), particle)`, depth 0 when none does.
-    /// How far the surface passed through itself.
+    /// The deepest a surface particle's physical position has passed through another part
+    /// of the workpiece's surface now, whether the scene's self-contact is on or off
+    /// ([`crate::contact::self_contact_3d::Surface::passed_through`]): `(depth (m),
+    /// particle)`, depth 0 when none has.
     pub fn self_penetration_now(&self) -> (Real, usize) {
-        self.ws
-            .self_contact
-            .deepest_behind(&self.positions(), self.disc.h_min)
+        self.ws.self_contact.passed_through(&self.positions())
     }
 
     /// [`SolidSimulation::penetration_now`] recorded in the state's maxima; a depth past

@@ -36,6 +36,8 @@ pub(crate) struct SolidSelfContact {
     search: SelfContact3,
     /// The scene's `self_contact.enabled`.
     enabled: bool,
+    /// The symmetry planes `(axis, coordinate)` the body is mirrored on.
+    mirrors: Vec<(usize, Real)>,
     /// The surface's predicted positions (m) and velocities (m/s) of the last search.
     x: Vec<[Real; 3]>,
     v: Vec<[Real; 3]>,
@@ -81,19 +83,17 @@ impl SolidSelfContact {
         SolidSelfContact {
             search,
             enabled: scene.self_contact.enabled,
+            mirrors: planes.to_vec(),
             x: vec![[0.0; 3]; n],
             v: vec![[0.0; 3]; n],
         }
     }
 
-    /// Number of surface particles in contact with the surface that the state keeps
-    /// ([`SolidState::self_touching`]): every surface particle, none when the scene turns
-    /// self-contact off.
+    /// Number of surface particles (the length of [`SolidState::self_touching`], whether
+    /// the scene's self-contact is on or off: a state saved from either restores on the
+    /// other).
     pub(super) fn slots(&self) -> usize {
-        match self.enabled {
-            true => self.search.surface.len(),
-            false => 0,
-        }
+        self.search.surface.len()
     }
 
     /// Forgets the last search, so that the next stage searches.
@@ -185,17 +185,17 @@ impl SolidSelfContact {
             .collect()
     }
 
-    /// The deepest a surface particle's position lies behind a face of the surface that is
-    /// not its neighbours' within `reach` (m), at the particles' positions `positions` (m):
-    /// `(depth (m), particle)`.
-    pub(super) fn deepest_behind(&self, positions: &[[Real; 3]], reach: Real) -> (Real, usize) {
+    /// The deepest a surface particle has passed through another part of the surface at
+    /// the particles' positions `positions` (m): `(depth (m), particle)`
+    /// ([`Surface::passed_through`]).
+    pub(super) fn passed_through(&self, positions: &[[Real; 3]]) -> (Real, usize) {
         let surface = &self.search.surface;
         let x: Vec<[Real; 3]> = surface
             .particles
             .iter()
             .map(|&j| positions[j as usize])
             .collect();
-        let (depth, s) = surface.deepest_behind(&x, reach, self.search.neighbours);
+        let (depth, s) = surface.passed_through(&x, &self.mirrors, self.search.neighbours);
         (depth, surface.particles.get(s).map_or(0, |&j| j as usize))
     }
 }
