@@ -110,7 +110,9 @@ fn merge<L>(
     let touched: Vec<usize> = (0..laps.len())
         .filter(|&l| touching(particles(&mut laps[l]), &members, near))
         .collect();
-    let &keep = touched.first()?;
+    let Some(&keep) = touched.first() else {
+        return Some(members);
+    };
     for &l in touched.iter().skip(1).rev() {
         let mut gone = laps.remove(l);
         members.append(particles(&mut gone));
@@ -375,5 +377,51 @@ pub fn solid_report(lap: &SolidLap, surface: &Surface, x: &[[Real; 3]]) -> Solid
             .iter()
             .map(|&s| surface.particles[s as usize] as usize)
             .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::self_contact_3d::tests::{folded_strip, search};
+
+    #[test]
+    fn a_strip_folded_onto_itself_is_one_lap_where_its_parts_overlap() {
+        let (x, v, surface) = folded_strip();
+        let pairs = search(&x, &surface, &v, &mut vec![false; x.len()]);
+        // Near the fold's root (x 5 to 6) the contacts join particles within four cells:
+        // not a lap; farther out they do.
+        assert!(pairs.iter().any(|p| is_solid_lap(p, &surface, 2)));
+        assert!(!pairs.iter().all(|p| is_solid_lap(p, &surface, 2)));
+        let mut laps = Vec::new();
+        let stage = SolidStage {
+            surface: &surface,
+            neighbours: 2,
+            x: &x,
+            time: 1.5,
+            strokes: vec![0.25],
+        };
+        grow_solid(&mut laps, &pairs, &stage);
+        assert_eq!(laps.len(), 1, "{laps:?}");
+        let report = solid_report(&laps[0], &surface, &x);
+        assert_eq!((report.formed_s, report.formed_strokes_m[0]), (1.5, 0.25));
+        // Where: between the left part's top face (z 1) and the folded part's (z 0.95),
+        // over the overlap (x 0 to 6).
+        let s = report.start_m;
+        assert!(
+            (s[2] - 0.975).abs() < 1e-12 && (0.0..=6.0).contains(&s[0]),
+            "{s:?}"
+        );
+        assert_eq!(report.end_m, s);
+        let e = report.extent_m;
+        assert!(e[2][0] >= 0.95 - 1e-12 && e[2][1] <= 1.0 + 1e-12, "{e:?}");
+        assert!(e[0][1] - e[0][0] >= 2.0, "{e:?}");
+        // Both parts of the strip took part in it.
+        let r = |j: &usize| surface.reference(*j)[0];
+        assert!(report.particles.iter().any(|j| r(j) < 6.5));
+        assert!(report.particles.iter().any(|j| r(j) > 6.5));
+        // A second stage with the same contacts grows the same lap.
+        grow_solid(&mut laps, &pairs, &stage);
+        assert_eq!(laps.len(), 1);
     }
 }

@@ -95,7 +95,10 @@ impl Surface {
         for (f, c) in faces.iter().enumerate() {
             for q in 0..4 {
                 let (a, b) = (c[q], c[(q + 1) % 4]);
-                edges.entry((a.min(b), a.max(b))).or_default().push(f as u32);
+                edges
+                    .entry((a.min(b), a.max(b)))
+                    .or_default()
+                    .push(f as u32);
             }
         }
         let across = faces
@@ -189,11 +192,7 @@ impl Surface {
     /// Triangle `q` of face `f`: its corners `q`, `q + 1` and the centre.
     fn triangle(&self, x: &[[Real; 3]], geo: &Geometry, f: usize, q: usize) -> [[Real; 3]; 3] {
         let c = self.faces[f];
-        [
-            x[c[q] as usize],
-            x[c[(q + 1) % 4] as usize],
-            geo.centre[f],
-        ]
+        [x[c[q] as usize], x[c[(q + 1) % 4] as usize], geo.centre[f]]
     }
 
     /// Bins of the faces at the positions `x` (m), each listed where it lies within `reach`
@@ -300,7 +299,14 @@ impl Surface {
     /// The weights on face `f`'s four corners of a point `p` of its triangle `q` at the
     /// positions `x` (m): the triangle's barycentric coordinates, the centre's shared a
     /// quarter to each corner (module doc).
-    fn weights(&self, x: &[[Real; 3]], geo: &Geometry, f: usize, q: usize, p: [Real; 3]) -> [Real; 4] {
+    fn weights(
+        &self,
+        x: &[[Real; 3]],
+        geo: &Geometry,
+        f: usize,
+        q: usize,
+        p: [Real; 3],
+    ) -> [Real; 4] {
         let [a, b, c] = self.triangle(x, geo, f, q);
         let (v0, v1, v2) = (sub(b, a), sub(c, a), sub(p, a));
         let (d00, d01, d11) = (dot(v0, v0), dot(v0, v1), dot(v1, v1));
@@ -348,7 +354,10 @@ impl Surface {
             // A particle held on a symmetry plane (within a hundredth of its cell: the plane's
             // penalty holds it a small fraction of a spacing beyond) is read on the plane, so
             // that its own faces' mirror images pass through it as its own faces do.
-            let cell = self.extents[k].iter().copied().fold(Real::INFINITY, Real::min);
+            let cell = self.extents[k]
+                .iter()
+                .copied()
+                .fold(Real::INFINITY, Real::min);
             let mut p = p;
             for &(axis, at) in mirrors {
                 if (p[axis] - at).abs() <= 0.01 * cell {
@@ -564,7 +573,10 @@ impl SelfContact3 {
             if !was {
                 let corners = surface.faces[f];
                 let rel: [Real; 3] = std::array::from_fn(|i| {
-                    v[k][i] - (0..4).map(|a| w[a] * v[corners[a] as usize][i]).sum::<Real>()
+                    v[k][i]
+                        - (0..4)
+                            .map(|a| w[a] * v[corners[a] as usize][i])
+                            .sum::<Real>()
                 });
                 if d * d > 4.0 * dt * dt * dot(rel, rel) {
                     continue;
@@ -622,16 +634,17 @@ impl SelfContact3 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// The outer faces of a box of `n` particles per axis at spacing 1 (all six sides),
     /// corners outward, over slots numbered as the lattice.
-    fn lattice_box(n: [usize; 3]) -> (Vec<[Real; 3]>, Surface) {
+    pub(crate) fn lattice_box(n: [usize; 3]) -> (Vec<[Real; 3]>, Surface) {
         let id = |i: usize, j: usize, k: usize| (i + n[0] * (j + n[1] * k)) as u32;
         let x: Vec<[Real; 3]> = (0..n[2])
             .flat_map(|k| {
-                (0..n[1]).flat_map(move |j| (0..n[0]).map(move |i| [i as Real, j as Real, k as Real]))
+                (0..n[1])
+                    .flat_map(move |j| (0..n[0]).map(move |i| [i as Real, j as Real, k as Real]))
             })
             .collect();
         let mut faces = Vec::new();
@@ -670,7 +683,28 @@ mod tests {
         (x, surface)
     }
 
-    fn search(x: &[[Real; 3]], surface: &Surface, v: &[[Real; 3]], touching: &mut [bool]) -> Vec<Pair3> {
+    /// A strip of 13 x 3 x 2 particles whose right part (x > 6.5) is folded over onto the
+    /// left part, turned half round the line x = 6.5, z = 0.975 (along y): its former top
+    /// face lies at z = 0.95, 0.05 inside the left part's top face (z = 1). The two parts
+    /// close at 0.1 per unit time. Positions, velocities and the surface.
+    pub(crate) fn folded_strip() -> (Vec<[Real; 3]>, Vec<[Real; 3]>, Surface) {
+        let (mut x, surface) = lattice_box([13, 3, 2]);
+        let mut v = vec![[0.0, 0.0, 0.05]; x.len()];
+        for (p, w) in x.iter_mut().zip(&mut v) {
+            if p[0] > 6.5 {
+                *p = [13.0 - p[0], p[1], 1.95 - p[2]];
+                *w = [0.0, 0.0, -0.05];
+            }
+        }
+        (x, v, surface)
+    }
+
+    pub(crate) fn search(
+        x: &[[Real; 3]],
+        surface: &Surface,
+        v: &[[Real; 3]],
+        touching: &mut [bool],
+    ) -> Vec<Pair3> {
         let mut s = SelfContact3::new(Friction::default(), surface.clone(), 1.0, 2.0);
         s.search(x, v, 1.0, touching);
         s.pairs
@@ -716,18 +750,7 @@ mod tests {
 
     #[test]
     fn a_strip_folded_through_itself_is_pushed_back_from_both_sides() {
-        // A strip of 13 x 3 x 2 particles whose right part (x > 6.5) is folded over onto
-        // the left part, turned half round the line x = 6.5, z = 0.975 (along y): its former
-        // top face lies at z = 0.95, 0.05 inside the left part's top face (z = 1). The two
-        // parts close at 0.1 per unit time.
-        let (mut x, surface) = lattice_box([13, 3, 2]);
-        let mut v = vec![[0.0, 0.0, 0.05]; x.len()];
-        for (p, w) in x.iter_mut().zip(&mut v) {
-            if p[0] > 6.5 {
-                *p = [13.0 - p[0], p[1], 1.95 - p[2]];
-                *w = [0.0, 0.0, -0.05];
-            }
-        }
+        let (x, v, surface) = folded_strip();
         let pairs = search(&x, &surface, &v, &mut vec![false; x.len()]);
         assert!(!pairs.is_empty());
         let (mut up, mut down) = (0, 0);
@@ -737,7 +760,9 @@ mod tests {
             // The master point is the weighted corners.
             let c = surface.faces[p.face as usize];
             let q: [Real; 3] = std::array::from_fn(|i| {
-                (0..4).map(|a| p.weights[a] * x[c[a] as usize][i]).sum::<Real>()
+                (0..4)
+                    .map(|a| p.weights[a] * x[c[a] as usize][i])
+                    .sum::<Real>()
             });
             let k = p.slave as usize;
             assert!((0..3).all(|i| (x[k][i] + p.gap * p.normal[i] - q[i]).abs() < 1e-12));

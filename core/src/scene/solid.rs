@@ -10,8 +10,8 @@
 //! tools and the surroundings, and elasticity over temperature.
 
 use super::{
-    Checks, HeatContact, IntegrationRule, MaterialSpec, Motion, Reference, Scene,
-    SelfContactSpec, ThermalSpec, TimeSpec,
+    Checks, HeatContact, IntegrationRule, MaterialSpec, Motion, Reference, Scene, SelfContactSpec,
+    ThermalSpec, TimeSpec,
 };
 use crate::error::Result;
 use crate::friction::Friction;

@@ -40,7 +40,13 @@ const BLOCK: usize = 64;
 
 /// The predicted physical position of particle `j` a step `dt` (s) ahead, `x_J = X_J +
 /// sum_I N_I(X_J) (d_I + dt v_I)` (m), from the coefficients `d` (m) and `v` (m/s).
-pub(super) fn predicted(disc: &SolidDisc, d: &[[Real; 3]], v: &[[Real; 3]], dt: Real, j: usize) -> [Real; 3] {
+pub(super) fn predicted(
+    disc: &SolidDisc,
+    d: &[[Real; 3]],
+    v: &[[Real; 3]],
+    dt: Real,
+    j: usize,
+) -> [Real; 3] {
     let mut x = disc.ref_pos[j];
     for e in disc.nodal.row(j) {
         let (i, n) = (disc.nodal.index[e] as usize, disc.nodal.n[e]);

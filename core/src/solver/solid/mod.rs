@@ -51,16 +51,16 @@ use super::stable_step::{landing_step, tool_step_limit, StepLength};
 use super::stress::{self, has_avx2, Inputs};
 use super::update::{self, Motion, Predictor};
 use crate::error::{Error, Result};
+use crate::laps::{SolidLap, SolidLapReport};
 use crate::material::{HenckyJ2, PointState3};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::scene::solid::SolidScene;
 use crate::solid_tool::{SolidTool, SolidToolState};
 use crate::team::Team;
-use crate::laps::{SolidLap, SolidLapReport};
 use contact::ToolContact;
-use self_contact::{SelfStage, SolidSelfContact};
 pub use rereference::SolidReference;
+use self_contact::{SelfStage, SolidSelfContact};
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
 

@@ -133,7 +133,8 @@ impl SolidSelfContact {
             self.x[s] = predicted(disc, d, v, dt, j);
             self.v[s] = disc.nodal.interpolate(j, v);
         }
-        self.search.search(&self.x, &self.v, dt, &mut st.self_touching);
+        self.search
+            .search(&self.x, &self.v, dt, &mut st.self_touching);
         let search = &self.search;
         let pairs = search.pairs();
         if pairs.is_empty() {
@@ -157,7 +158,11 @@ impl SolidSelfContact {
             force.spread(&disc.nodal, j, f);
             let face = search.surface.faces[pair.face as usize];
             for (&s, w) in face.iter().zip(pair.weights) {
-                force.spread(&disc.nodal, particles[s as usize] as usize, f.map(|c| -w * c));
+                force.spread(
+                    &disc.nodal,
+                    particles[s as usize] as usize,
+                    f.map(|c| -w * c),
+                );
             }
         }
         let stage = laps::SolidStage {

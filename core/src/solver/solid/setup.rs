@@ -271,16 +271,21 @@ impl SolidSimulation {
                 }
             }
         }
-        let self_contact =
-            SolidSelfContact::new(scene, &p.cells, &p.positions, &p.extents, &p.planes, p.h_min);
+        let self_contact = SolidSelfContact::new(
+            scene,
+            &p.cells,
+            &p.positions,
+            &p.extents,
+            &p.planes,
+            p.h_min,
+        );
         let needs_area = tools.iter().any(|t| t.friction.needs_flow_stress())
             || (scene.self_contact.enabled && scene.self_contact.friction.needs_flow_stress());
-        let heat_surface =
-            if scene.transfers_heat() || needs_area {
-                HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
-            } else {
-                HeatSurface::default()
-            };
+        let heat_surface = if scene.transfers_heat() || needs_area {
+            HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
+        } else {
+            HeatSurface::default()
+        };
         let mut disc = SolidDisc {
             inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
             mass,
