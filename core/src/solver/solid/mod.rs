@@ -26,9 +26,11 @@
 //! three dimensions) and a cylinder over the O-grid's
 //! ([`crate::cylinder_grid::CylinderGrid::nodal_domains`], smoothed by the same
 //! [`crate::integration::smoothed`]). Kernel re-referencing is `rereference.rs` (the
-//! temperature field carried as in 2D). Not in 3D yet (refused by the scene's validation):
-//! SCNI's stabilization and self-contact; not yet done either, without a refusal: the
-//! pass of the tools' convex edges and vertices against the surface between particles.
+//! temperature field carried as in 2D). Self-contact and its laps are
+//! `self_contact.rs` ([`crate::contact::self_contact_3d`] over the cells' outer faces). Not
+//! in 3D yet (refused by the scene's validation): SCNI's stabilization; not yet done
+//! either, without a refusal: the pass of the tools' convex edges and vertices against the
+//! surface between particles.
 
 mod contact;
 mod heat;
@@ -576,6 +578,7 @@ impl SolidSimulation {
             + npts * (r3 + 3 * 8 + size_of::<PointState3>() + size_of::<PointOut>())
             + st.held.len() * size_of::<bool>()
             + st.stick.len() * size_of::<Option<[Real; 3]>>()
+            + st.self_touching.len() * size_of::<bool>()
             + d.cells.len() * size_of::<[u32; 8]>()
             + heat
     }
