@@ -416,9 +416,9 @@ impl Surface {
 
 /// The signed solid angle of the triangle `t` seen from `p` (sr), positive when `p` lies
 /// behind it (on the side its normal points away from): Van Oosterom and Strackee, IEEE
-/// Trans. Biomed. Eng. 30(2), 1983, `tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a . b)|c|
-/// + (a . c)|b| + (b . c)|a|)`, `a`, `b`, `c` the corners relative to `p`. Zero when `p` is
-/// a corner.
+/// Trans. Biomed. Eng. 30(2), 1983, `tan(Omega / 2) = a . (b x c) / d` with
+/// `d = |a||b||c| + (a . b)|c| + (a . c)|b| + (b . c)|a|`, `a`, `b`, `c` the corners
+/// relative to `p`. Zero when `p` is a corner.
 fn solid_angle(p: [Real; 3], t: [[Real; 3]; 3]) -> Real {
     let [a, b, c] = t.map(|v| sub(v, p));
     let (la, lb, lc) = (dot(a, a).sqrt(), dot(b, b).sqrt(), dot(c, c).sqrt());

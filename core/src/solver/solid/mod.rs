@@ -521,7 +521,8 @@ impl SolidSimulation {
             && st.tools.len() == self.st.tools.len()
             && st.held.len() == self.st.held.len()
             && st.stick.len() == self.st.stick.len()
-            && st.self_touching.len() == self.st.self_touching.len()
+            && (st.self_touching.len() == self.st.self_touching.len()
+                || st.self_touching.is_empty())
             && st.heat.is_some() == self.st.heat.is_some();
         if !same {
             return Err(Error::State(
@@ -550,6 +551,9 @@ impl SolidSimulation {
         self.ws.v_prev.clone_from(&st.v);
         self.ws.contact = ToolContact::new(st.d.len(), self.tools.len());
         self.ws.self_contact.forget();
+        // A state saved before self-contact in 3D has no surface contacts: none.
+        let mut st = st;
+        st.self_touching.resize(self.st.self_touching.len(), false);
         for (p, (out, point)) in self.ws.out.iter_mut().zip(&st.points).enumerate() {
             let temp = st.heat.as_ref().map(|h| h.temperature_c[p]);
             *out = PointOut::at(&self.disc.material, point.eps_p, temp);
