@@ -17,6 +17,7 @@
 //! point, followed to its position now, and every surface particle that took part in it.
 
 use crate::contact::self_contact::Pair;
+use crate::contact::self_contact_3d::{Pair3, Surface};
 use crate::math::Real;
 use serde::{Deserialize, Serialize};
 
@@ -65,31 +66,21 @@ pub fn is_lap(pair: &Pair, n: usize, s: usize) -> bool {
     d > 2 * s
 }
 
-/// Whether any particle of `a` lies within `s` ring steps of any of `b` (ring indices on a
-/// ring of `n`).
-fn touching(a: &[u32], b: &[u32], n: usize, s: usize) -> bool {
-    a.iter().any(|&i| {
-        b.iter()
-            .any(|&j| ring_distance(i as usize, j as usize, n) <= s)
-    })
+/// Whether any particle of `a` is `near` any of `b`.
+fn touching(a: &[u32], b: &[u32], near: &impl Fn(u32, u32) -> bool) -> bool {
+    a.iter().any(|&i| b.iter().any(|&j| near(i, j)))
 }
 
-/// Grows `laps` by the lap pairs among `pairs` (module doc).
-pub fn grow(laps: &mut Vec<Lap>, pairs: &[Pair], stage: &Stage<'_>) {
-    let (n, s) = (stage.x.len(), stage.neighbours);
-    let lap_pairs: Vec<&Pair> = pairs.iter().filter(|p| is_lap(p, n, s)).collect();
-    if lap_pairs.is_empty() {
-        return;
-    }
-    // Groups of touching pairs (each pair's slave and master particles), in order of their
-    // first pair.
+/// Joins the lap pairs, each given by its particles (`members`), into groups of pairs whose
+/// particles are `near` each other, in order of their first pair: `(first pair, particles
+/// increasing)`. Shared by 2D and 3D.
+fn join(members: Vec<Vec<u32>>, near: &impl Fn(u32, u32) -> bool) -> Vec<(usize, Vec<u32>)> {
     let mut groups: Vec<(usize, Vec<u32>)> = Vec::new();
-    for (i, p) in lap_pairs.iter().enumerate() {
-        let mut own = vec![p.slave, p.segment, (p.segment + 1) % n as u32];
+    for (i, mut own) in members.into_iter().enumerate() {
         let mut first = i;
         let mut g = 0;
         while g < groups.len() {
-            if touching(&groups[g].1, &own, n, s) {
+            if touching(&groups[g].1, &own, near) {
                 let (f, members) = groups.remove(g);
                 first = first.min(f);
                 own.extend(members);
@@ -100,37 +91,66 @@ pub fn grow(laps: &mut Vec<Lap>, pairs: &[Pair], stage: &Stage<'_>) {
         groups.push((first, own));
     }
     groups.sort_by_key(|g| g.0);
-    for (first, mut members) in groups {
-        members.sort_unstable();
-        members.dedup();
-        let touched: Vec<usize> = (0..laps.len())
-            .filter(|&l| touching(&laps[l].ring, &members, n, s))
-            .collect();
-        match touched.first() {
-            Some(&keep) => {
-                for &l in touched.iter().skip(1).rev() {
-                    let gone = laps.remove(l);
-                    members.extend(gone.ring);
-                }
-                let lap = &mut laps[keep];
-                lap.ring.extend(members);
-                lap.ring.sort_unstable();
-                lap.ring.dedup();
-            }
-            None => {
-                let p = lap_pairs[first];
-                let (k, a, t) = (p.slave as usize, p.segment as usize, p.along);
-                let (xa, xb) = (stage.x[a], stage.x[(a + 1) % n]);
-                let c = [(1.0 - t) * xa[0] + t * xb[0], (1.0 - t) * xa[1] + t * xb[1]];
-                laps.push(Lap {
-                    formed_s: stage.time,
-                    formed_strokes_m: stage.strokes.clone(),
-                    start_m: [0.5 * (stage.x[k][0] + c[0]), 0.5 * (stage.x[k][1] + c[1])],
-                    seed: (p.slave, p.segment, t),
-                    ring: members,
-                });
-            }
-        }
+    for g in &mut groups {
+        g.1.sort_unstable();
+        g.1.dedup();
+    }
+    groups
+}
+
+/// Grows the laps a group of particles `members` (increasing) is `near` by it, the older
+/// taking in the others (two laps that grow together become one); `particles(lap)` a lap's
+/// particles. Returns the group when it touches no lap (a new one). Shared by 2D and 3D.
+fn merge<L>(
+    laps: &mut Vec<L>,
+    mut members: Vec<u32>,
+    particles: impl Fn(&mut L) -> &mut Vec<u32>,
+    near: &impl Fn(u32, u32) -> bool,
+) -> Option<Vec<u32>> {
+    let touched: Vec<usize> = (0..laps.len())
+        .filter(|&l| touching(particles(&mut laps[l]), &members, near))
+        .collect();
+    let Some(&keep) = touched.first() else {
+        return Some(members);
+    };
+    for &l in touched.iter().skip(1).rev() {
+        let mut gone = laps.remove(l);
+        members.append(particles(&mut gone));
+    }
+    let lap = particles(&mut laps[keep]);
+    lap.extend(members);
+    lap.sort_unstable();
+    lap.dedup();
+    None
+}
+
+/// Grows `laps` by the lap pairs among `pairs` (module doc).
+pub fn grow(laps: &mut Vec<Lap>, pairs: &[Pair], stage: &Stage<'_>) {
+    let (n, s) = (stage.x.len(), stage.neighbours);
+    let lap_pairs: Vec<&Pair> = pairs.iter().filter(|p| is_lap(p, n, s)).collect();
+    if lap_pairs.is_empty() {
+        return;
+    }
+    let near = |i: u32, j: u32| ring_distance(i as usize, j as usize, n) <= s;
+    let members = lap_pairs
+        .iter()
+        .map(|p| vec![p.slave, p.segment, (p.segment + 1) % n as u32])
+        .collect();
+    for (first, members) in join(members, &near) {
+        let Some(members) = merge(laps, members, |l| &mut l.ring, &near) else {
+            continue;
+        };
+        let p = lap_pairs[first];
+        let (k, a, t) = (p.slave as usize, p.segment as usize, p.along);
+        let (xa, xb) = (stage.x[a], stage.x[(a + 1) % n]);
+        let c = [(1.0 - t) * xa[0] + t * xb[0], (1.0 - t) * xa[1] + t * xb[1]];
+        laps.push(Lap {
+            formed_s: stage.time,
+            formed_strokes_m: stage.strokes.clone(),
+            start_m: [0.5 * (stage.x[k][0] + c[0]), 0.5 * (stage.x[k][1] + c[1])],
+            seed: (p.slave, p.segment, t),
+            ring: members,
+        });
     }
 }
 
@@ -226,5 +246,182 @@ pub fn report(
             .iter()
             .map(|&k| boundary[k as usize] as usize)
             .collect(),
+    }
+}
+
+/// A lap of a 3D workpiece as the state keeps it ([`crate::contact::self_contact_3d`]): as
+/// 2D's [`Lap`], over the surface's particles (slots) and faces. A self-contact is a lap
+/// when its slave lies more than `2 s` cells from every corner of its master face in the
+/// reference configuration ([`crate::contact::self_contact_3d::Surface::near`], `s` the
+/// cells that share a particle's coefficients); lap pairs whose particles lie within `s`
+/// cells of each other belong to one lap, grown as 2D's ([`grow`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SolidLap {
+    /// When it formed (s).
+    pub formed_s: Real,
+    /// Each tool's stroke then (m), in scene order.
+    pub formed_strokes_m: Vec<Real>,
+    /// Where it formed: the midpoint of its first contact's slave and master point (m).
+    pub start_m: [Real; 3],
+    /// Its first contact: the slave's slot, the master face and the master point's weights
+    /// on the face's corners.
+    pub seed: (u32, u32, [Real; 4]),
+    /// The slots of every surface particle that took part in it, increasing.
+    pub slots: Vec<u32>,
+}
+
+/// What the 3D laps are grown from at one stage: the surface, the cells that share a
+/// particle's coefficients, the predicted positions by slot (m), the time they are
+/// predicted for (s) and each tool's stroke then (m).
+pub struct SolidStage<'a> {
+    /// The workpiece's surface.
+    pub surface: &'a Surface,
+    /// Cells on either side of a particle that share its coefficients.
+    pub neighbours: usize,
+    /// Predicted positions by slot (m).
+    pub x: &'a [[Real; 3]],
+    /// The time they are predicted for (s).
+    pub time: Real,
+    /// Each tool's stroke then (m).
+    pub strokes: Vec<Real>,
+}
+
+/// The master point of `pair`'s face with `weights` at the positions `x` (m, by slot).
+fn master_point(surface: &Surface, face: u32, weights: [Real; 4], x: &[[Real; 3]]) -> [Real; 3] {
+    let c = surface.faces[face as usize];
+    std::array::from_fn(|i| (0..4).map(|a| weights[a] * x[c[a] as usize][i]).sum())
+}
+
+/// Whether a 3D `pair` joins surface points more than `2 s` cells apart (see [`SolidLap`]).
+pub fn is_solid_lap(pair: &Pair3, surface: &Surface, s: usize) -> bool {
+    let c = surface.faces[pair.face as usize];
+    c.iter()
+        .all(|&a| !surface.near(pair.slave as usize, a as usize, 2 * s))
+}
+
+/// Grows the 3D `laps` by the lap pairs among `pairs` (see [`SolidLap`]).
+pub fn grow_solid(laps: &mut Vec<SolidLap>, pairs: &[Pair3], stage: &SolidStage<'_>) {
+    let (surface, s) = (stage.surface, stage.neighbours);
+    let lap_pairs: Vec<&Pair3> = pairs
+        .iter()
+        .filter(|p| is_solid_lap(p, surface, s))
+        .collect();
+    if lap_pairs.is_empty() {
+        return;
+    }
+    let near = |i: u32, j: u32| surface.near(i as usize, j as usize, s);
+    let members = lap_pairs
+        .iter()
+        .map(|p| {
+            let mut m = vec![p.slave];
+            m.extend(surface.faces[p.face as usize]);
+            m
+        })
+        .collect();
+    for (first, members) in join(members, &near) {
+        let Some(members) = merge(laps, members, |l| &mut l.slots, &near) else {
+            continue;
+        };
+        let p = lap_pairs[first];
+        let q = master_point(surface, p.face, p.weights, stage.x);
+        let xk = stage.x[p.slave as usize];
+        laps.push(SolidLap {
+            formed_s: stage.time,
+            formed_strokes_m: stage.strokes.clone(),
+            start_m: std::array::from_fn(|i| 0.5 * (xk[i] + q[i])),
+            seed: (p.slave, p.face, p.weights),
+            slots: members,
+        });
+    }
+}
+
+/// A 3D lap as the outputs report it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SolidLapReport {
+    /// When it formed (s).
+    pub formed_s: Real,
+    /// Each tool's stroke then (m), in scene order.
+    pub formed_strokes_m: Vec<Real>,
+    /// Where it formed (m).
+    pub start_m: [Real; 3],
+    /// Where the material of its first contact is now (m).
+    pub end_m: [Real; 3],
+    /// Its extent now: `[min, max]` of x, y and z over its particles (m).
+    pub extent_m: [[Real; 2]; 3],
+    /// Where its first contact's slave particle lay in the undeformed workpiece (m).
+    pub reference_m: [Real; 3],
+    /// Every surface particle that took part in it.
+    pub particles: Vec<usize>,
+}
+
+/// The report of the 3D `lap` on `surface` at the positions now `x` (m, by slot).
+pub fn solid_report(lap: &SolidLap, surface: &Surface, x: &[[Real; 3]]) -> SolidLapReport {
+    let (k, face, w) = lap.seed;
+    let q = master_point(surface, face, w, x);
+    let xk = x[k as usize];
+    let mut extent = [[Real::INFINITY, Real::NEG_INFINITY]; 3];
+    for &s in &lap.slots {
+        for (e, c) in extent.iter_mut().zip(x[s as usize]) {
+            *e = [e[0].min(c), e[1].max(c)];
+        }
+    }
+    SolidLapReport {
+        formed_s: lap.formed_s,
+        formed_strokes_m: lap.formed_strokes_m.clone(),
+        start_m: lap.start_m,
+        end_m: std::array::from_fn(|i| 0.5 * (xk[i] + q[i])),
+        extent_m: extent,
+        reference_m: surface.reference(k as usize),
+        particles: lap
+            .slots
+            .iter()
+            .map(|&s| surface.particles[s as usize] as usize)
+            .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::self_contact_3d::tests::{folded_strip, search};
+
+    #[test]
+    fn a_strip_folded_onto_itself_is_one_lap_where_its_parts_overlap() {
+        let (x, v, surface) = folded_strip();
+        let pairs = search(&x, &surface, &v, &mut vec![false; x.len()]);
+        // Near the fold's root (x 5 to 6) the contacts join particles within four cells:
+        // not a lap; farther out they do.
+        assert!(pairs.iter().any(|p| is_solid_lap(p, &surface, 2)));
+        assert!(!pairs.iter().all(|p| is_solid_lap(p, &surface, 2)));
+        let mut laps = Vec::new();
+        let stage = SolidStage {
+            surface: &surface,
+            neighbours: 2,
+            x: &x,
+            time: 1.5,
+            strokes: vec![0.25],
+        };
+        grow_solid(&mut laps, &pairs, &stage);
+        assert_eq!(laps.len(), 1, "{laps:?}");
+        let report = solid_report(&laps[0], &surface, &x);
+        assert_eq!((report.formed_s, report.formed_strokes_m[0]), (1.5, 0.25));
+        // Where: between the left part's top face (z 1) and the folded part's (z 0.95),
+        // over the overlap (x 0 to 6).
+        let s = report.start_m;
+        assert!(
+            (s[2] - 0.975).abs() < 1e-12 && (0.0..=6.0).contains(&s[0]),
+            "{s:?}"
+        );
+        assert_eq!(report.end_m, s);
+        let e = report.extent_m;
+        assert!(e[2][0] >= 0.95 - 1e-12 && e[2][1] <= 1.0 + 1e-12, "{e:?}");
+        assert!(e[0][1] - e[0][0] >= 2.0, "{e:?}");
+        // Both parts of the strip took part in it.
+        let r = |j: &usize| surface.reference(*j)[0];
+        assert!(report.particles.iter().any(|j| r(j) < 6.5));
+        assert!(report.particles.iter().any(|j| r(j) > 6.5));
+        // A second stage with the same contacts grows the same lap.
+        grow_solid(&mut laps, &pairs, &stage);
+        assert_eq!(laps.len(), 1);
     }
 }

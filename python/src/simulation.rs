@@ -456,13 +456,14 @@ impl Simulation {
 
     /// The laps so far (folds of the surface onto itself between points apart along it), as
     /// in summary.json: each with `formed_s`, `formed_stroke_m` (by tool), `start_m`,
-    /// `end_m`, `length_m`, `reference_m` and its surface `particles`.
+    /// `end_m`, `length_m` (2D) or `extent_m` (3D), `reference_m` and its surface
+    /// `particles`.
     fn laps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let laps = self.with(py, |s| match &s.sim {
             Sim::Plane(sim) => Ok(serde_json::Value::Array(rkforge_runner::laps_json(sim))),
-            Sim::Solid(_) => Err(PyValueError::new_err(
-                "laps: a 3D run does not track the surface's folds yet (2D only)",
-            )),
+            Sim::Solid(sim) => Ok(serde_json::Value::Array(rkforge_runner::solid_laps_json(
+                sim,
+            ))),
         })?;
         to_dict(py, &laps)
     }

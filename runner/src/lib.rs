@@ -17,7 +17,8 @@ pub mod summary;
 pub use history::History;
 pub use runnable::Runnable;
 pub use summary::{
-    laps_json, reference_table, references_beside, solid_summary, summary, tool_json, Ending,
+    laps_json, reference_table, references_beside, solid_laps_json, solid_summary, summary,
+    tool_json, Ending,
 };
 
 impl<S: Body> Outcome<S> {

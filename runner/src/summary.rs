@@ -172,6 +172,7 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
             "axial_force_N": t.axial_force(),
             "fill_points": fill_json(sim.fill_points(), k),
         })).collect::<Vec<_>>(),
+        "laps": solid_laps_json(sim),
         "stage_seconds": {
             "setup": t.setup.as_secs_f64(),
             "shape_functions": t.shape_functions.as_secs_f64(),
@@ -190,6 +191,31 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
     }
     place(&mut summary, &solid_columns(scene), &sample);
     summary
+}
+
+/// The laps of a 3D run ([`rkforge_core::laps::SolidLap`]), as 2D's ([`laps_json`]) with
+/// the lap's extent now (`[min, max]` of x, y and z over its particles) for its length.
+pub fn solid_laps_json(sim: &SolidSimulation) -> Vec<Value> {
+    sim.laps()
+        .into_iter()
+        .map(|lap| {
+            let strokes: serde_json::Map<String, Value> = sim
+                .tools()
+                .iter()
+                .zip(&lap.formed_strokes_m)
+                .map(|(t, s)| (t.name.clone(), json!(s)))
+                .collect();
+            json!({
+                "formed_s": lap.formed_s,
+                "formed_stroke_m": strokes,
+                "start_m": lap.start_m,
+                "end_m": lap.end_m,
+                "extent_m": lap.extent_m,
+                "reference_m": lap.reference_m,
+                "particles": lap.particles,
+            })
+        })
+        .collect()
 }
 
 /// The laps ([`rkforge_core::laps`]): each with when and at which stroke of each tool it

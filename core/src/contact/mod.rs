@@ -38,6 +38,7 @@
 
 pub mod corners;
 pub mod self_contact;
+pub mod self_contact_3d;
 pub mod sidibe2009;
 pub mod symmetry;
 pub mod workpiece;

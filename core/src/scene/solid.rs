@@ -10,8 +10,8 @@
 //! tools and the surroundings, and elasticity over temperature.
 
 use super::{
-    Checks, HeatContact, IntegrationRule, MaterialSpec, Motion, Reference, Scene, ThermalSpec,
-    TimeSpec,
+    Checks, HeatContact, IntegrationRule, MaterialSpec, Motion, Reference, Scene, SelfContactSpec,
+    ThermalSpec, TimeSpec,
 };
 use crate::error::Result;
 use crate::friction::Friction;
@@ -372,6 +372,12 @@ pub struct SolidScene {
     /// Rigid tools: planes, or dies from STL files.
     #[serde(default)]
     pub tools: Vec<SolidToolSpec>,
+    /// Contact of the workpiece's surface with itself, as in 2D (the same keys and meaning,
+    /// on by default): where the surface folds, its parts press on each other, and a fold
+    /// between points apart on the surface is reported as a lap
+    /// ([`crate::contact::self_contact_3d`]).
+    #[serde(default)]
+    pub self_contact: SelfContactSpec,
     /// What to record.
     #[serde(default)]
     pub output: SolidOutput,
@@ -459,6 +465,7 @@ impl SolidScene {
             super::tools::check_fill_points(points, &key, &mut out);
             t.motion.check(&key, &mut out);
         }
+        self.self_contact.check(&mut out);
         let interval = self
             .output
             .history_interval_s

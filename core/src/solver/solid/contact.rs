@@ -40,7 +40,13 @@ const BLOCK: usize = 64;
 
 /// The predicted physical position of particle `j` a step `dt` (s) ahead, `x_J = X_J +
 /// sum_I N_I(X_J) (d_I + dt v_I)` (m), from the coefficients `d` (m) and `v` (m/s).
-fn predicted(disc: &SolidDisc, d: &[[Real; 3]], v: &[[Real; 3]], dt: Real, j: usize) -> [Real; 3] {
+pub(super) fn predicted(
+    disc: &SolidDisc,
+    d: &[[Real; 3]],
+    v: &[[Real; 3]],
+    dt: Real,
+    j: usize,
+) -> [Real; 3] {
     let mut x = disc.ref_pos[j];
     for e in disc.nodal.row(j) {
         let (i, n) = (disc.nodal.index[e] as usize, disc.nodal.n[e]);
@@ -61,7 +67,7 @@ fn predicted(disc: &SolidDisc, d: &[[Real; 3]], v: &[[Real; 3]], dt: Real, j: us
 /// particle off the surface `V_J^(2/3)` (`V_J` its volume, m^3), as 2D gives one the area
 /// of its spacing. The bound is then `m sigma_y A_J / sqrt 3` ([`crate::friction`];
 /// Wanheim and Bay 1978).
-fn interface(
+pub(super) fn interface(
     disc: &SolidDisc,
     j: usize,
     flow: Real,
@@ -150,6 +156,13 @@ impl ToolContact {
         self.moves[2] = bound;
     }
 
+    /// The bound on the change of any coefficient's `d_I + dt v*_I` since the last stage,
+    /// `sqrt 3` times the last two predictors' and the last update's move bounds (m): a
+    /// particle's predicted position moves at most `S_J` times it.
+    pub(crate) fn move_bound(&self) -> Real {
+        (3.0 as Real).sqrt() * (self.moves[0] + self.moves[1] + self.moves[2])
+    }
+
     /// The contact of the predicted positions (a natural step `dt` ahead, s) with `planes`
     /// (paper eqs. 4-7), `dt_avg` the corrector's step (s), the points' flow stresses in
     /// `out` for the friction laws that need one ([`interface`]). Fills
@@ -187,7 +200,7 @@ impl ToolContact {
         };
         self.strokes.clear();
         self.strokes.extend(planes.iter().map(|t| t.state.stroke));
-        let du = (3.0 as Real).sqrt() * (self.moves[0] + self.moves[1] + self.moves[2]);
+        let du = self.move_bound();
         let margin = 1e-9 * disc.h_min;
         self.evaluated.clear();
         for (j, (c, s)) in self.clearance.iter_mut().zip(&disc.sum_abs).enumerate() {

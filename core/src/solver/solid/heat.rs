@@ -192,6 +192,12 @@ impl HeatSurface {
             .sum()
     }
 
+    /// The particles on its faces (ascending) and each face's corners in order around it,
+    /// outward by the right-hand rule, as indices into the particles.
+    pub(super) fn parts(&self) -> (&[u32], &[[u32; 4]]) {
+        (&self.particles, &self.faces)
+    }
+
     /// The contact area (m^2) of particle `j` on a tool surface with unit normal `n`, the
     /// corners at `position(particle)` (m): `A_J = sum |a . n|` over its quarters (the
     /// area of its share of the surface projected on the tool's tangent plane, as the

@@ -29,16 +29,18 @@
 //! temperature field carried as in 2D). Die fill (`fill.rs`: 2D's test on the surface
 //! particles) and what the dies feel (`die_contact.rs`: each tool's contact area on the
 //! surface patches, its share of the surface, the pressure over an STL die's triangles or
-//! a plane's contact patch)
-//! are read from the state. Not in 3D yet (refused by the scene's validation):
-//! SCNI's stabilization and self-contact; not yet done either, without a refusal: the
-//! pass of the tools' convex edges and vertices against the surface between particles.
+//! a plane's contact patch) are read from the state. Self-contact and its laps are
+//! `self_contact.rs` ([`crate::contact::self_contact_3d`] over the cells' outer faces). Not
+//! in 3D yet (refused by the scene's validation): SCNI's stabilization; not yet done
+//! either, without a refusal: the pass of the tools' convex edges and vertices against the
+//! surface between particles.
 
 mod contact;
 mod die_contact;
 mod fill;
 mod heat;
 mod rereference;
+mod self_contact;
 mod setup;
 #[cfg(test)]
 mod tests;
@@ -58,6 +60,7 @@ use super::state::Filled;
 use super::stress::{self, has_avx2, Inputs};
 use super::update::{self, Motion, Predictor};
 use crate::error::{Error, Result};
+use crate::laps::{SolidLap, SolidLapReport};
 use crate::material::{HenckyJ2, PointState3};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
@@ -67,6 +70,7 @@ use crate::team::Team;
 use contact::ToolContact;
 pub use die_contact::DiePressure;
 pub use rereference::SolidReference;
+use self_contact::{SelfStage, SolidSelfContact};
 use serde::{Deserialize, Serialize};
 use std::time::{Duration, Instant};
 
@@ -195,6 +199,13 @@ pub struct SolidState {
     /// particle and tool in contact, in the stage's order (the pressure on the dies).
     #[serde(default)]
     pub pressed: Vec<Pressed>,
+    /// Which surface particles were in contact with the surface at the last stage, by slot
+    /// ([`crate::contact::self_contact_3d`]; all false when the scene turns it off).
+    #[serde(default)]
+    pub self_touching: Vec<bool>,
+    /// The laps (folds of the surface onto itself) found so far, in the order they formed.
+    #[serde(default)]
+    pub laps: Vec<SolidLap>,
 }
 
 /// The normal contact force of one particle on one scene tool at a contact stage.
@@ -219,6 +230,7 @@ pub(super) struct SolidWorkspace {
     f_int: Vec<[Real; 3]>,
     v_prev: Vec<[Real; 3]>,
     contact: ToolContact,
+    self_contact: SolidSelfContact,
     team: Team,
 }
 
@@ -402,9 +414,19 @@ impl SolidSimulation {
             for t in tools.iter_mut() {
                 t.state.stroke += (full - dt) * t.state.velocity;
             }
-            let touch = ws
+            let mut touch = ws
                 .contact
                 .stage(&ws.team, disc, tools, st, &ws.out, full, step.avg);
+            let on_itself = SelfStage {
+                tools: &tools[..disc.scene_tools],
+                out: &ws.out,
+                du: ws.contact.move_bound(),
+                dt: full,
+                dt_avg: step.avg,
+            };
+            touch.any |= ws
+                .self_contact
+                .stage(disc, st, &mut ws.contact.force, &on_itself);
             for (t, s) in tools.iter_mut().zip(at_end) {
                 t.state.stroke = s;
             }
@@ -544,6 +566,8 @@ impl SolidSimulation {
             && st.held.len() == self.st.held.len()
             && st.stick.len() == self.st.stick.len()
             && st.fill.len() == self.st.fill.len()
+            && (st.self_touching.len() == self.st.self_touching.len()
+                || st.self_touching.is_empty())
             && st.heat.is_some() == self.st.heat.is_some();
         if !same {
             return Err(Error::State(
@@ -571,6 +595,10 @@ impl SolidSimulation {
         }
         self.ws.v_prev.clone_from(&st.v);
         self.ws.contact = ToolContact::new(st.d.len(), self.tools.len());
+        self.ws.self_contact.forget();
+        // A state saved before self-contact in 3D has no surface contacts: none.
+        let mut st = st;
+        st.self_touching.resize(self.st.self_touching.len(), false);
         for (p, (out, point)) in self.ws.out.iter_mut().zip(&st.points).enumerate() {
             let temp = st.heat.as_ref().map(|h| h.temperature_c[p]);
             *out = PointOut::at(&self.disc.material, point.eps_p, temp);
@@ -601,6 +629,7 @@ impl SolidSimulation {
             + st.stick.len() * size_of::<Option<[Real; 3]>>()
             + st.pressed.len() * size_of::<Pressed>()
             + st.fill.len() * size_of::<Option<Filled>>()
+            + st.self_touching.len() * size_of::<bool>()
             + d.cells.len() * size_of::<[u32; 8]>()
             + heat
     }
@@ -854,6 +883,28 @@ impl SolidSimulation {
             }
         }
         worst
+    }
+
+    /// The laps found so far ([`crate::laps::SolidLap`]), in the order they formed, with
+    /// where their material is now.
+    pub fn laps(&self) -> Vec<SolidLapReport> {
+        if self.st.laps.is_empty() {
+            return Vec::new();
+        }
+        self.ws.self_contact.laps(&self.st, &self.positions())
+    }
+
+    /// How many laps formed so far.
+    pub fn lap_count(&self) -> usize {
+        self.st.laps.len()
+    }
+
+    /// The deepest a surface particle's physical position has passed through another part
+    /// of the workpiece's surface now, whether the scene's self-contact is on or off
+    /// ([`crate::contact::self_contact_3d::Surface::passed_through`]): `(depth (m),
+    /// particle)`, depth 0 when none has.
+    pub fn self_penetration_now(&self) -> (Real, usize) {
+        self.ws.self_contact.passed_through(&self.positions())
     }
 
     /// [`SolidSimulation::penetration_now`] recorded in the state's maxima; a depth past

@@ -6,6 +6,7 @@
 use super::contact::ToolContact;
 use super::fill;
 use super::heat::{update_eigenvalue, HeatSurface};
+use super::self_contact::SolidSelfContact;
 use super::{SolidDisc, SolidSimulation, SolidState, SolidWorkspace};
 use crate::cylinder_grid::{CylinderGrid, Sector};
 use crate::error::{Error, Result};
@@ -272,9 +273,19 @@ impl SolidSimulation {
                 }
             }
         }
-        // The surface the heat stage, the friction laws that need a contact area and the
-        // contact readings (`readings.rs`) take their areas on.
-        let heat_surface = if scene_tools > 0 || scene.transfers_heat() {
+        let self_contact = SolidSelfContact::new(
+            scene,
+            &p.cells,
+            &p.positions,
+            &p.extents,
+            &p.planes,
+            p.h_min,
+        );
+        // The surface the heat stage, the friction laws that need a contact area (the tools'
+        // and the surface's own) and the contact readings (`readings.rs`) take their areas on.
+        let own_area =
+            scene.self_contact.enabled && scene.self_contact.friction.needs_flow_stress();
+        let heat_surface = if scene_tools > 0 || scene.transfers_heat() || own_area {
             HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
         } else {
             HeatSurface::default()
@@ -320,6 +331,7 @@ impl SolidSimulation {
             f_int: vec![[0.0; 3]; np],
             v_prev: v.clone(),
             contact: ToolContact::new(np, ntools),
+            self_contact,
             team: Team::default(),
         };
         let mut st = SolidState {
@@ -362,6 +374,8 @@ impl SolidSimulation {
             }),
             max_stretch: 0.0,
             reference: None,
+            self_touching: vec![false; ws.self_contact.slots()],
+            laps: Vec::new(),
         };
         disc.critical_dt0 = measure_critical_step(&disc, &mut st, &mut ws)?;
         if let Some(ms) = scene.time.mass_scaling {
