@@ -362,6 +362,37 @@ impl TriangleSurface {
         Proximity::Near(self.nearest(x, shift))
     }
 
+    /// The triangles whose centroid lies within `r` (m) of `q` (m, in the surface's own
+    /// place, untranslated), ascending. Complete: a centroid lies in its triangle's bounds,
+    /// so the bin holding it lists the triangle, and that bin meets the box `q +- r`.
+    pub fn triangles_around(&self, q: [Real; 3], r: Real) -> Vec<u32> {
+        let b = &self.bins;
+        let lo = b.cell(q.map(|v| v - r));
+        let hi = b.cell(std::array::from_fn(|k| q[k] + r));
+        let mut found = Vec::new();
+        for i2 in lo[2]..=hi[2] {
+            for i1 in lo[1]..=hi[1] {
+                for i0 in lo[0]..=hi[0] {
+                    let bin = b.index([i0, i1, i2]);
+                    found.extend(
+                        b.items[b.offsets[bin] as usize..b.offsets[bin + 1] as usize]
+                            .iter()
+                            .copied()
+                            .filter(|&t| {
+                                let [a, bb, c] = self.mesh.corners(t as usize);
+                                let d: [Real; 3] =
+                                    std::array::from_fn(|k| (a[k] + bb[k] + c[k]) / 3.0 - q[k]);
+                                dot(d, d) <= r * r
+                            }),
+                    );
+                }
+            }
+        }
+        found.sort_unstable();
+        found.dedup();
+        found
+    }
+
     /// The exact signed distance and closest point of `x` (m), the surface translated by
     /// `shift` (m).
     pub fn closest(&self, x: [Real; 3], shift: [Real; 3]) -> Closest {

@@ -19,10 +19,13 @@
 //! over every quarter: the workpiece's own surface less its faces on symmetry planes.
 //!
 //! Pressure on a tool (Pa), per triangle. On an STL die, over the die's own triangles: each
-//! pressed particle's normal force `f_J = f . n` (N) goes to the triangle of the die closest
-//! to the particle's physical position now (the die where it is now; on a shared edge or
-//! vertex the lowest-numbered of the nearest triangles), and `p_k = sum_{J -> k} f_J / A_k`,
-//! `A_k` the triangle's area (m^2). The field is as fine as the die's triangles: a flat face
+//! pressed particle's normal force `f_J = f . n` (N) is spread over the triangles whose
+//! centroids lie within `r_J = sqrt(A_J / pi)` of its closest point on the die (the die
+//! where it is now; `A_J` its contact area, below), each taking `f_J A_k / sum A_k` by its
+//! area `A_k` (m^2), so that a die finer than the particles carries `f_J / A_J` over the
+//! particle's own patch rather than all of `f_J` on one small triangle; where no centroid
+//! lies that near (a die coarser than the particles), the closest point's triangle takes it
+//! all. Then `p_k = f_k / A_k`. The field is as fine as the die's triangles: a flat face
 //! exported as two triangles carries its mean pressure. On a plane, over the contact patch
 //! itself: each pressed particle's surface quarters projected on the plane, two triangles
 //! each, quarter `q` carrying `f_J |a_q . n| / A_J` of the particle's force (`A_J = sum_q
@@ -36,6 +39,7 @@ use super::{SolidSimulation, SolidState};
 use crate::math::Real;
 use crate::solid_tool::Surface;
 use crate::stl::{cross, dot, sub};
+use std::f64::consts::PI;
 
 /// The contact pressure on a tool over triangles (an STL die's own, or a plane's contact
 /// patch), where the tool is now.
@@ -123,9 +127,20 @@ impl SolidSimulation {
                     .map(|v| std::array::from_fn(|k| v[k] + shift[k]))
                     .collect();
                 let mut die = DiePressure::unloaded(vertices, mesh.triangles.clone());
+                let patches = &self.disc.heat_surface;
                 for p in pressed_on(&self.st, t) {
-                    let k = surface.closest(x[p.particle as usize], shift).triangle as usize;
-                    die.forces[k] += p.force_n;
+                    let j = p.particle as usize;
+                    let closest = surface.closest(x[j], shift);
+                    let area = patches.contact_area(j, &p.normal, |i| x[i]).unwrap_or(0.0);
+                    let around = surface.triangles_around(closest.point, (area / PI).sqrt());
+                    let total: Real = around.iter().map(|&k| die.areas[k as usize]).sum();
+                    if total > 0.0 {
+                        for &k in &around {
+                            die.forces[k as usize] += p.force_n * die.areas[k as usize] / total;
+                        }
+                    } else {
+                        die.forces[closest.triangle as usize] += p.force_n;
+                    }
                 }
                 die.loaded()
             }
