@@ -536,6 +536,53 @@ fn a_die_finer_than_the_particles_carries_each_particles_pressure_over_its_patch
     assert!((integral / tool.state.normal_force - 1.0).abs() < 1e-9);
     assert!((loaded / area - 1.0).abs() < 0.25, "{loaded} {area}");
     assert!(peak < 1.5 * mean, "{peak} {mean}");
+
+    // A pressed particle with no contact area of its own (edge-on quarters, or a particle off
+    // the surface pressed in a flash; here the block's centre particle, booked with the mean
+    // particle's force) is spread over the mean patch of the others, A_t / n: the triangles
+    // it adds to carry its force f at about f / (A_t / n), not all of f on the one triangle
+    // (1/32 of a particle's patch) nearest to it.
+    let pressed = &sim.state().pressed;
+    let n = pressed.iter().filter(|p| p.tool == 1).count() as f64;
+    let f = tool.state.normal_force / n;
+    let x = sim.positions();
+    let middle: [f64; 3] =
+        std::array::from_fn(|k| x.iter().map(|p| p[k]).sum::<f64>() / x.len() as f64);
+    let d2 = |p: &[f64; 3]| (0..3).map(|k| (p[k] - middle[k]).powi(2)).sum::<f64>();
+    let centre = (0..x.len())
+        .min_by(|&a, &b| d2(&x[a]).total_cmp(&d2(&x[b])))
+        .unwrap();
+    assert!(pressed.iter().all(|p| p.particle as usize != centre));
+    let mut st = sim.state().clone();
+    st.pressed.push(rkforge_core::solver::Pressed {
+        particle: centre as u32,
+        tool: 1,
+        force_n: f,
+        normal: [0.0, 0.0, -1.0],
+    });
+    let mut with = sim.clone();
+    with.restore(st).unwrap();
+    let more = with.die_pressure(1);
+    let added: Vec<(f64, f64)> = more
+        .forces
+        .iter()
+        .zip(&die.forces)
+        .zip(&die.areas)
+        .filter(|((a, b), _)| **a != **b)
+        .map(|((a, b), &area)| (a - b, area))
+        .collect();
+    let spread: f64 = added.iter().map(|(_, a)| a).sum();
+    let carried: f64 = added.iter().map(|(df, _)| df).sum();
+    let highest = added.iter().map(|(df, a)| df / a).fold(0.0, f64::max);
+    let patch = area / n;
+    eprintln!(
+        "a particle of no area of its own: {} triangles, {spread:.4e} m^2 against the mean patch {patch:.4e} m^2, highest added pressure {highest:.4e} against f / patch {:.4e} Pa",
+        added.len(),
+        f / patch
+    );
+    assert!((carried / f - 1.0).abs() < 1e-9);
+    assert!((spread / patch - 1.0).abs() < 0.5, "{spread} {patch}");
+    assert!(highest < 2.0 * f / patch, "{highest} {}", f / patch);
 }
 
 /// Fill points on the ram's face, which starts 0.5 mm above the block, with a fill distance

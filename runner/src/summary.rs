@@ -193,18 +193,25 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
     summary
 }
 
+/// Each tool's stroke (m) when a lap formed, by the tool's name.
+fn strokes_json<'a>(names: impl Iterator<Item = &'a str>, strokes: &[f64]) -> Value {
+    let map: serde_json::Map<String, Value> = names
+        .zip(strokes)
+        .map(|(name, s)| (name.to_owned(), json!(s)))
+        .collect();
+    Value::Object(map)
+}
+
 /// The laps of a 3D run ([`rkforge_core::laps::SolidLap`]), as 2D's ([`laps_json`]) with
 /// the lap's extent now (`[min, max]` of x, y and z over its particles) for its length.
 pub fn solid_laps_json(sim: &SolidSimulation) -> Vec<Value> {
     sim.laps()
         .into_iter()
         .map(|lap| {
-            let strokes: serde_json::Map<String, Value> = sim
-                .tools()
-                .iter()
-                .zip(&lap.formed_strokes_m)
-                .map(|(t, s)| (t.name.clone(), json!(s)))
-                .collect();
+            let strokes = strokes_json(
+                sim.tools().iter().map(|t| &t.name[..]),
+                &lap.formed_strokes_m,
+            );
             json!({
                 "formed_s": lap.formed_s,
                 "formed_stroke_m": strokes,
@@ -225,12 +232,10 @@ pub fn laps_json(sim: &Simulation) -> Vec<Value> {
     sim.laps()
         .into_iter()
         .map(|lap| {
-            let strokes: serde_json::Map<String, Value> = sim
-                .tools()
-                .iter()
-                .zip(&lap.formed_strokes_m)
-                .map(|(t, s)| (t.name.clone(), json!(s)))
-                .collect();
+            let strokes = strokes_json(
+                sim.tools().iter().map(|t| &t.name[..]),
+                &lap.formed_strokes_m,
+            );
             json!({
                 "formed_s": lap.formed_s,
                 "formed_stroke_m": strokes,

@@ -19,6 +19,7 @@
 
 use super::discretization::Discretization;
 use super::state::{Filled, State};
+use super::tool_readings::FillPoint;
 use super::workspace::Workspace;
 use crate::math::Real;
 use crate::scene::Scene;
@@ -43,9 +44,7 @@ pub(super) fn check(
         return;
     }
     let h = disc.h_min();
-    let open: Vec<(usize, [Real; 2], usize)> = points_now(scene, tools)
-        .filter(|&(k, _, _)| st.fill[k].is_none())
-        .collect();
+    let open = open_points(scene_points(scene, tools), &st.fill);
     let touching = ws.contact.near().map(|n| (n.0, n.2));
     let d = &st.d;
     reach_points(
@@ -108,24 +107,72 @@ fn distance<const D: usize>(a: [Real; D], b: [Real; D]) -> Real {
     (0..D).fold(0.0, |r: Real, k| r.hypot(a[k] - b[k]))
 }
 
-/// Every fill point of `scene` as (index in [`State::fill`], position now (m), tool), tool
-/// by tool in scene order, with `tools` where they are now.
-pub(super) fn points_now<'a>(
-    scene: &'a Scene,
-    tools: &'a [Tool],
-) -> impl Iterator<Item = (usize, [Real; 2], usize)> + 'a {
-    scene
-        .tools
-        .iter()
+/// Every fill point as (index in the state's `fill`, position now (m), tool, name), tool by
+/// tool in scene order, in either dimension: each tool given as its shift from its start
+/// now, `s a` (m; `s` the stroke, `a` the unit axis), and its points at the start `p_0`
+/// (m), which move with it: `p = p_0 + s a`.
+pub(crate) fn points_now<'a, const D: usize, P>(
+    tools: impl Iterator<Item = ([Real; D], P)> + 'a,
+) -> impl Iterator<Item = (usize, [Real; D], usize, &'a str)> + 'a
+where
+    P: IntoIterator<Item = (&'a str, [Real; D])> + 'a,
+{
+    tools
         .enumerate()
-        .flat_map(move |(t, spec)| {
-            let tool = &tools[t];
-            let s = tool.state.stroke;
-            spec.fill_points.iter().map(move |p| {
-                let at = [p.at_m[0] + s * tool.axis[0], p.at_m[1] + s * tool.axis[1]];
-                (at, t)
+        .flat_map(|(t, (shift, points))| {
+            points.into_iter().map(move |(name, p0)| {
+                let at: [Real; D] = std::array::from_fn(|k| p0[k] + shift[k]);
+                (at, t, name)
             })
         })
         .enumerate()
-        .map(|(k, (at, t))| (k, at, t))
+        .map(|(k, (at, t, name))| (k, at, t, name))
+}
+
+/// The points of [`points_now`] that no particle has reached yet, as [`reach_points`] takes
+/// them.
+pub(crate) fn open_points<'a, const D: usize, P>(
+    tools: impl Iterator<Item = ([Real; D], P)> + 'a,
+    fill: &[Option<Filled>],
+) -> Vec<(usize, [Real; D], usize)>
+where
+    P: IntoIterator<Item = (&'a str, [Real; D])> + 'a,
+{
+    points_now(tools)
+        .filter(|&(k, ..)| fill[k].is_none())
+        .map(|(k, at, t, _)| (k, at, t))
+        .collect()
+}
+
+/// The points of [`points_now`] with when they filled, as the simulations report them.
+pub(crate) fn fill_points<'a, const D: usize, P>(
+    tools: impl Iterator<Item = ([Real; D], P)> + 'a,
+    fill: &[Option<Filled>],
+) -> Vec<FillPoint<D>>
+where
+    P: IntoIterator<Item = (&'a str, [Real; D])> + 'a,
+{
+    points_now(tools)
+        .map(|(k, at_m, tool, name)| FillPoint {
+            tool,
+            name: name.to_owned(),
+            at_m,
+            filled: fill[k],
+        })
+        .collect()
+}
+
+/// The 2D tools' fill points as [`points_now`] takes them: each tool's shift and points.
+pub(super) fn scene_points<'a>(
+    scene: &'a Scene,
+    tools: &'a [Tool],
+) -> impl Iterator<Item = ([Real; 2], impl Iterator<Item = (&'a str, [Real; 2])> + 'a)> + 'a {
+    scene.tools.iter().zip(tools).map(|(spec, tool)| {
+        let s = tool.state.stroke;
+        let shift = [s * tool.axis[0], s * tool.axis[1]];
+        (
+            shift,
+            spec.fill_points.iter().map(|p| (&p.name[..], p.at_m)),
+        )
+    })
 }

@@ -9,7 +9,7 @@
 //! is that over the length of the tool's polyline. Both are read from the state alone, so a
 //! restored state reports them as first computed.
 
-use super::fill::{points_now, ON_TOOL_SPACINGS};
+use super::fill::{fill_points, scene_points, ON_TOOL_SPACINGS};
 use super::simulation::Simulation;
 use super::state::Filled;
 use crate::math::Real;
@@ -31,16 +31,7 @@ pub struct FillPoint<const D: usize = 2> {
 impl Simulation {
     /// Every tool's fill points, tool by tool, with where they are now and when they filled.
     pub fn fill_points(&self) -> Vec<FillPoint> {
-        let names = self.scene.tools.iter().flat_map(|t| &t.fill_points);
-        points_now(&self.scene, &self.tools)
-            .zip(names)
-            .map(|((k, at_m, tool), p)| FillPoint {
-                tool,
-                name: p.name.clone(),
-                at_m,
-                filled: self.st.fill[k],
-            })
-            .collect()
+        fill_points(scene_points(&self.scene, &self.tools), &self.st.fill)
     }
 
     /// The workpiece's surface in contact with tool `t` now: the boundary ring's segments

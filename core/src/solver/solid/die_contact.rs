@@ -23,9 +23,12 @@
 //! centroids lie within `r_J = sqrt(A_J / pi)` of its closest point on the die (the die
 //! where it is now; `A_J` its contact area, below), each taking `f_J A_k / sum A_k` by its
 //! area `A_k` (m^2), so that a die finer than the particles carries `f_J / A_J` over the
-//! particle's own patch rather than all of `f_J` on one small triangle; where no centroid
-//! lies that near (a die coarser than the particles), the closest point's triangle takes it
-//! all. Then `p_k = f_k / A_k`. The field is as fine as the die's triangles: a flat face
+//! particle's own patch rather than all of `f_J` on one small triangle; a pressed particle
+//! with no contact area of its own (its surface quarters all edge-on to the die, or a
+//! particle off the surface pressed in the flash) takes the mean patch of the tool's other
+//! pressed particles, `A_J = A_t / n_t` (`n_t` those with an area), rather than loading one
+//! triangle with its whole force; where no centroid lies that near (a die coarser than the
+//! particles), the closest point's triangle takes it all. Then `p_k = f_k / A_k`. The field is as fine as the die's triangles: a flat face
 //! exported as two triangles carries its mean pressure. On a plane, over the contact patch
 //! itself: each pressed particle's surface quarters projected on the plane, two triangles
 //! each, quarter `q` carrying `f_J |a_q . n| / A_J` of the particle's force (`A_J = sum_q
@@ -128,10 +131,18 @@ impl SolidSimulation {
                     .collect();
                 let mut die = DiePressure::unloaded(vertices, mesh.triangles.clone());
                 let patches = &self.disc.heat_surface;
-                for p in pressed_on(&self.st, t) {
+                let areas: Vec<Real> = pressed_on(&self.st, t)
+                    .map(|p| {
+                        let j = p.particle as usize;
+                        patches.contact_area(j, &p.normal, |i| x[i]).unwrap_or(0.0)
+                    })
+                    .collect();
+                let with_area = areas.iter().filter(|&&a| a > 0.0).count();
+                let mean_patch = areas.iter().sum::<Real>() / with_area.max(1) as Real;
+                for (p, &own) in pressed_on(&self.st, t).zip(&areas) {
                     let j = p.particle as usize;
                     let closest = surface.closest(x[j], shift);
-                    let area = patches.contact_area(j, &p.normal, |i| x[i]).unwrap_or(0.0);
+                    let area = if own > 0.0 { own } else { mean_patch };
                     let around = surface.triangles_around(closest.point, (area / PI).sqrt());
                     let total: Real = around.iter().map(|&k| die.areas[k as usize]).sum();
                     if total > 0.0 {

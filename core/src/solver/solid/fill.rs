@@ -16,29 +16,22 @@ use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::scene::solid::SolidScene;
 use crate::solid_tool::SolidTool;
-use crate::solver::fill::{reach_points, Reach};
+use crate::solver::fill::{fill_points, open_points, reach_points, Reach};
 use crate::solver::tool_readings::FillPoint;
 
-/// Every fill point of `scene` as (index in [`SolidState::fill`], position now (m), tool),
-/// tool by tool in scene order, with `tools` where they are now.
-fn points_now<'a>(
+/// The 3D tools' fill points as [`crate::solver::fill::points_now`] takes them: each tool's shift and points.
+fn scene_points<'a>(
     scene: &'a SolidScene,
     tools: &'a [SolidTool],
-) -> impl Iterator<Item = (usize, [Real; 3], usize)> + 'a {
-    scene
-        .tools
-        .iter()
-        .enumerate()
-        .flat_map(move |(t, spec)| {
-            let tool = &tools[t];
-            let s = tool.state.stroke;
-            spec.fill_points.iter().map(move |p| {
-                let at: [Real; 3] = std::array::from_fn(|k| p.at_m[k] + s * tool.axis[k]);
-                (at, t)
-            })
-        })
-        .enumerate()
-        .map(|(k, (at, t))| (k, at, t))
+) -> impl Iterator<Item = ([Real; 3], impl Iterator<Item = (&'a str, [Real; 3])> + 'a)> + 'a {
+    scene.tools.iter().zip(tools).map(|(spec, tool)| {
+        let s = tool.state.stroke;
+        let shift = tool.axis.map(|a| s * a);
+        (
+            shift,
+            spec.fill_points.iter().map(|p| (&p.name[..], p.at_m)),
+        )
+    })
 }
 
 /// At setup: every fill point lies on its tool's surface at the start, its signed depth in
@@ -81,9 +74,7 @@ pub(super) fn check(
     if st.fill.iter().all(Option::is_some) {
         return;
     }
-    let open: Vec<(usize, [Real; 3], usize)> = points_now(scene, tools)
-        .filter(|&(k, _, _)| st.fill[k].is_none())
-        .collect();
+    let open = open_points(scene_points(scene, tools), &st.fill);
     let d = &st.d;
     let position = |j: usize| -> [Real; 3] {
         let u = disc.nodal.interpolate(j, d);
@@ -110,15 +101,6 @@ pub(super) fn check(
 impl SolidSimulation {
     /// Every tool's fill points, tool by tool, with where they are now and when they filled.
     pub fn fill_points(&self) -> Vec<FillPoint<3>> {
-        let names = self.scene.tools.iter().flat_map(|t| &t.fill_points);
-        points_now(&self.scene, &self.tools)
-            .zip(names)
-            .map(|((k, at_m, tool), p)| FillPoint {
-                tool,
-                name: p.name.clone(),
-                at_m,
-                filled: self.st.fill[k],
-            })
-            .collect()
+        fill_points(scene_points(&self.scene, &self.tools), &self.st.fill)
     }
 }
