@@ -10,13 +10,17 @@
 //! The scene may be 2D or 3D (the same forging FMU interface). A 3D scene with symmetry
 //! planes models part of the workpiece: the press's `model_copies` is bound to the number of
 //! copies of the model the driven tool feels (4 for the quarter models, planes x = 0 and
-//! y = 0 with a ram along z), so the press works against the whole billet's force.
+//! y = 0 with a ram along z), so the press works against the whole billet's force. A 2D
+//! plane-strain scene's symmetry edges count alike (a half model held on x = 0 with the die
+//! along y: 2); an axisymmetric model is the whole revolution already, its mid-plane across
+//! the axis counting 1.
 
 use crate::fmu;
 use quick_xml::events::{BytesDecl, BytesEnd, BytesStart, Event};
 use quick_xml::Writer;
 use rkforge_core::scene::solid::{is_solid, CylinderPart, SolidShape};
 use rkforge_core::scene::SolidScene;
+use rkforge_core::scene::{Component, Edge, Kinematics};
 use rkforge_core::Scene;
 use rkforge_model_description::{press, variable_table, Causality, FmuScene, Kind, Variable};
 use std::io::Write;
@@ -258,7 +262,7 @@ pub fn pack(scene_path: &Path, name: &str, tool: &str, out: &Path) -> Result<(),
         let about = About {
             name: &scene.name,
             end_s: scene.time.end_s,
-            copies: 1.0,
+            copies: plane_copies(&scene, tool)?,
         };
         (ssd(&scene, &about, kind, name, tool)?, about.copies)
     };
@@ -330,6 +334,31 @@ fn solid_copies(scene: &SolidScene, tool: &str) -> Result<f64, String> {
     press::model_copies(&planes, spec.axis).map_err(|e| format!("--tool {tool}: {e}"))
 }
 
+/// How many copies of a 2D scene's model the press's ram feels through the tool `tool`
+/// ([`press::model_copies`] over its symmetry edges): an edge `x_min` or `x_max` holding `x`
+/// only is a plane normal to x, one `y_min` or `y_max` holding `y` only a plane normal to y
+/// (an edge holding both is a clamp, not a mirror). In axisymmetry the planes normal to `r`
+/// are the axis, and the model is the whole revolution.
+fn plane_copies(scene: &Scene, tool: &str) -> Result<f64, String> {
+    let Some(spec) = scene.tools.iter().find(|t| t.name == tool) else {
+        return Err(format!(
+            "--tool {tool}: the scene has no tool named `{tool}`"
+        ));
+    };
+    let plane_strain = scene.model.kinematics == Kinematics::PlaneStrain;
+    let planes: Vec<usize> = scene
+        .constraints
+        .iter()
+        .filter_map(|c| match (c.edge, &c.fix[..]) {
+            (Edge::XMin | Edge::XMax, [Component::X]) if plane_strain => Some(0),
+            (Edge::YMin | Edge::YMax, [Component::Y]) => Some(1),
+            _ => None,
+        })
+        .collect();
+    let [ax, ay] = spec.axis;
+    press::model_copies(&planes, [ax, ay, 0.0]).map_err(|e| format!("--tool {tool}: {e}"))
+}
+
 fn read(p: &Path) -> Result<Vec<u8>, String> {
     std::fs::read(p).map_err(|e| format!("cannot read {}: {e}", p.display()))
 }
@@ -345,4 +374,43 @@ fn tempfile_dir(out: &Path) -> Result<std::path::PathBuf, String> {
     let dir = parent.join(format!(".rkforge-ssp-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     Ok(dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shipped(name: &str) -> Scene {
+        let path = format!("{}/../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(&path).unwrap();
+        Scene::from_str_named(&text, &path).unwrap()
+    }
+
+    /// The plane-strain quarter model (symmetry on the part's axis x = 0 and on the
+    /// mid-plane y = 0, the die along y) is half of what the die presses: its mirror in
+    /// x = 0 presses the same die, its mirror in y = 0 a mirrored die on the bed. The
+    /// axisymmetric half ring (mid-plane z = 0, the axis r = 0) is the whole revolution.
+    /// A clamp (an edge holding both components) is not a mirror.
+    #[test]
+    fn a_2d_press_feels_the_copies_its_symmetry_edges_make() {
+        let mut quarter = shipped("flash_quarter");
+        assert_eq!(plane_copies(&quarter, "die"), Ok(2.0));
+        assert_eq!(
+            plane_copies(&shipped("ring_compression"), "platen"),
+            Ok(1.0)
+        );
+        assert_eq!(plane_copies(&shipped("block_forging"), "top"), Ok(1.0));
+        quarter.constraints.retain(|c| c.edge == Edge::YMin);
+        assert_eq!(plane_copies(&quarter, "die"), Ok(1.0));
+        quarter.constraints[0].edge = Edge::XMin;
+        quarter.constraints[0].fix = vec![Component::X, Component::Y];
+        assert_eq!(plane_copies(&quarter, "die"), Ok(1.0));
+        quarter.tools[0].axis = [0.6, -0.8];
+        quarter.constraints[0].fix = vec![Component::X];
+        let e = plane_copies(&quarter, "die").unwrap_err();
+        assert!(e.starts_with("--tool die: the symmetry plane x = 0"), "{e}");
+        assert!(plane_copies(&quarter, "ram")
+            .unwrap_err()
+            .contains("no tool named `ram`"));
+    }
 }
