@@ -162,10 +162,14 @@ def test_the_work_booked_is_the_whole_force_over_the_stroke(runs):
     ("block_upsetting_3d.toml", {'symmetry = ["x_min", "y_min"]': 'symmetry = ["x_min"]'}, "2"),
     ("press_upsetting_3d.toml", {'part = "quarter"': 'part = "half"'}, "2"),
     ("press_upsetting_3d.toml", {'part = "quarter"': 'part = "full"'}, "1"),
+    ("flash_quarter.toml", {}, "2"),
+    ("ring_compression.toml", {}, "1"),
 ])
 def test_model_copies_follow_the_symmetry_planes(rkforge_bin, tmp_path, src, changes, copies):
     """Each symmetry plane along the ram's axis (z) doubles what the ram feels: the box
-    with two planes and with one, the half and the whole cylinder."""
+    with two planes and with one, the half and the whole cylinder. In 2D the plane-strain
+    quarter (edges x = 0 and y = 0, the die along y) counts its x = 0 edge only, and the
+    axisymmetric half ring (mid-plane z = 0) is the whole revolution."""
     ssd = read_ssd(system(rkforge_bin, tmp_path, "s", scene_variant(src, changes)), validate=True)
     assert bound(ssd, "press", "model_copies") == copies
 
