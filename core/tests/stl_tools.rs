@@ -1,4 +1,5 @@
-//! Rigid tools from STL files in 3D against the plane tools they replace.
+//! Rigid tools from STL files in 3D against the plane tools they replace, and the analytic
+//! cylinder tools against the STL cylinders they replace.
 
 use rkforge_core::outputs::{solid_columns, Sample};
 use rkforge_core::scene::{SceneFile, SolidScene};
@@ -736,7 +737,8 @@ fn force_at(curve: &[[f64; 2]], s: f64) -> f64 {
 /// the force-stroke curves at each tenth of the stroke within `tol` of the largest force
 /// (the facets are inscribed, `R (1 - cos(pi / n))` inside the circle), the deepest
 /// particle against the analytic surface under 5 % of a spacing, the energy balance within
-/// the run's default check (1e-2), and the analytic contact stage cheaper. Returns the
+/// the run's default check (1e-2), the analytic contact stage cheaper, and the pressure
+/// over the contact patch on the cylinder adding up to its normal force. Returns the
 /// analytic run.
 fn cylinder_against_stl(
     name: &str,
@@ -781,6 +783,19 @@ fn cylinder_against_stl(
         exact.sim.steps()
     );
     assert!(worst < tol, "{worst}");
+    // The pressure over the contact patch on the cylinder: its corners on the surface, its
+    // forces adding up to the tool's normal force.
+    let die = exact.sim.die_pressure(1);
+    let tool = &exact.sim.tools()[1];
+    let total: f64 = die.forces.iter().sum();
+    eprintln!(
+        "{name}: patch of {} triangles, {total:.6e} N against the normal force {:.6e} N",
+        die.triangles.len(),
+        tool.state.normal_force
+    );
+    assert!(!die.triangles.is_empty());
+    assert!((total - tool.state.normal_force).abs() < 1e-9 * tool.state.normal_force.abs());
+    assert!(die.vertices.iter().all(|v| tool.depth_of(*v).abs() < 1e-12));
     assert!(exact.deepest < 0.05 * h, "{}", exact.deepest / h);
     assert!(exact.balance < 1e-2 && faceted.balance < 1e-2);
     assert!(exact.contact_s < faceted.contact_s);

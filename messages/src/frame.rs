@@ -665,6 +665,40 @@ mod tests {
         assert_eq!(c.clock, stamp(nanos(sim.time())));
     }
 
+    /// A cylinder's outline lies on its mantle at its two ends, shifted with the tool; an
+    /// unbounded one spans the box's reach along its axis about the box's centre.
+    #[test]
+    fn a_cylinder_outline_lies_on_its_ends() {
+        let capped = Cylinder {
+            centre: [1.0, 2.0, 3.0],
+            direction: [0.0, 0.6, 0.8],
+            radius: 0.5,
+            half_length: Some(1.0),
+        };
+        let shift = [0.0, 0.0, -0.25];
+        let line = cylinder_outline(&capped, shift, [[0.0, 1.0]; 3]);
+        assert_eq!(line.len(), 34);
+        let moved = Cylinder {
+            centre: [1.0, 2.0, 2.75],
+            ..capped
+        };
+        for p in &line {
+            let (phi, _) = moved.signed(*p);
+            let rel: [f64; 3] = std::array::from_fn(|k| p[k] - moved.centre[k]);
+            assert!(phi.abs() < 1e-12 && (dot(&rel, &capped.direction).abs() - 1.0).abs() < 1e-12);
+        }
+        let bar = Cylinder {
+            centre: [0.0, 0.0, 7.0],
+            direction: [0.0, 1.0, 0.0],
+            radius: 2.0,
+            half_length: None,
+        };
+        let line = cylinder_outline(&bar, [0.0; 3], [[0.0, 5.0], [0.0, 2.0], [0.0, 5.0]]);
+        let ys: Vec<f64> = line.iter().map(|p| p[1]).collect();
+        assert!(ys[..17].iter().all(|&y| (y - 0.0).abs() < 1e-12), "{ys:?}");
+        assert!(ys[17..].iter().all(|&y| (y - 2.0).abs() < 1e-12), "{ys:?}");
+    }
+
     /// The patch of an inclined plane lies on the plane, its sides as long as the box's
     /// projection on them; a plane normal to z shows the box's x and y bounds.
     #[test]
