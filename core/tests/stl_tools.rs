@@ -1,4 +1,5 @@
-//! Rigid tools from STL files in 3D against the plane tools they replace.
+//! Rigid tools from STL files in 3D against the plane tools they replace, and the analytic
+//! cylinder tools against the STL cylinders they replace.
 
 use rkforge_core::outputs::{solid_columns, Sample};
 use rkforge_core::scene::{SceneFile, SolidScene};
@@ -659,4 +660,213 @@ fn fill_points_on_a_die_fill_at_the_stroke_the_gap_gives() {
     let (anvil, ram) = block_dies(&dir, 0.5, false);
     let e = scene(&block_text(&anvil, &ram, 500e-6, &twice, 0.1), &file).unwrap_err();
     assert!(e.contains("tools[1].fill_points[1].name"), "{e}");
+}
+
+/// A closed cylinder (in the file's unit) about the line through `centre` along the
+/// coordinate axis `axis`, of radius `r` and half length `h`: `n` side quads (inscribed,
+/// their vertices on the circle) as two triangles each and its two caps as fans, wound out.
+fn cylinder_triangles(
+    centre: [f32; 3],
+    axis: usize,
+    r: f32,
+    h: f32,
+    n: usize,
+) -> Vec<[[f32; 3]; 3]> {
+    // `u, v, d` right-handed: `d` the axis.
+    let (ku, kv) = ((axis + 1) % 3, (axis + 2) % 3);
+    let point = |i: usize, a: f32| -> [f32; 3] {
+        let t = std::f64::consts::TAU * (i % n) as f64 / n as f64;
+        let mut p = centre;
+        p[ku] += r * t.cos() as f32;
+        p[kv] += r * t.sin() as f32;
+        p[axis] += a;
+        p
+    };
+    let mut ends = [centre; 2];
+    ends[0][axis] -= h;
+    ends[1][axis] += h;
+    let mut t = Vec::with_capacity(4 * n);
+    for i in 0..n {
+        let (b0, b1, t0, t1) = (point(i, -h), point(i + 1, -h), point(i, h), point(i + 1, h));
+        t.push([b0, b1, t1]);
+        t.push([b0, t1, t0]);
+        t.push([ends[1], t0, t1]);
+        t.push([ends[0], b1, b0]);
+    }
+    t
+}
+
+/// A quarter block of aluminium 5 mm wide (x), `y` mm deep and 5 mm high on a fixed plane
+/// anvil, pressed by the cylinder `cylinder` (its `[[tools]]` keys) moving down at 2 m/s
+/// for `end` s; particles 0.5 mm apart, Coulomb friction 0.1 on the cylinder.
+fn pressed_block_text(y: f64, cylinder: &str, end: f64) -> String {
+    let ny = (y / 0.5).round() as usize + 1;
+    format!(
+        r#"
+name = "cylinder_tool"
+[model]
+kinematics = "3d"
+[workpiece]
+shape = "box"
+origin_m = [0.0, 0.0, 0.0]
+size_m = [0.005, {y:e}, 0.005]
+particles = [11, {ny}, 11]
+symmetry = ["x_min", "y_min"]
+[material]
+density_kg_per_m3 = 2700.0
+youngs_modulus_pa = 70e9
+poisson_ratio = 0.33
+hardening = {{ law = "linear", yield_stress_pa = 100e6, modulus_pa = 500e6 }}
+[discretization]
+integration = "q2"
+[time]
+end_s = {end:e}
+[[tools]]
+name = "anvil"
+axis = [0.0, 0.0, -1.0]
+motion = {{ kind = "fixed" }}
+{ANVIL_PLANE}
+[[tools]]
+name = "ram"
+axis = [0.0, 0.0, -1.0]
+motion = {{ kind = "constant", velocity_m_per_s = 2.0 }}
+friction = 0.1
+{cylinder}
+"#,
+        y = y * 1e-3
+    )
+}
+
+/// What one cylinder run gives: the ram's stroke and force at every step, the deepest
+/// particle (physical positions against the exact tools, every 20 steps, m), the energy
+/// balance at the end, the contact stage's time (s) and the simulation.
+struct CylinderRun {
+    curve: Vec<[f64; 2]>,
+    deepest: f64,
+    balance: f64,
+    contact_s: f64,
+    sim: SolidSimulation,
+}
+
+fn run_cylinder(scene: &SolidScene) -> CylinderRun {
+    let mut sim = SolidSimulation::new(scene).unwrap();
+    let (mut curve, mut deepest) = (Vec::new(), 0.0_f64);
+    sim.run_toward(scene.time.end_s, u64::MAX, |s, step| {
+        let ram = &s.tools()[1];
+        curve.push([ram.state.stroke, ram.axial_force()]);
+        if step % 20 == 0 {
+            deepest = deepest.max(s.penetration_now()[0].0);
+        }
+        true
+    })
+    .unwrap();
+    deepest = deepest.max(sim.penetration_now()[0].0);
+    CylinderRun {
+        curve,
+        deepest,
+        balance: sim.energy().balance_error_rel(),
+        contact_s: sim.times.contact.as_secs_f64(),
+        sim,
+    }
+}
+
+/// The force of a stroke-force `curve` (m, N; strokes increasing) at the stroke `s` (m),
+/// linear between its points.
+fn force_at(curve: &[[f64; 2]], s: f64) -> f64 {
+    let k = curve
+        .partition_point(|p| p[0] < s)
+        .clamp(1, curve.len() - 1);
+    let ([s0, f0], [s1, f1]) = (curve[k - 1], curve[k]);
+    f0 + (f1 - f0) * (s - s0) / (s1 - s0)
+}
+
+/// The analytic cylinder against the same cylinder as a fine STL (`n` facets round):
+/// the force-stroke curves at each tenth of the stroke within `tol` of the largest force
+/// (the facets are inscribed, `R (1 - cos(pi / n))` inside the circle), the deepest
+/// particle against the analytic surface under 5 % of a spacing, the energy balance within
+/// the run's default check (1e-2), the analytic contact stage cheaper, and the pressure
+/// over the contact patch on the cylinder adding up to its normal force. Returns the
+/// analytic run.
+fn cylinder_against_stl(
+    name: &str,
+    y: f64,
+    analytic: &str,
+    stl: Vec<[[f32; 3]; 3]>,
+    end: f64,
+    tol: f64,
+) -> CylinderRun {
+    let dir = folder(name);
+    write_binary(&dir.join("dies/cylinder.stl"), &stl);
+    let file = dir.join("cylinder.toml");
+    let by_stl = "shape = \"stl\"\nfile = \"dies/cylinder.stl\"\nunit = \"mm\"";
+    let exact = run_cylinder(&scene(&pressed_block_text(y, analytic, end), &file).unwrap());
+    let faceted = run_cylinder(&scene(&pressed_block_text(y, by_stl, end), &file).unwrap());
+    let h = exact.sim.h_min();
+    let peak = exact.curve.iter().map(|p| -p[1]).fold(0.0, f64::max);
+    let mut worst = 0.0_f64;
+    let stroke = exact.curve.last().unwrap()[0].min(faceted.curve.last().unwrap()[0]);
+    for tenth in 1..=10 {
+        let s = stroke * tenth as f64 / 10.0;
+        let (a, b) = (force_at(&exact.curve, s), force_at(&faceted.curve, s));
+        worst = worst.max((a - b).abs() / peak);
+        eprintln!(
+            "{name}: stroke {:.3} mm force {:.1} N analytic, {:.1} N STL ({:+.2} %)",
+            s * 1e3,
+            -a,
+            -b,
+            100.0 * (a - b) / b
+        );
+    }
+    eprintln!(
+        "{name}: worst force difference {:.2} % of the peak {peak:.1} N; deepest {:.3} (STL {:.3}) of a spacing; balance {:.2e} (STL {:.2e}); contact stage {:.3} s analytic, {:.3} s STL ({} triangles), {} steps",
+        100.0 * worst,
+        exact.deepest / h,
+        faceted.deepest / h,
+        exact.balance,
+        faceted.balance,
+        exact.contact_s,
+        faceted.contact_s,
+        stl.len(),
+        exact.sim.steps()
+    );
+    assert!(worst < tol, "{worst}");
+    // The pressure over the contact patch on the cylinder: its corners on the surface, its
+    // forces adding up to the tool's normal force.
+    let die = exact.sim.die_pressure(1);
+    let tool = &exact.sim.tools()[1];
+    let total: f64 = die.forces.iter().sum();
+    eprintln!(
+        "{name}: patch of {} triangles, {total:.6e} N against the normal force {:.6e} N",
+        die.triangles.len(),
+        tool.state.normal_force
+    );
+    assert!(!die.triangles.is_empty());
+    assert!((total - tool.state.normal_force).abs() < 1e-9 * tool.state.normal_force.abs());
+    assert!(die.vertices.iter().all(|v| tool.depth_of(*v).abs() < 1e-12));
+    assert!(exact.deepest < 0.05 * h, "{}", exact.deepest / h);
+    assert!(exact.balance < 1e-2 && faceted.balance < 1e-2);
+    assert!(exact.contact_s < faceted.contact_s);
+    exact
+}
+
+/// A bar of radius 2 mm lying across the block (unbounded along y, its axis at x = 0, z = 7
+/// mm: touching the top face at the start) pressed 1 mm (two spacings) into it: fullering,
+/// the mantle against the material. The same bar as an STL of 512 facets, 2048 triangles.
+#[test]
+fn a_bar_pressed_across_a_block_gives_the_stl_bars_force() {
+    let bar = "shape = \"cylinder\"\ncenter_m = [0.0, 0.0, 0.007]\naxis_direction = [0.0, 1.0, 0.0]\nradius_m = 0.002";
+    let stl = cylinder_triangles([0.0, 1.5, 7.0], 1, 2.0, 3.5, 512);
+    let run = cylinder_against_stl("bar", 2.5, bar, stl, 500e-6, 0.03);
+    assert!(run.curve.last().unwrap()[1] < -1e3);
+}
+
+/// A pin of radius 1.5 mm and 4 mm long, its axis on the block's corner line x = y = 0
+/// and its flat end on the top face at the start, pressed 1 mm into it: the cap, its rim
+/// and the mantle against the material. The same pin as an STL of 512 facets.
+#[test]
+fn a_pin_pressed_into_a_block_gives_the_stl_pins_force() {
+    let pin = "shape = \"cylinder\"\ncenter_m = [0.0, 0.0, 0.007]\naxis_direction = [0.0, 0.0, 1.0]\nradius_m = 0.0015\nlength_m = 0.004";
+    let stl = cylinder_triangles([0.0, 0.0, 7.0], 2, 1.5, 2.0, 512);
+    let run = cylinder_against_stl("pin", 5.0, pin, stl, 500e-6, 0.03);
+    assert!(run.curve.last().unwrap()[1] < -1e3);
 }

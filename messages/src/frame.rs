@@ -42,7 +42,7 @@ use crate::msgs::{
 use crate::PublishedScene;
 use rkforge_core::math::{dot, Real};
 use rkforge_core::outputs::{self, Body, Column};
-use rkforge_core::solid_tool::Surface;
+use rkforge_core::solid_tool::{normal_to, Cylinder, Surface};
 use rkforge_core::solver::SolidSimulation;
 use rkforge_core::Simulation;
 
@@ -232,6 +232,7 @@ impl Published for SolidSimulation {
                         let origin: [Real; 3] = std::array::from_fn(|k| point0[k] + s * t.axis[k]);
                         plane_patch(origin, *normal, bounds).to_vec()
                     }
+                    Surface::Cylinder(c) => cylinder_outline(c, t.axis.map(|a| s * a), bounds),
                     Surface::Triangles(tri) => {
                         let b = tri.mesh().bounds();
                         box_outline(std::array::from_fn(|k| b[k].map(|x| x + s * t.axis[k])))
@@ -274,6 +275,37 @@ fn box_outline(bounds: [[Real; 2]; 3]) -> [[Real; 3]; 10] {
         c(2, 1),
         c(0, 1),
     ]
+}
+
+/// Points round a cylinder tool shifted by `shift` (m): a loop of 16 chords round its end
+/// `a = -H` (`a` along its axis from its centre, `H` half its length), along the mantle to
+/// the end `a = +H` and a loop round it. An unbounded cylinder is drawn over the reach of
+/// the box `bounds` (`[min, max]` of x, y, z; m) along its axis, about the point of the axis
+/// nearest to the box's centre.
+fn cylinder_outline(c: &Cylinder, shift: [Real; 3], bounds: [[Real; 2]; 3]) -> Vec<[Real; 3]> {
+    const CHORDS: usize = 16;
+    let d = c.direction;
+    let mut centre: [Real; 3] = std::array::from_fn(|k| c.centre[k] + shift[k]);
+    let h = c.half_length.unwrap_or_else(|| {
+        let middle: [Real; 3] = std::array::from_fn(|k| 0.5 * (bounds[k][0] + bounds[k][1]));
+        let along = dot(&d, &std::array::from_fn(|k| middle[k] - centre[k]));
+        centre = std::array::from_fn(|k| centre[k] + along * d[k]);
+        (0..3)
+            .map(|k| 0.5 * (bounds[k][1] - bounds[k][0]) * d[k].abs())
+            .sum()
+    });
+    let u = normal_to(d);
+    let v = cross(&d, &u);
+    let mut line = Vec::with_capacity(2 * (CHORDS + 1));
+    for end in [-h, h] {
+        for i in 0..=CHORDS {
+            let (sin, cos) = (i as Real * std::f64::consts::TAU / CHORDS as Real).sin_cos();
+            line.push(std::array::from_fn(|k| {
+                centre[k] + end * d[k] + c.radius * (cos * u[k] + sin * v[k])
+            }));
+        }
+    }
+    line
 }
 
 /// The closed loop (five corners, the first repeated; m) round the patch of the plane
@@ -631,6 +663,40 @@ mod tests {
         assert!(o.names.iter().any(|n| n == "wall.force_z_N"));
         let c = Clock::from_cdr(&s.messages[6]).unwrap();
         assert_eq!(c.clock, stamp(nanos(sim.time())));
+    }
+
+    /// A cylinder's outline lies on its mantle at its two ends, shifted with the tool; an
+    /// unbounded one spans the box's reach along its axis about the box's centre.
+    #[test]
+    fn a_cylinder_outline_lies_on_its_ends() {
+        let capped = Cylinder {
+            centre: [1.0, 2.0, 3.0],
+            direction: [0.0, 0.6, 0.8],
+            radius: 0.5,
+            half_length: Some(1.0),
+        };
+        let shift = [0.0, 0.0, -0.25];
+        let line = cylinder_outline(&capped, shift, [[0.0, 1.0]; 3]);
+        assert_eq!(line.len(), 34);
+        let moved = Cylinder {
+            centre: [1.0, 2.0, 2.75],
+            ..capped
+        };
+        for p in &line {
+            let (phi, _) = moved.signed(*p);
+            let rel: [f64; 3] = std::array::from_fn(|k| p[k] - moved.centre[k]);
+            assert!(phi.abs() < 1e-12 && (dot(&rel, &capped.direction).abs() - 1.0).abs() < 1e-12);
+        }
+        let bar = Cylinder {
+            centre: [0.0, 0.0, 7.0],
+            direction: [0.0, 1.0, 0.0],
+            radius: 2.0,
+            half_length: None,
+        };
+        let line = cylinder_outline(&bar, [0.0; 3], [[0.0, 5.0], [0.0, 2.0], [0.0, 5.0]]);
+        let ys: Vec<f64> = line.iter().map(|p| p[1]).collect();
+        assert!(ys[..17].iter().all(|&y| (y - 0.0).abs() < 1e-12), "{ys:?}");
+        assert!(ys[17..].iter().all(|&y| (y - 2.0).abs() < 1e-12), "{ys:?}");
     }
 
     /// The patch of an inclined plane lies on the plane, its sides as long as the box's

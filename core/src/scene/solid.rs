@@ -219,17 +219,23 @@ pub enum ToolShape {
     /// A closed triangle surface from an STL file (keys `file`, `unit`): the tool is the
     /// solid it encloses ([`crate::stl`]).
     Stl,
+    /// A solid circular cylinder (keys `center_m`, `axis_direction`, `radius_m`, and
+    /// `length_m` for flat end caps, else unbounded along its axis;
+    /// [`crate::solid_tool::Cylinder`]).
+    Cylinder,
 }
 
 /// A rigid 3D tool: the half-space behind the plane through `point_m` with the normal
-/// `normal` (pointing to the workpiece's side), or the solid an STL file's closed surface
-/// encloses (`shape = "stl"`, `file`), moving along `axis`.
+/// `normal` (pointing to the workpiece's side), the solid cylinder of radius `radius_m`
+/// about the line through `center_m` along `axis_direction` (`shape = "cylinder"`, capped
+/// at `center_m +- length_m / 2` along it when `length_m` is given), or the solid an STL
+/// file's closed surface encloses (`shape = "stl"`, `file`), moving along `axis`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SolidToolSpec {
     /// Name, used in outputs (`<name>.force_N`).
     pub name: String,
-    /// `plane` (the default) or `stl`.
+    /// `plane` (the default), `cylinder` or `stl`.
     #[serde(default, skip_serializing_if = "is_plane")]
     pub shape: ToolShape,
     /// A point of the plane with the tool at its start (m).
@@ -238,6 +244,20 @@ pub struct SolidToolSpec {
     /// Unit normal, pointing out of the tool towards the workpiece.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normal: Option<[Real; 3]>,
+    /// Cylinder: the point of its axis at the middle of its length with the tool at its
+    /// start (any point of the axis when unbounded; m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center_m: Option<[Real; 3]>,
+    /// Cylinder: unit direction of its axis (either sense).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis_direction: Option<[Real; 3]>,
+    /// Cylinder: radius (m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_m: Option<Real>,
+    /// Cylinder: length between its flat end caps (m), centred on `center_m`; absent:
+    /// unbounded along its axis (a roll or a bar longer than the workpiece is wide).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub length_m: Option<Real>,
     /// STL: the file (binary or ASCII), relative to the scene file's folder; its
     /// coordinates place the die at its start, its triangles wound with normals out of the
     /// die.
@@ -487,34 +507,37 @@ impl SolidScene {
         out.0
     }
 
-    /// Tool `i`'s surface: a plane's point and unit normal; an STL tool's file, read and
+    /// Tool `i`'s surface: a plane's point and unit normal; a cylinder's finite centre,
+    /// unit axis direction and positive radius and length; an STL tool's file, read and
     /// checked ([`SolidScene::tool_mesh`]) and its size and place against the
     /// workpiece's ([`units_finding`]); each shape's keys, and no other's.
     fn check_tool_surface(&self, i: usize, out: &mut validation::Checks) {
         let t = &self.tools[i];
         let key = |k: &str| format!("tools[{i}].{k}");
-        let (shape, needed, foreign): (&str, &[Given], &[Given]) = match t.shape {
-            ToolShape::Plane => (
-                "plane",
-                &[
-                    ("point_m", t.point_m.is_some()),
-                    ("normal", t.normal.is_some()),
-                ],
-                &[("file", t.file.is_some()), ("unit", t.unit.is_some())],
-            ),
+        let plane = [
+            ("point_m", t.point_m.is_some()),
+            ("normal", t.normal.is_some()),
+        ];
+        let cylinder = [
+            ("center_m", t.center_m.is_some()),
+            ("axis_direction", t.axis_direction.is_some()),
+            ("radius_m", t.radius_m.is_some()),
+        ];
+        let length = ("length_m", t.length_m.is_some());
+        let stl = [("file", t.file.is_some()), ("unit", t.unit.is_some())];
+        let (shape, needed, foreign): (&str, &[Given], Vec<Given>) = match t.shape {
+            ToolShape::Plane => ("plane", &plane, [&stl[..], &cylinder, &[length]].concat()),
             ToolShape::Stl => (
                 "stl",
-                &[("file", t.file.is_some())],
-                &[
-                    ("point_m", t.point_m.is_some()),
-                    ("normal", t.normal.is_some()),
-                ],
+                &stl[..1],
+                [&plane[..], &cylinder, &[length]].concat(),
             ),
+            ToolShape::Cylinder => ("cylinder", &cylinder, [&plane[..], &stl].concat()),
         };
         for (k, given) in needed {
             out.check(*given, &key(k), format!("a {shape} tool needs `{k}`"));
         }
-        for (k, given) in foreign {
+        for (k, given) in &foreign {
             out.check(
                 !*given,
                 &key(k),
@@ -534,6 +557,25 @@ impl SolidScene {
                 &key("normal"),
                 format!("must be a unit vector, got {n:?}"),
             );
+        }
+        if let Some(c) = t.center_m {
+            out.check(
+                c.iter().all(|x| x.is_finite()),
+                &key("center_m"),
+                format!("must be finite, got {c:?}"),
+            );
+        }
+        if let Some(d) = t.axis_direction {
+            out.check(
+                unit(d),
+                &key("axis_direction"),
+                format!("must be a unit vector, got {d:?}"),
+            );
+        }
+        for (k, value) in [("radius_m", t.radius_m), ("length_m", t.length_m)] {
+            if let Some(v) = value {
+                out.check(pos(v), &key(k), format!("must be positive, got {v}"));
+            }
         }
         if t.shape != ToolShape::Stl || t.file.is_none() {
             return;
@@ -980,6 +1022,83 @@ separation = false
         assert!(
             e.contains("workpiece.particles") && e.contains(":10:"),
             "{e}"
+        );
+    }
+
+    /// A cylinder tool's keys: read, and each bad value refused with its key and line; a
+    /// missing key named, another shape's key refused.
+    #[test]
+    fn bad_cylinder_tools_are_named_with_key_and_line() {
+        let plane = "point_m = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 1.0]";
+        let cylinder = "shape = \"cylinder\"\ncenter_m = [0.0, 0.0, -0.01]\naxis_direction = [1.0, 0.0, 0.0]\nradius_m = 0.01\nlength_m = 0.02";
+        let text = QUARTER_BAR.replace(plane, cylinder);
+        let SceneFile::Solid(s) = SceneFile::from_str_named(&text, "s.toml").unwrap() else {
+            panic!("not read as 3D")
+        };
+        let t = &s.tools[0];
+        assert_eq!(t.shape, ToolShape::Cylinder);
+        assert_eq!(
+            (t.center_m, t.axis_direction, t.radius_m, t.length_m),
+            (
+                Some([0.0, 0.0, -0.01]),
+                Some([1.0, 0.0, 0.0]),
+                Some(0.01),
+                Some(0.02)
+            )
+        );
+        let cases = [
+            ("radius_m = 0.01", "radius_m = 0.0", "tools[0].radius_m", 24),
+            (
+                "radius_m = 0.01",
+                "radius_m = -0.01",
+                "tools[0].radius_m",
+                24,
+            ),
+            (
+                "axis_direction = [1.0, 0.0, 0.0]",
+                "axis_direction = [0.0, 0.0, 0.0]",
+                "tools[0].axis_direction",
+                23,
+            ),
+            (
+                "axis_direction = [1.0, 0.0, 0.0]",
+                "axis_direction = [1.0, 1.0, 0.0]",
+                "tools[0].axis_direction",
+                23,
+            ),
+            ("length_m = 0.02", "length_m = 0.0", "tools[0].length_m", 25),
+            (
+                "center_m = [0.0, 0.0, -0.01]",
+                "center_m = [nan, 0.0, -0.01]",
+                "tools[0].center_m",
+                22,
+            ),
+        ];
+        for (from, to, key, line) in cases {
+            let e = err(&text.replace(from, to));
+            assert!(e.contains(key) && e.contains(&format!(":{line}:")), "{e}");
+        }
+        let e = err(&text.replace("radius_m = 0.01\n", ""));
+        assert!(
+            e.contains("tools[0].radius_m") && e.contains("needs"),
+            "{e}"
+        );
+        let e = err(&text.replace(
+            "length_m = 0.02",
+            "length_m = 0.02\nnormal = [0.0, 0.0, 1.0]",
+        ));
+        assert!(
+            e.contains("tools[0].normal") && e.contains("not a key"),
+            "{e}"
+        );
+        let e = err(&QUARTER_BAR.replace(plane, &format!("{plane}\nradius_m = 0.01")));
+        assert!(
+            e.contains("tools[0].radius_m") && e.contains("not a key of a plane tool"),
+            "{e}"
+        );
+        // Unbounded: no `length_m`.
+        assert!(
+            SceneFile::from_str_named(&text.replace("\nlength_m = 0.02", ""), "s.toml").is_ok()
         );
     }
 }

@@ -1,14 +1,15 @@
 //! The contact stage of the 3D solver: the paper's penalty contact (Sidibe et al. 2009,
 //! section II-3, eqs. 4-7, the force law [`penalty_force`] shared with 2D) of every
-//! particle against the tools and the symmetry planes ([`SolidTool`]: planes and closed
-//! triangle surfaces from STL files, one law for both).
+//! particle against the tools and the symmetry planes ([`SolidTool`]: planes, analytic
+//! cylinders and closed triangle surfaces from STL files, one law for all).
 //!
 //! For each particle `J` that may reach a tool, the predicted physical position and
 //! velocity are interpolated from the RK coefficients, `x_J = X_J + sum_I N_I(X_J) (d_I +
 //! dt v*_I)` (m) and `v_J = sum_I N_I(X_J) v*_I` (m/s); a particle inside a tool by the gap
-//! `g` (m: behind a plane, or `-phi` of a triangle surface's signed distance) gets the
-//! penalty force `m_J g / dt^2` along the contact normal `n` (the plane's; the face's, or
-//! from the closest edge or vertex point to `x_J`) plus the friction of eqs. 5-6 (the tool's
+//! `g` (m: behind a plane, or `-phi` of a cylinder's or a triangle surface's signed
+//! distance) gets the penalty force `m_J g / dt^2` along the contact normal `n` (the
+//! plane's; the cylinder's nearest feature's; the face's, or from the closest edge or vertex
+//! point to `x_J`) plus the friction of eqs. 5-6 (the tool's
 //! law, [`crate::friction`]: Coulomb, or the shear friction factor and capped laws with the
 //! particle's flow stress and contact area, [`interface`], as in 2D), spread to
 //! the coefficients by eq. 7 (`f_I += N_I(X_J) f_J`); the tool takes the reaction. A tool

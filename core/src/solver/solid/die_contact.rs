@@ -1,6 +1,6 @@
 //! What the dies feel in 3D: the area of the workpiece's surface in contact with each tool,
 //! its share of the surface, and the contact pressure on the tool as a field over
-//! triangles (an STL die's own, a plane's contact patch). All three are read from the state alone (the normal forces the last contact
+//! triangles (an STL die's own, a plane's or a cylinder's contact patch). All three are read from the state alone (the normal forces the last contact
 //! stage booked, [`SolidState::pressed`], and the displacements), so a restored state reports
 //! them as first computed.
 //!
@@ -28,15 +28,21 @@
 //! particle off the surface pressed in the flash) takes the mean patch of the tool's other
 //! pressed particles, `A_J = A_t / n_t` (`n_t` those with an area), rather than loading one
 //! triangle with its whole force; where no centroid lies that near (a die coarser than the
-//! particles), the closest point's triangle takes it all. Then `p_k = f_k / A_k`. The field is as fine as the die's triangles: a flat face
-//! exported as two triangles carries its mean pressure. On a plane, over the contact patch
-//! itself: each pressed particle's surface quarters projected on the plane, two triangles
-//! each, quarter `q` carrying `f_J |a_q . n| / A_J` of the particle's force (`A_J = sum_q
-//! |a_q . n|`, its share of the contact area) split over its two triangles by their areas:
-//! the particle's pressure `p_J = f_J / A_J` on a flat quarter. Either way `sum_k p_k A_k =
-//! sum_J f_J`, the tool's normal force, to round-off (on a plane less the force of a pressed
-//! particle with no area on it: one whose quarters all stand edge-on to the plane, which a
-//! flat die pressing a face does not have).
+//! particles), the closest point's triangle takes it all. Then `p_k = f_k / A_k`. The field
+//! is as fine as the die's triangles: a flat face exported as two triangles carries its mean
+//! pressure. On a plane or a cylinder, over the
+//! contact patch itself: each pressed particle's surface quarters, each corner moved to its
+//! nearest point of the tool's surface ([`crate::solid_tool::SolidTool::nearest_on_surface`]:
+//! on a plane its projection, on a cylinder's mantle the radial one), two triangles each,
+//! quarter `q` carrying `f_J |a_q . n_J| / A_J` of the particle's force (`n_J` the particle's
+//! contact normal, `A_J = sum_q |a_q . n_J|`, its share of the contact area) split over its
+//! two triangles by their areas: the particle's pressure `p_J = f_J / A_J` on a flat
+//! quarter. On a cylinder the triangles are chords of its curved surface, their area short
+//! of the arc's by `(w / R)^2 / 24` for a triangle `w` wide (a fraction of a percent at a
+//! spacing under a fifth of the radius). Either way `sum_k p_k A_k = sum_J f_J`, the tool's
+//! normal force, to round-off (less the force of a pressed particle with no area on it: one
+//! whose quarters all stand edge-on to its normal, which a die pressing a face does not
+//! have).
 
 use super::{SolidSimulation, SolidState};
 use crate::math::Real;
@@ -116,7 +122,7 @@ impl SolidSimulation {
     }
 
     /// The contact pressure on scene tool `t` over triangles, an STL die's own or a plane's
-    /// contact patch (see the module doc).
+    /// or a cylinder's contact patch (see the module doc).
     pub fn die_pressure(&self, t: usize) -> DiePressure {
         let tool = &self.tools()[t];
         let shift: [Real; 3] = tool.axis.map(|a| a * tool.state.stroke);
@@ -155,16 +161,15 @@ impl SolidSimulation {
                 }
                 die.loaded()
             }
-            Surface::Plane { point0, normal } => {
-                let origin: [Real; 3] = std::array::from_fn(|k| point0[k] + shift[k]);
-                let on_plane = |y: [Real; 3]| -> [Real; 3] {
-                    let off = dot(sub(y, origin), *normal);
-                    std::array::from_fn(|k| y[k] - off * normal[k])
-                };
+            Surface::Plane { .. } | Surface::Cylinder(_) => {
+                // The analytic surface where the tool is now, each corner to its nearest
+                // point on it.
+                let on_tool = |y: [Real; 3]| tool.nearest_on_surface(y).unwrap_or(y);
                 let (mut vertices, mut triangles, mut shares) =
                     (Vec::new(), Vec::new(), Vec::new());
                 let surface = &self.disc.heat_surface;
                 for p in pressed_on(&self.st, t) {
+                    let normal = &p.normal;
                     let quads = surface.quarters_at(p.particle as usize, |i| x[i]);
                     // Each quarter's projected area `|a . n|`, `a = (c - x_0) x (m_next -
                     // m_prev) / 2`, and the particle's, their sum.
@@ -177,7 +182,7 @@ impl SolidSimulation {
                         continue;
                     }
                     for (quad, a) in quads.iter().zip(projected) {
-                        let c = quad.map(on_plane);
+                        let c = quad.map(on_tool);
                         let first = vertices.len() as u32;
                         // Wound with the normal out of the tool.
                         let out = dot(cross(sub(c[1], c[0]), sub(c[2], c[0])), *normal) >= 0.0;

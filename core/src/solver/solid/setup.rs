@@ -243,7 +243,7 @@ impl SolidSimulation {
         let mut tools = Vec::with_capacity(scene.tools.len() + p.planes.len());
         for (i, t) in scene.tools.iter().enumerate() {
             let mesh = match t.shape {
-                ToolShape::Plane => None,
+                ToolShape::Plane | ToolShape::Cylinder => None,
                 ToolShape::Stl => Some(
                     scene
                         .tool_mesh(i)
