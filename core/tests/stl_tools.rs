@@ -317,16 +317,26 @@ fn stl_box_dies_take_the_plane_dies_heat() {
 /// 2 m/s for `end` (s); `anvil` and `ram` the dies' surface keys, `fill` the ram's fill
 /// points (TOML) and `reach` the `output.fill_distance_rel`.
 fn block_text(anvil: &str, ram: &str, end: f64, fill: &str, reach: f64) -> String {
+    let block = pressed_box([5.0, 5.0, 10.0], [5, 5, 9], end, anvil, ram);
+    format!("{block}{fill}\n[output]\nfill_distance_rel = {reach}\n")
+}
+
+/// A quarter aluminium box `size` mm (`particles` along x, y, z; the planes x = 0 and
+/// y = 0 holding it by symmetry, q2) on the fixed `anvil`, pressed by the `ram` (their
+/// surface keys, TOML) moving down at 2 m/s for `end` s.
+fn pressed_box(size: [f64; 3], particles: [usize; 3], end: f64, anvil: &str, ram: &str) -> String {
+    let [x, y, z] = size.map(|v| v * 1e-3);
+    let [nx, ny, nz] = particles;
     format!(
         r#"
-name = "block_dies"
+name = "pressed_box"
 [model]
 kinematics = "3d"
 [workpiece]
 shape = "box"
 origin_m = [0.0, 0.0, 0.0]
-size_m = [0.005, 0.005, 0.01]
-particles = [5, 5, 9]
+size_m = [{x:e}, {y:e}, {z:e}]
+particles = [{nx}, {ny}, {nz}]
 symmetry = ["x_min", "y_min"]
 [material]
 density_kg_per_m3 = 2700.0
@@ -347,9 +357,6 @@ name = "ram"
 axis = [0.0, 0.0, -1.0]
 motion = {{ kind = "constant", velocity_m_per_s = 2.0 }}
 {ram}
-{fill}
-[output]
-fill_distance_rel = {reach}
 "#
     )
 }
@@ -701,40 +708,8 @@ fn cylinder_triangles(
 /// for `end` s; particles 0.5 mm apart, Coulomb friction 0.1 on the cylinder.
 fn pressed_block_text(y: f64, cylinder: &str, end: f64) -> String {
     let ny = (y / 0.5).round() as usize + 1;
-    format!(
-        r#"
-name = "cylinder_tool"
-[model]
-kinematics = "3d"
-[workpiece]
-shape = "box"
-origin_m = [0.0, 0.0, 0.0]
-size_m = [0.005, {y:e}, 0.005]
-particles = [11, {ny}, 11]
-symmetry = ["x_min", "y_min"]
-[material]
-density_kg_per_m3 = 2700.0
-youngs_modulus_pa = 70e9
-poisson_ratio = 0.33
-hardening = {{ law = "linear", yield_stress_pa = 100e6, modulus_pa = 500e6 }}
-[discretization]
-integration = "q2"
-[time]
-end_s = {end:e}
-[[tools]]
-name = "anvil"
-axis = [0.0, 0.0, -1.0]
-motion = {{ kind = "fixed" }}
-{ANVIL_PLANE}
-[[tools]]
-name = "ram"
-axis = [0.0, 0.0, -1.0]
-motion = {{ kind = "constant", velocity_m_per_s = 2.0 }}
-friction = 0.1
-{cylinder}
-"#,
-        y = y * 1e-3
-    )
+    let ram = format!("friction = 0.1\n{cylinder}");
+    pressed_box([5.0, y, 5.0], [11, ny, 11], end, ANVIL_PLANE, &ram)
 }
 
 /// What one cylinder run gives: the ram's stroke and force at every step, the deepest
