@@ -376,11 +376,9 @@ mod tests {
     use super::*;
     use crate::scene::solid::ToolShape;
 
-    /// A wall under z = 0 moving down: the depth is measured from the plane where it is
-    /// now, within the search depth and, for a held particle, in front of it.
-    #[test]
-    fn depth_follows_the_moving_plane() {
-        let spec = SolidToolSpec {
+    /// A plane tool `die` filling z > 1 (its face z = 1 looking down), moving down at 2 m/s.
+    fn plane_spec() -> SolidToolSpec {
+        SolidToolSpec {
             name: "die".into(),
             shape: ToolShape::Plane,
             point_m: Some([0.0, 0.0, 1.0]),
@@ -401,7 +399,14 @@ mod tests {
             heat_transfer_w_per_m2_k: 0.0,
             heat_transfer_by_pressure: Vec::new(),
             fill_points: Vec::new(),
-        };
+        }
+    }
+
+    /// A wall under z = 0 moving down: the depth is measured from the plane where it is
+    /// now, within the search depth and, for a held particle, in front of it.
+    #[test]
+    fn depth_follows_the_moving_plane() {
+        let spec = plane_spec();
         let mut t = SolidTool::new(&spec, None, 0.5);
         assert_eq!(t.depth_of([3.0, -2.0, 0.75]), -0.25);
         t.state.stroke = 0.5;
@@ -479,19 +484,10 @@ mod tests {
             center_m: Some([0.0, 0.0, 2.0]),
             axis_direction: Some([1.0, 0.0, 0.0]),
             radius_m: Some(1.0),
-            length_m: None,
-            file: None,
-            unit: None,
-            axis: [0.0, 0.0, -1.0],
             motion: Motion::Constant {
                 velocity_m_per_s: 1.0,
             },
-            friction: Friction::default(),
-            separation: true,
-            temperature_c: None,
-            heat_transfer_w_per_m2_k: 0.0,
-            heat_transfer_by_pressure: Vec::new(),
-            fill_points: Vec::new(),
+            ..plane_spec()
         };
         let mut t = SolidTool::new(&spec, None, 0.5);
         // The lowest line of the mantle is z = 1: a point at z = 0.75 under it is 0.25 clear.
