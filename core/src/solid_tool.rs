@@ -14,7 +14,7 @@ use crate::scene::solid::SolidToolSpec;
 use crate::scene::Motion;
 use crate::stl::TriangleMesh;
 use crate::tools::{Driven, Penetration};
-use crate::triangle_surface::{Proximity, TriangleSurface};
+use crate::triangle_surface::{along, clip_to_box, Proximity, Ridge, TriangleSurface};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -210,6 +210,35 @@ impl SolidTool {
                 Proximity::Near(c) => (c.signed <= within).then_some(c.normal),
             },
         }
+    }
+
+    /// Whether the tool has ridges ([`TriangleSurface::ridges`]), which the contact stage's
+    /// second pass checks against the workpiece's surface.
+    pub fn has_ridges(&self) -> bool {
+        matches!(&self.surface, Surface::Triangles(t) if !t.ridges().is_empty())
+    }
+
+    /// The tool's ridges in its current position clipped to the box `lo..hi` (m), in their
+    /// order; none for a plane or a cylinder.
+    pub fn ridges_in(&self, lo: [Real; 3], hi: [Real; 3]) -> Vec<Ridge> {
+        let Surface::Triangles(t) = &self.surface else {
+            return Vec::new();
+        };
+        let shift = self.shift();
+        t.ridges()
+            .iter()
+            .filter_map(|r| {
+                let a: [Real; 3] = std::array::from_fn(|k| r.a[k] + shift[k]);
+                let b: [Real; 3] = std::array::from_fn(|k| r.b[k] + shift[k]);
+                let [t0, t1] = clip_to_box(a, b, lo, hi)?;
+                let e: [Real; 3] = std::array::from_fn(|k| b[k] - a[k]);
+                Some(Ridge {
+                    a: along(a, e, t0),
+                    b: along(a, e, t1),
+                    normal: r.normal,
+                })
+            })
+            .collect()
     }
 
     /// Velocity along the axis (m/s) at time `t` (s): the command, else the motion's.
