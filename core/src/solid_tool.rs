@@ -14,7 +14,7 @@ use crate::scene::solid::SolidToolSpec;
 use crate::scene::Motion;
 use crate::stl::TriangleMesh;
 use crate::tools::{Driven, Penetration};
-use crate::triangle_surface::{along, clip_to_box, Proximity, Ridge, TriangleSurface};
+use crate::triangle_surface::{clip_to_box, Proximity, Ridge, TriangleSurface};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -69,6 +69,8 @@ pub struct SolidTool {
     pub symmetry: bool,
     /// Largest penetration treated as contact (m).
     pub depth: Real,
+    /// Whether the contact's second pass holds its ridges ([`SolidToolSpec::ridges`]).
+    pub ridge_pass: bool,
     /// Moving state.
     pub state: SolidToolState,
 }
@@ -100,6 +102,7 @@ impl SolidTool {
             separation: spec.separation,
             symmetry: false,
             depth,
+            ridge_pass: spec.ridges,
             state: SolidToolState {
                 velocity: v0,
                 ..Default::default()
@@ -122,6 +125,7 @@ impl SolidTool {
             separation: false,
             symmetry: true,
             depth,
+            ridge_pass: false,
             state: SolidToolState::default(),
         }
     }
@@ -212,13 +216,15 @@ impl SolidTool {
         }
     }
 
-    /// Whether the tool has ridges ([`TriangleSurface::ridges`]), which the contact stage's
-    /// second pass checks against the workpiece's surface.
+    /// Whether the tool has ridges ([`TriangleSurface::ridges`]) and the scene turns the
+    /// contact stage's second pass on for it ([`SolidToolSpec::ridges`]): the pass checks
+    /// them against the workpiece's surface.
     pub fn has_ridges(&self) -> bool {
-        matches!(&self.surface, Surface::Triangles(t) if !t.ridges().is_empty())
+        self.ridge_pass && matches!(&self.surface, Surface::Triangles(t) if !t.ridges().is_empty())
     }
 
-    /// The tool's ridges in its current position clipped to the box `lo..hi` (m), in their
+    /// The tool's ridges in its current position (m) that reach into the box `lo..hi` (m),
+    /// whole (not clipped: the second pass samples each at fixed points along it), in their
     /// order; none for a plane or a cylinder.
     pub fn ridges_in(&self, lo: [Real; 3], hi: [Real; 3]) -> Vec<Ridge> {
         let Surface::Triangles(t) = &self.surface else {
@@ -230,11 +236,10 @@ impl SolidTool {
             .filter_map(|r| {
                 let a: [Real; 3] = std::array::from_fn(|k| r.a[k] + shift[k]);
                 let b: [Real; 3] = std::array::from_fn(|k| r.b[k] + shift[k]);
-                let [t0, t1] = clip_to_box(a, b, lo, hi)?;
-                let e: [Real; 3] = std::array::from_fn(|k| b[k] - a[k]);
+                clip_to_box(a, b, lo, hi)?;
                 Some(Ridge {
-                    a: along(a, e, t0),
-                    b: along(a, e, t1),
+                    a,
+                    b,
                     normal: r.normal,
                 })
             })
@@ -293,6 +298,7 @@ mod tests {
             heat_transfer_w_per_m2_k: 0.0,
             heat_transfer_by_pressure: Vec::new(),
             fill_points: Vec::new(),
+            ridges: false,
         };
         let mut t = SolidTool::new(&spec, None, 0.5);
         assert_eq!(t.depth_of([3.0, -2.0, 0.75]), -0.25);

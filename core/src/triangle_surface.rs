@@ -28,7 +28,7 @@
 //! returns a lower bound on the distance and the side without touching a triangle.
 //!
 //! Ridges: the die's convex features, which the contact stage's second pass checks against
-//! the workpiece's surface between its particles (`solver/solid/edges.rs`). An edge is a
+//! the workpiece's surface between its particles (`solver/solid/ridges.rs`). An edge is a
 //! ridge when its two faces' normals `n_1`, `n_2` part by more than [`RIDGE_ANGLE`]
 //! (`n_1 . n_2 < cos RIDGE_ANGLE`) and the die is convex across it (the far corner of the
 //! second face lies behind the first face's plane). A vertex is a ridge of no length when

@@ -26,8 +26,8 @@
 //! depth, [`SolidTool::clearance`]) stays positive after those moves cannot touch one, and
 //! is not interpolated.
 //!
-//! Then the second pass (`ridges.rs`): the tools' convex edges and vertices against the
-//! workpiece's surface facets between the particles.
+//! Then the second pass (`ridges.rs`, for the STL dies with `ridges = true`): the tools'
+//! convex edges and vertices against the workpiece's surface facets between the particles.
 
 use super::ridges::RidgePass;
 use super::{Pressed, SolidDisc, SolidState};
@@ -344,7 +344,7 @@ impl ToolContact {
         let ridges = self.ridges.run(
             disc,
             planes,
-            (&st.d, &st.v),
+            st,
             out,
             &mut flow_stress,
             &mut self.force,
@@ -352,6 +352,7 @@ impl ToolContact {
         );
         if ridges.any {
             touch.any = true;
+            touch.tools |= ridges.tools;
             touch.tool_work += ridges.tool_work;
         }
         for t in planes.iter_mut() {

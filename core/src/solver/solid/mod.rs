@@ -33,17 +33,17 @@
 //! `self_contact.rs` ([`crate::contact::self_contact_3d`] over the cells' outer faces). Not
 //! in 3D yet (refused by the scene's validation): SCNI's stabilization. The tools'
 //! convex edges and vertices meet the surface between the particles in the contact
-//! stage's second pass (`ridges.rs`).
+//! stage's second pass (`ridges.rs`), opt-in per die (`ridges = true`).
 
 mod contact;
 mod die_contact;
 mod fill;
 mod heat;
 mod rereference;
-mod self_contact;
 #[cfg(test)]
 mod ridge_tests;
 mod ridges;
+mod self_contact;
 mod setup;
 #[cfg(test)]
 mod tests;
