@@ -16,7 +16,7 @@ use crate::scene::solid::{SolidToolSpec, ToolShape};
 use crate::scene::Motion;
 use crate::stl::TriangleMesh;
 use crate::tools::{Driven, Penetration};
-use crate::triangle_surface::{Proximity, TriangleSurface};
+use crate::triangle_surface::{clip_to_box, Proximity, Ridge, TriangleSurface};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -161,6 +161,8 @@ pub struct SolidTool {
     pub symmetry: bool,
     /// Largest penetration treated as contact (m).
     pub depth: Real,
+    /// Whether the contact's second pass holds its ridges ([`SolidToolSpec::ridges`]).
+    pub ridge_pass: bool,
     /// Moving state.
     pub state: SolidToolState,
 }
@@ -203,6 +205,7 @@ impl SolidTool {
             separation: spec.separation,
             symmetry: false,
             depth,
+            ridge_pass: spec.ridges,
             state: SolidToolState {
                 velocity: v0,
                 ..Default::default()
@@ -225,6 +228,7 @@ impl SolidTool {
             separation: false,
             symmetry: true,
             depth,
+            ridge_pass: false,
             state: SolidToolState::default(),
         }
     }
@@ -345,6 +349,36 @@ impl SolidTool {
         }
     }
 
+    /// Whether the tool has ridges ([`TriangleSurface::ridges`]) and the scene turns the
+    /// contact stage's second pass on for it ([`SolidToolSpec::ridges`]): the pass checks
+    /// them against the workpiece's surface.
+    pub fn has_ridges(&self) -> bool {
+        self.ridge_pass && matches!(&self.surface, Surface::Triangles(t) if !t.ridges().is_empty())
+    }
+
+    /// The tool's ridges in its current position (m) that reach into the box `lo..hi` (m),
+    /// whole (not clipped: the second pass samples each at fixed points along it), in their
+    /// order; none for a plane or a cylinder.
+    pub fn ridges_in(&self, lo: [Real; 3], hi: [Real; 3]) -> Vec<Ridge> {
+        let Surface::Triangles(t) = &self.surface else {
+            return Vec::new();
+        };
+        let shift = self.shift();
+        t.ridges()
+            .iter()
+            .filter_map(|r| {
+                let a: [Real; 3] = std::array::from_fn(|k| r.a[k] + shift[k]);
+                let b: [Real; 3] = std::array::from_fn(|k| r.b[k] + shift[k]);
+                clip_to_box(a, b, lo, hi)?;
+                Some(Ridge {
+                    a,
+                    b,
+                    normal: r.normal,
+                })
+            })
+            .collect()
+    }
+
     /// Velocity along the axis (m/s) at time `t` (s): the command, else the motion's.
     pub fn velocity_at(&self, t: Real) -> Real {
         self.motion.velocity_at(t, self.state.command)
@@ -399,6 +433,7 @@ mod tests {
             heat_transfer_w_per_m2_k: 0.0,
             heat_transfer_by_pressure: Vec::new(),
             fill_points: Vec::new(),
+            ridges: false,
         }
     }
 

@@ -26,6 +26,17 @@
 //! on one side of the surface; one exact query per set). A query within reach `r` of a
 //! point outside the bounds, or in an empty bin farther than `r` from any occupied one,
 //! returns a lower bound on the distance and the side without touching a triangle.
+//!
+//! Ridges: the die's convex features, which the contact stage's second pass checks against
+//! the workpiece's surface between its particles (`solver/solid/ridges.rs`). An edge is a
+//! ridge when its two faces' normals `n_1`, `n_2` part by more than [`RIDGE_ANGLE`]
+//! (`n_1 . n_2 < cos RIDGE_ANGLE`) and the die is convex across it (the far corner of the
+//! second face lies behind the first face's plane). A vertex is a ridge of no length when
+//! three or more ridges meet at it (a punch's corner, a pyramid's tip), or when on none its
+//! faces' normals part from its pseudo-normal `N_v` by more than [`RIDGE_ANGLE`] and every
+//! neighbouring vertex lies behind the plane through it normal to `N_v` (the tip of a
+//! finely faceted cone). A flat face's diagonals and a fine faceting
+//! of a smooth die (a roll of 36 or more sides) have none.
 
 use crate::math::Real;
 use crate::stl::{cross, dot, sub, TriangleMesh};
@@ -82,8 +93,27 @@ pub fn closest_on_triangle(p: [Real; 3], [a, b, c]: [[Real; 3]; 3]) -> ([Real; 3
     )
 }
 
+/// The part `[t_0, t_1]` of the segment `a + t (b - a)`, `t` in [0, 1], inside the box
+/// `lo..hi` (m), by its slabs; `None` when it misses the box.
+pub fn clip_to_box(a: [Real; 3], b: [Real; 3], lo: [Real; 3], hi: [Real; 3]) -> Option<[Real; 2]> {
+    let (mut t0, mut t1): (Real, Real) = (0.0, 1.0);
+    for k in 0..3 {
+        let e = b[k] - a[k];
+        if e == 0.0 {
+            if a[k] < lo[k] || a[k] > hi[k] {
+                return None;
+            }
+            continue;
+        }
+        let (u, v) = ((lo[k] - a[k]) / e, (hi[k] - a[k]) / e);
+        t0 = t0.max(u.min(v));
+        t1 = t1.min(u.max(v));
+    }
+    (t0 <= t1).then_some([t0, t1])
+}
+
 /// `o + t e`.
-fn along(o: [Real; 3], e: [Real; 3], t: Real) -> [Real; 3] {
+pub(crate) fn along(o: [Real; 3], e: [Real; 3], t: Real) -> [Real; 3] {
     std::array::from_fn(|k| o[k] + t * e[k])
 }
 
@@ -123,6 +153,23 @@ pub enum Proximity {
     Near(Closest),
 }
 
+/// The smallest angle between the normals of two faces (rad) that makes their convex edge
+/// a ridge (20 degrees: the faceting of a smooth die of 18 or more sides stays below it).
+pub const RIDGE_ANGLE: Real = 20.0 * std::f64::consts::PI / 180.0;
+
+/// A convex feature of a die: an edge between faces meeting at a convex angle, or a convex
+/// vertex on no such edge (then `a = b`), in the die's position at the start (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ridge {
+    /// Its ends (m).
+    pub a: [Real; 3],
+    /// The other end (m).
+    pub b: [Real; 3],
+    /// Unit pseudo-normal out of the die: the sum of the two faces' normals, or the
+    /// vertex's angle-weighted one.
+    pub normal: [Real; 3],
+}
+
 /// A closed triangle surface with its pseudo-normals and bins.
 #[derive(Debug, Clone)]
 pub struct TriangleSurface {
@@ -134,6 +181,8 @@ pub struct TriangleSurface {
     edge_normal: Vec<[[Real; 3]; 3]>,
     /// Angle-weighted pseudo-normal of each vertex.
     vertex_normal: Vec<[Real; 3]>,
+    /// The convex ridges and vertices, in the order of the triangles.
+    ridges: Vec<Ridge>,
     bins: Bins,
 }
 
@@ -222,11 +271,13 @@ impl TriangleSurface {
             })
             .collect();
         let bins = Bins::new(&mesh);
+        let ridges = ridges(&mesh, &face_normal, &vertex_normal);
         let mut surface = TriangleSurface {
             mesh,
             face_normal,
             edge_normal,
             vertex_normal,
+            ridges,
             bins,
         };
         surface.classify_empty_bins();
@@ -236,6 +287,11 @@ impl TriangleSurface {
     /// The mesh.
     pub fn mesh(&self) -> &TriangleMesh {
         &self.mesh
+    }
+
+    /// The die's convex ridges and vertices (see the module doc).
+    pub fn ridges(&self) -> &[Ridge] {
+        &self.ridges
     }
 
     /// The closest point of triangle `t` to `y` with its squared distance.
@@ -445,6 +501,85 @@ impl TriangleSurface {
             .map(|&l| l != u32::MAX && inside_of[l as usize])
             .collect();
     }
+}
+
+/// The ridges of a closed mesh with its unit face normals and its vertices' (not unit)
+/// pseudo-normals (module doc): each convex edge once, from its lower-numbered vertex, in
+/// the order of the triangles, then the convex vertices on none in the vertices' order.
+fn ridges(
+    mesh: &TriangleMesh,
+    face_normal: &[[Real; 3]],
+    vertex_normal: &[[Real; 3]],
+) -> Vec<Ridge> {
+    let sharp = RIDGE_ANGLE.cos();
+    let mut face_of = std::collections::HashMap::new();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            face_of.insert((tri[k], tri[(k + 1) % 3]), t);
+        }
+    }
+    let mut out = Vec::new();
+    let mut on_ridges = vec![0u32; mesh.vertices.len()];
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            let Some(&u) = face_of.get(&(b, a)).filter(|_| a < b) else {
+                continue;
+            };
+            let (n1, n2) = (face_normal[t], face_normal[u]);
+            let far = mesh.triangles[u]
+                .into_iter()
+                .find(|&v| v != a && v != b)
+                .map_or([0.0; 3], |v| mesh.vertices[v as usize]);
+            let (pa, pb) = (mesh.vertices[a as usize], mesh.vertices[b as usize]);
+            if dot(n1, n2) < sharp && dot(n1, sub(far, pa)) < 0.0 {
+                on_ridges[a as usize] += 1;
+                on_ridges[b as usize] += 1;
+                out.push(Ridge {
+                    a: pa,
+                    b: pb,
+                    normal: unit(std::array::from_fn(|k| n1[k] + n2[k])),
+                });
+            }
+        }
+    }
+    let mut around: Vec<Vec<u32>> = vec![Vec::new(); mesh.vertices.len()];
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for &v in tri {
+            around[v as usize].push(t as u32);
+        }
+    }
+    for (v, faces) in around.iter().enumerate() {
+        if faces.is_empty() || on_ridges[v] == 1 || on_ridges[v] == 2 {
+            continue;
+        }
+        let p = mesh.vertices[v];
+        let n = unit(vertex_normal[v]);
+        if on_ridges[v] > 2 {
+            out.push(Ridge {
+                a: p,
+                b: p,
+                normal: n,
+            });
+            continue;
+        }
+        let spread = faces
+            .iter()
+            .any(|&t| dot(n, face_normal[t as usize]) < sharp);
+        let convex = faces.iter().all(|&t| {
+            mesh.triangles[t as usize]
+                .iter()
+                .all(|&w| w as usize == v || dot(n, sub(mesh.vertices[w as usize], p)) < 0.0)
+        });
+        if spread && convex {
+            out.push(Ridge {
+                a: p,
+                b: p,
+                normal: n,
+            });
+        }
+    }
+    out
 }
 
 impl Bins {

@@ -297,6 +297,13 @@ pub struct SolidToolSpec {
     /// of it.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub fill_points: Vec<SolidFillPoint>,
+    /// STL: whether the contact's second pass holds the die's ridges (its convex edges and
+    /// vertices) against the workpiece's surface between the particles, so that a sharp
+    /// edge cannot sink between two rows of surface particles (opt-in, default false: on
+    /// the conrod it raises the force by up to 29 % and its interface gains energy over the
+    /// last millimetre; docs/forging.md, "Die edges between surface particles").
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub ridges: bool,
 }
 
 /// A named point of a 3D tool's surface, [`super::FillPoint`] with three coordinates.
@@ -313,6 +320,10 @@ pub struct SolidFillPoint {
 
 fn default_separation() -> bool {
     true
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 fn is_plane(shape: &ToolShape) -> bool {
@@ -524,7 +535,11 @@ impl SolidScene {
             ("radius_m", t.radius_m.is_some()),
         ];
         let length = ("length_m", t.length_m.is_some());
-        let stl = [("file", t.file.is_some()), ("unit", t.unit.is_some())];
+        let stl = [
+            ("file", t.file.is_some()),
+            ("unit", t.unit.is_some()),
+            ("ridges", t.ridges),
+        ];
         let (shape, needed, foreign): (&str, &[Given], Vec<Given>) = match t.shape {
             ToolShape::Plane => ("plane", &plane, [&stl[..], &cylinder, &[length]].concat()),
             ToolShape::Stl => (

@@ -26,7 +26,11 @@
 //! a triangle surface's lower bound from its bins when no triangle lies within the search
 //! depth, [`SolidTool::clearance`]) stays positive after those moves cannot touch one, and
 //! is not interpolated.
+//!
+//! Then the second pass (`ridges.rs`, for the STL dies with `ridges = true`): the tools'
+//! convex edges and vertices against the workpiece's surface facets between the particles.
 
+use super::ridges::RidgePass;
 use super::{Pressed, SolidDisc, SolidState};
 use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::{slip_work, Forces};
@@ -85,6 +89,19 @@ pub(super) fn interface(
     }
 }
 
+/// The particles' flow stresses (Pa), the points' smoothed to them ([`smoothed`]), computed
+/// into `cache` when a friction law first needs them in a stage.
+pub(super) fn flow_stresses<'a>(
+    cache: &'a mut Option<Vec<Real>>,
+    disc: &SolidDisc,
+    out: &[PointOut],
+) -> &'a [Real] {
+    cache.get_or_insert_with(|| {
+        let values: Vec<Real> = out.iter().map(|o| o.flow_stress).collect();
+        smoothed(&disc.scatter, &disc.weights, disc.ref_pos.len(), &values)
+    })
+}
+
 /// A particle-plane pair with friction in contact at the last stage.
 #[derive(Debug, Clone, Copy)]
 struct Touched {
@@ -115,6 +132,8 @@ pub(crate) struct ToolContact {
     motion: Vec<[[Real; 3]; 2]>,
     /// The pairs with friction in contact at this stage.
     touched: Vec<Touched>,
+    /// The second pass: the tools' ridges against the surface between the particles.
+    pub(super) ridges: RidgePass,
     /// Skip the particles with a positive clearance (false only in the test that compares
     /// against evaluating all).
     pub(crate) skip: bool,
@@ -122,7 +141,7 @@ pub(crate) struct ToolContact {
 
 /// What a contact stage did.
 #[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Touch {
+pub(super) struct Touch {
     /// Some contact force acts.
     pub any: bool,
     /// A scene's tool (not a symmetry plane) presses the workpiece.
@@ -143,6 +162,7 @@ impl ToolContact {
             evaluated: Vec::new(),
             motion: vec![[[0.0; 3]; 2]; particles],
             touched: Vec::new(),
+            ridges: RidgePass::new(),
             skip: true,
         }
     }
@@ -275,10 +295,7 @@ impl ToolContact {
                     carried: stick[t].unwrap_or([0.0; 3]),
                 };
                 let at = if plane.friction.needs_flow_stress() {
-                    let flow = flow_stress.get_or_insert_with(|| {
-                        let values: Vec<Real> = out.iter().map(|o| o.flow_stress).collect();
-                        smoothed(&disc.scatter, &disc.weights, np, &values)
-                    });
+                    let flow = flow_stresses(&mut flow_stress, disc, out);
                     interface(disc, j, flow[j], pen.normal, |i| {
                         predicted(disc, d, v, dt, i)
                     })
@@ -324,6 +341,20 @@ impl ToolContact {
                 touch.any = true;
                 touch.tools |= t < disc.scene_tools;
             }
+        }
+        let ridges = self.ridges.run(
+            disc,
+            planes,
+            st,
+            out,
+            &mut flow_stress,
+            &mut self.force,
+            (dt, dt_avg, du),
+        );
+        if ridges.any {
+            touch.any = true;
+            touch.tools |= ridges.tools;
+            touch.tool_work += ridges.tool_work;
         }
         for t in planes.iter_mut() {
             let f = t.state.force;

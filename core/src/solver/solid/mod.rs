@@ -31,15 +31,18 @@
 //! surface patches, its share of the surface, the pressure over an STL die's triangles or
 //! a plane's contact patch) are read from the state. Self-contact and its laps are
 //! `self_contact.rs` ([`crate::contact::self_contact_3d`] over the cells' outer faces). Not
-//! in 3D yet (refused by the scene's validation): SCNI's stabilization; not yet done
-//! either, without a refusal: the pass of the tools' convex edges and vertices against the
-//! surface between particles.
+//! in 3D yet (refused by the scene's validation): SCNI's stabilization. The tools'
+//! convex edges and vertices meet the surface between the particles in the contact
+//! stage's second pass (`ridges.rs`), opt-in per die (`ridges = true`).
 
 mod contact;
 mod die_contact;
 mod fill;
 mod heat;
 mod rereference;
+#[cfg(test)]
+mod ridge_tests;
+mod ridges;
 mod self_contact;
 mod setup;
 #[cfg(test)]
@@ -128,8 +131,9 @@ pub(super) struct SolidDisc {
     scene_tools: usize,
     /// The heat settings of a scene with `[thermal]` (a transfer when its heat moves).
     thermal: Option<Thermal>,
-    /// The surface heat crosses and the friction laws that need a flow stress take their
-    /// contact area on (empty unless the scene's heat moves or a tool has such a law).
+    /// The surface heat crosses, the friction laws that need a flow stress take their
+    /// contact area on and the tools' ridges meet between the particles (empty unless the
+    /// scene's heat moves, a tool has such a law or a die has ridges).
     heat_surface: heat::HeatSurface,
     /// What mass scaling added, if the scene scales ([`super::mass_scaling`]).
     mass_scaling: Option<MassScalingReport>,
