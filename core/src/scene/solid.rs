@@ -1111,6 +1111,17 @@ separation = false
             e.contains("tools[0].radius_m") && e.contains("not a key of a plane tool"),
             "{e}"
         );
+        // The ridge pass is an STL die's: a plane or a cylinder has no edges to hold.
+        for shaped in [
+            text.replace("length_m = 0.02", "length_m = 0.02\nridges = true"),
+            QUARTER_BAR.replace(plane, &format!("{plane}\nridges = true")),
+        ] {
+            let e = err(&shaped);
+            assert!(
+                e.contains("tools[0].ridges") && e.contains("not a key of a"),
+                "{e}"
+            );
+        }
         // Unbounded: no `length_m`.
         assert!(
             SceneFile::from_str_named(&text.replace("\nlength_m = 0.02", ""), "s.toml").is_ok()
