@@ -27,12 +27,12 @@ AXISYMMETRIC = {"particles = [11, 31]": "particles = [6, 16]"}
 H, T = 2e-4, 0.4
 
 
-def system(rkforge_bin, tmp_path, name, text, press="hydraulic"):
+def system(rkforge_bin, tmp_path, name, text, press="hydraulic", tool="ram"):
     scene = tmp_path / f"{name}.toml"
     scene.write_text(text)
     out = tmp_path / f"{name}.ssp"
-    subprocess.run([rkforge_bin, "ssp", str(scene), "--press", press, "--out", str(out)],
-                   check=True, capture_output=True, text=True)
+    subprocess.run([rkforge_bin, "ssp", str(scene), "--press", press, "--tool", tool,
+                    "--out", str(out)], check=True, capture_output=True, text=True)
     return str(out)
 
 
@@ -157,20 +157,21 @@ def test_the_work_booked_is_the_whole_force_over_the_stroke(runs):
     assert np.array_equal(r["press.ram.tool_work_J"], r["forging.energy.tool_work_J"])
 
 
-@pytest.mark.parametrize("src, changes, copies", [
-    ("block_upsetting_3d.toml", {}, "4"),
-    ("block_upsetting_3d.toml", {'symmetry = ["x_min", "y_min"]': 'symmetry = ["x_min"]'}, "2"),
-    ("press_upsetting_3d.toml", {'part = "quarter"': 'part = "half"'}, "2"),
-    ("press_upsetting_3d.toml", {'part = "quarter"': 'part = "full"'}, "1"),
-    ("flash_quarter.toml", {}, "2"),
-    ("ring_compression.toml", {}, "1"),
+@pytest.mark.parametrize("src, changes, copies, tool", [
+    ("block_upsetting_3d.toml", {}, "4", "ram"),
+    ("block_upsetting_3d.toml", {'symmetry = ["x_min", "y_min"]': 'symmetry = ["x_min"]'}, "2", "ram"),
+    ("press_upsetting_3d.toml", {'part = "quarter"': 'part = "half"'}, "2", "ram"),
+    ("press_upsetting_3d.toml", {'part = "quarter"': 'part = "full"'}, "1", "ram"),
+    ("flash_quarter.toml", {}, "2", "die"),
+    ("ring_compression.toml", {}, "1", "platen"),
 ])
-def test_model_copies_follow_the_symmetry_planes(rkforge_bin, tmp_path, src, changes, copies):
+def test_model_copies_follow_the_symmetry_planes(rkforge_bin, tmp_path, src, changes, copies, tool):
     """Each symmetry plane along the ram's axis (z) doubles what the ram feels: the box
     with two planes and with one, the half and the whole cylinder. In 2D the plane-strain
     quarter (edges x = 0 and y = 0, the die along y) counts its x = 0 edge only, and the
     axisymmetric half ring (mid-plane z = 0) is the whole revolution."""
-    ssd = read_ssd(system(rkforge_bin, tmp_path, "s", scene_variant(src, changes)), validate=True)
+    ssd = read_ssd(system(rkforge_bin, tmp_path, "s", scene_variant(src, changes), tool=tool),
+                   validate=True)
     assert bound(ssd, "press", "model_copies") == copies
 
 
