@@ -8,12 +8,16 @@
 //! boundary ring). A two-pass node-to-segment method (Hallquist, Goudreau and Benson 1985;
 //! Wriggers 2006, *Computational Contact Mechanics*, section 9.1) also checks the master's
 //! nodes against the slave surface: here each convex tool vertex `v` against the polygon of
-//! the predicted boundary ring positions `x_a` (counter-clockwise; in a Lagrangian
-//! description the material's surface is the image of its reference boundary).
+//! the boundary ring positions `x_a` (counter-clockwise; in a Lagrangian description the
+//! material's surface is the image of its reference boundary), read as the particle pass
+//! leaves them: predicted, then moved by the corrector's displacement of the particle
+//! pass's forces, so that a particle the particle pass pushes out of the tool is not
+//! pushed a second time through the segments beside it.
 //!
 //! A corner inside the polygon, at the distance `g` (m) from its nearest ring segment
 //! `(a, b)` at the point `c = (1 - s) x_a + s x_b`, gets the paper's normal penalty (eq. 4)
-//! with the segment's interpolated mass `m_s = (1 - s) m_a + s m_b` (kg):
+//! with its share `w = g / sum g` (over the corners on the same segment, [`inside`]) of the
+//! segment's interpolated mass `m_s = w ((1 - s) m_a + s m_b)` (kg):
 //! `f = m_s g / (dt dt_avg) (v - c) / g` (N) on the surface, pushing the material past
 //! the corner; it is shared `(1 - s) f` and `s f` by the two ring particles, each spread to
 //! the coefficients with eq. 7, and the tool takes the reaction `-f`. The pass is
@@ -28,7 +32,7 @@ use crate::tools::Tool;
 pub struct Surface<'a> {
     /// The boundary ring's particles, counter-clockwise.
     pub ring: &'a [u32],
-    /// Predicted position of each ring particle (m).
+    /// Position of each ring particle (m): predicted, corrected by the particle pass.
     pub positions: &'a [[Real; 2]],
     /// Lumped masses of all particles (kg).
     pub mass: &'a [Real],
@@ -47,11 +51,21 @@ pub struct Corner {
     pub nearest: [Real; 2],
     /// Distance `g` from the corner to the surface (m), at most the tool's search depth.
     pub gap: Real,
+    /// The corner's share of its segment's mass, `g / sum g` over the corners on the
+    /// segment ([`inside`]).
+    pub share: Real,
 }
 
 /// The convex corners of `tool` (in its current position) that lie inside the polygon of
 /// the surface, within the tool's search depth of it (deeper ones would belong to material
-/// the particle pass holds).
+/// the particle pass holds), each with its share `g_i / sum_j g_j` of its segment's mass
+/// over the corners `j` on the same segment. A die's curve faceted finer than the particles
+/// (a CAD arc, its vertices a few degrees apart) puts several corners over one segment:
+/// each with the whole mass would add their stiffnesses and the explicit penalty would
+/// overshoot (the interface generating energy); only the deepest would hand the push from
+/// corner to corner as their depths cross (the force chattering). Shared by depth, the
+/// segment's push `sum_i g_i^2 / sum_j g_j` is at most its deepest corner's, and a corner
+/// coming in at `g = 0` takes nothing at first.
 pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
     let x = surface.positions;
     if tool.convex.is_empty() || x.len() < 3 {
@@ -67,7 +81,8 @@ pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
         },
     );
     let s = tool.state.stroke;
-    tool.convex
+    let found: Vec<Corner> = tool
+        .convex
         .iter()
         .filter_map(|&k| {
             let p = tool.points0[k as usize];
@@ -81,6 +96,20 @@ pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
             let corner = nearest_segment(x, v);
             (corner.gap > 0.0 && corner.gap <= tool.depth).then_some(corner)
         })
+        .collect();
+    found
+        .iter()
+        .map(|c| {
+            let total: Real = found
+                .iter()
+                .filter(|d| d.segment == c.segment)
+                .map(|d| d.gap)
+                .sum();
+            Corner {
+                share: c.gap / total,
+                ..*c
+            }
+        })
         .collect()
 }
 
@@ -90,8 +119,9 @@ pub fn penalty(corner: &Corner, surface: &Surface<'_>, dt: Real, dt_avg: Real) -
     let n = surface.ring.len();
     let (a, b) = (corner.segment, (corner.segment + 1) % n);
     let s = corner.along;
-    let m = (1.0 - s) * surface.mass[surface.ring[a] as usize]
-        + s * surface.mass[surface.ring[b] as usize];
+    let m = corner.share
+        * ((1.0 - s) * surface.mass[surface.ring[a] as usize]
+            + s * surface.mass[surface.ring[b] as usize]);
     let f = m / (dt * dt_avg);
     [
         f * (corner.at[0] - corner.nearest[0]),
@@ -125,6 +155,7 @@ fn nearest_segment(x: &[[Real; 2]], v: [Real; 2]) -> Corner {
         along: 0.0,
         nearest: x[0],
         gap: Real::INFINITY,
+        share: 1.0,
     };
     for k in 0..n {
         let (s, c, _) = closest_on_segment(x[k], x[(k + 1) % n], v);
@@ -136,6 +167,7 @@ fn nearest_segment(x: &[[Real; 2]], v: [Real; 2]) -> Corner {
                 along: s,
                 nearest: c,
                 gap,
+                share: 1.0,
             };
         }
     }
@@ -214,6 +246,40 @@ mod tests {
         assert!(f[0].abs() < 1e-12 && (f[1] + 20.0).abs() < 1e-9, "{f:?}");
         // The same corner above the surface is outside the material.
         assert!(inside(&notched(1.05), &surface).is_empty());
+    }
+
+    /// Two corners of a faceted profile over the same surface segment (between (1, 1) and
+    /// (0.5, 1)), 0.05 and 0.1 deep: they share the segment's mass by depth, 1/3 and 2/3, so
+    /// the segment's push is `2 (0.05^2 + 0.1^2) / 0.15 / dt^2`, under the deeper one's alone.
+    #[test]
+    fn corners_over_one_segment_share_its_mass_by_depth() {
+        let (positions, ring, mass) = square();
+        let surface = Surface {
+            ring: &ring,
+            positions: &positions,
+            mass: &mass,
+        };
+        let punch = tool(vec![
+            [2.0, 1.2],
+            [0.9, 1.2],
+            [0.8, 0.95],
+            [0.75, 1.1],
+            [0.7, 0.9],
+            [0.6, 1.2],
+            [-1.0, 1.2],
+        ]);
+        assert_eq!(punch.convex, vec![2, 4]);
+        let found = inside(&punch, &surface);
+        assert_eq!(found.len(), 2);
+        assert!(found.iter().all(|c| c.segment == 4));
+        assert!((found[0].share - 1.0 / 3.0).abs() < 1e-12, "{found:?}");
+        assert!((found[1].share - 2.0 / 3.0).abs() < 1e-12, "{found:?}");
+        let push: Real = found
+            .iter()
+            .map(|c| -penalty(c, &surface, 0.1, 0.1)[1])
+            .sum();
+        assert!((push - 2.0 * (0.05 * 0.05 + 0.1 * 0.1) / 0.15 / 0.01).abs() < 1e-9);
+        assert!(push < 2.0 * 0.1 / 0.01);
     }
 
     #[test]

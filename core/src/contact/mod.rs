@@ -607,8 +607,26 @@ impl Contact {
         self.in_reach = kept;
         touch.any |= touch.tools;
         let corners = tools.iter().any(|t| !t.convex.is_empty());
+        // The ring as the particle pass leaves it: each predicted position moved by the
+        // corrector's displacement of the forces so far, `dt dt_avg sum_I N_I(X_J) f_I / m_I`
+        // (m), so that a corner over a particle the particle pass already pushes out of the
+        // tool is not pushed against a second time (which would overshoot: the interface
+        // would generate energy).
         let positions: Vec<[Real; 2]> = match corners {
-            true => self.motion[..ring].iter().map(|m| m[0]).collect(),
+            true => self.motion[..ring]
+                .iter()
+                .zip(&self.candidates[..ring])
+                .map(|(m, &j)| {
+                    let mut x = m[0];
+                    for e in nodal.row(j as usize) {
+                        let i = nodal.index[e] as usize;
+                        let w = nodal.n[e] * dt * dt_avg / mass[i];
+                        x[0] += w * self.force.at[i][0];
+                        x[1] += w * self.force.at[i][1];
+                    }
+                    x
+                })
+                .collect(),
             false => Vec::new(),
         };
         let surface = corners::Surface {
