@@ -1,17 +1,17 @@
 //! The 3D solver against closed-form answers.
 
+mod common;
+
+use common::solid_scenes::{box_scene, solid_scene, ALUMINIUM};
 use rkforge_core::scene::solid::BoxFace;
-use rkforge_core::scene::{SceneFile, SolidScene};
+use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::SolidSimulation;
 use std::f64::consts::PI;
 
 /// A quarter of an elastic steel bar (radius 5 mm, length 100 mm) hitting a rigid wall at
 /// 1 m/s, the wall letting it go again.
 fn elastic_bar() -> SolidScene {
-    match SceneFile::from_str_named(&elastic_bar_text(), "elastic_bar.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    }
+    solid_scene(&elastic_bar_text(), "elastic_bar.toml")
 }
 
 /// The scene text of [`elastic_bar`].
@@ -67,10 +67,7 @@ fn a_square_bar_with_scni_follows_1d_wave_theory() {
             "shape = \"box\"\norigin_m = [0.0, 0.0, 0.0]\nsize_m = [0.005, 0.005, 0.1]\nparticles = [6, 6, 81]\nsymmetry = [\"x_min\", \"y_min\"]",
         )
         .replace("[time]", "[discretization]\nintegration = \"scni\"\n[time]");
-    let scene = match SceneFile::from_str_named(&text, "square_bar.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    };
+    let scene = solid_scene(&text, "square_bar.toml");
     assert_eq!(
         scene.discretization.integration,
         rkforge_core::IntegrationRule::Scni
@@ -88,10 +85,7 @@ fn a_square_bar_with_scni_follows_1d_wave_theory() {
 fn a_round_bar_with_scni_follows_1d_wave_theory() {
     let text =
         elastic_bar_text().replace("[time]", "[discretization]\nintegration = \"scni\"\n[time]");
-    let scene = match SceneFile::from_str_named(&text, "round_bar_scni.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    };
+    let scene = solid_scene(&text, "round_bar_scni.toml");
     let sim = SolidSimulation::new(&scene).unwrap();
     assert_eq!(sim.point_count(), sim.particle_count());
     let r: f64 = 0.005;
@@ -187,10 +181,7 @@ motion = {{ kind = "fixed" }}
 separation = false
 "#
     );
-    match SceneFile::from_str_named(&text, "box_impact.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    }
+    solid_scene(&text, "box_impact.toml")
 }
 
 /// The symmetry planes hold a quarter model as the whole body's symmetry does: a quarter
@@ -263,26 +254,10 @@ fn symmetry_planes_hold_a_quarter_as_the_whole_body_does() {
 /// start would set the scaled body ringing), with `[time] mass_scaling` given as `scaling`
 /// (TOML, or empty).
 fn cube_press(speed: f64, scaling: &str) -> SolidScene {
+    let eighth = ["x_min", "y_min", "z_min"];
+    let block = box_scene("cube_press", [0.005; 3], [5; 3], &eighth, ALUMINIUM, "q2");
     let text = format!(
-        r#"
-name = "cube_press"
-[model]
-kinematics = "3d"
-[workpiece]
-shape = "box"
-origin_m = [0.0, 0.0, 0.0]
-size_m = [0.005, 0.005, 0.005]
-particles = [5, 5, 5]
-symmetry = ["x_min", "y_min", "z_min"]
-initial_velocity_m_per_s = [0.0, 0.0, 0.0]
-[material]
-density_kg_per_m3 = 2700.0
-youngs_modulus_pa = 70e9
-poisson_ratio = 0.33
-hardening = {{ law = "linear", yield_stress_pa = 100e6, modulus_pa = 500e6 }}
-[discretization]
-integration = "q2"
-[time]
+        r#"{block}[time]
 end_s = {end}
 {scaling}
 [[tools]]
@@ -296,10 +271,7 @@ history_interval_s = {end}
 "#,
         end = 0.5e-3 / speed + 25e-6
     );
-    match SceneFile::from_str_named(&text, "cube_press.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    }
+    solid_scene(&text, "cube_press.toml")
 }
 
 /// Mass scaling in 3D buys steps and keeps a slow press's answer: an eighth of a cube pressed
@@ -374,6 +346,17 @@ fn mass_scaling_keeps_a_slow_press_answer_in_fewer_steps() {
 const K_CU: f64 = 400.0;
 const RHO_C_CU: f64 = 8960.0 * 385.0;
 
+/// The `[material]` keys of copper, perfectly plastic at `yield_stress_pa` (Pa): 8960
+/// kg/m^3, E 124 GPa, nu 0.34.
+fn copper(yield_stress_pa: f64) -> String {
+    format!(
+        r#"density_kg_per_m3 = 8960.0
+youngs_modulus_pa = 124.0e9
+poisson_ratio = 0.34
+hardening = {{ law = "linear", yield_stress_pa = {yield_stress_pa:e}, modulus_pa = 0.0 }}"#
+    )
+}
+
 /// A box `size` (m) of `particles` at `t0` (degrees C) with the `rule`, copper-like, its
 /// mass scaled by 1e10 so that the mechanical step is not what the run waits on, with
 /// `thermal` keys added to `[thermal]` and `extra` scene text after the `[time]` section
@@ -387,24 +370,9 @@ fn copper_box(
     thermal: &str,
     extra: &str,
 ) -> SolidScene {
+    let block = box_scene("conduction3d", size, particles, &[], &copper(100.0e6), rule);
     let text = format!(
-        r#"
-name = "conduction3d"
-[model]
-kinematics = "3d"
-[workpiece]
-shape = "box"
-origin_m = [0.0, 0.0, 0.0]
-size_m = [{}, {}, {}]
-particles = [{}, {}, {}]
-[material]
-density_kg_per_m3 = 8960.0
-youngs_modulus_pa = 124.0e9
-poisson_ratio = 0.34
-hardening = {{ law = "linear", yield_stress_pa = 100.0e6, modulus_pa = 0.0 }}
-[discretization]
-integration = "{rule}"
-[thermal]
+        r#"{block}[thermal]
 initial_temperature_c = {t0}
 specific_heat_j_per_kg_k = 385.0
 conductivity_w_per_m_k = {K_CU}
@@ -413,13 +381,9 @@ conductivity_w_per_m_k = {K_CU}
 end_s = {end}
 mass_scaling = {{ factor = 1.0e10 }}
 {extra}
-"#,
-        size[0], size[1], size[2], particles[0], particles[1], particles[2]
+"#
     );
-    match SceneFile::from_str_named(&text, "conduction3d.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    }
+    solid_scene(&text, "conduction3d.toml")
 }
 
 /// `erfc(x)` to 1.2e-7 relative (Numerical Recipes, 2nd ed., section 6.2, `erfcc`).
@@ -732,10 +696,7 @@ motion = { kind = "constant", velocity_m_per_s = 0.1 }
 temperature_c = 20.0
 heat_transfer_w_per_m2_k = 2.0e4
 "#;
-    let read = |text: &str| match SceneFile::from_str_named(text, "hot_upset3d.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    };
+    let read = |text: &str| solid_scene(text, "hot_upset3d.toml");
     let scene = read(text);
     // The anvil at the table's h(0) throughout: the contact pressure raised the
     // coefficient, so the anvil takes more heat than at h(0).
@@ -870,38 +831,28 @@ fn an_eighth_cube_cools_in_air_as_the_lumped_body() {
     assert!(heat_balance(v).abs() < 1e-9);
 }
 
-/// A 4 x 4 x 2 mm copper box (5 x 5 x 3 particles, q4, elastic: yield 1 GPa) pressed by a
-/// frictionless ram coming down at 0.2 mm/s onto an anvil that slides under it along x at
-/// 10 mm/s with Coulomb friction `mu` = 0.2; the face x = 0 held on a symmetry plane, so
-/// the box stays and slides on the anvil all the time. `[thermal]` at 20 C with the
-/// conductivity `k` (W/(m K); 0: the heat stays where friction made it) and
-/// `friction_heat_to_workpiece` = 0.5; mass scaled by 1e4 (quasi-static: the box's transit
-/// time 5e-5 s against the run's 10 ms).
-fn sliding_box(k: f64) -> SolidScene {
+/// The 3D scene `name` of a 4 x 4 x 2 mm copper box (5 x 5 x 3 particles, q4, elastic:
+/// yield 1 GPa), the face x = 0 held on a symmetry plane, with the `[thermal]` section
+/// `thermal` (or none), pressed by a frictionless ram coming down at `ram_speed` (m/s) onto
+/// an anvil that slides under it along x at `anvil_speed` (m/s) with the friction `friction`
+/// (a scene value), for 10 ms with the mass scaled by 1e4.
+fn sliding_scene(
+    name: &str,
+    thermal: &str,
+    anvil_speed: f64,
+    friction: &str,
+    ram_speed: f64,
+) -> SolidScene {
+    let block = box_scene(
+        name,
+        [0.004, 0.004, 0.002],
+        [5, 5, 3],
+        &["x_min"],
+        &copper(1.0e9),
+        "q4",
+    );
     let text = format!(
-        r#"
-name = "slide3d"
-[model]
-kinematics = "3d"
-[workpiece]
-shape = "box"
-origin_m = [0.0, 0.0, 0.0]
-size_m = [0.004, 0.004, 0.002]
-particles = [5, 5, 3]
-symmetry = ["x_min"]
-[material]
-density_kg_per_m3 = 8960.0
-youngs_modulus_pa = 124.0e9
-poisson_ratio = 0.34
-hardening = {{ law = "linear", yield_stress_pa = 1.0e9, modulus_pa = 0.0 }}
-[discretization]
-integration = "q4"
-[thermal]
-initial_temperature_c = 20.0
-specific_heat_j_per_kg_k = 385.0
-conductivity_w_per_m_k = {k}
-friction_heat_to_workpiece = 0.5
-[time]
+        r#"{block}{thermal}[time]
 end_s = 0.01
 mass_scaling = {{ factor = 1.0e4 }}
 [[tools]]
@@ -909,20 +860,35 @@ name = "anvil"
 point_m = [0.0, 0.0, 0.0]
 normal = [0.0, 0.0, 1.0]
 axis = [1.0, 0.0, 0.0]
-motion = {{ kind = "constant", velocity_m_per_s = 0.01 }}
-friction = 0.2
+motion = {{ kind = "constant", velocity_m_per_s = {anvil_speed:e} }}
+friction = {friction}
 [[tools]]
 name = "ram"
 point_m = [0.0, 0.0, 0.002]
 normal = [0.0, 0.0, -1.0]
 axis = [0.0, 0.0, -1.0]
-motion = {{ kind = "constant", velocity_m_per_s = 2.0e-4 }}
+motion = {{ kind = "constant", velocity_m_per_s = {ram_speed:e} }}
 "#
     );
-    match SceneFile::from_str_named(&text, "slide3d.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    }
+    solid_scene(&text, &format!("{name}.toml"))
+}
+
+/// The box of [`sliding_scene`] pressed by the ram coming down at 0.2 mm/s onto the anvil
+/// sliding under it at 10 mm/s with Coulomb friction `mu` = 0.2; the face x = 0 held on a
+/// symmetry plane, so the box stays and slides on the anvil all the time. `[thermal]` at 20
+/// C with the conductivity `k` (W/(m K); 0: the heat stays where friction made it) and
+/// `friction_heat_to_workpiece` = 0.5; mass scaled by 1e4 (quasi-static: the box's transit
+/// time 5e-5 s against the run's 10 ms).
+fn sliding_box(k: f64) -> SolidScene {
+    let thermal = format!(
+        r#"[thermal]
+initial_temperature_c = 20.0
+specific_heat_j_per_kg_k = 385.0
+conductivity_w_per_m_k = {k}
+friction_heat_to_workpiece = 0.5
+"#
+    );
+    sliding_scene("slide3d", &thermal, 0.01, "0.2", 2.0e-4)
 }
 
 /// The friction heat made so far (J): what the heat stages took in plus the work booked at
@@ -1021,25 +987,16 @@ fn friction_heat_is_the_work_of_coulomb_friction() {
 /// extents (m) and the points' Jacobians and Mises stresses (Pa). The 2D tests' block
 /// (`core/tests/thermoelastic.rs`) in 3D.
 fn heated_box(thermal: &str, tools: &str) -> (SolidSimulation, HeatedBox) {
+    let block = box_scene(
+        "thermoelastic3d",
+        [0.002, 0.002, 0.005],
+        [3, 3, 6],
+        &["x_min", "y_min", "z_min"],
+        &copper(1.0e9),
+        "q4",
+    );
     let text = format!(
-        r#"
-name = "thermoelastic3d"
-[model]
-kinematics = "3d"
-[workpiece]
-shape = "box"
-origin_m = [0.0, 0.0, 0.0]
-size_m = [0.002, 0.002, 0.005]
-particles = [3, 3, 6]
-symmetry = ["x_min", "y_min", "z_min"]
-[material]
-density_kg_per_m3 = 8960.0
-youngs_modulus_pa = 124.0e9
-poisson_ratio = 0.34
-hardening = {{ law = "linear", yield_stress_pa = 1.0e9, modulus_pa = 0.0 }}
-[discretization]
-integration = "q4"
-[thermal]
+        r#"{block}[thermal]
 initial_temperature_c = 20.0
 specific_heat_j_per_kg_k = 385.0
 conductivity_w_per_m_k = 400.0
@@ -1052,10 +1009,7 @@ mass_scaling = {{ factor = 1.0e4 }}
 {tools}
 "#
     );
-    let scene = match SceneFile::from_str_named(&text, "thermoelastic3d.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    };
+    let scene = solid_scene(&text, "thermoelastic3d.toml");
     assert_eq!(scene.validate(), vec![]);
     let mut sim = SolidSimulation::new(&scene).unwrap();
     let end = scene.time.end_s;
@@ -1217,32 +1171,36 @@ heat_transfer_w_per_m2_k = 1.0e5
     );
 }
 
-/// A copper cylinder (radius 5 mm, length 10 mm, linear hardening from 60 MPa, at 20 C with
-/// conductivity 400 W/(m K), no heat to the dies or the air) upset by 2 mm in 20 ms between
-/// flat dies with Coulomb friction `mu` = 0.2, the mass scaled by 1e4: as a 3D quarter
-/// model on the O-grid `cells` and as the axisymmetric 2D scene on `particles` (r, z);
-/// returns the friction heat made and the plastic heat (J) of the whole cylinder of each.
-fn frictional_upset(cells: [usize; 3], particles: [usize; 2]) -> [[f64; 2]; 2] {
-    let common = r#"
+/// The scene texts of a copper cylinder (radius 5 mm, length 10 mm, linear hardening from 60
+/// MPa by 300 MPa, q4, the mass scaled by 1e4) upset for `end_s` (s) between a fixed anvil and
+/// a ram coming down at 0.1 m/s, both with the friction `friction` (a scene value), with the
+/// `[thermal]` section `thermal` (or none): the 3D quarter model `{name}3d` on the O-grid
+/// `cells` and the axisymmetric scene `{name}2d` on `particles` (r, z).
+fn upset_texts(
+    name: &str,
+    cells: [usize; 3],
+    particles: [usize; 2],
+    thermal: &str,
+    end_s: f64,
+    friction: &str,
+) -> [String; 2] {
+    let common = format!(
+        r#"
 [material]
 density_kg_per_m3 = 8960.0
 youngs_modulus_pa = 124.0e9
 poisson_ratio = 0.34
-hardening = { law = "linear", yield_stress_pa = 60.0e6, modulus_pa = 300.0e6 }
+hardening = {{ law = "linear", yield_stress_pa = 60.0e6, modulus_pa = 300.0e6 }}
 [discretization]
 integration = "q4"
-[thermal]
-initial_temperature_c = 20.0
-specific_heat_j_per_kg_k = 385.0
-conductivity_w_per_m_k = 400.0
-taylor_quinney = 0.9
-[time]
-end_s = 0.02
-mass_scaling = { factor = 1.0e4 }
-"#;
+{thermal}[time]
+end_s = {end_s}
+mass_scaling = {{ factor = 1.0e4 }}
+"#
+    );
     let text3 = format!(
         r#"
-name = "friction_upset3d"
+name = "{name}3d"
 [model]
 kinematics = "3d"
 [workpiece]
@@ -1258,20 +1216,20 @@ point_m = [0.0, 0.0, 0.0]
 normal = [0.0, 0.0, 1.0]
 axis = [0.0, 0.0, -1.0]
 motion = {{ kind = "fixed" }}
-friction = 0.2
+friction = {friction}
 [[tools]]
 name = "ram"
 point_m = [0.0, 0.0, 0.01]
 normal = [0.0, 0.0, -1.0]
 axis = [0.0, 0.0, -1.0]
 motion = {{ kind = "constant", velocity_m_per_s = 0.1 }}
-friction = 0.2
+friction = {friction}
 "#,
         cells[0], cells[1], cells[2]
     );
     let text2 = format!(
         r#"
-name = "friction_upset2d"
+name = "{name}2d"
 [model]
 kinematics = "axisymmetric"
 [workpiece]
@@ -1284,20 +1242,33 @@ name = "anvil"
 points_m = [[-0.002, 0.0], [0.02, 0.0]]
 axis = [0.0, -1.0]
 motion = {{ kind = "fixed" }}
-friction = 0.2
+friction = {friction}
 [[tools]]
 name = "ram"
 points_m = [[0.02, 0.01], [-0.002, 0.01]]
 axis = [0.0, -1.0]
 motion = {{ kind = "constant", velocity_m_per_s = 0.1 }}
-friction = 0.2
+friction = {friction}
 "#,
         particles[0], particles[1]
     );
-    let scene3 = match SceneFile::from_str_named(&text3, "friction_upset3d.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    };
+    [text3, text2]
+}
+
+/// A copper cylinder (radius 5 mm, length 10 mm, linear hardening from 60 MPa, at 20 C with
+/// conductivity 400 W/(m K), no heat to the dies or the air) upset by 2 mm in 20 ms between
+/// flat dies with Coulomb friction `mu` = 0.2, the mass scaled by 1e4: as a 3D quarter
+/// model on the O-grid `cells` and as the axisymmetric 2D scene on `particles` (r, z);
+/// returns the friction heat made and the plastic heat (J) of the whole cylinder of each.
+fn frictional_upset(cells: [usize; 3], particles: [usize; 2]) -> [[f64; 2]; 2] {
+    let thermal = r#"[thermal]
+initial_temperature_c = 20.0
+specific_heat_j_per_kg_k = 385.0
+conductivity_w_per_m_k = 400.0
+taylor_quinney = 0.9
+"#;
+    let [text3, text2] = upset_texts("friction_upset", cells, particles, thermal, 0.02, "0.2");
+    let scene3 = solid_scene(&text3, "friction_upset3d.toml");
     let mut sim3 = SolidSimulation::new(&scene3).unwrap();
     sim3.run_toward(0.02, u64::MAX, |_, _| true).unwrap();
     let v3 = sim3.thermal_values().unwrap();
@@ -1418,46 +1389,7 @@ heat_transfer_w_per_m2_k = 1.0e5
 /// The box of [`sliding_box`] without `[thermal]`, the anvil sliding at 100 mm/s with the
 /// friction `friction` (a scene value), the ram coming down at 1 mm/s.
 fn sliding_box_with(friction: &str) -> SolidScene {
-    let text = format!(
-        r#"
-name = "slide3d_shear"
-[model]
-kinematics = "3d"
-[workpiece]
-shape = "box"
-origin_m = [0.0, 0.0, 0.0]
-size_m = [0.004, 0.004, 0.002]
-particles = [5, 5, 3]
-symmetry = ["x_min"]
-[material]
-density_kg_per_m3 = 8960.0
-youngs_modulus_pa = 124.0e9
-poisson_ratio = 0.34
-hardening = {{ law = "linear", yield_stress_pa = 1.0e9, modulus_pa = 0.0 }}
-[discretization]
-integration = "q4"
-[time]
-end_s = 0.01
-mass_scaling = {{ factor = 1.0e4 }}
-[[tools]]
-name = "anvil"
-point_m = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-axis = [1.0, 0.0, 0.0]
-motion = {{ kind = "constant", velocity_m_per_s = 0.1 }}
-friction = {friction}
-[[tools]]
-name = "ram"
-point_m = [0.0, 0.0, 0.002]
-normal = [0.0, 0.0, -1.0]
-axis = [0.0, 0.0, -1.0]
-motion = {{ kind = "constant", velocity_m_per_s = 1.0e-3 }}
-"#
-    );
-    match SceneFile::from_str_named(&text, "slide3d_shear.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    }
+    sliding_scene("slide3d_shear", "", 0.1, friction, 1.0e-3)
 }
 
 /// The largest relative departure of the friction stress from `m k` (-) over the second
@@ -1538,79 +1470,11 @@ fn a_3d_box_sliding_under_shear_friction_carries_m_k() {
 /// and the axisymmetric run on `particles`, each the mean over the steps of each 0.5 mm of
 /// stroke (the mass-scaled body rings about its quasi-static answer), eight means.
 fn shear_upset(cells: [usize; 3], particles: [usize; 2], friction: &str) -> [Vec<f64>; 2] {
-    let common = r#"
-[material]
-density_kg_per_m3 = 8960.0
-youngs_modulus_pa = 124.0e9
-poisson_ratio = 0.34
-hardening = { law = "linear", yield_stress_pa = 60.0e6, modulus_pa = 300.0e6 }
-[discretization]
-integration = "q4"
-[time]
-end_s = 0.04
-mass_scaling = { factor = 1.0e4 }
-"#;
-    let text3 = format!(
-        r#"
-name = "shear_upset3d"
-[model]
-kinematics = "3d"
-[workpiece]
-shape = "cylinder"
-radius_m = 0.005
-length_m = 0.01
-part = "quarter"
-cells = [{}, {}, {}]
-{common}
-[[tools]]
-name = "anvil"
-point_m = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-axis = [0.0, 0.0, -1.0]
-motion = {{ kind = "fixed" }}
-friction = {friction}
-[[tools]]
-name = "ram"
-point_m = [0.0, 0.0, 0.01]
-normal = [0.0, 0.0, -1.0]
-axis = [0.0, 0.0, -1.0]
-motion = {{ kind = "constant", velocity_m_per_s = 0.1 }}
-friction = {friction}
-"#,
-        cells[0], cells[1], cells[2]
-    );
-    let text2 = format!(
-        r#"
-name = "shear_upset2d"
-[model]
-kinematics = "axisymmetric"
-[workpiece]
-origin_m = [0.0, 0.0]
-size_m = [0.005, 0.01]
-particles = [{}, {}]
-{common}
-[[tools]]
-name = "anvil"
-points_m = [[-0.002, 0.0], [0.02, 0.0]]
-axis = [0.0, -1.0]
-motion = {{ kind = "fixed" }}
-friction = {friction}
-[[tools]]
-name = "ram"
-points_m = [[0.02, 0.01], [-0.002, 0.01]]
-axis = [0.0, -1.0]
-motion = {{ kind = "constant", velocity_m_per_s = 0.1 }}
-friction = {friction}
-"#,
-        particles[0], particles[1]
-    );
+    let [text3, text2] = upset_texts("shear_upset", cells, particles, "", 0.04, friction);
     let windows = 8;
     let window = 0.04 / windows as f64;
     let mean = |sums: &[[f64; 2]]| sums.iter().map(|s| s[0] / s[1]).collect::<Vec<f64>>();
-    let scene3 = match SceneFile::from_str_named(&text3, "shear_upset3d.toml").unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    };
+    let scene3 = solid_scene(&text3, "shear_upset3d.toml");
     assert_eq!(scene3.validate(), vec![]);
     let mut sim3 = SolidSimulation::new(&scene3).unwrap();
     let mut sums3 = vec![[0.0; 2]; windows];

@@ -1,9 +1,12 @@
 //! Rigid tools from STL files in 3D against the plane tools they replace, and the analytic
 //! cylinder tools against the STL cylinders they replace.
 
+mod common;
+
+use common::solid_scenes::{box_scene, ALUMINIUM};
 use rkforge_core::outputs::{solid_columns, Sample};
 use rkforge_core::scene::{SceneFile, SolidScene};
-use rkforge_core::solver::SolidSimulation;
+use rkforge_core::solver::{DiePressure, SolidSimulation};
 use std::path::{Path, PathBuf};
 
 /// The closed box `lo..hi` (in the file's unit) as 12 triangles with outward normals,
@@ -325,27 +328,17 @@ fn block_text(anvil: &str, ram: &str, end: f64, fill: &str, reach: f64) -> Strin
 /// y = 0 holding it by symmetry, q2) on the fixed `anvil`, pressed by the `ram` (their
 /// surface keys, TOML) moving down at 2 m/s for `end` s.
 fn pressed_box(size: [f64; 3], particles: [usize; 3], end: f64, anvil: &str, ram: &str) -> String {
-    let [x, y, z] = size.map(|v| v * 1e-3);
-    let [nx, ny, nz] = particles;
+    let quarter = ["x_min", "y_min"];
+    let block = box_scene(
+        "pressed_box",
+        size.map(|v| v * 1e-3),
+        particles,
+        &quarter,
+        ALUMINIUM,
+        "q2",
+    );
     format!(
-        r#"
-name = "pressed_box"
-[model]
-kinematics = "3d"
-[workpiece]
-shape = "box"
-origin_m = [0.0, 0.0, 0.0]
-size_m = [{x:e}, {y:e}, {z:e}]
-particles = [{nx}, {ny}, {nz}]
-symmetry = ["x_min", "y_min"]
-[material]
-density_kg_per_m3 = 2700.0
-youngs_modulus_pa = 70e9
-poisson_ratio = 0.33
-hardening = {{ law = "linear", yield_stress_pa = 100e6, modulus_pa = 500e6 }}
-[discretization]
-integration = "q2"
-[time]
+        r#"{block}[time]
 end_s = {end:e}
 [[tools]]
 name = "anvil"
@@ -457,14 +450,7 @@ fn flat_dies_report_the_contact_area_and_pressure_of_a_quarter_block() {
                 .map(|(p, a)| p * a)
                 .sum();
             let rel = integral / tool.state.normal_force - 1.0;
-            let loaded: f64 = die
-                .pressure
-                .iter()
-                .zip(&die.areas)
-                .filter(|(p, _)| **p != 0.0)
-                .map(|(_, a)| a)
-                .sum();
-            let peak = die.pressure.iter().copied().fold(0.0, f64::max);
+            let (loaded, peak) = loaded_area_and_peak(&die);
             eprintln!(
                 "  {} triangles, integral against the normal force {rel:.1e}, loaded area {loaded:.4e} m^2, highest {peak:.4e} Pa",
                 die.triangles.len()
@@ -486,6 +472,20 @@ fn flat_dies_report_the_contact_area_and_pressure_of_a_quarter_block() {
         }
     }
     assert_eq!(areas[..2], areas[2..]);
+}
+
+/// The loaded area of a die's pressure field, its triangles' with a pressure on them (m^2;
+/// a triangle of no area carries none), and the highest pressure on one (Pa).
+fn loaded_area_and_peak(die: &DiePressure) -> (f64, f64) {
+    let loaded = die
+        .pressure
+        .iter()
+        .zip(&die.areas)
+        .filter(|(p, _)| **p != 0.0)
+        .map(|(_, a)| a)
+        .sum();
+    let peak = die.pressure.iter().copied().fold(0.0, f64::max);
+    (loaded, peak)
 }
 
 /// Each triangle of `triangles` split into four at its edges' midpoints, `levels` times (a
@@ -529,14 +529,7 @@ fn a_die_finer_than_the_particles_carries_each_particles_pressure_over_its_patch
     let mean = tool.state.normal_force / area;
     let die = sim.die_pressure(1);
     let integral: f64 = die.forces.iter().sum();
-    let loaded: f64 = die
-        .forces
-        .iter()
-        .zip(&die.areas)
-        .filter(|(f, _)| **f != 0.0)
-        .map(|(_, a)| a)
-        .sum();
-    let peak = die.pressure.iter().copied().fold(0.0, f64::max);
+    let (loaded, peak) = loaded_area_and_peak(&die);
     eprintln!(
         "integral against the normal force {:.1e}, loaded {loaded:.4e} against the contact area {area:.4e} m^2, peak {peak:.4e} against the mean {mean:.4e} Pa",
         integral / tool.state.normal_force - 1.0

@@ -5,6 +5,8 @@ use rkforge_core::material::Hardening;
 use rkforge_core::scene::*;
 use rkforge_core::Simulation;
 
+pub mod solid_scenes;
+
 /// A free square patch of copper (no tools, no constraints).
 pub fn patch(kin: Kinematics, n: usize, rule: IntegrationRule, support: f64) -> Scene {
     Scene {

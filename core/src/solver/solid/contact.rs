@@ -30,7 +30,7 @@
 //! Then the second pass (`ridges.rs`, for the STL dies with `ridges = true`): the tools'
 //! convex edges and vertices against the workpiece's surface facets between the particles.
 
-use super::ridges::RidgePass;
+use super::ridges::{ParticlePass, RidgePass};
 use super::{Pressed, SolidDisc, SolidState};
 use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::{slip_work, Forces};
@@ -38,6 +38,7 @@ use crate::math::{dot, Real};
 use crate::solid_tool::SolidTool;
 use crate::solver::fields::smoothed;
 use crate::solver::point_outputs::PointOut;
+use crate::solver::stable_step::StepLength;
 use crate::team::{part, particle_phase, Parts, Team};
 
 /// Particles interpolated by one task of the stage.
@@ -184,11 +185,11 @@ impl ToolContact {
         (3.0 as Real).sqrt() * (self.moves[0] + self.moves[1] + self.moves[2])
     }
 
-    /// The contact of the predicted positions (a natural step `dt` ahead, s) with `planes`
-    /// (paper eqs. 4-7), `dt_avg` the corrector's step (s), the points' flow stresses in
-    /// `out` for the friction laws that need one ([`interface`]). Fills
-    /// [`ToolContact::force`], each plane's force and the held and friction states of `st`.
-    #[allow(clippy::too_many_arguments)]
+    /// The contact of the predicted positions (a natural step `dt = step.full` ahead, s)
+    /// with `planes` (paper eqs. 4-7), `dt_avg = step.avg` the corrector's step (s), the
+    /// points' flow stresses in `out` for the friction laws that need one ([`interface`]).
+    /// Fills [`ToolContact::force`], each plane's force and the held and friction states of
+    /// `st`.
     pub(crate) fn stage(
         &mut self,
         team: &Team,
@@ -196,9 +197,9 @@ impl ToolContact {
         planes: &mut [SolidTool],
         st: &mut SolidState,
         out: &[PointOut],
-        dt: Real,
-        dt_avg: Real,
+        step: StepLength,
     ) -> Touch {
+        let (dt, dt_avg) = (step.full, step.avg);
         for t in planes.iter_mut() {
             t.state.force = [0.0; 3];
             t.state.normal_force = 0.0;
@@ -346,10 +347,13 @@ impl ToolContact {
             disc,
             planes,
             st,
-            out,
-            &mut flow_stress,
-            &mut self.force,
-            (dt, dt_avg, du),
+            ParticlePass {
+                out,
+                flow: &mut flow_stress,
+                force: &mut self.force,
+                du,
+            },
+            step,
         );
         if ridges.any {
             touch.any = true;

@@ -46,6 +46,8 @@ mod ridges;
 mod self_contact;
 mod setup;
 #[cfg(test)]
+mod test_scenes;
+#[cfg(test)]
 mod tests;
 mod volume;
 
@@ -418,9 +420,7 @@ impl SolidSimulation {
             for t in tools.iter_mut() {
                 t.state.stroke += (full - dt) * t.state.velocity;
             }
-            let mut touch = ws
-                .contact
-                .stage(&ws.team, disc, tools, st, &ws.out, full, step.avg);
+            let mut touch = ws.contact.stage(&ws.team, disc, tools, st, &ws.out, step);
             let on_itself = SelfStage {
                 tools: &tools[..disc.scene_tools],
                 out: &ws.out,

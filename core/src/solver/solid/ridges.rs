@@ -83,6 +83,7 @@ use crate::contact::Forces;
 use crate::math::{dot, Real};
 use crate::solid_tool::SolidTool;
 use crate::solver::point_outputs::PointOut;
+use crate::solver::stable_step::StepLength;
 use crate::stl::{cross, sub};
 use crate::tools::Penetration;
 use crate::triangle_surface::along;
@@ -413,6 +414,21 @@ pub(super) fn dents(
     out
 }
 
+/// What the particle pass of a contact stage hands on to the ridge pass
+/// ([`RidgePass::run`]).
+pub(super) struct ParticlePass<'a> {
+    /// The points' outputs (flow stresses for the friction laws that need one).
+    pub out: &'a [PointOut],
+    /// The particles' flow stresses smoothed from `out`, once a friction law needed them
+    /// ([`flow_stresses`]).
+    pub flow: &'a mut Option<Vec<Real>>,
+    /// The contact force on each RK coefficient (N), eq. 7, which the ridge pass adds to.
+    pub force: &'a mut Forces<3>,
+    /// The particle pass's bound on the change of a coefficient's predicted displacement
+    /// `d_I + dt v*_I` since the last stage (m).
+    pub du: Real,
+}
+
 /// What the pass keeps between stages to skip its work while no ridge is near.
 #[derive(Debug, Clone)]
 pub(super) struct RidgePass {
@@ -433,21 +449,24 @@ impl RidgePass {
         }
     }
 
-    /// The pass on the positions a natural step `dt` ahead (s), `dt_avg` the corrector's
-    /// step (s), `du` the particle pass's bound on the change of a coefficient's predicted
-    /// displacement since the last stage (m): adds to `force` and to the tools' forces
-    /// (module doc).
-    #[allow(clippy::too_many_arguments)]
+    /// The pass on the positions a natural step `dt = step.full` ahead (s), `dt_avg =
+    /// step.avg` the corrector's step (s), after the particle pass `pass`: adds to its
+    /// `force` and to the tools' forces (module doc).
     pub(super) fn run(
         &mut self,
         disc: &SolidDisc,
         tools: &mut [SolidTool],
         st: &mut SolidState,
-        out: &[PointOut],
-        flow: &mut Option<Vec<Real>>,
-        force: &mut Forces<3>,
-        (dt, dt_avg, du): (Real, Real, Real),
+        pass: ParticlePass<'_>,
+        step: StepLength,
     ) -> Touch {
+        let ParticlePass {
+            out,
+            flow,
+            force,
+            du,
+        } = pass;
+        let (dt, dt_avg) = (step.full, step.avg);
         let surface = &disc.heat_surface;
         if !self.on || surface.particles().is_empty() || !tools.iter().any(SolidTool::has_ridges) {
             return Touch::default();
