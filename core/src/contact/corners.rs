@@ -113,6 +113,28 @@ pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
         .collect()
 }
 
+/// The segments of the closed ring polygon `x` (m, counter-clockwise) that a convex corner
+/// of `tool` (in its current position) touches: each corner's nearest segment, when the
+/// corner lies inside the polygon or within `reach` (m) outside it. Where a tool is held
+/// through its corners (a curve faceted finer than the particles), the corners keep the
+/// surface's particles just off the tool's faces, and the segments they push are the
+/// surface in contact.
+pub fn touching(tool: &Tool, x: &[[Real; 2]], reach: Real) -> Vec<usize> {
+    if x.len() < 3 {
+        return Vec::new();
+    }
+    let s = tool.state.stroke;
+    tool.convex
+        .iter()
+        .filter_map(|&k| {
+            let p = tool.points0[k as usize];
+            let v = [p[0] + s * tool.axis[0], p[1] + s * tool.axis[1]];
+            let corner = nearest_segment(x, v);
+            (corner.gap <= reach || in_polygon(x, v)).then_some(corner.segment)
+        })
+        .collect()
+}
+
 /// The surface force of a corner (N; module doc): `m_s g / (dt dt_avg)` along `v - c`,
 /// with the natural step `dt` and the corrector's step `dt_avg` (s) as the particle pass.
 pub fn penalty(corner: &Corner, surface: &Surface<'_>, dt: Real, dt_avg: Real) -> [Real; 2] {
@@ -280,6 +302,16 @@ mod tests {
             .sum();
         assert!((push - 2.0 * (0.05 * 0.05 + 0.1 * 0.1) / 0.15 / 0.01).abs() < 1e-9);
         assert!(push < 2.0 * 0.1 / 0.01);
+    }
+
+    /// A corner touches the segment under it when inside the material or within the
+    /// reach outside it, and no segment when farther off.
+    #[test]
+    fn a_corner_touches_the_segment_it_presses_or_nearly_does() {
+        let (positions, _, _) = square();
+        assert_eq!(touching(&notched(0.9), &positions, 0.05), vec![4]);
+        assert_eq!(touching(&notched(1.04), &positions, 0.05), vec![4]);
+        assert!(touching(&notched(1.06), &positions, 0.05).is_empty());
     }
 
     #[test]

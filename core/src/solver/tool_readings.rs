@@ -5,13 +5,16 @@
 //! The contact length of a tool is the length of the workpiece's surface polygon (the
 //! boundary ring's physical positions) over the segments whose two particles both lie on
 //! the tool: inside it, or outside by at most [`ON_TOOL_SPACINGS`] smallest spacings (the
-//! corrector leaves a particle in contact at about zero gap, on either side); its fraction
-//! is that over the length of the tool's polyline. Both are read from the state alone, so a
+//! corrector leaves a particle in contact at about zero gap, on either side), and over the
+//! segments a convex corner of the tool touches within that reach (where the corner pass
+//! holds the surface, its particles sit just off the tool's faces); its fraction is that
+//! over the length of the tool's polyline. Both are read from the state alone, so a
 //! restored state reports them as first computed.
 
 use super::fill::{fill_points, scene_points, ON_TOOL_SPACINGS};
 use super::simulation::Simulation;
 use super::state::Filled;
+use crate::contact::corners;
 use crate::math::Real;
 use crate::scene::Kinematics;
 
@@ -35,18 +38,23 @@ impl Simulation {
     }
 
     /// The workpiece's surface in contact with tool `t` now: the boundary ring's segments
-    /// whose two particles both lie on it, each as its two ends at their physical positions
-    /// (m), counter-clockwise.
+    /// whose two particles both lie on it, and those a convex corner of the tool touches
+    /// ([`corners::touching`], within the same reach), each as its two ends at their physical
+    /// positions (m), counter-clockwise.
     pub fn contact_segments(&self, t: usize) -> Vec<[[Real; 2]; 2]> {
-        let below = -ON_TOOL_SPACINGS * self.disc.h_min();
+        let reach = ON_TOOL_SPACINGS * self.disc.h_min();
         let x = self.disc.ring(&self.st.d);
         let inside: Vec<bool> = x
             .iter()
-            .map(|&p| self.tools[t].gap_above(p, below).is_some())
+            .map(|&p| self.tools[t].gap_above(p, -reach).is_some())
             .collect();
         let n = x.len();
+        let mut touched: Vec<bool> = (0..n).map(|k| inside[k] && inside[(k + 1) % n]).collect();
+        for k in corners::touching(&self.tools[t], &x, reach) {
+            touched[k] = true;
+        }
         (0..n)
-            .filter(|&k| inside[k] && inside[(k + 1) % n])
+            .filter(|&k| touched[k])
             .map(|k| [x[k], x[(k + 1) % n]])
             .collect()
     }
