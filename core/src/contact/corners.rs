@@ -115,7 +115,9 @@ pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
 
 /// The segments of the closed ring polygon `x` (m, counter-clockwise) that a convex corner
 /// of `tool` (in its current position) touches: each corner's nearest segment, when the
-/// corner lies inside the polygon or within `reach` (m) outside it. Where a tool is held
+/// corner lies inside the polygon or within `reach` (m) outside it, but not exactly on it
+/// (as a particle at zero gap is not in contact: a die placed on the workpiece touches
+/// nothing until it presses). Where a tool is held
 /// through its corners (a curve faceted finer than the particles), the corners keep the
 /// surface's particles just off the tool's faces, and the segments they push are the
 /// surface in contact.
@@ -130,7 +132,8 @@ pub fn touching(tool: &Tool, x: &[[Real; 2]], reach: Real) -> Vec<usize> {
             let p = tool.points0[k as usize];
             let v = [p[0] + s * tool.axis[0], p[1] + s * tool.axis[1]];
             let corner = nearest_segment(x, v);
-            (corner.gap <= reach || in_polygon(x, v)).then_some(corner.segment)
+            let near = corner.gap <= reach || in_polygon(x, v);
+            (near && corner.gap != 0.0).then_some(corner.segment)
         })
         .collect()
 }
@@ -312,6 +315,7 @@ mod tests {
         assert_eq!(touching(&notched(0.9), &positions, 0.05), vec![4]);
         assert_eq!(touching(&notched(1.04), &positions, 0.05), vec![4]);
         assert!(touching(&notched(1.06), &positions, 0.05).is_empty());
+        assert!(touching(&notched(1.0), &positions, 0.05).is_empty());
     }
 
     #[test]
