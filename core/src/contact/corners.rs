@@ -80,13 +80,8 @@ pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
             )
         },
     );
-    let s = tool.state.stroke;
-    let found: Vec<Corner> = tool
-        .convex
-        .iter()
-        .filter_map(|&k| {
-            let p = tool.points0[k as usize];
-            let v = [p[0] + s * tool.axis[0], p[1] + s * tool.axis[1]];
+    let found: Vec<Corner> = convex_now(tool)
+        .filter_map(|v| {
             if v[0] <= lo[0] || v[0] >= hi[0] || v[1] <= lo[1] || v[1] >= hi[1] {
                 return None;
             }
@@ -117,25 +112,29 @@ pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
 /// of `tool` (in its current position) touches: each corner's nearest segment, when the
 /// corner lies inside the polygon or within `reach` (m) outside it, but not exactly on it
 /// (as a particle at zero gap is not in contact: a die placed on the workpiece touches
-/// nothing until it presses). Where a tool is held
-/// through its corners (a curve faceted finer than the particles), the corners keep the
-/// surface's particles just off the tool's faces, and the segments they push are the
-/// surface in contact.
+/// nothing until it presses). Where a tool is held through its corners (a curve faceted
+/// finer than the particles), the corners keep the surface's particles just off the tool's
+/// faces, and the segments they push are the surface in contact.
 pub fn touching(tool: &Tool, x: &[[Real; 2]], reach: Real) -> Vec<usize> {
     if x.len() < 3 {
         return Vec::new();
     }
-    let s = tool.state.stroke;
-    tool.convex
-        .iter()
-        .filter_map(|&k| {
-            let p = tool.points0[k as usize];
-            let v = [p[0] + s * tool.axis[0], p[1] + s * tool.axis[1]];
+    convex_now(tool)
+        .filter_map(|v| {
             let corner = nearest_segment(x, v);
             let near = corner.gap <= reach || in_polygon(x, v);
             (near && corner.gap != 0.0).then_some(corner.segment)
         })
         .collect()
+}
+
+/// The positions (m) of `tool`'s convex corners at its current stroke.
+fn convex_now(tool: &Tool) -> impl Iterator<Item = [Real; 2]> + '_ {
+    let s = tool.state.stroke;
+    tool.convex.iter().map(move |&k| {
+        let p = tool.points0[k as usize];
+        [p[0] + s * tool.axis[0], p[1] + s * tool.axis[1]]
+    })
 }
 
 /// The surface force of a corner (N; module doc): `m_s g / (dt dt_avg)` along `v - c`,
