@@ -52,6 +52,80 @@ pub(super) fn smoothed<const D: usize>(
         .collect()
 }
 
+/// [`smoothed`] particle by particle: for each particle the points its shape function
+/// reaches, ascending, with the weights `|N_I(x_p) w_p|` (m^D), so that one particle's
+/// smoothed value costs its own points instead of a pass over every point. A stage that
+/// needs a point value at a few particles (the flow stress of the particles in contact,
+/// for the shear and capped friction laws) reads it here; the bits are [`smoothed`]'s (the
+/// same sums in the same order, the zero weights left out).
+#[derive(Debug, Clone, Default)]
+pub(super) struct Smoothing {
+    /// Start of each particle's entries, `particles + 1` of them.
+    offsets: Vec<u32>,
+    /// The points, ascending within a particle.
+    points: Vec<u32>,
+    /// `|N_I(x_p) w_p|` of each entry (m^D).
+    weights: Vec<Real>,
+}
+
+impl Smoothing {
+    /// The points of `scatter` with weights `weights` (m^D) reaching each of `particles`.
+    pub(super) fn new<const D: usize>(
+        scatter: &Scatter<D>,
+        weights: &[Real],
+        particles: usize,
+    ) -> Smoothing {
+        let entries = |p: usize| {
+            let weight = weights[p];
+            scatter
+                .point_values(p)
+                .map(move |(i, n)| (i, (n * weight).abs()))
+                .filter(|&(_, w)| w != 0.0)
+        };
+        let mut offsets = vec![0u32; particles + 1];
+        for p in 0..weights.len() {
+            for (i, _) in entries(p) {
+                offsets[i + 1] += 1;
+            }
+        }
+        for i in 0..particles {
+            offsets[i + 1] += offsets[i];
+        }
+        let total = offsets[particles] as usize;
+        let (mut points, mut w) = (vec![0u32; total], vec![0.0; total]);
+        let mut next = offsets.clone();
+        for p in 0..weights.len() {
+            for (i, wi) in entries(p) {
+                let e = next[i] as usize;
+                (points[e], w[e]) = (p as u32, wi);
+                next[i] += 1;
+            }
+        }
+        Smoothing {
+            offsets,
+            points,
+            weights: w,
+        }
+    }
+
+    /// No particle has points (the table was not needed).
+    pub(super) fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Particle `j`'s value: the mean of `value(p)` over the points reaching it, weighted by
+    /// `|N_J(x_p) w_p|`; 0 if none does.
+    pub(super) fn at(&self, j: usize, value: impl Fn(usize) -> Real) -> Real {
+        let e = self.offsets[j] as usize..self.offsets[j + 1] as usize;
+        let (mut wsum, mut sum) = (0.0, 0.0);
+        for (&p, &w) in self.points[e.clone()].iter().zip(&self.weights[e]) {
+            wsum += w;
+            sum += w * value(p as usize);
+        }
+        sum * if wsum > 0.0 { 1.0 / wsum } else { 0.0 }
+    }
+}
+
 impl Simulation {
     /// Physical positions `X_J + sum_I N_I(X_J) d_I` of all particles (m).
     pub fn positions(&self) -> Vec<[Real; 2]> {
@@ -181,5 +255,34 @@ impl Simulation {
     /// Equivalent plastic strain at each integration point.
     pub fn point_plastic_strain(&self) -> Vec<Real> {
         self.st.points.iter().map(|s| s.eps_p).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integration::point_shapes;
+    use crate::rk_shape::Lattice;
+    use crate::scene::IntegrationRule;
+    use crate::solver::layout::MAX_GROUP_3D;
+
+    #[test]
+    fn one_particle_smoothed_gives_the_bits_of_the_whole_field() {
+        let h = [1.0e-3, 1.2e-3, 0.9e-3];
+        let lattice = Lattice::new([0.0; 3], h, [7, 6, 5], h.map(|h| 2.0 * h));
+        let particles = lattice.cloud().positions.len();
+        for rule in [IntegrationRule::Q2, IntegrationRule::Q4] {
+            let (points, pt) = point_shapes(&lattice, rule).unwrap();
+            let scatter = Scatter::new(&pt, particles, 96, MAX_GROUP_3D);
+            // A value varying from point to point, negative at some.
+            let values: Vec<Real> = (0..points.areas.len())
+                .map(|p| ((p * 7919) % 113) as Real * 1.37e6 - 2.0e7)
+                .collect();
+            let field = smoothed(&scatter, &points.areas, particles, &values);
+            let smoothing = Smoothing::new(&scatter, &points.areas, particles);
+            for (j, &f) in field.iter().enumerate() {
+                assert_eq!(smoothing.at(j, |p| values[p]).to_bits(), f.to_bits(), "{j}");
+            }
+        }
     }
 }

@@ -20,9 +20,10 @@
 //! and in a scene with `[thermal]` its work against the slip booked at the particle for the
 //! heat stage, as in 2D.
 //!
-//! Skipping, as in 2D: between two stages `x_J` moves at most `sqrt 3 S_J du` (`S_J =
-//! sum_I |N_I(X_J)|`, `du` the bound on the change of `d_I + dt v*_I` per component) and a
-//! tool at most its stroke change; a particle whose distance to every tool (its clearance,
+//! Skipping: between two stages `x_J` moves at most `S_J M_c` (`S_J = sum_I |N_I(X_J)|`,
+//! `M_c` the largest change of `d_I + dt v*_I` over the coefficients near the particle,
+//! [`MoveBound`]) and a tool at most its stroke change; a particle whose distance to every
+//! tool (its clearance,
 //! a triangle surface's lower bound from its bins when no triangle lies within the search
 //! depth, [`SolidTool::clearance`]) stays positive after those moves cannot touch one, and
 //! is not interpolated.
@@ -32,11 +33,11 @@
 
 use super::ridges::{ParticlePass, RidgePass};
 use super::{Pressed, SolidDisc, SolidState};
+use crate::contact::move_bound::MoveBound;
 use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::{slip_work, Forces};
 use crate::math::{dot, Real};
 use crate::solid_tool::SolidTool;
-use crate::solver::fields::smoothed;
 use crate::solver::point_outputs::PointOut;
 use crate::solver::stable_step::StepLength;
 use crate::team::{part, particle_phase, Parts, Team};
@@ -66,7 +67,7 @@ pub(super) fn predicted(
 /// What the shear and capped friction laws read of particle `j` on a tool with contact
 /// normal `n` ([`Interface`], 2D's `crate::contact::Contact::interface` in 3D): its flow
 /// stress `flow` (Pa: the static flow stress `sigma_y(eps_p, T)` of the points smoothed to
-/// the particle, the `|N_I(x_p)| w_p`-weighted mean of [`smoothed`]) and its contact area
+/// the particle, the `|N_I(x_p)| w_p`-weighted mean of [`crate::solver::fields::smoothed`]) and its contact area
 /// (m^2): on the body's surface the projection of its quarters on the tool's tangent
 /// plane at the predicted positions `position(i)` (m), `A_J = sum |a . n|`
 /// ([`super::heat::HeatSurface::contact_area`], the heat stage's contact area); a
@@ -90,17 +91,10 @@ pub(super) fn interface(
     }
 }
 
-/// The particles' flow stresses (Pa), the points' smoothed to them ([`smoothed`]), computed
-/// into `cache` when a friction law first needs them in a stage.
-pub(super) fn flow_stresses<'a>(
-    cache: &'a mut Option<Vec<Real>>,
-    disc: &SolidDisc,
-    out: &[PointOut],
-) -> &'a [Real] {
-    cache.get_or_insert_with(|| {
-        let values: Vec<Real> = out.iter().map(|o| o.flow_stress).collect();
-        smoothed(&disc.scatter, &disc.weights, disc.ref_pos.len(), &values)
-    })
+/// Particle `j`'s flow stress (Pa): the points' in `out` smoothed to it ([`crate::solver::fields::smoothed`],
+/// [`crate::solver::fields::Smoothing`]).
+pub(super) fn flow_stress(disc: &SolidDisc, out: &[PointOut], j: usize) -> Real {
+    disc.flow_smoothing.at(j, |p| out[p].flow_stress)
 }
 
 /// A particle-plane pair with friction in contact at the last stage.
@@ -123,7 +117,10 @@ pub(crate) struct ToolContact {
     pub force: Forces<3>,
     /// Lower bound on how far each particle must move before a plane can act on it (m).
     clearance: Vec<Real>,
-    /// `dt V*` of the last two predictors and `dt V` of the last update (m).
+    /// How far each particle's predicted position can have moved since the last stage.
+    bound: MoveBound<3>,
+    /// `dt V*` of the last two predictors and `dt V` of the last update (m): the global
+    /// bound of the ridge pass and the self-contact.
     moves: [Real; 3],
     /// The planes' strokes at the last stage (m).
     strokes: Vec<Real>,
@@ -158,6 +155,7 @@ impl ToolContact {
         ToolContact {
             force: Forces::new(particles),
             clearance: vec![0.0; particles],
+            bound: MoveBound::default(),
             moves: [Real::INFINITY; 3],
             strokes: Vec::with_capacity(planes),
             evaluated: Vec::new(),
@@ -176,6 +174,12 @@ impl ToolContact {
     /// Records the update's move bound `dt V` (m).
     pub(crate) fn updated_move(&mut self, bound: Real) {
         self.moves[2] = bound;
+    }
+
+    /// Forgets the coefficients' last positions (the shape functions changed): the next
+    /// stage evaluates every particle.
+    pub(crate) fn forget_moves(&mut self) {
+        self.bound.forget();
     }
 
     /// The bound on the change of any coefficient's `d_I + dt v*_I` since the last stage,
@@ -225,8 +229,10 @@ impl ToolContact {
         let du = self.move_bound();
         let margin = 1e-9 * disc.h_min;
         self.evaluated.clear();
+        self.bound
+            .measure(&disc.nodal, &disc.ref_pos, &st.d, &st.v, dt);
         for (j, (c, s)) in self.clearance.iter_mut().zip(&disc.sum_abs).enumerate() {
-            *c -= s * du + plane_move;
+            *c -= s * self.bound.near(j) + plane_move;
             if !(self.skip && *c > 0.0) {
                 self.evaluated.push(j as u32);
             }
@@ -266,8 +272,6 @@ impl ToolContact {
             }
         });
         let mut touch = Touch::default();
-        // The particles' flow stresses, smoothed from the points when a law first needs one.
-        let mut flow_stress: Option<Vec<Real>> = None;
         for &j in &self.evaluated {
             let j = j as usize;
             let stick = &mut st.stick[j * nplanes..(j + 1) * nplanes];
@@ -296,8 +300,7 @@ impl ToolContact {
                     carried: stick[t].unwrap_or([0.0; 3]),
                 };
                 let at = if plane.friction.needs_flow_stress() {
-                    let flow = flow_stresses(&mut flow_stress, disc, out);
-                    interface(disc, j, flow[j], pen.normal, |i| {
+                    interface(disc, j, flow_stress(disc, out, j), pen.normal, |i| {
                         predicted(disc, d, v, dt, i)
                     })
                 } else {
@@ -349,7 +352,6 @@ impl ToolContact {
             st,
             ParticlePass {
                 out,
-                flow: &mut flow_stress,
                 force: &mut self.force,
                 du,
             },

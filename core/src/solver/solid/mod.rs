@@ -53,7 +53,7 @@ mod volume;
 
 use super::discretization::{MassScalingReport, Thermal};
 use super::energy::{Energy, StepEnergy};
-use super::fields::smoothed;
+use super::fields::{smoothed, Smoothing};
 use super::heat::Heat;
 use super::heat_readings;
 use super::layout::Scatter;
@@ -137,6 +137,9 @@ pub(super) struct SolidDisc {
     /// contact area on and the tools' ridges meet between the particles (empty unless the
     /// scene's heat moves, a tool has such a law or a die has ridges).
     heat_surface: heat::HeatSurface,
+    /// The points reaching each particle, for the flow stress at a particle in contact
+    /// (empty unless a friction law needs one).
+    flow_smoothing: Smoothing,
     /// What mass scaling added, if the scene scales ([`super::mass_scaling`]).
     mass_scaling: Option<MassScalingReport>,
     /// The points are the particles' (SCNI: one per nodal domain, in particle order), not

@@ -19,7 +19,8 @@
 //!   reproduces the particles' temperatures `sum_I N_I(X_J) T_I`, the points keeping
 //!   theirs (the next heat stage gathers what the fit missed into the particles, the heat
 //!   kept exactly);
-//! - masses, the planes' states, which particles are held, the friction carried and the
+//! - the contact stage's move bound starts again (every particle is evaluated at the next
+//!   stage); masses, the planes' states, which particles are held, the friction carried and the
 //!   heat surface's faces are the particles' own and stay; the critical step is measured
 //!   again on the new shape functions with unstressed points, as at the start, and
 //!   conduction's largest eigenvalue on them.
@@ -33,6 +34,7 @@ use crate::material::PointState3;
 use crate::math::Real;
 use crate::scene::solid::SolidScene;
 use crate::solver::energy::kinetic_energy;
+use crate::solver::fields::Smoothing;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
 use crate::solver::rereference::{
     carry_temperatures, failed, fit, particle_temperatures, shapes_on,
@@ -239,6 +241,11 @@ pub(super) fn install(
     disc.scatter = Scatter::new(&pt, np, disc.scatter.chunk, MAX_GROUP_3D);
     disc.neighbours = pt.entries() as Real / pt.rows() as Real;
     ws.buf = disc.scatter.buffers();
+    if !disc.flow_smoothing.is_empty() {
+        disc.flow_smoothing = Smoothing::new(&disc.scatter, &disc.weights, np);
+    }
+    // The contact's move bound measured the coefficients of the old shape functions.
+    ws.contact.forget_moves();
     disc.sum_abs = (0..np)
         .map(|j| nodal.row(j).map(|e| nodal.n[e].abs()).sum())
         .collect();

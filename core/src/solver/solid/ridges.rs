@@ -76,7 +76,7 @@
 //! energy over the last millimetre (up to 13.9 J, about 2 % of the tool work then, 5.1 J at
 //! the end; without the pass it dissipates 1.3 %).
 
-use super::contact::{flow_stresses, interface, predicted, Touch};
+use super::contact::{flow_stress, interface, predicted, Touch};
 use super::{Pressed, SolidDisc, SolidSimulation, SolidState};
 use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::Forces;
@@ -419,9 +419,6 @@ pub(super) fn dents(
 pub(super) struct ParticlePass<'a> {
     /// The points' outputs (flow stresses for the friction laws that need one).
     pub out: &'a [PointOut],
-    /// The particles' flow stresses smoothed from `out`, once a friction law needed them
-    /// ([`flow_stresses`]).
-    pub flow: &'a mut Option<Vec<Real>>,
     /// The contact force on each RK coefficient (N), eq. 7, which the ridge pass adds to.
     pub force: &'a mut Forces<3>,
     /// The particle pass's bound on the change of a coefficient's predicted displacement
@@ -460,12 +457,7 @@ impl RidgePass {
         pass: ParticlePass<'_>,
         step: StepLength,
     ) -> Touch {
-        let ParticlePass {
-            out,
-            flow,
-            force,
-            du,
-        } = pass;
+        let ParticlePass { out, force, du } = pass;
         let (dt, dt_avg) = (step.full, step.avg);
         let surface = &disc.heat_surface;
         if !self.on || surface.particles().is_empty() || !tools.iter().any(SolidTool::has_ridges) {
@@ -526,9 +518,9 @@ impl RidgePass {
                 normal: dent.normal.map(|x| -x),
             };
             let at = if tool.friction.needs_flow_stress() {
-                let flow = flow_stresses(flow, disc, out);
                 (0..4).fold(Interface::default(), |s, a| {
-                    let i = interface(disc, j[a], flow[j[a]], pen.normal, |i| {
+                    let flow = flow_stress(disc, out, j[a]);
+                    let i = interface(disc, j[a], flow, pen.normal, |i| {
                         predicted(disc, d, v, dt, i)
                     });
                     Interface {

@@ -15,7 +15,7 @@
 //! tool contact's bound on the change of `d_I + dt v*_I`), which decides whether the search
 //! is due.
 
-use super::contact::{interface, predicted};
+use super::contact::{flow_stress, interface, predicted};
 use super::heat::HeatSurface;
 use super::{SolidDisc, SolidState};
 use crate::contact::self_contact_3d::{SelfContact3, Surface};
@@ -25,7 +25,6 @@ use crate::laps::{self, SolidLap, SolidLapReport};
 use crate::math::Real;
 use crate::scene::solid::SolidScene;
 use crate::solid_tool::SolidTool;
-use crate::solver::fields::smoothed;
 use crate::solver::point_outputs::PointOut;
 
 /// The self-contact of a 3D run and its stage's arrays.
@@ -141,17 +140,14 @@ impl SolidSelfContact {
             return false;
         }
         let particles = &search.surface.particles;
-        let flow = search.friction.needs_flow_stress().then(|| {
-            let values: Vec<Real> = at.out.iter().map(|o| o.flow_stress).collect();
-            smoothed(&disc.scatter, &disc.weights, disc.ref_pos.len(), &values)
-        });
+        let own_law = search.friction.needs_flow_stress();
         for pair in pairs {
             let j = particles[pair.slave as usize] as usize;
-            let law = match &flow {
-                Some(flow) => interface(disc, j, flow[j], pair.normal, |i| {
+            let law = match own_law {
+                true => interface(disc, j, flow_stress(disc, at.out, j), pair.normal, |i| {
                     predicted(disc, d, v, dt, i)
                 }),
-                None => Interface::default(),
+                false => Interface::default(),
             };
             let mass = |s: usize| disc.mass[particles[s] as usize];
             let f = search.pair_force(pair, &self.v, mass, law, dt, at.dt_avg);

@@ -20,6 +20,7 @@ use crate::solid_tool::SolidTool;
 use crate::solver::critical_step::{critical_step, stiffening};
 use crate::solver::discretization::{Thermal, Transfer};
 use crate::solver::energy::Energy;
+use crate::solver::fields::Smoothing;
 use crate::solver::heat::Heat;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
 use crate::solver::mass_scaling::{scaled, stiffness_bounds, Plan};
@@ -285,6 +286,13 @@ impl SolidSimulation {
         // and the surface's own) and the contact readings (`readings.rs`) take their areas on.
         let own_area =
             scene.self_contact.enabled && scene.self_contact.friction.needs_flow_stress();
+        // The flow stress at a particle in contact, for the friction laws that need one.
+        let flow_smoothing =
+            if own_area || scene.tools.iter().any(|t| t.friction.needs_flow_stress()) {
+                Smoothing::new(&scatter, &p.weights, np)
+            } else {
+                Smoothing::default()
+            };
         let heat_surface = if scene_tools > 0 || scene.transfers_heat() || own_area {
             HeatSurface::new(&p.cells, &p.positions, &p.planes, p.h_min)
         } else {
@@ -322,6 +330,7 @@ impl SolidSimulation {
                 }),
             }),
             heat_surface,
+            flow_smoothing,
         };
         update_eigenvalue(&mut disc)?;
         let temp0 = scene.thermal.as_ref().map(|t| t.initial_temperature_c);
