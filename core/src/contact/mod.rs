@@ -37,7 +37,7 @@
 //! axis has the disc `pi (l / 2)^2`).
 
 pub mod corners;
-pub mod move_bound;
+pub(crate) mod move_bound;
 pub mod self_contact;
 pub mod self_contact_3d;
 pub mod sidibe2009;

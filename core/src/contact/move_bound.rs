@@ -11,10 +11,13 @@
 //! bound is then `S_J M_c`, `M_c` the largest `|du_I|` (measured exactly from the `u_I` of
 //! the last stage) over the coefficients of cell `c = cell(J)` and its neighbours.
 //!
-//! A global bound (the fastest coefficient anywhere, as the stage used before) makes every
-//! particle near a tool wait on the surface coefficients that ring under the penalty
-//! contact: on the 3D block they move some twenty times faster than the material. By
-//! region, a particle's clearance runs out at the pace of its own neighbourhood.
+//! A global bound (the fastest coefficient anywhere, as 2D uses) makes every particle near a
+//! tool wait on the surface coefficients that ring under the penalty contact: on the 3D
+//! block they move some twenty times faster than the material. By region, a particle's
+//! clearance runs out at the pace of its own neighbourhood. The 3D stage uses it, where a
+//! particle's evaluation costs a row of about a hundred coefficients and a search of the
+//! tools' triangles; 2D keeps the global bound, as this pass over every coefficient cost
+//! more than it saved there (the Taylor bar with SCNI took 1.21 times as long).
 
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
@@ -29,7 +32,8 @@ pub struct MoveBound<const D: usize> {
     dims: [usize; D],
     /// `u_I` at the last stage (m).
     last: Vec<[Real; D]>,
-    /// Largest `|du_I|` of each cell's coefficients since the last stage (m).
+    /// Largest `|du_I|^2` of each cell's coefficients since the last stage (m^2); the
+    /// neighbour pass's scratch after it.
     cell_move: Vec<Real>,
     /// `M_c`: the largest over the cell and its neighbours (m).
     near_move: Vec<Real>,
@@ -130,13 +134,11 @@ impl<const D: usize> MoveBound<D> {
         self.cell_move.fill(0.0);
         for (i, ((u, di), vi)) in self.last.iter_mut().zip(d).zip(v).enumerate() {
             let now: [Real; D] = std::array::from_fn(|k| di[k] + dt * vi[k]);
+            // The squared move: the square root is taken once per cell.
             let moved = if first {
                 Real::INFINITY
             } else {
-                (0..D)
-                    .map(|k| (now[k] - u[k]) * (now[k] - u[k]))
-                    .sum::<Real>()
-                    .sqrt()
+                (0..D).map(|k| (now[k] - u[k]) * (now[k] - u[k])).sum()
             };
             *u = now;
             let c = &mut self.cell_move[self.cell_of[i] as usize];
@@ -145,16 +147,19 @@ impl<const D: usize> MoveBound<D> {
         self.spread();
     }
 
-    /// `near_move` from `cell_move`: the largest over each cell's neighbours, one direction
-    /// at a time.
+    /// `near_move` from `cell_move` (squared): the largest over each cell's neighbours, one
+    /// direction at a time, then its square root.
     fn spread(&mut self) {
-        self.near_move.clone_from(&self.cell_move);
         let mut stride = 1;
         for k in 0..D {
             let n = self.dims[k];
-            let from = self.near_move.clone();
-            for (c, m) in self.near_move.iter_mut().enumerate() {
+            let (from, to) = match k % 2 {
+                0 => (&self.cell_move, &mut self.near_move),
+                _ => (&self.near_move, &mut self.cell_move),
+            };
+            for (c, m) in to.iter_mut().enumerate() {
                 let i = (c / stride) % n;
+                *m = from[c];
                 if i > 0 {
                     *m = max_keep_nan(from[c - stride], *m);
                 }
@@ -163,6 +168,12 @@ impl<const D: usize> MoveBound<D> {
                 }
             }
             stride *= n;
+        }
+        if D % 2 == 0 {
+            std::mem::swap(&mut self.cell_move, &mut self.near_move);
+        }
+        for m in &mut self.near_move {
+            *m = m.sqrt();
         }
     }
 
