@@ -183,6 +183,10 @@ pub struct TriangleSurface {
     vertex_normal: Vec<[Real; 3]>,
     /// The convex ridges and vertices, in the order of the triangles.
     ridges: Vec<Ridge>,
+    /// Each triangle's bounding box, `[lo, hi]` (m): a point's squared distance to it
+    /// bounds the triangle's from below, so the nearest-triangle search skips the
+    /// triangles whose box lies farther than the nearest found.
+    boxes: Vec<[[Real; 3]; 2]>,
     bins: Bins,
 }
 
@@ -272,12 +276,22 @@ impl TriangleSurface {
             .collect();
         let bins = Bins::new(&mesh);
         let ridges = ridges(&mesh, &face_normal, &vertex_normal);
+        let boxes = (0..nt)
+            .map(|t| {
+                let p = mesh.corners(t);
+                [
+                    std::array::from_fn(|k| p[0][k].min(p[1][k]).min(p[2][k])),
+                    std::array::from_fn(|k| p[0][k].max(p[1][k]).max(p[2][k])),
+                ]
+            })
+            .collect();
         let mut surface = TriangleSurface {
             mesh,
             face_normal,
             edge_normal,
             vertex_normal,
             ridges,
+            boxes,
             bins,
         };
         surface.classify_empty_bins();
@@ -292,6 +306,27 @@ impl TriangleSurface {
     /// The die's convex ridges and vertices (see the module doc).
     pub fn ridges(&self) -> &[Ridge] {
         &self.ridges
+    }
+
+    /// Triangle `t` cannot be nearer to `y` than the squared distance `e2` (m^2), nor as
+    /// near: `y`'s squared distance to its bounding box exceeds `e2` by more than the
+    /// rounding of either (a relative 1e-6 and an absolute `(1e-9 b)^2`, `b` the smallest
+    /// bin side), so skipping it changes no answer, ties included.
+    fn box_beyond(&self, y: [Real; 3], t: usize, e2: Real) -> bool {
+        let [lo, hi] = self.boxes[t];
+        let out2: Real = (0..3)
+            .map(|k| {
+                let o = (lo[k] - y[k]).max(y[k] - hi[k]).max(0.0);
+                o * o
+            })
+            .sum();
+        let b = self
+            .bins
+            .size
+            .iter()
+            .copied()
+            .fold(Real::INFINITY, Real::min);
+        out2 > e2 * (1.0 + 1e-6) + (1e-9 * b) * (1e-9 * b)
     }
 
     /// The closest point of triangle `t` to `y` with its squared distance.
@@ -362,6 +397,9 @@ impl TriangleSurface {
                     for i0 in lo[0]..=hi[0] {
                         let bin = b.index([i0, i1, i2]);
                         for &t in &b.items[b.offsets[bin] as usize..b.offsets[bin + 1] as usize] {
+                            if best.is_some_and(|(e2, _)| self.box_beyond(y, t as usize, e2)) {
+                                continue;
+                            }
                             let d2 = self.on_triangle(y, t as usize).2;
                             if best.is_none_or(|(e2, u)| d2 < e2 || (d2 == e2 && t < u)) {
                                 best = Some((d2, t));
