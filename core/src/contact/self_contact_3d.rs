@@ -178,8 +178,13 @@ impl Surface {
     fn geometry(&self, x: &[[Real; 3]], geo: &mut Geometry) {
         geo.centre.clear();
         geo.normal.clear();
+        geo.boxes.clear();
         for c in &self.faces {
             let p = c.map(|s| x[s as usize]);
+            geo.boxes.push([
+                std::array::from_fn(|k| p.iter().fold(Real::INFINITY, |m, q| m.min(q[k]))),
+                std::array::from_fn(|k| p.iter().fold(Real::NEG_INFINITY, |m, q| m.max(q[k]))),
+            ]);
             let m: [Real; 3] =
                 std::array::from_fn(|k| 0.25 * (p[0][k] + p[1][k] + p[2][k] + p[3][k]));
             geo.centre.push(m);
@@ -197,22 +202,12 @@ impl Surface {
 
     /// Bins of the faces at the positions `x` (m), each listed where it lies within `reach`
     /// (m).
-    fn bin(&self, x: &[[Real; 3]], reach: Real, bins: &mut Bins<3>) {
+    fn bin(&self, x: &[[Real; 3]], geo: &Geometry, reach: Real, bins: &mut Bins<3>) {
         let [lo, hi] = padded_bounds(x, reach);
         // Bins of the reach, but no more than about one per face.
         let volume = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
         let size = reach.max((volume / self.faces.len().max(1) as Real).cbrt());
-        let boxes = self.faces.iter().map(|c| {
-            let mut b = [[Real::INFINITY; 3], [Real::NEG_INFINITY; 3]];
-            for &s in c {
-                for k in 0..3 {
-                    b[0][k] = b[0][k].min(x[s as usize][k]);
-                    b[1][k] = b[1][k].max(x[s as usize][k]);
-                }
-            }
-            b
-        });
-        bins.fill_boxes(boxes, [lo, hi], reach, size);
+        bins.fill_boxes(geo.boxes.iter().copied(), [lo, hi], reach, size);
     }
 
     /// The closest point to slot `k` of the faces binned near it that are not its
@@ -229,6 +224,20 @@ impl Surface {
         let mut best: Option<Nearest> = None;
         for &f in bins.candidates(xk) {
             let f = f as usize;
+            // A face whose box lies beyond the nearest found by more than the rounding
+            // (a relative 1e-6, an absolute 1e-9 of the face's size) cannot be nearer.
+            if best.is_some_and(|b| {
+                let [lo, hi] = geo.boxes[f];
+                let (mut out2, mut size2) = (0.0, 0.0);
+                for c in 0..3 {
+                    let o = (lo[c] - xk[c]).max(xk[c] - hi[c]).max(0.0);
+                    out2 += o * o;
+                    size2 += (hi[c] - lo[c]) * (hi[c] - lo[c]);
+                }
+                out2 > b.d2 * (1.0 + 1e-6) + 1e-18 * size2
+            }) {
+                continue;
+            }
             if self.excluded(k, f, s) {
                 continue;
             }
@@ -449,6 +458,8 @@ fn angle(p: [Real; 3], a: [Real; 3], b: [Real; 3]) -> Real {
 struct Geometry {
     centre: Vec<[Real; 3]>,
     normal: Vec<[[Real; 3]; 4]>,
+    /// Each face's bounding box `[lo, hi]` (m).
+    boxes: Vec<[[Real; 3]; 2]>,
 }
 
 /// The closest point of a slave's candidate faces.
@@ -556,7 +567,7 @@ impl SelfContact3 {
         let (depth, reach, s) = (self.depth, 2.0 * self.depth, self.neighbours);
         let surface = &self.surface;
         surface.geometry(x, &mut self.geo);
-        surface.bin(x, reach, &mut self.bins);
+        surface.bin(x, &self.geo, reach, &mut self.bins);
         let mut least = depth;
         for (k, touch) in touching.iter_mut().enumerate() {
             let was = std::mem::replace(touch, false);
