@@ -23,10 +23,9 @@
 //! Skipping: between two stages `x_J` moves at most `S_J M_c` (`S_J = sum_I |N_I(X_J)|`,
 //! `M_c` the largest change of `d_I + dt v*_I` over the coefficients near the particle,
 //! [`MoveBound`]) and a tool at most its stroke change; a particle whose distance to every
-//! tool (its clearance,
-//! a triangle surface's lower bound from its bins when no triangle lies within the search
-//! depth, [`SolidTool::clearance`]) stays positive after those moves cannot touch one, and
-//! is not interpolated.
+//! tool (its clearance, a triangle surface's lower bound from its bins when no triangle
+//! lies within the search depth, [`SolidTool::clearance`]) stays positive after those moves
+//! cannot touch one, and is not interpolated.
 //!
 //! Then the second pass (`ridges.rs`, for the STL dies with `ridges = true`): the tools'
 //! convex edges and vertices against the workpiece's surface facets between the particles.
@@ -67,8 +66,8 @@ pub(super) fn predicted(
 /// What the shear and capped friction laws read of particle `j` on a tool with contact
 /// normal `n` ([`Interface`], 2D's `crate::contact::Contact::interface` in 3D): its flow
 /// stress `flow` (Pa: the static flow stress `sigma_y(eps_p, T)` of the points smoothed to
-/// the particle, the `|N_I(x_p)| w_p`-weighted mean of [`crate::solver::fields::smoothed`]) and its contact area
-/// (m^2): on the body's surface the projection of its quarters on the tool's tangent
+/// the particle, the `|N_I(x_p)| w_p`-weighted mean of [`flow_stress`]) and its contact
+/// area (m^2): on the body's surface the projection of its quarters on the tool's tangent
 /// plane at the predicted positions `position(i)` (m), `A_J = sum |a . n|`
 /// ([`super::heat::HeatSurface::contact_area`], the heat stage's contact area); a
 /// particle off the surface `V_J^(2/3)` (`V_J` its volume, m^3), as 2D gives one the area
@@ -91,8 +90,8 @@ pub(super) fn interface(
     }
 }
 
-/// Particle `j`'s flow stress (Pa): the points' in `out` smoothed to it ([`crate::solver::fields::smoothed`],
-/// [`crate::solver::fields::Smoothing`]).
+/// Particle `j`'s flow stress (Pa): the points' in `out` smoothed to it, the
+/// `|N_J(x_p)| w_p`-weighted mean ([`crate::solver::fields::Smoothing`]).
 pub(super) fn flow_stress(disc: &SolidDisc, out: &[PointOut], j: usize) -> Real {
     disc.flow_smoothing.at(j, |p| out[p].flow_stress)
 }
