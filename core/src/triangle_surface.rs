@@ -52,6 +52,17 @@ pub enum Feature {
     Vertex(u8),
 }
 
+/// Squared distance (m^2) from `p` to the axis-aligned box `[lo, hi]`, 0 inside it: a
+/// lower bound on the squared distance from `p` to anything inside the box.
+pub fn box_distance2(p: [Real; 3], [lo, hi]: [[Real; 3]; 2]) -> Real {
+    (0..3)
+        .map(|k| {
+            let o = (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0);
+            o * o
+        })
+        .sum()
+}
+
 /// The point of the triangle `(a, b, c)` closest to `p` and the feature it lies on
 /// (Ericson 2005, section 5.1.5).
 pub fn closest_on_triangle(p: [Real; 3], [a, b, c]: [[Real; 3]; 3]) -> ([Real; 3], Feature) {
@@ -204,6 +215,9 @@ struct Bins {
     ring: Vec<u32>,
     /// An empty bin lies inside the die.
     inside: Vec<bool>,
+    /// The absolute rounding margin of a squared distance, `(1e-9 b)^2` with `b` the
+    /// smallest bin side (m^2).
+    rounding2: Real,
 }
 
 /// The most bins along one side of a triangle surface's grid.
@@ -313,20 +327,7 @@ impl TriangleSurface {
     /// rounding of either (a relative 1e-6 and an absolute `(1e-9 b)^2`, `b` the smallest
     /// bin side), so skipping it changes no answer, ties included.
     fn box_beyond(&self, y: [Real; 3], t: usize, e2: Real) -> bool {
-        let [lo, hi] = self.boxes[t];
-        let out2: Real = (0..3)
-            .map(|k| {
-                let o = (lo[k] - y[k]).max(y[k] - hi[k]).max(0.0);
-                o * o
-            })
-            .sum();
-        let b = self
-            .bins
-            .size
-            .iter()
-            .copied()
-            .fold(Real::INFINITY, Real::min);
-        out2 > e2 * (1.0 + 1e-6) + (1e-9 * b) * (1e-9 * b)
+        box_distance2(y, self.boxes[t]) > e2 * (1.0 + 1e-6) + self.bins.rounding2
     }
 
     /// The closest point of triangle `t` to `y` with its squared distance.
@@ -667,6 +668,10 @@ impl Bins {
             items: Vec::new(),
             ring: Vec::new(),
             inside: Vec::new(),
+            rounding2: {
+                let b = size.iter().copied().fold(Real::INFINITY, Real::min);
+                (1e-9 * b) * (1e-9 * b)
+            },
         };
         let n = dims.iter().product::<usize>();
         let mut lists: Vec<Vec<u32>> = vec![Vec::new(); n];

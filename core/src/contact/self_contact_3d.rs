@@ -52,7 +52,7 @@ use crate::math::Real;
 use crate::segment_bins::{padded_bounds, Bins};
 use crate::stl::{cross, dot, sub};
 use crate::tools::Penetration;
-use crate::triangle_surface::{closest_on_triangle, Feature};
+use crate::triangle_surface::{box_distance2, closest_on_triangle, Feature};
 use std::collections::HashMap;
 
 /// The winding number above which a surface particle has passed through another part of
@@ -228,13 +228,8 @@ impl Surface {
             // (a relative 1e-6, an absolute 1e-9 of the face's size) cannot be nearer.
             if best.is_some_and(|b| {
                 let [lo, hi] = geo.boxes[f];
-                let (mut out2, mut size2) = (0.0, 0.0);
-                for c in 0..3 {
-                    let o = (lo[c] - xk[c]).max(xk[c] - hi[c]).max(0.0);
-                    out2 += o * o;
-                    size2 += (hi[c] - lo[c]) * (hi[c] - lo[c]);
-                }
-                out2 > b.d2 * (1.0 + 1e-6) + 1e-18 * size2
+                let size2 = dot(sub(hi, lo), sub(hi, lo));
+                box_distance2(xk, [lo, hi]) > b.d2 * (1.0 + 1e-6) + 1e-18 * size2
             }) {
                 continue;
             }
