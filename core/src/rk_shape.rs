@@ -320,6 +320,77 @@ impl<const D: usize> KernelCloud<D> {
     }
 }
 
+/// Grows the per-particle support radii `supports` (m) of the particles at `positions` (m)
+/// so that each of `sites` (m) lies strictly inside the supports of at least `min`
+/// particles. At a site with fewer, its `min` nearest particles (Euclidean distance, ties
+/// by index) take `a_k = max(a_k, s |x_k - X_k|)` in each direction `k`, `s` the scene's
+/// support in spacings: the site becomes to them what a lattice neighbour is at a distance
+/// of one spacing. Sites are visited in order, so the result is deterministic. Returns how
+/// many sites were short.
+///
+/// A re-referenced kernel sizes each support from the particle's deformed cell
+/// (`solver::rereference`); where the material thins to a sheet or a particle runs out
+/// ahead of its neighbours (a flash's tip), that cell can miss the neighbours, and `M(x)`
+/// would be singular. `min = 2^D`, the coverage of a corner particle of the starting
+/// lattice, is the floor the callers use.
+pub fn cover_sites<const D: usize>(
+    positions: &[[Real; D]],
+    supports: &mut [[Real; D]],
+    sites: &[[Real; D]],
+    min: usize,
+    s: [Real; D],
+) -> usize {
+    if positions.len() < min {
+        return 0;
+    }
+    let mut largest = supports.iter().fold([0.0 as Real; D], |m, a| {
+        std::array::from_fn(|k| m[k].max(a[k]))
+    });
+    let grid = BinGrid::new(positions, largest);
+    let (mut short, mut nb) = (0, Vec::new());
+    for &x in sites {
+        grid.query(positions, x, largest, &mut nb);
+        let covering = nb
+            .iter()
+            .filter(|&&i| {
+                let (xi, ai) = (positions[i as usize], supports[i as usize]);
+                (0..D).all(|k| (x[k] - xi[k]).abs() < ai[k])
+            })
+            .count();
+        if covering >= min {
+            continue;
+        }
+        short += 1;
+        // The nearest `min`: a box query of half-width `r` holds every particle within
+        // the Euclidean distance `min_k r_k`.
+        let mut r = largest;
+        let nearest = loop {
+            grid.query(positions, x, r, &mut nb);
+            let mut by_distance: Vec<(Real, u32)> = nb
+                .iter()
+                .map(|&i| {
+                    let xi = positions[i as usize];
+                    ((0..D).map(|k| (x[k] - xi[k]).powi(2)).sum::<Real>(), i)
+                })
+                .collect();
+            by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let reach = r.iter().copied().fold(Real::INFINITY, Real::min);
+            if by_distance.len() >= min && by_distance[min - 1].0 <= reach * reach {
+                break by_distance;
+            }
+            r = r.map(|v| 2.0 * v);
+        };
+        for &(_, i) in &nearest[..min] {
+            let (xi, a) = (positions[i as usize], &mut supports[i as usize]);
+            for k in 0..D {
+                a[k] = a[k].max(s[k] * (x[k] - xi[k]).abs());
+                largest[k] = largest[k].max(a[k]);
+            }
+        }
+    }
+    short
+}
+
 /// A point of a [`Lattice`] given by a particle and its offset from it: the position is
 /// `X_node + offset` (m). Shape functions at a site depend only on the offsets to the
 /// neighbours, which are formed from whole multiples of the spacing, so two sites with
@@ -682,6 +753,68 @@ mod tests {
     /// Particles with their own supports (as after a re-reference): linear fields and
     /// their gradients are still reproduced, and the gradients are the derivatives of the
     /// values.
+    /// A 4 x 4 x 4 lattice of spacing 1 with supports of 2, and a particle run out 3.5
+    /// spacings ahead of one face (a flash's tip): only its own support covers it, so its
+    /// shape functions cannot be built. `cover_sites` grows the supports of its 8 nearest
+    /// particles (itself among them, already covering it) and no others, after which it and
+    /// every particle reproduce a linear field; where every site is covered, nothing
+    /// changes.
+    #[test]
+    fn cover_sites_reaches_a_particle_run_out_of_its_neighbours_supports() {
+        let mut positions: Vec<[Real; 3]> = Vec::new();
+        for k in 0..4 {
+            for j in 0..4 {
+                for i in 0..4 {
+                    positions.push([i as Real, j as Real, k as Real]);
+                }
+            }
+        }
+        let lattice = positions.len();
+        let mut supports = vec![[2.0; 3]; lattice];
+        let unchanged = supports.clone();
+        assert_eq!(
+            cover_sites(&positions, &mut supports, &positions, 8, [2.0; 3]),
+            0
+        );
+        assert_eq!(supports, unchanged);
+        positions.push([6.5, 1.5, 1.2]);
+        supports.push([2.0; 3]);
+        let volumes = vec![1.0; positions.len()];
+        let short =
+            KernelCloud::with_supports(positions.clone(), volumes.clone(), supports.clone())
+                .shape_table(&positions, &|p| format!("particle {p}"));
+        assert!(short.is_err());
+        assert_eq!(
+            cover_sites(&positions, &mut supports, &positions, 8, [2.0; 3]),
+            1
+        );
+        // Its 8 nearest are itself and 7 on the face x = 3: (y, z) = (1, 1), (2, 1),
+        // (1, 2), (2, 2), (1, 0), (2, 0), and of the tie (0, 1) / (3, 1) the lower index.
+        let grown: Vec<usize> = (0..lattice).filter(|&i| supports[i] != [2.0; 3]).collect();
+        assert_eq!(grown, [7, 11, 19, 23, 27, 39, 43]);
+        for &i in &grown {
+            assert_eq!(positions[i][0], 3.0);
+            assert_eq!(supports[i][0], 2.0 * 3.5);
+        }
+        let t = KernelCloud::with_supports(positions.clone(), volumes, supports)
+            .shape_table(&positions, &|p| format!("particle {p}"))
+            .unwrap();
+        for (p, x) in positions.iter().enumerate() {
+            let mut sum = [0.0; 4];
+            for e in t.row(p) {
+                let xi = positions[t.index[e] as usize];
+                sum[0] += t.n[e];
+                for k in 0..3 {
+                    sum[k + 1] += t.n[e] * xi[k];
+                }
+            }
+            assert!((sum[0] - 1.0).abs() < 1e-10, "partition of unity at {x:?}");
+            for k in 0..3 {
+                assert!((sum[k + 1] - x[k]).abs() < 1e-9, "linear field at {x:?}");
+            }
+        }
+    }
+
     #[test]
     fn variable_supports_reproduce_linear_fields_with_consistent_gradients() {
         let (nx, ny, h) = (9, 7, [0.2e-3, 0.5e-3]);

@@ -99,7 +99,9 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
         *path(&mut summary, &c) = json!(c.value(&sample));
     }
     if let Some(stretch) = scene.discretization.rereference_stretch {
-        let last = sim.reference().map(|r| (r.count, r.time_s, r.fit_residual));
+        let last = sim
+            .reference()
+            .map(|r| (r.count, r.time_s, r.fit_residual, r.short_sites));
         summary["rereference"] = rereference_entry(stretch, last, sim.energy().remap);
     }
     summary
@@ -107,15 +109,16 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
 
 /// The `rereference` entry of a scene that re-references the kernel (only such a scene
 /// has it, 2D or 3D): the stretch that triggers one, how many were made and the time of
-/// the last with its velocity fit's residual (`last`: count, s, -), and the kinetic energy
-/// the remaps changed (J).
-fn rereference_entry(stretch: f64, last: Option<(u32, f64, f64)>, remap_j: f64) -> Value {
+/// the last with its velocity fit's residual, and the sites whose supports were grown over
+/// all of them (`last`: count, s, -, -), and the kinetic energy the remaps changed (J).
+fn rereference_entry(stretch: f64, last: Option<(u32, f64, f64, u64)>, remap_j: f64) -> Value {
     json!({
         "stretch": stretch,
         "count": last.map_or(0, |l| l.0),
         "last_s": last.map(|l| l.1),
         "remap_J": remap_j,
         "velocity_fit_residual": last.map(|l| l.2),
+        "supports_grown": last.map_or(0, |l| l.3),
     })
 }
 
@@ -186,7 +189,9 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
         summary["stage_seconds"]["heat"] = json!(t.heat.as_secs_f64());
     }
     if let Some(stretch) = scene.discretization.rereference_stretch {
-        let last = sim.reference().map(|r| (r.count, r.time_s, r.fit_residual));
+        let last = sim
+            .reference()
+            .map(|r| (r.count, r.time_s, r.fit_residual, r.short_sites));
         summary["rereference"] = rereference_entry(stretch, last, sim.energy().remap);
     }
     place(&mut summary, &solid_columns(scene), &sample);

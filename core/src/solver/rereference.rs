@@ -52,7 +52,7 @@ use crate::error::{Error, Result};
 use crate::material::simo1992_hencky_j2::elastic_left_cauchy_green;
 use crate::material::PointState;
 use crate::math::Real;
-use crate::rk_shape::{KernelCloud, ShapeTable};
+use crate::rk_shape::{cover_sites, KernelCloud, ShapeTable};
 use crate::scene::{Kinematics, Scene};
 use crate::tools::Tool;
 
@@ -169,8 +169,9 @@ pub(super) fn now(
         points,
         point_jacobian,
         fit_residual: 0.0,
+        short_sites: previous.map_or(0, |r| r.short_sites),
     };
-    install(scene, disc, tools, st, ws, &reference)?;
+    reference.short_sites += install(scene, disc, tools, st, ws, &reference)? as u64;
     let (v, r1) = fit(&disc.nodal, &v_now);
     let (v_prev, r2) = fit(&disc.nodal, &v_before);
     reference.fit_residual = r1.max(r2);
@@ -231,7 +232,8 @@ fn point_motion(disc: &Discretization, d: &[[Real; 2]], p: usize, axi: bool) -> 
 
 /// Builds the shape functions, the scatter, the essential conditions, the contact stage
 /// and the critical step on `reference`, and conduction's eigenvalue; the rest of the
-/// state is left to the caller.
+/// state is left to the caller. Returns how many sites' supports were grown
+/// ([`shapes_on`]).
 pub(super) fn install(
     scene: &Scene,
     disc: &mut Discretization,
@@ -239,7 +241,7 @@ pub(super) fn install(
     st: &mut State,
     ws: &mut Workspace,
     reference: &Reference,
-) -> Result<()> {
+) -> Result<usize> {
     let axi = scene.model.kinematics == Kinematics::Axisymmetric;
     let s = scene.discretization.support;
     let supports = reference
@@ -247,12 +249,13 @@ pub(super) fn install(
         .iter()
         .map(|g| [s[0] * g[0].hypot(g[1]), s[1] * g[2].hypot(g[3])])
         .collect();
-    let (cloud, pt, nodal) = shapes_on(
+    let (cloud, pt, nodal, short) = shapes_on(
         &reference.particles,
         &reference.volumes,
         supports,
         &reference.points,
         reference.count,
+        s,
     )?;
     let np = reference.particles.len();
     disc.scatter = Scatter::new(&pt, np, disc.scatter.chunk, MAX_GROUP);
@@ -286,7 +289,8 @@ pub(super) fn install(
     ws.out = out;
     disc.critical_dt0 = measured?;
     // Conduction's largest eigenvalue on the new shape functions.
-    conduction::update_eigenvalue(disc, st.step, st.time)
+    conduction::update_eigenvalue(disc, st.step, st.time)?;
+    Ok(short)
 }
 
 /// The temperature field at the particles before the shape functions change (2D and 3D; a
@@ -332,14 +336,20 @@ pub(super) fn carry_temperatures<const D: usize>(
 
 /// The shape functions of re-reference `count` (2D and 3D): the kernel cloud of the
 /// `particles` (m) with their kernel `volumes` (m^D) and support radii `supports` (m), the
-/// points' table at `points` (m) and the particles' own (values only).
+/// points' table at `points` (m) and the particles' own (values only), with how many
+/// particles and points were covered by fewer than `2^D` supports, whose nearest
+/// particles' supports were grown to reach them ([`cover_sites`], with the scene's
+/// support `s` in spacings per direction).
 pub(super) fn shapes_on<const D: usize>(
     particles: &[[Real; D]],
     volumes: &[Real],
-    supports: Vec<[Real; D]>,
+    mut supports: Vec<[Real; D]>,
     points: &[[Real; D]],
     count: u32,
-) -> Result<(KernelCloud<D>, ShapeTable<D>, ShapeTable<D>)> {
+    s: [Real; D],
+) -> Result<(KernelCloud<D>, ShapeTable<D>, ShapeTable<D>, usize)> {
+    let short = cover_sites(particles, &mut supports, particles, 1 << D, s)
+        + cover_sites(particles, &mut supports, points, 1 << D, s);
     let cloud = KernelCloud::with_supports(particles.to_vec(), volumes.to_vec(), supports);
     let pt = cloud.shape_table(points, &|p| {
         format!("integration point {p} at re-reference {count}")
@@ -348,7 +358,7 @@ pub(super) fn shapes_on<const D: usize>(
         format!("particle {j} at re-reference {count}")
     })?;
     nodal.drop_gradients();
-    Ok((cloud, pt, nodal))
+    Ok((cloud, pt, nodal, short))
 }
 
 /// The coefficients `c` with `sum_I N_I(X_J) c_I = target_J` at every particle: the

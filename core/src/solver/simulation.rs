@@ -402,7 +402,8 @@ impl Simulation {
                     &mut self.st,
                     &mut self.ws,
                     r,
-                )?,
+                )
+                .map(|_| ())?,
                 None => {
                     let fresh = Simulation::new(&self.scene)?;
                     self.disc = fresh.disc;

@@ -162,4 +162,9 @@ pub struct Reference {
     pub point_jacobian: Vec<Real>,
     /// Relative residual of the velocity transfer (-).
     pub fit_residual: Real,
+    /// Particles and points, summed over the re-references so far, where the supports
+    /// sized from the deformed cells covered too few particles and were grown
+    /// ([`crate::rk_shape::cover_sites`]).
+    #[serde(default)]
+    pub short_sites: u64,
 }

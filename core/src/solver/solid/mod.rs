@@ -583,13 +583,10 @@ impl SolidSimulation {
         }
         if st.reference != self.st.reference {
             match &st.reference {
-                Some(r) => rereference::install(
-                    &self.scene,
-                    &mut self.disc,
-                    &mut self.st,
-                    &mut self.ws,
-                    r,
-                )?,
+                Some(r) => {
+                    rereference::install(&self.scene, &mut self.disc, &mut self.st, &mut self.ws, r)
+                        .map(|_| ())?
+                }
                 None => {
                     let fresh = SolidSimulation::new(&self.scene)?;
                     self.disc = fresh.disc;

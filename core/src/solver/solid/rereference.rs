@@ -60,6 +60,11 @@ pub struct SolidReference {
     pub point_jacobian: Vec<Real>,
     /// Relative residual of the velocity transfer (-).
     pub fit_residual: Real,
+    /// Particles and points, summed over the re-references so far, where the supports
+    /// sized from the deformed cells covered too few particles and were grown
+    /// ([`crate::rk_shape::cover_sites`]).
+    #[serde(default)]
+    pub short_sites: u64,
 }
 
 /// `det` of a row-major 3 x 3 matrix.
@@ -178,8 +183,9 @@ pub(super) fn now(
         points,
         point_jacobian,
         fit_residual: 0.0,
+        short_sites: st.reference.as_ref().map_or(0, |r| r.short_sites),
     };
-    install(scene, disc, st, ws, &reference)?;
+    reference.short_sites += install(scene, disc, st, ws, &reference)? as u64;
     let (v, r1) = fit(&disc.nodal, &v_now);
     let (v_prev, r2) = fit(&disc.nodal, &v_before);
     reference.fit_residual = r1.max(r2);
@@ -216,26 +222,28 @@ fn current_reference(disc: &SolidDisc, st: &SolidState) -> (Vec<[Real; 9]>, Vec<
 }
 
 /// Builds the shape functions, the scatter and the critical step on `reference`; the rest
-/// of the state is left to the caller.
+/// of the state is left to the caller. Returns how many sites' supports were grown
+/// ([`shapes_on`]).
 pub(super) fn install(
     scene: &SolidScene,
     disc: &mut SolidDisc,
     st: &mut SolidState,
     ws: &mut SolidWorkspace,
     reference: &SolidReference,
-) -> Result<()> {
+) -> Result<usize> {
     let s = scene.discretization.support;
     let supports = reference
         .cells
         .iter()
         .map(|g| std::array::from_fn(|k| s * g[3 * k].hypot(g[3 * k + 1]).hypot(g[3 * k + 2])))
         .collect();
-    let (_, pt, nodal) = shapes_on(
+    let (_, pt, nodal, short) = shapes_on(
         &reference.particles,
         &reference.volumes,
         supports,
         &reference.points,
         reference.count,
+        [s; 3],
     )?;
     let np = reference.particles.len();
     disc.scatter = Scatter::new(&pt, np, disc.scatter.chunk, MAX_GROUP_3D);
@@ -271,5 +279,6 @@ pub(super) fn install(
     (st.points, ws.out, st.heat, st.dt_prev, st.d) = saved;
     disc.critical_dt0 = measured?;
     // Conduction's largest eigenvalue on the new shape functions.
-    update_eigenvalue(disc)
+    update_eigenvalue(disc)?;
+    Ok(short)
 }
