@@ -361,8 +361,9 @@ pub fn cover_sites<const D: usize>(
             continue;
         }
         short += 1;
-        // The nearest `min`: a box query of half-width `r` holds every particle within
-        // the Euclidean distance `min_k r_k`.
+        // The nearest `min`: a box query of half-width `r` holds every particle nearer
+        // than `min_k r_k` (Euclidean), so a `min`-th nearest inside that distance has no
+        // nearer or tied particle left out.
         let mut r = largest;
         let nearest = loop {
             grid.query(positions, x, r, &mut nb);
@@ -375,7 +376,7 @@ pub fn cover_sites<const D: usize>(
                 .collect();
             by_distance.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             let reach = r.iter().copied().fold(Real::INFINITY, Real::min);
-            if by_distance.len() >= min && by_distance[min - 1].0 <= reach * reach {
+            if by_distance.len() >= min && by_distance[min - 1].0 < reach * reach {
                 break by_distance;
             }
             r = r.map(|v| 2.0 * v);
