@@ -7,7 +7,9 @@
 //!   diagonal of its cell extents, the supports over `discretization.support`) and kernel
 //!   volume `V' = det F_J V` (m^3), `F_J` and `det F_J` averaged over the points that see
 //!   the particle with weights `|N_J(x_p)| w_p`; support radii `a'_k = s |G'_k.|` (m, the
-//!   row's length), so that a stretched region keeps about `s` neighbours per direction;
+//!   row's length), so that a stretched region keeps about `s` neighbours per direction,
+//!   grown where a particle or point would lie inside fewer than 8 supports
+//!   ([`crate::rk_shape::cover_sites`]);
 //! - points: `x_p` becomes the point's position, its weight `w_p` kept (the stress and
 //!   energy are per original volume), the history pushed forward, `C_p'^{-1} = F C_p^{-1}
 //!   F^T` (the elastic left Cauchy-Green tensor `b_e`), and `J_ref' = J_ref det F` so that
