@@ -751,9 +751,6 @@ mod tests {
         }
     }
 
-    /// Particles with their own supports (as after a re-reference): linear fields and
-    /// their gradients are still reproduced, and the gradients are the derivatives of the
-    /// values.
     /// A 4 x 4 x 4 lattice of spacing 1 with supports of 2, and a particle run out 3.5
     /// spacings ahead of one face (a flash's tip): only its own support covers it, so its
     /// shape functions cannot be built. `cover_sites` grows the supports of its 8 nearest
@@ -816,6 +813,9 @@ mod tests {
         }
     }
 
+    /// Particles with their own supports (as after a re-reference): linear fields and
+    /// their gradients are still reproduced, and the gradients are the derivatives of the
+    /// values.
     #[test]
     fn variable_supports_reproduce_linear_fields_with_consistent_gradients() {
         let (nx, ny, h) = (9, 7, [0.2e-3, 0.5e-3]);
