@@ -275,10 +275,7 @@ impl<const D: usize> KernelCloud<D> {
         for (p, &x) in points.iter().enumerate() {
             self.grid.query(&self.positions, x, self.support, &mut nb);
             if let Some(a) = &self.supports {
-                nb.retain(|&i| {
-                    let (xi, ai) = (self.positions[i as usize], a[i as usize]);
-                    (0..D).all(|k| (x[k] - xi[k]).abs() < ai[k])
-                });
+                nb.retain(|&i| covers(x, self.positions[i as usize], a[i as usize]));
             }
             offsets.clear();
             offsets.extend(nb.iter().map(|&i| {
@@ -320,6 +317,14 @@ impl<const D: usize> KernelCloud<D> {
     }
 }
 
+/// Whether `x` (m) lies strictly inside the support `a` (m, per direction) of the particle
+/// at `xi` (m): `|x_k - X_k| < a_k` in every direction, where the window of
+/// [`crate::kernel`] (a cubic B-spline per direction) is nonzero.
+#[inline]
+fn covers<const D: usize>(x: [Real; D], xi: [Real; D], a: [Real; D]) -> bool {
+    (0..D).all(|k| (x[k] - xi[k]).abs() < a[k])
+}
+
 /// Grows the per-particle support radii `supports` (m) of the particles at `positions` (m)
 /// so that each of `sites` (m) lies strictly inside the supports of at least `min`
 /// particles. At a site with fewer, its `min` nearest particles (Euclidean distance, ties
@@ -352,10 +357,7 @@ pub fn cover_sites<const D: usize>(
         grid.query(positions, x, largest, &mut nb);
         let covering = nb
             .iter()
-            .filter(|&&i| {
-                let (xi, ai) = (positions[i as usize], supports[i as usize]);
-                (0..D).all(|k| (x[k] - xi[k]).abs() < ai[k])
-            })
+            .filter(|&&i| covers(x, positions[i as usize], supports[i as usize]))
             .count();
         if covering >= min {
             continue;

@@ -14,6 +14,7 @@ use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::team::part;
 use std::collections::HashMap;
+use std::hash::{DefaultHasher, Hasher};
 
 /// Particles handled by one task of the particle phases (force gather and predictor,
 /// energy sums and update); fixed so that results do not depend on the number of threads.
@@ -199,6 +200,17 @@ impl GroupPlan {
     }
 }
 
+/// A hash of a block's length and bits, the key under which [`Scatter::new`] finds the
+/// bitwise-equal blocks already stored.
+fn bits_hash(block: &[Real]) -> u64 {
+    let mut h = DefaultHasher::new();
+    h.write_usize(block.len());
+    for x in block {
+        h.write_u64(x.to_bits());
+    }
+    h.finish()
+}
+
 impl<const D: usize> Scatter<D> {
     /// Chunks of `chunk` points over `particles` particles, groups of at most `max_group`
     /// points (at most [`MAX_GROUP_3D`]).
@@ -240,10 +252,12 @@ impl<const D: usize> Scatter<D> {
         let mut strip = vec![false; pt.rows()];
         let (mut lists, mut list_range) = (Vec::new(), vec![[0u32; 2]; pt.rows()]);
         let mut base = vec![0u32; pt.rows()];
-        let mut table = Vec::new();
+        let mut table: Vec<Real> = Vec::new();
         let mut table_start = vec![0u32; pt.rows()];
         let mut stored_lists: HashMap<Vec<u32>, u32> = HashMap::new();
-        let mut stored_blocks: HashMap<Vec<u64>, u32> = HashMap::new();
+        // Stored blocks by a hash of their bits; each hit is compared with the stored
+        // entries, so the map holds starts, not a second copy of the table.
+        let mut stored_blocks: HashMap<u64, Vec<u32>> = HashMap::new();
         let mut block = Vec::new();
         let mut p = 0;
         while p < pt.rows() {
@@ -279,11 +293,24 @@ impl<const D: usize> Scatter<D> {
                     );
                 }
             }
-            let bits: Vec<u64> = block.iter().map(|x| x.to_bits()).collect();
-            table_start[p] = *stored_blocks.entry(bits).or_insert_with(|| {
-                table.extend(&block);
-                (table.len() - block.len()) as u32
-            });
+            let starts = stored_blocks.entry(bits_hash(&block)).or_default();
+            let same = |&s: &u32| {
+                let stored = table.get(s as usize..s as usize + block.len());
+                stored.is_some_and(|t| {
+                    t.iter()
+                        .zip(&block)
+                        .all(|(a, b)| a.to_bits() == b.to_bits())
+                })
+            };
+            table_start[p] = match starts.iter().copied().find(same) {
+                Some(s) => s,
+                None => {
+                    let start = table.len() as u32;
+                    starts.push(start);
+                    table.extend(&block);
+                    start
+                }
+            };
             p += plan.size;
         }
         Scatter {
@@ -300,6 +327,15 @@ impl<const D: usize> Scatter<D> {
             block_offsets,
             block_chunks,
         }
+    }
+
+    /// Rebuilds the scatter on new shape functions `pt` (a re-reference), with the same
+    /// chunk size; the old groups and blocks are freed first, so the two are never held
+    /// together.
+    pub(super) fn rebuild(&mut self, pt: &ShapeTable<D>, particles: usize, max_group: usize) {
+        let chunk = self.chunk;
+        *self = Scatter::default();
+        *self = Scatter::new(pt, particles, chunk, max_group);
     }
 
     /// Zeroed chunk buffers for this scatter (N): chunk `c`'s slice is

@@ -43,7 +43,7 @@ use super::critical_step::measure_critical_step;
 use super::discretization::{Discretization, Thermal};
 use super::energy::kinetic_energy;
 use super::heat::Heat;
-use super::layout::{Scatter, MAX_GROUP};
+use super::layout::MAX_GROUP;
 use super::outline::Outline;
 use super::state::{Reference, State};
 use super::workspace::Workspace;
@@ -258,7 +258,10 @@ pub(super) fn install(
         s,
     )?;
     let np = reference.particles.len();
-    disc.scatter = Scatter::new(&pt, np, disc.scatter.chunk, MAX_GROUP);
+    // The old buffers and scatter freed before the new are built (the 3D install's note).
+    ws.buf = Vec::new();
+    disc.scatter.rebuild(&pt, np, MAX_GROUP);
+    drop(pt);
     ws.buf = disc.scatter.buffers();
     if let Some(c) = &disc.constraints {
         disc.constraints = Constraints::new(c.rows.clone(), &nodal, &disc.mass)?;

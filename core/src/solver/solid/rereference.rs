@@ -37,7 +37,7 @@ use crate::math::Real;
 use crate::scene::solid::SolidScene;
 use crate::solver::energy::kinetic_energy;
 use crate::solver::fields::Smoothing;
-use crate::solver::layout::{Scatter, MAX_GROUP_3D};
+use crate::solver::layout::MAX_GROUP_3D;
 use crate::solver::rereference::{
     carry_temperatures, failed, fit, particle_temperatures, shapes_on,
 };
@@ -248,8 +248,13 @@ pub(super) fn install(
         [s; 3],
     )?;
     let np = reference.particles.len();
-    disc.scatter = Scatter::new(&pt, np, disc.scatter.chunk, MAX_GROUP_3D);
+    // The old chunk buffers and scatter are freed before the new ones are built, and the
+    // point table once the scatter holds its values: a re-reference then holds about one
+    // scatter and one table at its peak, not two of each.
+    ws.buf = Vec::new();
+    disc.scatter.rebuild(&pt, np, MAX_GROUP_3D);
     disc.neighbours = pt.entries() as Real / pt.rows() as Real;
+    drop(pt);
     ws.buf = disc.scatter.buffers();
     if !disc.flow_smoothing.is_empty() {
         disc.flow_smoothing = Smoothing::new(&disc.scatter, &disc.weights, np);
