@@ -74,6 +74,8 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "max_penetration_rel": sim.max_penetration() / min_spacing,
             "max_beyond_symmetry_m": sim.max_beyond_symmetry(),
             "max_beyond_symmetry_rel": sim.max_beyond_symmetry() / min_spacing,
+            "plane_feedback_max": sim.plane_feedback_max(),
+            "plane_penalty_scale_min": sim.plane_penalty_scale_min(),
             "max_inside_itself_m": sim.max_inside_itself(),
             "max_inside_itself_rel": sim.max_inside_itself() / min_spacing,
             "max_boundary_crossings": sim.max_boundary_crossings(),
@@ -168,6 +170,8 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
             "max_penetration_rel": st.max_penetration / sim.h_min(),
             "max_beyond_plane_m": st.max_beyond_plane,
             "max_beyond_plane_rel": st.max_beyond_plane / sim.h_min(),
+            "plane_feedback_max": st.plane_feedback_max,
+            "plane_penalty_scale_min": sim.plane_penalty_scale_min(),
         },
         "tools": sim.tools().iter().enumerate().map(|(k, t)| json!({
             "name": t.name,

@@ -38,6 +38,7 @@
 
 pub mod corners;
 pub(crate) mod move_bound;
+pub(crate) mod penalty_feedback;
 pub mod self_contact;
 pub mod self_contact_3d;
 pub mod sidibe2009;
@@ -46,6 +47,7 @@ pub mod workpiece;
 
 pub use workpiece::{Body, Pairs, Stick};
 
+use crate::contact::penalty_feedback::Feedback;
 use crate::contact::self_contact::{pair_force, Due, Pair, Ring, SelfContact};
 use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::symmetry::SymmetryPlane;
@@ -136,6 +138,9 @@ pub struct Contact {
     /// Skip the inside particles with a positive clearance (false only in the test that
     /// compares against evaluating all of them).
     pub(crate) skip: bool,
+    /// The penalty feedback of each tool without separation and each symmetry plane (after
+    /// the tools) over the particles it holds ([`Feedback`]).
+    pub(crate) feedback: Feedback,
     /// The integration point nearest to each candidate's reference position (only when a
     /// tool's friction law needs the flow stress).
     nearest_point: Vec<u32>,
@@ -191,6 +196,9 @@ pub struct Touch {
     pub tools: bool,
     /// The work the tools' motion delivered, `sum dt_avg f_J . v_tool` (J).
     pub tool_work: Real,
+    /// The largest penalty feedback of a holding tool or plane this stage measured (-, 0
+    /// when it measured none; [`penalty_feedback`]).
+    pub feedback: Real,
 }
 
 /// The frictionless law of the symmetry planes.
@@ -292,6 +300,7 @@ impl Contact {
     /// evaluates every particle (after the displacements were set from outside).
     pub fn forget(&mut self) {
         self.clearance.fill(0.0);
+        self.feedback.forget();
         self.strokes.clear();
         self.update_move = Real::INFINITY;
         if let Some(s) = &mut self.self_contact {
@@ -469,6 +478,26 @@ impl Contact {
             stations,
             impulse,
         } = pairs;
+        let candidates = &self.candidates;
+        let holding = |flags: &[bool], count: usize, t: usize| -> Vec<usize> {
+            let mut set: Vec<usize> = (0..candidates.len())
+                .filter(|&k| flags.get(k * count + t).copied().unwrap_or(false))
+                .map(|k| candidates[k] as usize)
+                .collect();
+            set.sort_unstable();
+            set
+        };
+        let measured = self.feedback.update(
+            ntools + nplanes,
+            nodal,
+            mass,
+            |t| t >= ntools || !tools[t].separation,
+            |t| match t < ntools {
+                true => holding(held, ntools, t),
+                false => holding(plane_held, nplanes, t - ntools),
+            },
+        );
+        touch.feedback = measured;
         pressure.fill(0.0);
         self.touched.clear();
         // Friction states live only on the candidates the last stage kept in reach: those
@@ -519,6 +548,7 @@ impl Contact {
                     continue;
                 };
                 if let Some(h) = hold {
+                    self.feedback.took_hold(t, *h);
                     *h = true;
                 }
                 let vt = [
@@ -535,7 +565,7 @@ impl Contact {
                     None => [0.0; 2],
                 };
                 let slave = Slave {
-                    m: mass[j],
+                    m: mass[j] * self.feedback.scale(t),
                     v_rel: [vj[0] - vt[0], vj[1] - vt[1]],
                     carried,
                 };
@@ -584,9 +614,10 @@ impl Contact {
                 if gap <= below || gap == 0.0 {
                     continue;
                 }
+                self.feedback.took_hold(ntools + p, *hold);
                 *hold = true;
                 let slave = Slave {
-                    m: mass[j],
+                    m: mass[j] * self.feedback.scale(ntools + p),
                     v_rel: vj,
                     carried: [0.0; 2],
                 };

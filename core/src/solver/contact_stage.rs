@@ -74,6 +74,7 @@ pub(super) fn run(
         full,
         step.avg,
     );
+    st.plane_feedback_max = st.plane_feedback_max.max(touch.feedback);
     if let Some(strokes) = strokes {
         for (t, stroke) in tools.iter_mut().zip(strokes) {
             t.state.stroke = stroke;

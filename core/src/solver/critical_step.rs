@@ -13,44 +13,24 @@ use crate::material::HenckyJ2;
 use crate::math::{dot, Real};
 use crate::scene::Scene;
 
-/// Most Lanczos products for the critical step.
+/// Most Lanczos products of [`largest_eigenvalue`].
 const LANCZOS_MAX: usize = 300;
 
 /// Critical step of central differences with lumped masses on the undeformed
 /// discretisation, `dt_crit = 2 / omega_max` (s), with `omega_max^2` the largest
-/// eigenvalue of `M^{-1} K`, found by Lanczos iteration on the symmetric
-/// `A = M^{-1/2} K M^{-1/2}` (Golub & Van Loan, Matrix Computations, sec. 10.1): the
-/// largest eigenvalue of the tridiagonal `T_k` converges to it from below in a few tens
-/// of products, where power iteration needs hundreds on large models. `K x` is the
-/// internal force (N) that `internal_force` returns for a displacement `x` (m) scaled to
-/// `amplitude` (m; small enough to stay linear elastic); `inv_sqrt_m` is `1 / sqrt(m_I)`
-/// (kg^-1/2); displacements and forces have `D` components, the dot products summed from
-/// the first component on ([`dot`]). The estimate depends on the support, the integration
-/// rule and the mass lumping, which `h / c` ignores.
+/// eigenvalue of `M^{-1} K`, found by Lanczos iteration ([`largest_eigenvalue`]) on the
+/// symmetric `A = M^{-1/2} K M^{-1/2}`. `K x` is the internal force (N) that
+/// `internal_force` returns for a displacement `x` (m) scaled to `amplitude` (m; small
+/// enough to stay linear elastic); `inv_sqrt_m` is `1 / sqrt(m_I)` (kg^-1/2);
+/// displacements and forces have `D` components. The estimate depends on the support, the
+/// integration rule and the mass lumping, which `h / c` ignores.
 pub(super) fn critical_step<const D: usize>(
     inv_sqrt_m: &[Real],
     amplitude: Real,
     mut internal_force: impl FnMut(Vec<[Real; D]>) -> Result<Vec<[Real; D]>>,
 ) -> Result<Real> {
-    let np = inv_sqrt_m.len();
-    // Deterministic pseudo-random start (xorshift), so no mode is missed by symmetry.
-    let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut rnd = || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
-    };
-    // The components of each particle drawn in order (`from_fn` calls in index order).
-    let mut v: Vec<[Real; D]> = (0..np).map(|_| std::array::from_fn(|_| rnd())).collect();
-    let norm = |x: &[[Real; D]]| x.iter().map(|a| dot(a, a)).sum::<Real>().sqrt();
-    let n0 = norm(&v);
-    v.iter_mut().for_each(|a| *a = a.map(|x| x / n0));
-    let mut v_prev = vec![[0.0; D]; np];
-    let (mut alpha, mut beta) = (Vec::new(), Vec::new());
-    let mut lambda = 0.0;
-    for it in 0..LANCZOS_MAX {
-        // w = A v: K applied to the displacement M^{-1/2} v, scaled to `amplitude`.
+    let lambda = largest_eigenvalue(inv_sqrt_m.len(), |v: &[[Real; D]]| {
+        // A v: K applied to the displacement M^{-1/2} v, scaled to `amplitude`.
         let xmax = v
             .iter()
             .zip(inv_sqrt_m)
@@ -63,13 +43,56 @@ pub(super) fn critical_step<const D: usize>(
                 .map(|(a, s)| a.map(|x| x * s * scale))
                 .collect(),
         )?;
-        let b_prev = beta.last().copied().unwrap_or(0.0);
-        let mut w: Vec<[Real; D]> = f_int
+        Ok(f_int
             .iter()
             .zip(inv_sqrt_m)
-            .zip(&v_prev)
-            .map(|((f, s), vp)| std::array::from_fn(|k| f[k] * s / scale - b_prev * vp[k]))
-            .collect();
+            .map(|(f, s)| f.map(|f| f * s / scale))
+            .collect())
+    })?;
+    if !(lambda > 0.0 && lambda.is_finite()) {
+        return Err(Error::ShapeFunctions(format!(
+            "the stiffness has no positive eigenvalue ({lambda:.3e})"
+        )));
+    }
+    Ok(2.0 / lambda.sqrt())
+}
+
+/// The largest eigenvalue of a symmetric operator `A` on vectors of `n` entries of `D`
+/// components, `apply(v) = A v`, by Lanczos iteration (Golub & Van Loan, Matrix
+/// Computations, sec. 10.1): the largest eigenvalue of the tridiagonal `T_k` converges to
+/// it from below in a few tens of products, where power iteration needs hundreds on large
+/// models. The start vector is a fixed pseudo-random one, the dot products are summed from
+/// the first component on ([`dot`]), so the answer has the same bits on every run; the
+/// iteration stops when the estimate changes by at most 1e-6 relative (after 10 products)
+/// or after [`LANCZOS_MAX`].
+pub(crate) fn largest_eigenvalue<const D: usize, E>(
+    n: usize,
+    mut apply: impl FnMut(&[[Real; D]]) -> std::result::Result<Vec<[Real; D]>, E>,
+) -> std::result::Result<Real, E> {
+    // Deterministic pseudo-random start (xorshift), so no mode is missed by symmetry.
+    let mut seed: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut rnd = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
+    };
+    // The components of each entry drawn in order (`from_fn` calls in index order).
+    let mut v: Vec<[Real; D]> = (0..n).map(|_| std::array::from_fn(|_| rnd())).collect();
+    let norm = |x: &[[Real; D]]| x.iter().map(|a| dot(a, a)).sum::<Real>().sqrt();
+    let n0 = norm(&v);
+    v.iter_mut().for_each(|a| *a = a.map(|x| x / n0));
+    let mut v_prev = vec![[0.0; D]; n];
+    let (mut alpha, mut beta) = (Vec::new(), Vec::new());
+    let mut lambda = 0.0;
+    for it in 0..LANCZOS_MAX {
+        let b_prev = beta.last().copied().unwrap_or(0.0);
+        let mut w = apply(&v)?;
+        w.iter_mut().zip(&v_prev).for_each(|(x, vp)| {
+            for (x, vp) in x.iter_mut().zip(vp) {
+                *x -= b_prev * vp;
+            }
+        });
         let a: Real = w.iter().zip(&v).map(|(x, y)| dot(x, y)).sum();
         w.iter_mut().zip(&v).for_each(|(x, y)| {
             for (x, y) in x.iter_mut().zip(y) {
@@ -88,12 +111,7 @@ pub(super) fn critical_step<const D: usize>(
         w.iter_mut().for_each(|x| *x = x.map(|c| c / b));
         v_prev = std::mem::replace(&mut v, w);
     }
-    if !(lambda > 0.0 && lambda.is_finite()) {
-        return Err(Error::ShapeFunctions(format!(
-            "the stiffness has no positive eigenvalue ({lambda:.3e})"
-        )));
-    }
-    Ok(2.0 / lambda.sqrt())
+    Ok(lambda)
 }
 
 /// Largest eigenvalue of the symmetric tridiagonal matrix with diagonal `a` and

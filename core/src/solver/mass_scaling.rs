@@ -182,7 +182,7 @@ fn report(
 /// Replaces the lumped masses (kg) of `disc` and what depends on them: inverse masses, the
 /// essential conditions' projection, the initial velocities projected onto them and the
 /// initial kinetic energy.
-fn set_masses(
+pub(super) fn set_masses(
     scene: &Scene,
     disc: &mut Discretization,
     st: &mut State,

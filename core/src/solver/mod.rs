@@ -51,6 +51,8 @@ mod contact_stage;
 mod critical_step;
 mod discretization;
 mod energy;
+#[cfg(test)]
+mod feedback_tests;
 mod fields;
 mod fill;
 mod heat;
@@ -75,6 +77,7 @@ mod tool_readings;
 mod update;
 mod workspace;
 
+pub(crate) use critical_step::largest_eigenvalue;
 pub use discretization::MassScalingReport;
 pub use energy::Energy;
 pub use fields::Fields;

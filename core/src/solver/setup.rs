@@ -197,6 +197,7 @@ impl Simulation {
             plane_held,
             self_touching,
             max_beyond_plane: 0.0,
+            plane_feedback_max: 0.0,
             max_inside_itself: 0.0,
             max_crossings: 0,
             laps: Vec::new(),

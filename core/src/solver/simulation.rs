@@ -349,6 +349,16 @@ impl Simulation {
     pub fn max_beyond_symmetry(&self) -> Real {
         self.st.max_beyond_plane
     }
+    /// Largest collective feedback of the penalty of a tool without separation or a
+    /// symmetry plane over the particles it held (-; [`crate::contact::penalty_feedback`]).
+    pub fn plane_feedback_max(&self) -> Real {
+        self.st.plane_feedback_max
+    }
+    /// The smallest factor the contact put on such a penalty for its feedback (-, 1 when
+    /// none passed the limit).
+    pub fn plane_penalty_scale_min(&self) -> Real {
+        crate::contact::penalty_feedback::scale(self.st.plane_feedback_max)
+    }
     /// Deepest a surface particle lay inside another part of the workpiece (m).
     pub fn max_inside_itself(&self) -> Real {
         self.st.max_inside_itself

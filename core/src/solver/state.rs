@@ -62,6 +62,10 @@ pub struct State {
     /// over the steps' checks and the samples.
     #[serde(default)]
     pub max_beyond_plane: Real,
+    /// Largest collective feedback of the penalty of a tool without separation or a
+    /// symmetry plane over the particles it held (-; [`crate::contact::penalty_feedback`]).
+    #[serde(default)]
+    pub plane_feedback_max: Real,
     /// Deepest a surface particle lay inside another part of the workpiece (m).
     #[serde(default)]
     pub max_inside_itself: Real,

@@ -33,6 +33,7 @@
 use super::ridges::{ParticlePass, RidgePass};
 use super::{Pressed, SolidDisc, SolidState};
 use crate::contact::move_bound::MoveBound;
+use crate::contact::penalty_feedback::Feedback;
 use crate::contact::sidibe2009::{penalty_force, Interface, Slave, SlaveForce};
 use crate::contact::{slip_work, Forces};
 use crate::math::{dot, Real};
@@ -127,6 +128,9 @@ pub(crate) struct ToolContact {
     evaluated: Vec<u32>,
     /// Predicted position (m) and velocity (m/s) of each particle evaluated.
     motion: Vec<[[Real; 3]; 2]>,
+    /// The penalty feedback of each tool without separation and each symmetry plane over
+    /// the particles it holds ([`Feedback`]).
+    pub(crate) feedback: Feedback,
     /// The pairs with friction in contact at this stage.
     touched: Vec<Touched>,
     /// The second pass: the tools' ridges against the surface between the particles.
@@ -159,6 +163,7 @@ impl ToolContact {
             strokes: Vec::with_capacity(planes),
             evaluated: Vec::new(),
             motion: vec![[[0.0; 3]; 2]; particles],
+            feedback: Feedback::default(),
             touched: Vec::new(),
             ridges: RidgePass::new(),
             skip: true,
@@ -179,6 +184,7 @@ impl ToolContact {
     /// stage evaluates every particle.
     pub(crate) fn forget_moves(&mut self) {
         self.bound.forget();
+        self.feedback.forget();
     }
 
     /// The bound on the change of any coefficient's `d_I + dt v*_I` since the last stage,
@@ -215,6 +221,15 @@ impl ToolContact {
         }
         let np = disc.ref_pos.len();
         let nplanes = planes.len();
+        let held = &st.held;
+        let measured = self.feedback.update(
+            nplanes,
+            &disc.nodal,
+            &disc.mass,
+            |t| !planes[t].separation,
+            |t| (0..np).filter(|&j| held[j * nplanes + t]).collect(),
+        );
+        st.plane_feedback_max = st.plane_feedback_max.max(measured);
         let plane_move = if self.strokes.len() == nplanes {
             planes
                 .iter()
@@ -290,11 +305,13 @@ impl ToolContact {
                     continue;
                 };
                 if !plane.separation {
+                    // A particle held from now on changes the plane's feedback.
+                    self.feedback.took_hold(t, *held);
                     *held = true;
                 }
                 let vt = plane.axis.map(|a| a * plane.state.velocity);
                 let slave = Slave {
-                    m: disc.mass[j],
+                    m: disc.mass[j] * self.feedback.scale(t),
                     v_rel: std::array::from_fn(|k| vj[k] - vt[k]),
                     carried: stick[t].unwrap_or([0.0; 3]),
                 };

@@ -37,6 +37,8 @@
 
 mod contact;
 mod die_contact;
+#[cfg(test)]
+mod feedback_tests;
 mod fill;
 mod heat;
 mod rereference;
@@ -181,6 +183,10 @@ pub struct SolidState {
     pub max_penetration: Real,
     /// Deepest a particle's physical position lay beyond a symmetry plane at a sample (m).
     pub max_beyond_plane: Real,
+    /// Largest collective feedback of the penalty of a plane or tool without separation
+    /// over the particles it held (-; [`crate::contact::penalty_feedback`]).
+    #[serde(default)]
+    pub plane_feedback_max: Real,
     /// When a scene's tool first pressed the workpiece (s), for the quasi-static watch.
     pub first_contact_s: Option<Real>,
     /// Largest ratio of kinetic to internal energy since the watch began (-).
@@ -668,6 +674,12 @@ impl SolidSimulation {
             self.disc.mass_scaling.is_some(),
             self.st.kinetic_to_internal_max,
         )
+    }
+    /// The smallest factor the contact put on the penalty of a plane or tool without
+    /// separation for its collective feedback (-, 1 when none passed the limit;
+    /// [`crate::contact::penalty_feedback`]).
+    pub fn plane_penalty_scale_min(&self) -> Real {
+        crate::contact::penalty_feedback::scale(self.st.plane_feedback_max)
     }
     /// Stable step estimate on the current deformation (s).
     pub fn stable_dt(&self) -> Real {

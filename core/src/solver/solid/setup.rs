@@ -356,6 +356,7 @@ impl SolidSimulation {
             stick: vec![None; np * ntools],
             max_penetration: 0.0,
             max_beyond_plane: 0.0,
+            plane_feedback_max: 0.0,
             first_contact_s: None,
             kinetic_to_internal_max: 0.0,
             stable_dt: disc.critical_dt0,
