@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::solid_scenes::{box_scene, solid_scene, ALUMINIUM};
+use common::solid_scenes::{box_scene, ALUMINIUM};
 use rkforge_core::scene::solid::BoxFace;
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::SolidSimulation;
@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 /// A quarter of an elastic steel bar (radius 5 mm, length 100 mm) hitting a rigid wall at
 /// 1 m/s, the wall letting it go again.
 fn elastic_bar() -> SolidScene {
-    solid_scene(&elastic_bar_text(), "elastic_bar.toml")
+    SolidScene::from_str_named(&elastic_bar_text(), "elastic_bar.toml").unwrap()
 }
 
 /// The scene text of [`elastic_bar`].
@@ -67,7 +67,7 @@ fn a_square_bar_with_scni_follows_1d_wave_theory() {
             "shape = \"box\"\norigin_m = [0.0, 0.0, 0.0]\nsize_m = [0.005, 0.005, 0.1]\nparticles = [6, 6, 81]\nsymmetry = [\"x_min\", \"y_min\"]",
         )
         .replace("[time]", "[discretization]\nintegration = \"scni\"\n[time]");
-    let scene = solid_scene(&text, "square_bar.toml");
+    let scene = SolidScene::from_str_named(&text, "square_bar.toml").unwrap();
     assert_eq!(
         scene.discretization.integration,
         rkforge_core::IntegrationRule::Scni
@@ -85,7 +85,7 @@ fn a_square_bar_with_scni_follows_1d_wave_theory() {
 fn a_round_bar_with_scni_follows_1d_wave_theory() {
     let text =
         elastic_bar_text().replace("[time]", "[discretization]\nintegration = \"scni\"\n[time]");
-    let scene = solid_scene(&text, "round_bar_scni.toml");
+    let scene = SolidScene::from_str_named(&text, "round_bar_scni.toml").unwrap();
     let sim = SolidSimulation::new(&scene).unwrap();
     assert_eq!(sim.point_count(), sim.particle_count());
     let r: f64 = 0.005;
@@ -181,7 +181,7 @@ motion = {{ kind = "fixed" }}
 separation = false
 "#
     );
-    solid_scene(&text, "box_impact.toml")
+    SolidScene::from_str_named(&text, "box_impact.toml").unwrap()
 }
 
 /// The symmetry planes hold a quarter model as the whole body's symmetry does: a quarter
@@ -271,7 +271,7 @@ history_interval_s = {end}
 "#,
         end = 0.5e-3 / speed + 25e-6
     );
-    solid_scene(&text, "cube_press.toml")
+    SolidScene::from_str_named(&text, "cube_press.toml").unwrap()
 }
 
 /// Mass scaling in 3D buys steps and keeps a slow press's answer: an eighth of a cube pressed
@@ -383,7 +383,7 @@ mass_scaling = {{ factor = 1.0e10 }}
 {extra}
 "#
     );
-    solid_scene(&text, "conduction3d.toml")
+    SolidScene::from_str_named(&text, "conduction3d.toml").unwrap()
 }
 
 /// `erfc(x)` to 1.2e-7 relative (Numerical Recipes, 2nd ed., section 6.2, `erfcc`).
@@ -696,7 +696,7 @@ motion = { kind = "constant", velocity_m_per_s = 0.1 }
 temperature_c = 20.0
 heat_transfer_w_per_m2_k = 2.0e4
 "#;
-    let read = |text: &str| solid_scene(text, "hot_upset3d.toml");
+    let read = |text: &str| SolidScene::from_str_named(text, "hot_upset3d.toml").unwrap();
     let scene = read(text);
     // The anvil at the table's h(0) throughout: the contact pressure raised the
     // coefficient, so the anvil takes more heat than at h(0).
@@ -870,7 +870,7 @@ axis = [0.0, 0.0, -1.0]
 motion = {{ kind = "constant", velocity_m_per_s = {ram_speed:e} }}
 "#
     );
-    solid_scene(&text, &format!("{name}.toml"))
+    SolidScene::from_str_named(&text, &format!("{name}.toml")).unwrap()
 }
 
 /// The box of [`sliding_scene`] pressed by the ram coming down at 0.2 mm/s onto the anvil
@@ -1009,7 +1009,7 @@ mass_scaling = {{ factor = 1.0e4 }}
 {tools}
 "#
     );
-    let scene = solid_scene(&text, "thermoelastic3d.toml");
+    let scene = SolidScene::from_str_named(&text, "thermoelastic3d.toml").unwrap();
     assert_eq!(scene.validate(), vec![]);
     let mut sim = SolidSimulation::new(&scene).unwrap();
     let end = scene.time.end_s;
@@ -1268,7 +1268,7 @@ conductivity_w_per_m_k = 400.0
 taylor_quinney = 0.9
 "#;
     let [text3, text2] = upset_texts("friction_upset", cells, particles, thermal, 0.02, "0.2");
-    let scene3 = solid_scene(&text3, "friction_upset3d.toml");
+    let scene3 = SolidScene::from_str_named(&text3, "friction_upset3d.toml").unwrap();
     let mut sim3 = SolidSimulation::new(&scene3).unwrap();
     sim3.run_toward(0.02, u64::MAX, |_, _| true).unwrap();
     let v3 = sim3.thermal_values().unwrap();
@@ -1474,7 +1474,7 @@ fn shear_upset(cells: [usize; 3], particles: [usize; 2], friction: &str) -> [Vec
     let windows = 8;
     let window = 0.04 / windows as f64;
     let mean = |sums: &[[f64; 2]]| sums.iter().map(|s| s[0] / s[1]).collect::<Vec<f64>>();
-    let scene3 = solid_scene(&text3, "shear_upset3d.toml");
+    let scene3 = SolidScene::from_str_named(&text3, "shear_upset3d.toml").unwrap();
     assert_eq!(scene3.validate(), vec![]);
     let mut sim3 = SolidSimulation::new(&scene3).unwrap();
     let mut sums3 = vec![[0.0; 2]; windows];

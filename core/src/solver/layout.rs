@@ -330,12 +330,23 @@ impl<const D: usize> Scatter<D> {
     }
 
     /// Rebuilds the scatter on new shape functions `pt` (a re-reference), with the same
-    /// chunk size; the old groups and blocks are freed first, so the two are never held
-    /// together.
-    pub(super) fn rebuild(&mut self, pt: &ShapeTable<D>, particles: usize, max_group: usize) {
+    /// chunk size, and its chunk buffers `buf`. The old buffers, groups and blocks are
+    /// freed before the new are built, and the point table once the scatter holds its
+    /// values: a re-reference then holds about one scatter and one table at its peak, not
+    /// two of each.
+    pub(super) fn rebuild(
+        &mut self,
+        pt: ShapeTable<D>,
+        particles: usize,
+        max_group: usize,
+        buf: &mut Vec<[Real; D]>,
+    ) {
         let chunk = self.chunk;
+        *buf = Vec::new();
         *self = Scatter::default();
-        *self = Scatter::new(pt, particles, chunk, max_group);
+        *self = Scatter::new(&pt, particles, chunk, max_group);
+        drop(pt);
+        *buf = self.buffers();
     }
 
     /// Zeroed chunk buffers for this scatter (N): chunk `c`'s slice is

@@ -258,11 +258,7 @@ pub(super) fn install(
         s,
     )?;
     let np = reference.particles.len();
-    // The old buffers and scatter freed before the new are built (the 3D install's note).
-    ws.buf = Vec::new();
-    disc.scatter.rebuild(&pt, np, MAX_GROUP);
-    drop(pt);
-    ws.buf = disc.scatter.buffers();
+    disc.scatter.rebuild(pt, np, MAX_GROUP, &mut ws.buf);
     if let Some(c) = &disc.constraints {
         disc.constraints = Constraints::new(c.rows.clone(), &nodal, &disc.mass)?;
     }

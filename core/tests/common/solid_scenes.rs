@@ -1,16 +1,5 @@
-//! 3D scenes written in code: a scene's text read as 3D, and the start of a box scene's text
-//! that the tests complete with their `[time]` section and tools.
-
-use rkforge_core::scene::{SceneFile, SolidScene};
-
-/// The scene text `text` read as a 3D scene from the file `file` (its STL files relative to
-/// it); a panic when it does not parse or reads as 2D.
-pub fn solid_scene(text: &str, file: &str) -> SolidScene {
-    match SceneFile::from_str_named(text, file).unwrap() {
-        SceneFile::Solid(s) => *s,
-        SceneFile::Plane(_) => panic!("read as 2D"),
-    }
-}
+//! 3D scenes written in code: the start of a box scene's text that the tests complete with
+//! their `[time]` section and tools.
 
 /// The `[material]` keys of an aluminium: 2700 kg/m^3, E 70 GPa, nu 0.33, linear hardening
 /// from 100 MPa by 500 MPa.

@@ -48,8 +48,6 @@ mod ridges;
 mod self_contact;
 mod setup;
 #[cfg(test)]
-mod test_scenes;
-#[cfg(test)]
 mod tests;
 mod volume;
 

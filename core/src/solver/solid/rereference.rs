@@ -248,14 +248,8 @@ pub(super) fn install(
         [s; 3],
     )?;
     let np = reference.particles.len();
-    // The old chunk buffers and scatter are freed before the new ones are built, and the
-    // point table once the scatter holds its values: a re-reference then holds about one
-    // scatter and one table at its peak, not two of each.
-    ws.buf = Vec::new();
-    disc.scatter.rebuild(&pt, np, MAX_GROUP_3D);
     disc.neighbours = pt.entries() as Real / pt.rows() as Real;
-    drop(pt);
-    ws.buf = disc.scatter.buffers();
+    disc.scatter.rebuild(pt, np, MAX_GROUP_3D, &mut ws.buf);
     if !disc.flow_smoothing.is_empty() {
         disc.flow_smoothing = Smoothing::new(&disc.scatter, &disc.weights, np);
     }

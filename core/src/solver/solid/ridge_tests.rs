@@ -1,8 +1,8 @@
 //! The second pass of the 3D contact (`ridges.rs`): a knife edge and a pyramid's tip pressed
 //! into a block between its surface particles, with and without the pass.
 
-use super::test_scenes::solid_scene;
 use super::*;
+use crate::scene::solid::SolidScene;
 use crate::stl::TriangleMesh;
 use std::path::{Path, PathBuf};
 
@@ -119,7 +119,7 @@ ridges = true
 {friction}
 "#
     );
-    solid_scene(&text, &dir.join("ridges.toml").display().to_string())
+    SolidScene::from_str_named(&text, &dir.join("ridges.toml").display().to_string()).unwrap()
 }
 
 /// What a run measured: the die's axial force at each step (N), the deepest its ridges

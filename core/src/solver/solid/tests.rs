@@ -1,7 +1,7 @@
 //! The 3D solver on small scenes.
 
-use super::test_scenes::solid_scene;
 use super::*;
+use crate::scene::solid::SolidScene;
 
 /// A coarse quarter Taylor bar (the paper's copper at 227 m/s on the FE wall).
 pub(crate) fn quarter_bar(cells: [usize; 3], rule: &str, end_s: Real) -> SolidScene {
@@ -36,7 +36,7 @@ motion = {{ kind = "fixed" }}
 separation = false
 "#
     );
-    solid_scene(&text, "bar3d.toml")
+    SolidScene::from_str_named(&text, "bar3d.toml").unwrap()
 }
 
 /// The coarse bar runs 2 us: the energy account closes, the impact face spreads, and no
@@ -267,7 +267,7 @@ fn rereferencing_refuses_scni_and_takes_a_body_whose_heat_moves() {
     scni.discretization.rereference_stretch = Some(1.5);
     assert!(refused(&scni, "scni"));
     let text = include_str!("../../../../scenes/hot_upsetting_3d.toml");
-    let mut hot = solid_scene(text, "hot.toml");
+    let mut hot = SolidScene::from_str_named(text, "hot.toml").unwrap();
     assert!(hot.validate().is_empty());
     hot.discretization.rereference_stretch = Some(1.5);
     assert_eq!(hot.validate(), vec![]);
@@ -323,7 +323,7 @@ friction = 0.2
 temperature_c = 20.0
 heat_transfer_w_per_m2_k = 2.0e4
 "#;
-    solid_scene(text, "hot_reref3d.toml")
+    SolidScene::from_str_named(text, "hot_reref3d.toml").unwrap()
 }
 
 /// The temperature field at the particles, `sum_I N_I(X_J) T_I` (degrees C).
