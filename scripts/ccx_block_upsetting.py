@@ -47,7 +47,7 @@ MIDSIDE = [(1, 0, 0), (2, 1, 0), (1, 2, 0), (0, 1, 0), (1, 0, 2), (2, 1, 2), (1,
            (0, 0, 1), (2, 0, 1), (2, 2, 1), (0, 2, 1)]
 
 
-def block_deck(cells, element, mu, penalty, stick, dt_max, contact):
+def block_deck(cells, element, mu, penalty, stick, dt_max, contact, explicit=None):
     """The CalculiX input for the eighth with `cells` elements along x, y, z."""
     nx, ny, nz = cells
     q = 2 if element.startswith("C3D20") else 1
@@ -104,13 +104,13 @@ def block_deck(cells, element, mu, penalty, stick, dt_max, contact):
     surfaces = {"SBLOCK": [f"{x}, S2" for x in top] + [f"{x}, S4" for x in xface]
                 + [f"{x}, S5" for x in yface],
                 "SDIE": [f"{x}, S1" for x in die]}
-    return _common(lines, sets, die_nodes, surfaces, mu, penalty, stick, dt_max, contact,
+    return _common(lines, sets, die_nodes, surfaces, mu, penalty, stick, dt_max, contact, explicit,
                    ["XSYM, 1, 1", "YSYM, 2, 2", "ZSYM, 3, 3", "DIEN, 1, 2"],
                    f"DIEN, 3, 3, {-STROKE}")
 
 
-def _common(lines, sets, die_nodes, surfaces, mu, penalty, stick, dt_max, contact, fixed,
-            travel):
+def _common(lines, sets, die_nodes, surfaces, mu, penalty, stick, dt_max, contact, explicit,
+            fixed, travel):
     """The sets, surfaces, materials, contact and the step, after the mesh. Every node of
     the die is moved, so the die is rigid and its reaction the sum over its nodes."""
     def nset(name, ids):
@@ -123,13 +123,17 @@ def _common(lines, sets, die_nodes, surfaces, mu, penalty, stick, dt_max, contac
     for name, faces in surfaces.items():
         lines.append(f"*SURFACE, NAME={name}, TYPE=ELEMENT")
         lines += faces
-    lines += ["*MATERIAL, NAME=AL", "*ELASTIC", f"{E}, {NU}", "*PLASTIC"]
+    lines += ["*MATERIAL, NAME=AL", "*ELASTIC", f"{E}, {NU}"]
+    if explicit:  # the densities (t/mm^3) times the mass scale
+        lines += ["*DENSITY", f"{2.7e-9 * explicit:.6g}"]
+    lines += ["*PLASTIC"]
     eps = [0.0]
     while eps[-1] < 5.0:
         eps.append(eps[-1] + (0.002 if eps[-1] < 0.05 else 0.01 if eps[-1] < 0.5 else 0.05))
     lines += [f"{K * (EPS0 + p) ** N:.8g}, {p:.6g}" for p in eps]
     lines += [
         "*MATERIAL, NAME=DIESTEEL", "*ELASTIC", "210000., 0.3",
+        *(["*DENSITY", f"{7.8e-9 * explicit:.6g}"] if explicit else []),
         "*SOLID SECTION, ELSET=BLOCK, MATERIAL=AL",
         "*SOLID SECTION, ELSET=DIE, MATERIAL=DIESTEEL",
         "*SURFACE INTERACTION, NAME=SI",
@@ -143,14 +147,30 @@ def _common(lines, sets, die_nodes, surfaces, mu, penalty, stick, dt_max, contac
         f"*CONTACT PAIR, INTERACTION=SI, TYPE={contact.upper()} TO SURFACE",
         "SBLOCK, SDIE",
         "*BOUNDARY", *fixed,
-        "*STEP, NLGEOM, INC=100000",
-        # more iterations and cutbacks than the defaults for the late, rolled-over faces
-        "*CONTROLS, PARAMETERS=TIME INCREMENTATION", "4, 8, 9, 60, 10, 4, , 20",
-        "*STATIC", f"0.005, 1.0, 1e-7, {dt_max}",
-        "*BOUNDARY", travel,
-        "*NODE PRINT, NSET=DIEN, FREQUENCY=1, TOTALS=ONLY", "RF",
-        "*NODE FILE, FREQUENCY=1", "U",
-        "*EL FILE, FREQUENCY=1", "S, PEEQ",
+    ]
+    if explicit:
+        # central differences, the die at constant speed from the start; the force printed
+        # every 100 increments (the step is about 1.6e-4 at a mass scale of 1e6)
+        lines += [
+            "*AMPLITUDE, NAME=RAMP", "0., 0., 1., 1.",
+            "*STEP, NLGEOM, INC=100000000",
+            "*DYNAMIC, EXPLICIT", "1e-4, 1.0",
+            "*BOUNDARY, AMPLITUDE=RAMP", travel,
+            "*NODE PRINT, NSET=DIEN, FREQUENCY=100, TOTALS=ONLY", "RF",
+            "*NODE FILE, FREQUENCY=1000", "U",
+        ]
+    else:
+        lines += [
+            "*STEP, NLGEOM, INC=100000",
+            # more iterations and cutbacks than the defaults for the late, rolled-over faces
+            "*CONTROLS, PARAMETERS=TIME INCREMENTATION", "4, 8, 9, 60, 10, 4, , 20",
+            "*STATIC", f"0.005, 1.0, 1e-7, {dt_max}",
+            "*BOUNDARY", travel,
+            "*NODE PRINT, NSET=DIEN, FREQUENCY=1, TOTALS=ONLY", "RF",
+            "*NODE FILE, FREQUENCY=1", "U",
+            "*EL FILE, FREQUENCY=1", "S, PEEQ",
+        ]
+    lines += [
         "*END STEP",
     ]
     return "\n".join(lines) + "\n"
@@ -236,6 +256,8 @@ def main():
                    help="friction's stick slope, MPa per mm of elastic slip")
     r.add_argument("--contact", default="surface", choices=["surface", "node"],
                    help="CalculiX's contact: surface to surface, or node to surface")
+    r.add_argument("--explicit", type=float, default=None, metavar="MASS_SCALE",
+                   help="explicit dynamics with the densities times MASS_SCALE, not static")
     r.add_argument("--dt-max", type=float, default=0.004, help="largest increment, of the step")
     sh = sub.add_parser("shape", help="the mid-height section at the end of a run")
     sh.add_argument("frd", help="the run's block.frd")
@@ -246,7 +268,7 @@ def main():
     if a.cmd == "run":
         os.makedirs(a.out, exist_ok=True)
         with open(os.path.join(a.out, "block.inp"), "w") as f:
-            f.write(block_deck(a.cells, a.element, a.mu, a.penalty, a.stick_slope, a.dt_max, a.contact))
+            f.write(block_deck(a.cells, a.element, a.mu, a.penalty, a.stick_slope, a.dt_max, a.contact, a.explicit))
         with open(os.path.join(a.out, "ccx.log"), "w") as log:
             rc = subprocess.run(["ccx", "-i", "block"], cwd=a.out, stdout=log,
                                 stderr=subprocess.STDOUT).returncode
