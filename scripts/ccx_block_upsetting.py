@@ -197,7 +197,7 @@ def ccx_curve(path):
 def at(curve, s):
     """Linear interpolation at stroke `s`; None beyond the curve's end."""
     for (a, fa), (b, fb) in zip(curve, curve[1:]):
-        if a - 1e-6 <= s <= b + 1e-6 and b > a:
+        if a - 1e-4 <= s <= b + 1e-4 and b > a:
             return fa + (fb - fa) * (s - a) / (b - a)
     return None
 
