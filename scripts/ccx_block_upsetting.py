@@ -11,7 +11,8 @@ plastic strain of 5 (CalculiX integrates isotropic hardening at finite strain
 multiplicatively); a penalty contact from the block's top and free faces (so the faces
 that roll over onto the die are held) to the die's face, with Coulomb friction. Units mm,
 N, MPa. docs/forging.md, "An independent reference: the block in CalculiX", has the
-figures and what limits the runs (none reaches 20 mm: the rolling faces' elements).
+figures and what limits the runs (no static run reaches 20 mm, as the free faces roll
+onto the die; the explicit one, `--explicit`, does).
 
     apt-get install calculix-ccx
     python3 scripts/ccx_block_upsetting.py run out/ccx_q4 --cells 6 4 4
