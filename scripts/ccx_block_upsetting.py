@@ -105,15 +105,9 @@ def block_deck(cells, element, mu, penalty, stick, dt_max, contact, explicit=Non
     surfaces = {"SBLOCK": [f"{x}, S2" for x in top] + [f"{x}, S4" for x in xface]
                 + [f"{x}, S5" for x in yface],
                 "SDIE": [f"{x}, S1" for x in die]}
-    return _common(lines, sets, die_nodes, surfaces, mu, penalty, stick, dt_max, contact, explicit,
-                   ["XSYM, 1, 1", "YSYM, 2, 2", "ZSYM, 3, 3", "DIEN, 1, 2"],
-                   f"DIEN, 3, 3, {-STROKE}")
+    fixed = ["XSYM, 1, 1", "YSYM, 2, 2", "ZSYM, 3, 3", "DIEN, 1, 2"]
+    travel = f"DIEN, 3, 3, {-STROKE}"  # every node of the die moved: a rigid die
 
-
-def _common(lines, sets, die_nodes, surfaces, mu, penalty, stick, dt_max, contact, explicit,
-            fixed, travel):
-    """The sets, surfaces, materials, contact and the step, after the mesh. Every node of
-    the die is moved, so the die is rigid and its reaction the sum over its nodes."""
     def nset(name, ids):
         lines.append(f"*NSET, NSET={name}")
         lines.extend(", ".join(map(str, ids[a:a + 12])) for a in range(0, len(ids), 12))
