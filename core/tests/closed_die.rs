@@ -90,8 +90,39 @@ fn no_particle_enters_the_wheel_dies_with_any_rule() {
             depth < 0.05,
             "{rule:?}: a particle {depth:.4} spacings inside a tool"
         );
-        assert!(volume.abs() < 0.5, "{rule:?}: volume change {volume:.4}");
+        // Within 1 % up to 90 % of the stroke (0.34-0.36 %, the three rules).
+        assert!(volume.abs() < 0.01, "{rule:?}: volume change {volume:.4}");
     }
+}
+
+/// Paper Table 5's pair on the shipped wheel, the shipped grid: q4 forges the wheel as q2
+/// does. The punch's peak force and its work over the stroke within 2 % of each other (q2
+/// 16.41 MN and 93.1 kJ, q4 16.41 MN and 92.6 kJ). The rim's corners had pushed q4's
+/// surface into the punch's recess wall (the corner pass taking the nearest chord, whose
+/// push entered the tool): its surface particles held on the wall, the rim folded at the
+/// corner, and q4 ended at 42.6 MN and 186 kJ.
+#[test]
+fn q4_and_q2_forge_the_wheel_alike() {
+    let mut peaks_and_work = Vec::new();
+    for rule in [IntegrationRule::Q2, IntegrationRule::Q4] {
+        let scene = wheel(rule, [30, 30]);
+        let mut sim = Simulation::new(&scene).unwrap();
+        let punch = sim.tool_index("punch").unwrap();
+        sim.run_to(scene.time.end_s, |_| {}).unwrap();
+        let peak = sim.tools()[punch].state.peak_force;
+        peaks_and_work.push((peak, sim.energy().tool_work));
+    }
+    let [(p2, w2), (p4, w4)] = peaks_and_work[..] else {
+        unreachable!()
+    };
+    assert!(
+        (p4 / p2 - 1.0).abs() < 0.02,
+        "peak force q2 {p2:.4e} N, q4 {p4:.4e} N"
+    );
+    assert!(
+        (w4 / w2 - 1.0).abs() < 0.02,
+        "work q2 {w2:.4e} J, q4 {w4:.4e} J"
+    );
 }
 
 /// The shipped impression-die scene (a flanged hub with flash land and gutter) on a grid of

@@ -15,7 +15,9 @@
 //! pushed a second time through the segments beside it.
 //!
 //! A corner inside the polygon, at the distance `g` (m) from its nearest ring segment
-//! `(a, b)` at the point `c = (1 - s) x_a + s x_b`, gets the paper's normal penalty (eq. 4)
+//! `(a, b)` at the point `c = (1 - s) x_a + s x_b` among the segments whose push leaves the
+//! tool (`u = (v - c) / g` with `u . n > 0` for either face's outward normal `n` at the
+//! corner: the surface moved past `v` along `u` lies outside the tool's wedge), gets the paper's normal penalty (eq. 4)
 //! with its share `w = g / sum g` (over the corners on the same segment, [`inside`]) of the
 //! segment's interpolated mass `m_s = w ((1 - s) m_a + s m_b)` (kg):
 //! `f = m_s g / (dt dt_avg) (v - c) / g` (N) on the surface, pushing the material past
@@ -23,6 +25,15 @@
 //! the coefficients with eq. 7, and the tool takes the reaction `-f`. The pass is
 //! frictionless: a corner touches the material over a point, where the particle pass
 //! carries the friction of the faces on either side.
+//!
+//! Only the pushes that leave the tool: where the material flows past a corner into a
+//! recess, the corner can lie nearer the ring's chord along the recess wall than the chord
+//! under the face (the wheel forging's rim corners, q4 on 30 x 30). Pushing the wall's
+//! chord past the corner would put it inside the tool, whose particle pass pushes it back
+//! out: the two passes held the surface particles on the wall, the material folded at the
+//! corner and the punch force rose to 2.6 times q2's. (The 3D ridge pass,
+//! `solver/solid/ridges.rs`, has the rule in its own form: a facet pushes a ridge only
+//! where it faces it.)
 
 use crate::geometry::closest_on_segment;
 use crate::math::Real;
@@ -81,14 +92,15 @@ pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
         },
     );
     let found: Vec<Corner> = convex_now(tool)
-        .filter_map(|v| {
+        .zip(outward_normals(tool))
+        .filter_map(|(v, normals)| {
             if v[0] <= lo[0] || v[0] >= hi[0] || v[1] <= lo[1] || v[1] >= hi[1] {
                 return None;
             }
             if !in_polygon(x, v) {
                 return None;
             }
-            let corner = nearest_segment(x, v);
+            let corner = nearest_segment(x, v, leaves(normals))?;
             (corner.gap > 0.0 && corner.gap <= tool.depth).then_some(corner)
         })
         .collect();
@@ -109,8 +121,9 @@ pub fn inside(tool: &Tool, surface: &Surface<'_>) -> Vec<Corner> {
 }
 
 /// The segments of the closed ring polygon `x` (m, counter-clockwise) that a convex corner
-/// of `tool` (in its current position) touches: each corner's nearest segment, when the
-/// corner lies inside the polygon or within `reach` (m) outside it, but not exactly on it
+/// of `tool` (in its current position) touches: the segment [`inside`] pushes for a corner
+/// inside the polygon, the nearest segment for a corner within `reach` (m) outside it; none
+/// for a corner exactly on it
 /// (as a particle at zero gap is not in contact: a die placed on the workpiece touches
 /// nothing until it presses). Where a tool is held through its corners (a curve faceted
 /// finer than the particles), the corners keep the surface's particles just off the tool's
@@ -120,10 +133,13 @@ pub fn touching(tool: &Tool, x: &[[Real; 2]], reach: Real) -> Vec<usize> {
         return Vec::new();
     }
     convex_now(tool)
-        .filter_map(|v| {
-            let corner = nearest_segment(x, v);
-            let near = corner.gap <= reach || in_polygon(x, v);
-            (near && corner.gap != 0.0).then_some(corner.segment)
+        .zip(outward_normals(tool))
+        .filter_map(|(v, normals)| {
+            let corner = match in_polygon(x, v) {
+                true => nearest_segment(x, v, leaves(normals))?,
+                false => nearest_segment(x, v, |_| true).filter(|c| c.gap <= reach)?,
+            };
+            (corner.gap != 0.0).then_some(corner.segment)
         })
         .collect()
 }
@@ -135,6 +151,27 @@ fn convex_now(tool: &Tool) -> impl Iterator<Item = [Real; 2]> + '_ {
         let p = tool.points0[k as usize];
         [p[0] + s * tool.axis[0], p[1] + s * tool.axis[1]]
     })
+}
+
+/// The outward normals (towards the workpiece) of the two faces meeting at each of `tool`'s
+/// convex corners, in the order of [`convex_now`]. A direction `u` leaves the tool from
+/// the corner when `u . n > 0` for either face: the tool's own wedge is where both are `<= 0`.
+fn outward_normals(tool: &Tool) -> impl Iterator<Item = [[Real; 2]; 2]> + '_ {
+    let p = &tool.points0;
+    let normal = |a: [Real; 2], b: [Real; 2]| {
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        [-(b[1] - a[1]) / len, (b[0] - a[0]) / len]
+    };
+    tool.convex.iter().map(move |&k| {
+        let k = k as usize;
+        [normal(p[k - 1], p[k]), normal(p[k], p[k + 1])]
+    })
+}
+
+/// Whether a push `u` (a unit vector) carries the surface from a convex corner out of the
+/// tool: along either face's outward normal, `u . n > 0`.
+fn leaves(normals: [[Real; 2]; 2]) -> impl Fn([Real; 2]) -> bool {
+    move |u| normals.iter().any(|n| u[0] * n[0] + u[1] * n[1] > 0.0)
 }
 
 /// The surface force of a corner (N; module doc): `m_s g / (dt dt_avg)` along `v - c`,
@@ -170,8 +207,14 @@ fn in_polygon(x: &[[Real; 2]], v: [Real; 2]) -> bool {
     inside
 }
 
-/// The segment of the closed polygon `x` nearest to `v`, the first of equals.
-fn nearest_segment(x: &[[Real; 2]], v: [Real; 2]) -> Corner {
+/// The segment of the closed polygon `x` nearest to `v`, the first of equals, over the
+/// segments whose push `u = (v - c) / g` (from the nearest point `c` towards `v`) `allowed`
+/// accepts; `None` when none does.
+fn nearest_segment(
+    x: &[[Real; 2]],
+    v: [Real; 2],
+    allowed: impl Fn([Real; 2]) -> bool,
+) -> Option<Corner> {
     let n = x.len();
     let mut best = Corner {
         at: v,
@@ -184,7 +227,7 @@ fn nearest_segment(x: &[[Real; 2]], v: [Real; 2]) -> Corner {
     for k in 0..n {
         let (s, c, _) = closest_on_segment(x[k], x[(k + 1) % n], v);
         let gap = (v[0] - c[0]).hypot(v[1] - c[1]);
-        if gap < best.gap {
+        if gap < best.gap && (gap == 0.0 || allowed([(v[0] - c[0]) / gap, (v[1] - c[1]) / gap])) {
             best = Corner {
                 at: v,
                 segment: k,
@@ -195,7 +238,7 @@ fn nearest_segment(x: &[[Real; 2]], v: [Real; 2]) -> Corner {
             };
         }
     }
-    best
+    best.gap.is_finite().then_some(best)
 }
 
 #[cfg(test)]
@@ -270,6 +313,40 @@ mod tests {
         assert!(f[0].abs() < 1e-12 && (f[1] + 20.0).abs() < 1e-9, "{f:?}");
         // The same corner above the surface is outside the material.
         assert!(inside(&notched(1.05), &surface).is_empty());
+    }
+
+    /// A punch's face at y = 1 with a recess beyond a corner at (0.97, 1), the tool above
+    /// the face and left of the recess wall; the material's top right particle has flowed
+    /// past the corner into the recess, to (1, 1.04). The corner lies inside the surface's
+    /// polygon, 0.03 from the right face and 0.0375 from the top chord. Pushed past the
+    /// corner, the right face would go into the punch (left of its wall), where the particle
+    /// pass pushes it back: the two passes held the wheel forging's rim particles on the
+    /// punch's wall. The corner takes the top chord, whose push leaves the tool.
+    #[test]
+    fn a_corner_pushes_the_surface_only_out_of_the_tool() {
+        let (mut positions, ring, mass) = square();
+        positions[4] = [1.0, 1.04];
+        let surface = Surface {
+            ring: &ring,
+            positions: &positions,
+            mass: &mass,
+        };
+        let punch = tool(vec![[0.97, 2.0], [0.97, 1.0], [-1.0, 1.0]]);
+        assert_eq!(punch.convex, vec![1]);
+        let found = inside(&punch, &surface);
+        assert_eq!(found.len(), 1);
+        let c = found[0];
+        assert_eq!(c.segment, 4, "the top chord from (1, 1.04) to (0.5, 1)");
+        let chord = 0.04 * 0.47 / 0.5;
+        assert!(
+            (c.gap - chord / (1.0 + 0.08 * 0.08 as Real).sqrt()).abs() < 1e-12,
+            "{c:?}"
+        );
+        let f = penalty(&c, &surface, 0.1, 0.1);
+        assert!(
+            f[1] < 0.0 && f[1].abs() > 10.0 * f[0].abs(),
+            "down, not into the wall: {f:?}"
+        );
     }
 
     /// Two corners of a faceted profile over the same surface segment (between (1, 1) and
