@@ -58,7 +58,7 @@ def drop(v):
         return [drop(x) for x in v]
     return v
 s = drop(json.load(open(sys.argv[1])))
-for k in ("wall_s", "stage_seconds"):
+for k in ("wall_s", "stage_seconds", "us_per_particle_step"):
     s.pop(k, None)
 print(json.dumps(s, indent=1, sort_keys=True))
 PY

@@ -15,9 +15,9 @@
 //! pushed a second time through the segments beside it.
 //!
 //! A corner inside the polygon, at the distance `g` (m) from its nearest ring segment
-//! `(a, b)` at the point `c = (1 - s) x_a + s x_b` among the segments whose push leaves the
-//! tool (`u = (v - c) / g` with `u . n > 0` for either face's outward normal `n` at the
-//! corner: the surface moved past `v` along `u` lies outside the tool's wedge), gets the paper's normal penalty (eq. 4)
+//! `(a, b)` at the point `c = (1 - s) x_a + s x_b` among the segments whose push leads away
+//! from the tool (`u = (v - c) / g` with `u . (n_1 + n_2) > 0`, `n_1`, `n_2` the outward
+//! normals of the faces meeting at the corner, whose sum is its pseudo-normal), gets the paper's normal penalty (eq. 4)
 //! with its share `w = g / sum g` (over the corners on the same segment, [`inside`]) of the
 //! segment's interpolated mass `m_s = w ((1 - s) m_a + s m_b)` (kg):
 //! `f = m_s g / (dt dt_avg) (v - c) / g` (N) on the surface, pushing the material past
@@ -26,14 +26,16 @@
 //! frictionless: a corner touches the material over a point, where the particle pass
 //! carries the friction of the faces on either side.
 //!
-//! Only the pushes that leave the tool: where the material flows past a corner into a
-//! recess, the corner can lie nearer the ring's chord along the recess wall than the chord
-//! under the face (the wheel forging's rim corners, q4 on 30 x 30). Pushing the wall's
-//! chord past the corner would put it inside the tool, whose particle pass pushes it back
-//! out: the two passes held the surface particles on the wall, the material folded at the
-//! corner and the punch force rose to 2.6 times q2's. (The 3D ridge pass,
-//! `solver/solid/ridges.rs`, has the rule in its own form: a facet pushes a ridge only
-//! where it faces it.)
+//! Only the pushes that lead away from the tool: where the material flows past a corner
+//! into a recess, the corner can lie nearer the ring's chord along the recess wall than the
+//! chord under the face (the wheel forging's rim corners, q4 and SCNI on 30 x 30). Pushed
+//! past the corner, the wall's chord goes into the tool (a push along the face, `u` at 90
+//! degrees or more from the pseudo-normal, leaves the corner's point outside but not the
+//! chord's end above the face), and the particle pass pushes it back out: the two passes
+//! held the surface particles on the wall, the material folded at the corner, and q4's
+//! punch force rose to 2.7 times q2's (SCNI's interface generated energy until the run
+//! stopped). The 3D ridge pass (`solver/solid/ridges.rs`) has the rule in its own form: a
+//! facet pushes a ridge only when its normal is against the ridge's pseudo-normal.
 
 use crate::geometry::closest_on_segment;
 use crate::math::Real;
@@ -154,8 +156,7 @@ fn convex_now(tool: &Tool) -> impl Iterator<Item = [Real; 2]> + '_ {
 }
 
 /// The outward normals (towards the workpiece) of the two faces meeting at each of `tool`'s
-/// convex corners, in the order of [`convex_now`]. A direction `u` leaves the tool from
-/// the corner when `u . n > 0` for either face: the tool's own wedge is where both are `<= 0`.
+/// convex corners, in the order of [`convex_now`].
 fn outward_normals(tool: &Tool) -> impl Iterator<Item = [[Real; 2]; 2]> + '_ {
     let p = &tool.points0;
     let normal = |a: [Real; 2], b: [Real; 2]| {
@@ -168,10 +169,10 @@ fn outward_normals(tool: &Tool) -> impl Iterator<Item = [[Real; 2]; 2]> + '_ {
     })
 }
 
-/// Whether a push `u` (a unit vector) carries the surface from a convex corner out of the
-/// tool: along either face's outward normal, `u . n > 0`.
-fn leaves(normals: [[Real; 2]; 2]) -> impl Fn([Real; 2]) -> bool {
-    move |u| normals.iter().any(|n| u[0] * n[0] + u[1] * n[1] > 0.0)
+/// Whether a push `u` (a unit vector) carries the surface from a convex corner away from
+/// the tool: along the corner's pseudo-normal, `u . (n_1 + n_2) > 0`.
+fn leaves([n1, n2]: [[Real; 2]; 2]) -> impl Fn([Real; 2]) -> bool {
+    move |u| u[0] * (n1[0] + n2[0]) + u[1] * (n1[1] + n2[1]) > 0.0
 }
 
 /// The surface force of a corner (N; module doc): `m_s g / (dt dt_avg)` along `v - c`,
@@ -347,6 +348,19 @@ mod tests {
             f[1] < 0.0 && f[1].abs() > 10.0 * f[0].abs(),
             "down, not into the wall: {f:?}"
         );
+        // The particle higher up the recess wall, the right face's chord tilted across the
+        // corner: its push, along the face (u = (-0.999, -0.043)), would carry the chord's
+        // top end into the punch. The top chord, 0.18 away, is pushed instead.
+        positions[4] = [0.9702, 1.2];
+        let surface = Surface {
+            ring: &ring,
+            positions: &positions,
+            mass: &mass,
+        };
+        let found = inside(&punch, &surface);
+        assert_eq!(found.len(), 1);
+        assert_eq!(found[0].segment, 4, "{:?}", found[0]);
+        assert!((found[0].gap - 0.18).abs() < 0.01, "{:?}", found[0]);
     }
 
     /// Two corners of a faceted profile over the same surface segment (between (1, 1) and
