@@ -226,7 +226,12 @@ fn nearest_segment(
         share: 1.0,
     };
     for k in 0..n {
-        let (s, c, _) = closest_on_segment(x[k], x[(k + 1) % n], v);
+        let (s, c, d2) = closest_on_segment(x[k], x[(k + 1) % n], v);
+        // The squared distance rules out the segments clearly farther than the best so far
+        // (the margin covers the roundings of `d2` against `hypot`'s: the same choices).
+        if d2 > best.gap * best.gap * (1.0 + 1e-9) {
+            continue;
+        }
         let gap = (v[0] - c[0]).hypot(v[1] - c[1]);
         if gap < best.gap && (gap == 0.0 || allowed([(v[0] - c[0]) / gap, (v[1] - c[1]) / gap])) {
             best = Corner {

@@ -84,7 +84,11 @@ pub(crate) fn reach_points<const D: usize>(
     fill: &mut [Option<Filled>],
     stroke: impl Fn(usize) -> Real,
 ) {
-    let near = |x: [Real; D], p: [Real; D], r: Real| distance(x, p) <= r;
+    // A point farther than `r` along an axis is farther than `r` (`hypot` is at least each
+    // of its arguments): the box rules out most pairs before the distance is taken.
+    let near = |x: [Real; D], p: [Real; D], r: Real| {
+        (0..D).all(|k| (x[k] - p[k]).abs() <= r) && distance(x, p) <= r
+    };
     let particles: Vec<usize> = candidates
         .filter(|&(_, x)| open.iter().any(|&(_, p, _)| near(x, p, at.reach + at.h)))
         .map(|(j, _)| j)
