@@ -1176,11 +1176,12 @@ pub(crate) mod tests {
         h
     }
 
-    /// The 2D update gives the bits it gave before the 3D update shared its steps
-    /// (the digest of commit d62fe70's code).
+    /// The 2D update gives the bits it gave before the 3D update shared its steps (the
+    /// digest of commit d62fe70's code, 7_139_988_511_618_323_398, until session 56's
+    /// safeguard in [`rate_consistent_root`] changed the rate laws' iterates at round-off).
     #[test]
     fn plane_update_keeps_its_bits() {
-        assert_eq!(plane_digest(), 7_139_988_511_618_323_398);
+        assert_eq!(plane_digest(), 6_639_902_864_249_278_799);
     }
 
     /// The hot hub's AA6063 (Sellars-Tegart held below 0.01/s) at 481 C, a point whose
