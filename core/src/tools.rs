@@ -6,7 +6,7 @@
 //! applies it is [`crate::contact`].
 
 use crate::friction::Friction;
-use crate::geometry::closest_on_segment;
+use crate::geometry::{closest_on_segment, left_normal};
 use crate::math::Real;
 use crate::scene::{Motion, ToolSpec};
 use crate::segment_bins::SegmentBins;
@@ -323,11 +323,7 @@ pub fn gap_within(
     below: Real,
     depth: Real,
 ) -> Option<Penetration> {
-    let normal = |k: usize| {
-        let (a, b) = (verts[k], verts[k + 1]);
-        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-        [-(b[1] - a[1]) / len, (b[0] - a[0]) / len]
-    };
+    let normal = |k: usize| left_normal(verts[k], verts[k + 1]);
     // (signed distance, negative inside; closest point; side normal; on a face interior)
     let mut best: Option<(Real, [Real; 2], [Real; 2], bool)> = None;
     for k in candidates {

@@ -17,9 +17,9 @@
 //! A corner inside the polygon, at the distance `g` (m) from its nearest ring segment
 //! `(a, b)` at the point `c = (1 - s) x_a + s x_b` among the segments whose push leads away
 //! from the tool (`u = (v - c) / g` with `u . (n_1 + n_2) > 0`, `n_1`, `n_2` the outward
-//! normals of the faces meeting at the corner, whose sum is its pseudo-normal), gets the paper's normal penalty (eq. 4)
-//! with its share `w = g / sum g` (over the corners on the same segment, [`inside`]) of the
-//! segment's interpolated mass `m_s = w ((1 - s) m_a + s m_b)` (kg):
+//! normals of the faces meeting at the corner, whose sum is its pseudo-normal), gets the
+//! paper's normal penalty (eq. 4) with its share `w = g / sum g` (over the corners on the
+//! same segment, [`inside`]) of the segment's interpolated mass `m_s = w ((1 - s) m_a + s m_b)` (kg):
 //! `f = m_s g / (dt dt_avg) (v - c) / g` (N) on the surface, pushing the material past
 //! the corner; it is shared `(1 - s) f` and `s f` by the two ring particles, each spread to
 //! the coefficients with eq. 7, and the tool takes the reaction `-f`. The pass is
@@ -37,7 +37,7 @@
 //! stopped). The 3D ridge pass (`solver/solid/ridges.rs`) has the rule in its own form: a
 //! facet pushes a ridge only when its normal is against the ridge's pseudo-normal.
 
-use crate::geometry::closest_on_segment;
+use crate::geometry::{closest_on_segment, left_normal};
 use crate::math::Real;
 use crate::tools::Tool;
 
@@ -159,13 +159,9 @@ fn convex_now(tool: &Tool) -> impl Iterator<Item = [Real; 2]> + '_ {
 /// convex corners, in the order of [`convex_now`].
 fn outward_normals(tool: &Tool) -> impl Iterator<Item = [[Real; 2]; 2]> + '_ {
     let p = &tool.points0;
-    let normal = |a: [Real; 2], b: [Real; 2]| {
-        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-        [-(b[1] - a[1]) / len, (b[0] - a[0]) / len]
-    };
     tool.convex.iter().map(move |&k| {
         let k = k as usize;
-        [normal(p[k - 1], p[k]), normal(p[k], p[k + 1])]
+        [left_normal(p[k - 1], p[k]), left_normal(p[k], p[k + 1])]
     })
 }
 
