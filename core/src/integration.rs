@@ -19,8 +19,9 @@
 //!   around it, cut at the workpiece's boundary); the gradient is smoothed over the domain,
 //!   `B_I = (1 / A_L) int_{dA_L} N_I n dG` (3-point Gauss per edge, 3x3 per face in 3D),
 //!   which satisfies the integration constraint exactly (the linear patch test passes to
-//!   round-off, also next to the boundary; tested in 3D below). The quadrants of the nodal
-//!   stabilization ([`nodal_quadrants`]) are 2D only.
+//!   round-off, also next to the boundary; tested in 3D below). The stabilization of nodal
+//!   integration smooths the gradient over each orthant of a domain as well (quadrants in
+//!   2D, octants in 3D: [`orthant_shapes`]).
 
 use crate::error::Result;
 use crate::math::Real;
@@ -89,9 +90,17 @@ pub fn rule_points<const D: usize>(rule: IntegrationRule) -> Vec<([Real; D], Rea
 /// 3D, 3x3 Gauss on each of 6 faces: 54).
 pub const SCNI_EDGE_POINTS: usize = 12;
 
-/// Edge quadrature points per quadrant of a nodal domain: 2-point Gauss on each of its 4
-/// edges (the stabilization's smoothed gradients, [`nodal_quadrants`]).
-pub const QUADRANT_EDGE_POINTS: usize = 8;
+/// Boundary quadrature points per orthant of a nodal domain in `d` dimensions (the
+/// stabilization's smoothed gradients, [`orthant_shapes`]): 2-point Gauss on each of a
+/// quadrant's 4 edges in 2D (8), 2 x 2 on each of an octant's 6 faces in 3D (24).
+pub const fn orthant_boundary_points(d: usize) -> usize {
+    2 * d * (1 << (d - 1))
+}
+
+/// Nodal domains whose orthants' boundary points are evaluated at once by
+/// [`orthant_shapes`]: the points' shape functions of a block are freed before the next
+/// (in 3D a domain has 192 of them, each with some 60-90 particles).
+const ORTHANT_BLOCK: usize = 64;
 
 /// A face of a box: one corner, the edge vectors from it that span the face (`D - 1` of
 /// them) and the outward unit normal; positions relative to the box's particle (m).
@@ -209,47 +218,57 @@ pub fn nodal_domains<const D: usize>(
         (0.5, 8.0 / 18.0),
         (0.5 + g, 5.0 / 18.0),
     ];
-    smoothing_cells(lattice, |lo, hi| [(lo, hi)], &gauss)
-}
-
-/// The four quadrants of every nodal domain (cut through the domain's centroid), for the
-/// stabilization of nodal integration: the quadrants as points (centroid, area; cell = the
-/// domain's particle), domain by domain in the order lower-left, lower-right, upper-right,
-/// upper-left, and [`QUADRANT_EDGE_POINTS`] boundary sites per quadrant with their outward
-/// normal times the quadrature weight (m).
-pub fn nodal_quadrants(lattice: &Lattice) -> (PointSet, Vec<Site>, Vec<[Real; 2]>) {
-    let g = 0.5 / 3.0_f64.sqrt();
-    let gauss = [(0.5 - g, 0.5), (0.5 + g, 0.5)];
     smoothing_cells(
         lattice,
-        |[x0, y0], [x1, y1]| {
-            let (xc, yc) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-            [
-                ([x0, y0], [xc, yc]),
-                ([xc, y0], [x1, yc]),
-                ([xc, yc], [x1, y1]),
-                ([x0, yc], [xc, y1]),
-            ]
-        },
+        &domain_bounds(lattice),
+        |lo, hi| [(lo, hi)],
         &gauss,
     )
 }
 
-/// The smoothing cells that `split` cuts each nodal domain `[lo, hi]` (offsets from its
-/// particle, m) into: each cell as a point at its centroid with its measure `prod_k (hi_k -
-/// lo_k)` (cell = the domain's particle), domain by domain, and the Gauss points `rule`
-/// (position along an edge, weight) on each cell's edges or faces as boundary sites with
-/// their outward normal times the weight (m^(D-1)).
+/// The `K = 2^D` orthants of the nodal domain `[lo, hi]` (offsets from its particle, m), cut
+/// through its centroid: in 2D the quadrants lower-left, lower-right, upper-right,
+/// upper-left; in 3D the octants in that order below the centroid, then above it.
+fn orthants<const D: usize, const K: usize>(
+    lo: [Real; D],
+    hi: [Real; D],
+) -> [([Real; D], [Real; D]); K] {
+    assert_eq!(K, 1 << D, "a nodal domain has 2^D orthants");
+    std::array::from_fn(|k| {
+        // Counter-clockwise in the first two directions, binary in the others.
+        let upper = |axis: usize| match axis {
+            0 => matches!(k & 3, 1 | 2),
+            1 => k & 2 != 0,
+            _ => (k >> axis) & 1 != 0,
+        };
+        let (mut a, mut b) = (lo, hi);
+        for axis in 0..D {
+            let centre = 0.5 * (lo[axis] + hi[axis]);
+            match upper(axis) {
+                true => a[axis] = centre,
+                false => b[axis] = centre,
+            }
+        }
+        (a, b)
+    })
+}
+
+/// The smoothing cells that `split` cuts each nodal domain `[lo, hi]` of `domains` (offsets
+/// from its particle, m) into: each cell as a point at its centroid with its measure
+/// `prod_k (hi_k - lo_k)` (cell = the domain's particle), domain by domain, and the Gauss
+/// points `rule` (position along an edge, weight) on each cell's edges or faces as boundary
+/// sites with their outward normal times the weight (m^(D-1)).
 #[allow(clippy::type_complexity)]
 fn smoothing_cells<const D: usize, const K: usize>(
     lattice: &Lattice<D>,
+    domains: &[([usize; D], [Real; D], [Real; D])],
     split: impl Fn([Real; D], [Real; D]) -> [([Real; D], [Real; D]); K],
     rule: &[(Real, Real)],
 ) -> (PointSet<D>, Vec<Site<D>>, Vec<[Real; D]>) {
     let n = lattice.dims();
     let mut s = PointSet::default();
     let (mut edge_sites, mut edge_nw) = (Vec::new(), Vec::new());
-    for (node, lo, hi) in domain_bounds(lattice) {
+    for &(node, lo, hi) in domains {
         for (a, b) in split(lo, hi) {
             let centre = Site {
                 node,
@@ -321,20 +340,45 @@ pub fn point_shapes<const D: usize>(
     })
 }
 
-/// The quadrants of the nodal domains ([`nodal_quadrants`]) with their smoothed gradients
-/// `B^k_I = (1 / A_k) sum_edges N_I(x_g) n w_g` (1/m; no values `N_I`).
-pub fn quadrant_shapes(lattice: &Lattice) -> Result<(PointSet, ShapeTable)> {
-    let (quadrants, edges, nw) = nodal_quadrants(lattice);
-    let on_edges = lattice.shape_table(&edges, &|q| {
-        format!(
-            "boundary point {q} of quadrant {} of nodal domain {}",
-            q / QUADRANT_EDGE_POINTS % 4,
-            q / (4 * QUADRANT_EDGE_POINTS)
-        )
-    })?;
-    let boundaries = DomainBoundaries::consecutive(nw, quadrants.areas.len());
-    let table = smoothed(None, &on_edges, &boundaries, &quadrants.areas);
-    Ok((quadrants, table))
+/// The `K = 2^D` orthants of every nodal domain of the lattice ([`orthants`]), for the
+/// stabilization of nodal integration: the orthants as points (centroid, measure; cell =
+/// the domain's particle), `K` per domain in particle order, and their smoothed gradients
+/// `B^k_I = (1 / A_k) sum_g N_I(x_g) n w_g` (1/m; no values `N_I`) from
+/// [`orthant_boundary_points`] Gauss points on each orthant's edges or faces. The boundary
+/// points are evaluated [`ORTHANT_BLOCK`] domains at a time; each row depends on its own
+/// points only, so the table is the one an evaluation of all at once gives.
+pub fn orthant_shapes<const D: usize, const K: usize>(
+    lattice: &Lattice<D>,
+) -> Result<(PointSet<D>, ShapeTable<D>)> {
+    let g = 0.5 / 3.0_f64.sqrt();
+    let gauss = [(0.5 - g, 0.5), (0.5 + g, 0.5)];
+    let name = if D == 2 { "quadrant" } else { "octant" };
+    let per_orthant = orthant_boundary_points(D);
+    let domains = domain_bounds(lattice);
+    let mut points = PointSet::default();
+    let mut table = ShapeTable {
+        offsets: vec![0],
+        ..Default::default()
+    };
+    for (b, block) in domains.chunks(ORTHANT_BLOCK).enumerate() {
+        let (orthants, edges, nw) = smoothing_cells(lattice, block, orthants::<D, K>, &gauss);
+        let first = b * ORTHANT_BLOCK * K * per_orthant;
+        let on_edges = lattice.shape_table(&edges, &|q| {
+            let q = first + q;
+            format!(
+                "boundary point {q} of {name} {} of nodal domain {}",
+                q / per_orthant % K,
+                q / (K * per_orthant)
+            )
+        })?;
+        let boundaries = DomainBoundaries::consecutive(nw, orthants.areas.len());
+        table.append(smoothed(None, &on_edges, &boundaries, &orthants.areas));
+        points.sites.extend(orthants.sites);
+        points.positions.extend(orthants.positions);
+        points.areas.extend(orthants.areas);
+        points.cells.extend(orthants.cells);
+    }
+    Ok((points, table))
 }
 
 /// The boundary terms of smoothing domains: domain `L`'s terms are

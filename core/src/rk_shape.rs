@@ -200,6 +200,17 @@ impl<const D: usize> ShapeTable<D> {
     pub fn entries(&self) -> usize {
         self.index.len()
     }
+    /// Appends the rows of `other` after this table's.
+    pub fn append(&mut self, other: ShapeTable<D>) {
+        let base = self.index.len() as u32;
+        self.offsets
+            .extend(other.offsets[1..].iter().map(|&o| base + o));
+        self.index.extend(other.index);
+        self.n.extend(other.n);
+        for (column, more) in self.grad.iter_mut().zip(other.grad) {
+            column.extend(more);
+        }
+    }
     /// Frees the gradients of a table that is only interpolated: `grad` becomes empty,
     /// `n` and the rows stay.
     pub fn drop_gradients(&mut self) {

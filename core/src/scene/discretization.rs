@@ -67,7 +67,7 @@ pub struct Discretization {
     /// With `integration = "scni"`: the coefficient `c` (-) of the stabilization of nodal
     /// integration (Puso, Chen, Zywicz, Elmer 2008's MSCNI; [`crate::solver`]'s
     /// `nodal_stabilization.rs`), a stiffness `c mu` against the variation of the
-    /// displacement gradient over the quadrants of each nodal domain, which holds the
+    /// displacement gradient over the quadrants of each nodal domain (octants in 3D), which holds the
     /// saw-tooth SCNI leaves free on a surface. Absent or 0: plain SCNI.
     #[serde(default)]
     pub scni_stabilization: Option<Real>,
@@ -102,13 +102,19 @@ impl Discretization {
             );
         }
         check_rereference(self.rereference_stretch, self.integration, out);
-        if let Some(c) = self.scni_stabilization {
-            out.check(
-                c.is_finite() && (0.0..=1.0).contains(&c),
-                "discretization.scni_stabilization",
-                format!("must lie in [0, 1] (a fraction of the shear modulus), got {c}"),
-            );
-        }
+        check_scni_stabilization(self.scni_stabilization, out);
+    }
+}
+
+/// `discretization.scni_stabilization` (2D and 3D): a fraction of the shear modulus in
+/// [0, 1].
+pub(crate) fn check_scni_stabilization(c: Option<Real>, out: &mut Checks) {
+    if let Some(c) = c {
+        out.check(
+            c.is_finite() && (0.0..=1.0).contains(&c),
+            "discretization.scni_stabilization",
+            format!("must lie in [0, 1] (a fraction of the shear modulus), got {c}"),
+        );
     }
 }
 

@@ -193,6 +193,12 @@ pub struct SolidDiscretization {
     /// (`solver/solid/rereference.rs`). Absent: the Lagrangian kernel throughout.
     #[serde(default)]
     pub rereference_stretch: Option<Real>,
+    /// With `integration = "scni"`: the coefficient `c` (-) of the stabilization of nodal
+    /// integration over the octants of each nodal domain, as in 2D
+    /// ([`super::discretization::Discretization::scni_stabilization`]). Absent or 0: plain
+    /// SCNI.
+    #[serde(default)]
+    pub scni_stabilization: Option<Real>,
 }
 
 fn default_support() -> Real {
@@ -205,6 +211,7 @@ impl Default for SolidDiscretization {
             integration: IntegrationRule::default(),
             support: default_support(),
             rereference_stretch: None,
+            scni_stabilization: None,
         }
     }
 }
@@ -468,6 +475,7 @@ impl SolidScene {
             ),
         );
         super::discretization::check_rereference(d.rereference_stretch, d.integration, &mut out);
+        super::discretization::check_scni_stabilization(d.scni_stabilization, &mut out);
         self.time.check(&mut out);
         if let Some(mass_scaling) = &self.time.mass_scaling {
             mass_scaling.check(&mut out);

@@ -53,7 +53,7 @@ pub(super) struct Discretization {
     pub scatter: Scatter,
     /// The quadrant gradients of the stabilized nodal integration, when the scene asks for
     /// it (`nodal_stabilization.rs`).
-    pub stabilization: Option<Tables>,
+    pub stabilization: Option<Tables<2>>,
     /// `N_I(X_J)` in row `J`, for positions and contact; its gradients are freed after
     /// setup (nothing reads them).
     pub nodal: ShapeTable,

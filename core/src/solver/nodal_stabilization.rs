@@ -1,27 +1,33 @@
 //! Stabilization of nodal integration (`discretization.scni_stabilization`): the modified
 //! stabilized conforming nodal integration (MSCNI) of Puso, Chen, Zywicz, Elmer (2008),
 //! "Meshfree and finite element nodal integration methods", IJNME 74, 416-446, eq. (40), in
-//! the total Lagrangian form of this solver.
+//! the total Lagrangian form of this solver, in two and three dimensions.
 //!
 //! SCNI's smoothed gradient averages the displacement gradient over a particle's whole
 //! nodal domain, so a field that alternates from particle to particle along a free surface
 //! (a saw-tooth) strains the domains little and costs little energy: under a die's drag the
-//! top face of a forging takes it and folds. Each nodal domain `L` is cut into its four
-//! quadrants `k`, each with its own smoothed gradient
-//! `B^k_I = (1 / A_k) int_{dA_k} N_I n dG` (1/m, [`crate::integration::quadrant_shapes`]);
-//! the saw-tooth bends the quadrants' gradients against each other while their mean barely
-//! moves. With `T^k = G^k - G_L` the quadrant's displacement gradient
-//! `G^k = sum_I d_I (x) B^k_I` (-) less its domain's mean `G_L = sum_k w_k G^k / sum_k w_k`,
-//! the stabilization stores the energy
+//! top face of a forging takes it and folds. Each nodal domain `L` is cut into its `K`
+//! orthants `k` (four quadrants in 2D, eight octants in 3D), each with its own smoothed
+//! gradient `B^k_I = (1 / A_k) int_{dA_k} N_I n dG` (1/m,
+//! [`crate::integration::orthant_shapes`] on a lattice,
+//! [`crate::cylinder_grid::CylinderGrid::octant_domains`] on a cylinder); the saw-tooth
+//! bends the orthants' gradients against each other while their mean barely moves. With
+//! `T^k = G^k - G_L` the orthant's displacement gradient `G^k = sum_I d_I (x) B^k_I` (-)
+//! less its domain's mean `G_L = sum_k w_k G^k / sum_k w_k`, the stabilization stores the
+//! energy
 //!
 //! `W_s = sum_L sum_k (c mu / 2) w_k |T^k|^2` (J),
 //!
-//! `w_k` the quadrant's volume weight (m^3), `mu` the shear modulus (Pa), `c` the scene's
+//! `w_k` the orthant's volume weight (m^3), `mu` the shear modulus (Pa), `c` the scene's
 //! coefficient (-). Its force on particle `I` is
 //! `f_I = dW_s / dd_I = c mu sum_L sum_k w_k T^k B^k_I` (N); the mean's own term vanishes
 //! because `sum_k w_k T^k = 0`. A rigid motion and any linear field give `T^k = 0` (each
-//! quadrant's smoothed gradient is exact for it), so the patch test and the consistency of
-//! SCNI are kept; the energy enters the account as stored (elastic) energy.
+//! orthant's smoothed gradient is exact for it), so the patch test and the consistency of
+//! SCNI are kept; the energy enters the account as stored (elastic) energy. The gradients
+//! are the reference configuration's, so `W_s` is a fixed quadratic form in the
+//! coefficients: the stage applies its Hessian ([`Tables`]), assembled once at setup,
+//! instead of forming the `K D^2` gradients of every domain at every step (in 3D a tenth
+//! of the arithmetic).
 //!
 //! The energy is elastic in the whole gradient since the start, also where the metal flows:
 //! a real flow that varies the gradient over half a spacing is resisted as well, in
@@ -34,333 +40,361 @@
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
 use crate::team::{part, particle_phase, Parts, Team};
+use rayon::prelude::*;
 
-/// Quadrants per nodal domain.
-const QUADRANTS: usize = 4;
-
-/// Nodal domains per block of the first phase (fixed, so the bits do not depend on the
-/// number of threads).
-const DOMAINS: usize = 64;
-
-/// Particles per block of the second phase.
+/// Particles per block of the stage and of the setup (fixed, so the bits do not depend on
+/// the number of threads).
 const PARTICLES: usize = 128;
 
-/// The stage's working arrays: the quadrants' stresses and the force.
+/// Running sums per row of the stage: entry `e` of a row goes to sum `e mod SUMS`, and the
+/// sums are added pairwise at the end (a fixed order; four chains keep the fused
+/// multiply-adds from waiting on each other).
+const SUMS: usize = 4;
+
+/// The stage's working arrays: the force and the energy of each block.
 #[derive(Debug, Clone)]
-pub(super) struct Forces {
-    /// `c mu w_k T^k` of each domain's quadrants (N m): `[xX, xY]` of quadrants 0..3, then
-    /// `[yX, yY]` of quadrants 0..3.
-    stress: Vec<[Real; 4 * QUADRANTS]>,
+pub(crate) struct Forces<const D: usize> {
     /// The stabilization's force on each particle (N), added to the internal force.
-    pub force: Vec<[Real; 2]>,
+    pub force: Vec<[Real; D]>,
+    /// `f_I . d_I` summed over each block of particles (J).
+    work: Vec<Real>,
 }
 
-impl Forces {
-    /// Zero arrays for `tables` over `particles` particles.
-    pub(super) fn new(tables: &Tables, particles: usize) -> Forces {
+impl<const D: usize> Forces<D> {
+    /// Zero arrays over `particles` particles.
+    pub(crate) fn new(particles: usize) -> Forces<D> {
         Forces {
-            stress: vec![[0.0; 4 * QUADRANTS]; tables.weights.len()],
-            force: vec![[0.0; 2]; particles],
+            force: vec![[0.0; D]; particles],
+            work: vec![0.0; particles.div_ceil(PARTICLES)],
         }
     }
 
     /// Bytes held.
-    pub(super) fn memory_bytes(&self) -> usize {
-        self.stress.len() * 32 * QUADRANTS + self.force.len() * 16
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.force.len() * std::mem::size_of::<[Real; D]>() + self.work.len() * 8
     }
 }
 
-/// What the stage reads, fixed after setup: the coefficient, the weights and both orders of
-/// the quadrants' smoothed gradients. A domain's four quadrants share one entry per
-/// particle: `[B^0_x, B^0_y, B^1_x, B^1_y, B^2_x, B^2_y, B^3_x, B^3_y]` (1/m), zero for a
-/// quadrant that does not involve the particle.
+/// What the stage reads, fixed after setup: the stabilization's stiffness. `W_s` is a
+/// quadratic form in the coefficients whose directions do not mix (`T^k_ij` takes
+/// component `i` of the `d_I` only), so its Hessian is a scalar matrix per pair of
+/// particles:
+///
+/// `W_s = 1/2 sum_i sum_I sum_J k_IJ d_I,i d_J,i`, `k_IJ = c mu sum_L sum_k w_k C^k_I . C^k_J`
+/// (N/m),
+///
+/// `C^k_I = B^k_I - sum_m w_m B^m_I / sum_m w_m` (1/m) the orthant's gradient less the
+/// domain's mean, and the force `f_I = sum_J k_IJ d_J` (N). The stage is then one sparse
+/// product: two particles are coupled when a domain reaches both (81 per particle inside
+/// a lattice in 2D, 729 in 3D).
 #[derive(Debug, Clone)]
-pub(super) struct Tables {
-    /// `c mu` (Pa).
-    modulus: Real,
-    /// `w_k` of quadrant `k` of domain `L` (m^3).
-    weights: Vec<[Real; QUADRANTS]>,
-    /// Domain `L`'s particles `particles[by_domain[L]..by_domain[L + 1]]` (ascending) and
-    /// their gradients in `domain_gradients`.
-    by_domain: Vec<u32>,
-    particles: Vec<u32>,
-    domain_gradients: Vec<[Real; 2 * QUADRANTS]>,
-    /// The same entries by particle: the domains `domains[by_particle[I]..by_particle[I +
-    /// 1]]` (ascending) whose quadrants involve `I`, with `B^k_I` in `particle_gradients`.
-    by_particle: Vec<u32>,
-    domains: Vec<u32>,
-    particle_gradients: Vec<[Real; 2 * QUADRANTS]>,
+pub(crate) struct Tables<const D: usize> {
+    /// Row `I`'s entries `rows[I]..rows[I + 1]`.
+    rows: Vec<u32>,
+    /// Each entry's particle `J`, ascending within a row.
+    columns: Vec<u32>,
+    /// Each entry's `k_IJ` (N/m).
+    stiffness: Vec<Real>,
 }
 
-impl Tables {
+impl<const D: usize> Tables<D> {
     /// The stabilization of `particles` particles with coefficient `c` (-), shear modulus
-    /// `mu` (Pa), quadrant gradients `quadrants` (rows `4 L + k`) and weights `weights`
-    /// (m^3, the same order).
-    pub(super) fn new(
+    /// `mu` (Pa), orthant gradients `orthants` (rows `K L + k`, [`crate::integration::orthant_shapes`]) and weights
+    /// `weights` (m^3, the same order; a domain of fewer than `K` orthants has empty rows of
+    /// weight 0 after its own).
+    pub(crate) fn new<const K: usize>(
         c: Real,
         mu: Real,
-        quadrants: &ShapeTable,
+        orthants: &ShapeTable<D>,
         weights: &[Real],
         particles: usize,
-    ) -> Tables {
-        let domain_count = quadrants.rows() / QUADRANTS;
+    ) -> Tables<D> {
+        let domains = orthants.rows() / K;
+        // Each domain's particles (ascending) with `w_k C^k_I` and `C^k_I`.
         let mut by_domain = vec![0u32];
-        let (mut members, mut domain_gradients) = (Vec::new(), Vec::new());
-        let mut row: std::collections::BTreeMap<u32, [Real; 2 * QUADRANTS]> = Default::default();
-        for l in 0..domain_count {
+        let (mut members, mut weighted, mut centred) = (Vec::new(), Vec::new(), Vec::new());
+        let mut row: std::collections::BTreeMap<u32, [[Real; D]; K]> = Default::default();
+        for l in 0..domains {
             row.clear();
-            for k in 0..QUADRANTS {
-                for e in quadrants.row(QUADRANTS * l + k) {
-                    let b = row.entry(quadrants.index[e]).or_default();
-                    b[2 * k] = quadrants.grad[0][e];
-                    b[2 * k + 1] = quadrants.grad[1][e];
+            for k in 0..K {
+                for e in orthants.row(K * l + k) {
+                    let b = row.entry(orthants.index[e]).or_insert([[0.0; D]; K]);
+                    for (j, column) in orthants.grad.iter().enumerate() {
+                        b[k][j] = column[e];
+                    }
                 }
             }
+            let w = &weights[K * l..K * (l + 1)];
+            let total: Real = w.iter().sum();
             for (&i, b) in &row {
+                let mean: [Real; D] =
+                    std::array::from_fn(|j| (0..K).map(|k| w[k] * b[k][j]).sum::<Real>() / total);
+                let centred_i: [[Real; D]; K] =
+                    std::array::from_fn(|k| std::array::from_fn(|j| b[k][j] - mean[j]));
                 members.push(i);
-                domain_gradients.push(*b);
+                weighted.push(std::array::from_fn::<[Real; D], K, _>(|k| {
+                    centred_i[k].map(|x| c * mu * w[k] * x)
+                }));
+                centred.push(centred_i);
             }
             by_domain.push(members.len() as u32);
         }
-        let mut count = vec![0u32; particles + 1];
-        for &i in &members {
-            count[i as usize + 1] += 1;
-        }
-        for i in 0..particles {
-            count[i + 1] += count[i];
-        }
-        let by_particle = count.clone();
-        let (mut domains, mut particle_gradients) = (
-            vec![0u32; members.len()],
-            vec![[0.0; 2 * QUADRANTS]; members.len()],
-        );
-        for l in 0..domain_count {
+        // The domains reaching each particle, ascending, with the particle's entry in each.
+        let mut reach = vec![Vec::new(); particles];
+        for l in 0..domains {
             for e in by_domain[l] as usize..by_domain[l + 1] as usize {
-                let i = members[e] as usize;
-                let at = count[i] as usize;
-                count[i] += 1;
-                domains[at] = l as u32;
-                particle_gradients[at] = domain_gradients[e];
+                reach[members[e] as usize].push((l, e));
             }
         }
-        Tables {
-            modulus: c * mu,
-            weights: weights
-                .chunks_exact(QUADRANTS)
-                .map(|w| [w[0], w[1], w[2], w[3]])
-                .collect(),
-            by_domain,
-            particles: members,
-            domain_gradients,
-            by_particle,
-            domains,
-            particle_gradients,
+        // Row I: the domains reaching I in ascending order, each one's particles J in
+        // ascending order, k_IJ += sum_k sum_j (c mu w_k C^k_I,j) C^k_J,j.
+        let blocks: Vec<(Vec<u32>, Vec<u32>, Vec<Real>)> = (0..particles.div_ceil(PARTICLES))
+            .into_par_iter()
+            .map(|b| {
+                let (mut rows, mut columns, mut stiffness) = (Vec::new(), Vec::new(), Vec::new());
+                let (mut acc, mut mark) = (vec![0.0; particles], vec![usize::MAX; particles]);
+                let mut touched = Vec::new();
+                for i in part(b, PARTICLES, particles) {
+                    for &(l, at) in &reach[i] {
+                        let ci = &weighted[at];
+                        for e in by_domain[l] as usize..by_domain[l + 1] as usize {
+                            let cj = &centred[e];
+                            let mut s = 0.0;
+                            for (cik, cjk) in ci.iter().zip(cj) {
+                                for (a, b) in cik.iter().zip(cjk) {
+                                    s = a.mul_add(*b, s);
+                                }
+                            }
+                            let j = members[e] as usize;
+                            if mark[j] != i {
+                                mark[j] = i;
+                                touched.push(j as u32);
+                            }
+                            acc[j] += s;
+                        }
+                    }
+                    touched.sort_unstable();
+                    rows.push(touched.len() as u32);
+                    for &j in &touched {
+                        columns.push(j);
+                        stiffness.push(acc[j as usize]);
+                        acc[j as usize] = 0.0;
+                    }
+                    touched.clear();
+                }
+                (rows, columns, stiffness)
+            })
+            .collect();
+        let mut t = Tables {
+            rows: vec![0],
+            columns: Vec::new(),
+            stiffness: Vec::new(),
+        };
+        for (lengths, columns, stiffness) in blocks {
+            for n in lengths {
+                let last = *t.rows.last().unwrap_or(&0);
+                t.rows.push(last + n);
+            }
+            t.columns.extend(columns);
+            t.stiffness.extend(stiffness);
         }
+        t
     }
 
     /// Bytes held.
-    pub(super) fn memory_bytes(&self) -> usize {
-        let entry = 4 + 16 * QUADRANTS;
-        (self.by_domain.len() + self.by_particle.len()) * 4
-            + (self.particles.len() + self.domains.len()) * entry
-            + self.weights.len() * 8 * QUADRANTS
+    pub(crate) fn memory_bytes(&self) -> usize {
+        (self.rows.len() + self.columns.len()) * 4 + self.stiffness.len() * 8
     }
 }
 
-/// The stabilization stage of `t` on the displacement coefficients `d` (m): fills `s.force` (N)
-/// and returns the stored energy `W_s` (J). Two parallel phases over fixed blocks: the
-/// quadrants' gradients and stresses domain by domain, then each particle's force summed
-/// over its domains in ascending order. Every product is a fused multiply-add, so the
-/// AVX2 build (`avx2`, where the CPU has it) gives the same bits as the portable one.
-pub(super) fn stage(team: &Team, t: &Tables, s: &mut Forces, d: &[[Real; 2]], avx2: bool) -> Real {
-    let domains = t.weights.len();
-    let blocks = domains.div_ceil(DOMAINS);
-    let mut energies = vec![0.0; blocks];
+/// The stabilization stage of `t` on the displacement coefficients `d` (m): fills `s.force`
+/// (N) with `f_I = sum_J k_IJ d_J` and returns the stored energy `W_s = 1/2 sum_I f_I . d_I`
+/// (J). One parallel phase over fixed blocks of particles, the blocks' work added in block
+/// order. Every product is a fused multiply-add, so the AVX2 build (`avx2`, where the CPU
+/// has it) gives the same bits as the portable one.
+pub(crate) fn stage<const D: usize>(
+    team: &Team,
+    t: &Tables<D>,
+    s: &mut Forces<D>,
+    d: &[[Real; D]],
+    avx2: bool,
+) -> Real {
+    let np = d.len();
     {
-        let (stress, slots) = (Parts::new(&mut s.stress), Parts::new(&mut energies));
-        particle_phase(team, d.len(), blocks, &|b| {
-            let range = part(b, DOMAINS, domains);
-            // SAFETY: block `b` alone takes these domains and its energy slot.
-            let (out, energy) = unsafe { (stress.get(range.clone()), &mut slots.get(b..b + 1)[0]) };
-            *energy = match avx2 {
+        let (force, work) = (Parts::new(&mut s.force), Parts::new(&mut s.work));
+        particle_phase(team, np, np.div_ceil(PARTICLES), &|b| {
+            let range = part(b, PARTICLES, np);
+            // SAFETY: block `b` alone takes these particles and its work slot.
+            let (fs, w) = unsafe { (force.get(range.clone()), &mut work.get(b..b + 1)[0]) };
+            *w = match avx2 {
                 // SAFETY: `avx2` only where the CPU has AVX2 and FMA (the caller checks).
-                true => unsafe { domains_avx2(t, d, range, out) },
-                false => domain_stresses(t, d, range, out),
+                true => unsafe { rows_avx2(t, d, range, fs) },
+                false => rows(t, d, range, fs),
             };
         });
     }
-    let np = d.len();
-    let (force, stress) = (Parts::new(&mut s.force), &s.stress);
-    particle_phase(team, np, np.div_ceil(PARTICLES), &|b| {
-        let range = part(b, PARTICLES, np);
-        // SAFETY: block `b` alone takes these particles.
-        let fs = unsafe { force.get(range.clone()) };
-        match avx2 {
-            // SAFETY: as above.
-            true => unsafe { particles_avx2(t, stress, range, fs) },
-            false => particle_forces(t, stress, range, fs),
-        }
-    });
-    energies.into_iter().sum()
+    0.5 * s.work.iter().sum::<Real>()
 }
 
-/// The quadrants' gradients `G^k` of the domains in `range`, their stresses `c mu w_k T^k`
-/// into `out`, and the domains' stored energy (J). A domain's gradients are summed as two
-/// 8-lane vectors, `d_I,x [B^k_x, B^k_y]_k` and `d_I,y [B^k_x, B^k_y]_k`.
+/// The force `f_I = sum_J k_IJ d_J` (N) on the particles of `range` into `fs`, and `sum_I
+/// f_I . d_I` over them (J).
 #[inline(always)]
-fn domain_stresses(
-    s: &Tables,
-    d: &[[Real; 2]],
+fn rows<const D: usize>(
+    t: &Tables<D>,
+    d: &[[Real; D]],
     range: std::ops::Range<usize>,
-    out: &mut [[Real; 4 * QUADRANTS]],
+    fs: &mut [[Real; D]],
 ) -> Real {
-    let mut energy = 0.0;
-    for (l, out) in range.zip(out.iter_mut()) {
-        let (mut gx, mut gy) = ([0.0; 2 * QUADRANTS], [0.0; 2 * QUADRANTS]);
-        for e in s.by_domain[l] as usize..s.by_domain[l + 1] as usize {
-            let (di, bk) = (d[s.particles[e] as usize], &s.domain_gradients[e]);
-            for j in 0..2 * QUADRANTS {
-                gx[j] = di[0].mul_add(bk[j], gx[j]);
-                gy[j] = di[1].mul_add(bk[j], gy[j]);
-            }
-        }
-        let w = s.weights[l];
-        let total = w[0] + w[1] + w[2] + w[3];
-        let mut mean = [0.0; 4];
-        for (k, wk) in w.iter().enumerate() {
-            mean[0] = wk.mul_add(gx[2 * k], mean[0]);
-            mean[1] = wk.mul_add(gx[2 * k + 1], mean[1]);
-            mean[2] = wk.mul_add(gy[2 * k], mean[2]);
-            mean[3] = wk.mul_add(gy[2 * k + 1], mean[3]);
-        }
-        for m in &mut mean {
-            *m /= total;
-        }
-        for (k, wk) in w.iter().enumerate() {
-            let t = [
-                gx[2 * k] - mean[0],
-                gx[2 * k + 1] - mean[1],
-                gy[2 * k] - mean[2],
-                gy[2 * k + 1] - mean[3],
-            ];
-            let scale = s.modulus * wk;
-            out[2 * k] = scale * t[0];
-            out[2 * k + 1] = scale * t[1];
-            out[2 * QUADRANTS + 2 * k] = scale * t[2];
-            out[2 * QUADRANTS + 2 * k + 1] = scale * t[3];
-            let norm2 = t[0].mul_add(t[0], t[1].mul_add(t[1], t[2].mul_add(t[2], t[3] * t[3])));
-            energy = (0.5 * scale).mul_add(norm2, energy);
-        }
-    }
-    energy
-}
-
-/// The force on the particles of `range` (N) into `fs`: `f_I = sum_L sum_k (c mu w_k T^k)
-/// B^k_I`, each domain's term an 8-lane product summed lane by lane.
-#[inline(always)]
-fn particle_forces(
-    s: &Tables,
-    stress: &[[Real; 4 * QUADRANTS]],
-    range: std::ops::Range<usize>,
-    fs: &mut [[Real; 2]],
-) {
+    let mut work = 0.0;
     for (i, f) in range.zip(fs.iter_mut()) {
-        let (mut ax, mut ay) = ([0.0; 2 * QUADRANTS], [0.0; 2 * QUADRANTS]);
-        for e in s.by_particle[i] as usize..s.by_particle[i + 1] as usize {
-            let (p, bk) = (&stress[s.domains[e] as usize], &s.particle_gradients[e]);
-            for j in 0..2 * QUADRANTS {
-                ax[j] = p[j].mul_add(bk[j], ax[j]);
-                ay[j] = p[2 * QUADRANTS + j].mul_add(bk[j], ay[j]);
+        let entries = t.rows[i] as usize..t.rows[i + 1] as usize;
+        let mut sums = [[0.0; D]; SUMS];
+        let (columns, stiffness) = (&t.columns[entries.clone()], &t.stiffness[entries]);
+        for (e, (&j, &k)) in columns.iter().zip(stiffness).enumerate() {
+            let (sum, dj) = (&mut sums[e % SUMS], d[j as usize]);
+            for (s, x) in sum.iter_mut().zip(dj) {
+                *s = k.mul_add(x, *s);
             }
         }
-        let lanes = |a: [Real; 2 * QUADRANTS]| {
-            ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]))
-        };
-        *f = [lanes(ax), lanes(ay)];
+        *f = std::array::from_fn(|c| (sums[0][c] + sums[1][c]) + (sums[2][c] + sums[3][c]));
+        for (fc, dc) in f.iter().zip(&d[i]) {
+            work = fc.mul_add(*dc, work);
+        }
     }
+    work
 }
 
-/// [`domain_stresses`] compiled for AVX2 and FMA.
+/// [`rows`] compiled for AVX2 and FMA.
 ///
 /// # Safety
 ///
 /// The CPU must support AVX2 and FMA.
 #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
-unsafe fn domains_avx2(
-    s: &Tables,
-    d: &[[Real; 2]],
+unsafe fn rows_avx2<const D: usize>(
+    t: &Tables<D>,
+    d: &[[Real; D]],
     range: std::ops::Range<usize>,
-    out: &mut [[Real; 4 * QUADRANTS]],
+    fs: &mut [[Real; D]],
 ) -> Real {
-    domain_stresses(s, d, range, out)
-}
-
-/// [`particle_forces`] compiled for AVX2 and FMA.
-///
-/// # Safety
-///
-/// The CPU must support AVX2 and FMA.
-#[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2,fma"))]
-unsafe fn particles_avx2(
-    s: &Tables,
-    stress: &[[Real; 4 * QUADRANTS]],
-    range: std::ops::Range<usize>,
-    fs: &mut [[Real; 2]],
-) {
-    particle_forces(s, stress, range, fs)
+    rows(t, d, range, fs)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integration::quadrant_shapes;
-    use crate::rk_shape::Lattice;
+    use crate::integration::orthant_shapes;
+    use crate::rk_shape::{Lattice, ShapeTable};
 
-    /// A 9 x 7 lattice of 1 mm spacing with its stabilization (`c mu` = 1 Pa, unit depth).
-    fn patch() -> (Lattice, Tables, Forces) {
-        let lattice = Lattice::new([0.0, 0.0], [1e-3, 1e-3], [9, 7], [2e-3, 2e-3]);
-        let (quadrants, table) = quadrant_shapes(&lattice).unwrap();
-        let t = Tables::new(1.0, 1.0, &table, &quadrants.areas, 63);
-        let s = Forces::new(&t, 63);
-        (lattice, t, s)
+    /// A lattice of spacing `h` with `n` particles per direction, its orthants (gradients
+    /// and weights) and their stabilization (`c mu` = 1 Pa).
+    #[allow(clippy::type_complexity)]
+    fn patch<const D: usize, const K: usize>(
+        n: [usize; D],
+        h: [Real; D],
+    ) -> (Lattice<D>, ShapeTable<D>, Vec<Real>, Tables<D>, Forces<D>) {
+        let lattice = Lattice::new([0.0; D], h, n, h.map(|hk| 2.0 * hk));
+        let (orthants, table) = orthant_shapes::<D, K>(&lattice).unwrap();
+        let np = n.iter().product();
+        let t = Tables::new::<K>(1.0, 1.0, &table, &orthants.areas, np);
+        (lattice, table, orthants.areas, t, Forces::new(np))
+    }
+
+    /// The energy of the definition, `W_s = sum_L sum_k (c mu / 2) w_k |G^k - G_L|^2` with
+    /// `G^k = sum_I d_I (x) B^k_I` and `G_L` the weighted mean (J; `c mu` = 1 Pa), straight
+    /// from the orthants' gradients: the reference the stiffness is checked against.
+    fn energy_by_definition<const D: usize, const K: usize>(
+        table: &ShapeTable<D>,
+        weights: &[Real],
+        d: &[[Real; D]],
+    ) -> Real {
+        let mut energy = 0.0;
+        for l in 0..table.rows() / K {
+            let g: Vec<[[Real; D]; D]> = (0..K)
+                .map(|k| {
+                    let mut g = [[0.0; D]; D];
+                    for e in table.row(K * l + k) {
+                        for (i, gi) in g.iter_mut().enumerate() {
+                            for (j, gij) in gi.iter_mut().enumerate() {
+                                *gij += d[table.index[e] as usize][i] * table.grad[j][e];
+                            }
+                        }
+                    }
+                    g
+                })
+                .collect();
+            let w = &weights[K * l..K * (l + 1)];
+            let total: Real = w.iter().sum();
+            for (wk, gk) in w.iter().zip(&g) {
+                for (i, gki) in gk.iter().enumerate() {
+                    for (j, gkij) in gki.iter().enumerate() {
+                        let mean: Real =
+                            w.iter().zip(&g).map(|(wm, gm)| wm * gm[i][j]).sum::<Real>() / total;
+                        energy += 0.5 * wk * (gkij - mean).powi(2);
+                    }
+                }
+            }
+        }
+        energy
+    }
+
+    /// Every orthant's smoothed gradient reproduces a linear field's gradient, and the
+    /// orthants tile the body.
+    fn each_orthant_reproduces_a_linear_gradient<const D: usize, const K: usize>(n: [usize; D]) {
+        let (lattice, table, weights, _, _) = patch::<D, K>(n, [1e-3; D]);
+        let x = &lattice.cloud().positions;
+        let grad = |i: usize, j: usize| 0.1 * (1 + i) as Real - 0.07 * (j * j) as Real;
+        let u = |p: [Real; D]| -> [Real; D] {
+            std::array::from_fn(|i| (0..D).map(|j| grad(i, j) * p[j]).sum())
+        };
+        for q in 0..table.rows() {
+            let mut g = [[0.0; D]; D];
+            for e in table.row(q) {
+                let ui = u(x[table.index[e] as usize]);
+                for (gi, uik) in g.iter_mut().zip(ui) {
+                    for (gij, column) in gi.iter_mut().zip(&table.grad) {
+                        *gij += uik * column[e];
+                    }
+                }
+            }
+            for (i, gi) in g.iter().enumerate() {
+                for (j, gij) in gi.iter().enumerate() {
+                    assert!((gij - grad(i, j)).abs() < 1e-12, "orthant {q}: {g:?}");
+                }
+            }
+        }
+        let volume: Real = weights.iter().sum();
+        let exact: Real = n.iter().map(|&nk| (nk - 1) as Real * 1e-3).product();
+        assert!(
+            (volume - exact).abs() < 1e-12 * exact,
+            "{volume} vs {exact}"
+        );
     }
 
     #[test]
     fn each_quadrant_reproduces_a_linear_gradient() {
-        let (lattice, _, _) = patch();
-        let (quadrants, table) = quadrant_shapes(&lattice).unwrap();
-        let x = &lattice.cloud().positions;
-        let u = |p: [Real; 2]| [0.3 * p[0] - 0.2 * p[1], 0.1 * p[0] + 0.4 * p[1]];
-        for q in 0..quadrants.areas.len() {
-            let mut g = [0.0; 4];
-            for e in table.row(q) {
-                let ui = u(x[table.index[e] as usize]);
-                g[0] += ui[0] * table.grad[0][e];
-                g[1] += ui[0] * table.grad[1][e];
-                g[2] += ui[1] * table.grad[0][e];
-                g[3] += ui[1] * table.grad[1][e];
-            }
-            for (a, b) in g.iter().zip([0.3, -0.2, 0.1, 0.4]) {
-                assert!((a - b).abs() < 1e-12, "quadrant {q}: {g:?}");
-            }
-        }
-        let area: Real = quadrants.areas.iter().sum();
-        assert!((area - 8e-3 * 6e-3).abs() < 1e-15);
+        each_orthant_reproduces_a_linear_gradient::<2, 4>([9, 7]);
     }
 
     #[test]
-    fn a_linear_field_and_a_rigid_motion_cost_nothing() {
-        let (lattice, t, mut s) = patch();
-        // The RK coefficients of a linear field are its nodal values (linear basis).
-        let d: Vec<[Real; 2]> = lattice
+    fn each_octant_reproduces_a_linear_gradient() {
+        each_orthant_reproduces_a_linear_gradient::<3, 8>([5, 4, 6]);
+    }
+
+    /// A linear field and a rigid motion (the RK coefficients of a linear field are its
+    /// nodal values, linear basis) store no energy and feel no force.
+    fn linear_fields_cost_nothing<const D: usize, const K: usize>(n: [usize; D]) {
+        let (lattice, _, _, t, mut s) = patch::<D, K>(n, [1e-3; D]);
+        let d: Vec<[Real; D]> = lattice
             .cloud()
             .positions
             .iter()
             .map(|p| {
-                [
-                    1e-4 + 0.01 * p[0] - 0.02 * p[1],
-                    -2e-4 + 0.02 * p[0] + 0.005 * p[1],
-                ]
+                std::array::from_fn(|i| {
+                    (1.0 - 3.0 * i as Real) * 1e-4
+                        + (0..D)
+                            .map(|j| (0.01 + 0.005 * i as Real - 0.02 * j as Real) * p[j])
+                            .sum::<Real>()
+                })
             })
             .collect();
         for avx2 in [false, crate::solver::stress::has_avx2()] {
@@ -376,53 +410,88 @@ mod tests {
     }
 
     #[test]
-    fn a_saw_tooth_stores_energy_and_the_force_is_its_gradient() {
-        let (_, t, mut s) = patch();
-        // The top row alternating up and down.
-        let d: Vec<[Real; 2]> = (0..63)
-            .map(|i| match i / 9 == 6 {
-                true => [0.0, if i % 2 == 0 { 1e-5 } else { -1e-5 }],
-                false => [0.0, 0.0],
+    fn a_linear_field_and_a_rigid_motion_cost_nothing() {
+        linear_fields_cost_nothing::<2, 4>([9, 7]);
+    }
+
+    #[test]
+    fn a_linear_field_costs_nothing_in_three_dimensions() {
+        linear_fields_cost_nothing::<3, 8>([5, 4, 6]);
+    }
+
+    /// A scattered field and a saw-tooth of the top layer (particles alternating up and
+    /// down) on an unequal lattice: the stage's energy is the definition's, and its force
+    /// the definition's gradient (central differences); the saw-tooth stores energy; the
+    /// AVX2 build gives the same bits.
+    fn the_stiffness_is_the_energys_hessian<const D: usize, const K: usize>(
+        n: [usize; D],
+        probe: [usize; 3],
+    ) {
+        let h: [Real; D] = std::array::from_fn(|k| 1e-3 * (1.0 + 0.3 * k as Real));
+        let (_, table, weights, t, mut s) = patch::<D, K>(n, h);
+        let np: usize = n.iter().product();
+        let top = np - np / n[D - 1];
+        let scattered: Vec<[Real; D]> = (0..np as u64)
+            .map(|i| {
+                std::array::from_fn(|c| {
+                    ((i * 2654435761 + 40503 * c as u64) % 1000) as Real * 1e-8 - 5e-6
+                })
+            })
+            .collect();
+        let saw: Vec<[Real; D]> = (0..np)
+            .map(|i| {
+                let mut di = [0.0; D];
+                if i >= top {
+                    di[D - 1] = if i % 2 == 0 { 1e-5 } else { -1e-5 };
+                }
+                di
             })
             .collect();
         let team = Team::default();
-        let w = stage(&team, &t, &mut s, &d, false);
-        assert!(w > 0.0);
-        let force = s.force.clone();
-        // W is quadratic in d: W(d) = f . d / 2, and each force component is the central
-        // difference of W.
-        let work: Real = force
-            .iter()
-            .zip(&d)
-            .map(|(f, d)| f[0] * d[0] + f[1] * d[1])
-            .sum();
-        assert!((0.5 * work - w).abs() < 1e-9 * w, "{w} vs {}", 0.5 * work);
-        let h = 1e-9;
-        for i in [58, 60, 31] {
-            for c in 0..2 {
-                let (mut up, mut down) = (d.clone(), d.clone());
-                up[i][c] += h;
-                down[i][c] -= h;
-                let fd = (stage(&team, &t, &mut s, &up, false)
-                    - stage(&team, &t, &mut s, &down, false))
-                    / (2.0 * h);
-                let tol = 1e-6
-                    * force
-                        .iter()
-                        .flatten()
-                        .fold(0.0, |m: Real, x| m.max(x.abs()));
-                assert!(
-                    (fd - force[i][c]).abs() < tol,
-                    "particle {i}.{c}: {fd} vs {}",
-                    force[i][c]
-                );
+        for d in [scattered, saw] {
+            let w = stage(&team, &t, &mut s, &d, false);
+            let reference = energy_by_definition::<D, K>(&table, &weights, &d);
+            assert!(w > 0.0);
+            assert!(
+                (w - reference).abs() < 1e-10 * reference,
+                "{w} vs {reference}"
+            );
+            let force = s.force.clone();
+            let largest = force
+                .iter()
+                .flatten()
+                .fold(0.0, |m: Real, x| m.max(x.abs()));
+            let step = 1e-9;
+            for i in probe {
+                for c in 0..D {
+                    let (mut up, mut down) = (d.clone(), d.clone());
+                    up[i][c] += step;
+                    down[i][c] -= step;
+                    let fd = (energy_by_definition::<D, K>(&table, &weights, &up)
+                        - energy_by_definition::<D, K>(&table, &weights, &down))
+                        / (2.0 * step);
+                    assert!(
+                        (fd - force[i][c]).abs() < 1e-6 * largest,
+                        "particle {i}.{c}: {fd} vs {}",
+                        force[i][c]
+                    );
+                }
+            }
+            if crate::solver::stress::has_avx2() {
+                let w2 = stage(&team, &t, &mut s, &d, true);
+                assert_eq!(w.to_bits(), w2.to_bits());
+                assert_eq!(force, s.force);
             }
         }
-        // The AVX2 build gives the same bits.
-        if crate::solver::stress::has_avx2() {
-            let w2 = stage(&team, &t, &mut s, &d, true);
-            assert_eq!(w.to_bits(), w2.to_bits());
-            assert_eq!(force, s.force);
-        }
+    }
+
+    #[test]
+    fn the_plane_stiffness_is_the_energys_hessian() {
+        the_stiffness_is_the_energys_hessian::<2, 4>([9, 7], [58, 60, 31]);
+    }
+
+    #[test]
+    fn the_solid_stiffness_is_the_energys_hessian() {
+        the_stiffness_is_the_energys_hessian::<3, 8>([5, 4, 6], [100, 117, 47]);
     }
 }

@@ -22,7 +22,7 @@ use super::workspace::Workspace;
 use crate::constraints::Constraints;
 use crate::contact::symmetry;
 use crate::error::{Error, Result};
-use crate::integration::{point_shapes, quadrant_shapes, PointSet};
+use crate::integration::{orthant_shapes, point_shapes, PointSet};
 use crate::material::{HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::{Lattice, ShapeTable, Site};
@@ -72,11 +72,11 @@ impl Simulation {
         let scatter = Scatter::new(&pt, np, chunk, MAX_GROUP);
         let stabilization = match scene.discretization.scni_stabilization {
             Some(c) if c > 0.0 && scene.discretization.integration == IntegrationRule::Scni => {
-                let (quadrants, table) = quadrant_shapes(&lattice)?;
+                let (quadrants, table) = orthant_shapes::<2, 4>(&lattice)?;
                 let (weights, _) = point_weights(&quadrants, scene);
                 let m = &scene.material;
                 let mu = m.youngs_modulus_pa / (2.0 * (1.0 + m.poisson_ratio));
-                Some(Tables::new(c, mu, &table, &weights, np))
+                Some(Tables::new::<4>(c, mu, &table, &weights, np))
             }
             _ => None,
         };
@@ -173,7 +173,7 @@ impl Simulation {
             buf: disc.scatter.buffers(),
             f_int: vec![[0.0; 2]; np],
             v_prev: v.clone(),
-            stabilization: disc.stabilization.as_ref().map(|t| Forces::new(t, np)),
+            stabilization: disc.stabilization.as_ref().map(|_| Forces::new(np)),
             contact,
             team: Team::default(),
             simd: true,

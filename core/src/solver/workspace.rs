@@ -22,7 +22,7 @@ pub(super) struct Workspace {
     pub v_prev: Vec<[Real; 2]>,
     /// The stabilization's quadrant stresses and force, when the scene stabilizes nodal
     /// integration (`nodal_stabilization.rs`).
-    pub stabilization: Option<Forces>,
+    pub stabilization: Option<Forces<2>>,
     /// The contact stage: contact forces, its candidates and bins, and what it carries
     /// between steps.
     pub contact: Contact,

@@ -30,8 +30,12 @@
 //! particles) and what the dies feel (`die_contact.rs`: each tool's contact area on the
 //! surface patches, its share of the surface, the pressure over an STL die's triangles or
 //! a plane's contact patch) are read from the state. Self-contact and its laps are
-//! `self_contact.rs` ([`crate::contact::self_contact_3d`] over the cells' outer faces). Not
-//! in 3D yet (refused by the scene's validation): SCNI's stabilization. The tools'
+//! `self_contact.rs` ([`crate::contact::self_contact_3d`] over the cells' outer faces). SCNI's
+//! stabilization (`discretization.scni_stabilization`) is 2D's
+//! ([`super::nodal_stabilization`]) over the octants of the nodal domains: the box's cut
+//! through their centroids ([`crate::integration::orthant_shapes`]), the cylinder's the
+//! cells' octants they are made of ([`crate::cylinder_grid::CylinderGrid::octant_domains`]).
+//! The tools'
 //! convex edges and vertices meet the surface between the particles in the contact
 //! stage's second pass (`ridges.rs`), opt-in per die (`ridges = true`).
 
@@ -57,6 +61,7 @@ use super::fields::{smoothed, Smoothing};
 use super::heat::Heat;
 use super::heat_readings;
 use super::layout::Scatter;
+use super::nodal_stabilization::{self, Forces, Tables};
 use super::point_outputs::PointOut;
 use super::quasi_static;
 use super::simulation::{stepping_loop, Ran, StageTimes, Stepping};
@@ -116,6 +121,9 @@ pub(super) struct SolidDisc {
     reference_jacobian: Vec<Real>,
     /// The point shape functions in the stress stage's layout.
     scatter: Scatter<3>,
+    /// The octant gradients of the stabilized nodal integration, when the scene asks for
+    /// it ([`super::nodal_stabilization`]).
+    stabilization: Option<Tables<3>>,
     /// `N_I(X_J)` in row `J` (no gradients).
     nodal: ShapeTable<3>,
     /// Mean number of particles whose shape functions reach a point (-): what a point's
@@ -244,6 +252,8 @@ pub(super) struct SolidWorkspace {
     v_prev: Vec<[Real; 3]>,
     contact: ToolContact,
     self_contact: SolidSelfContact,
+    /// The stabilization's octant stresses and force ([`super::nodal_stabilization`]).
+    stabilization: Option<Forces<3>>,
     team: Team,
 }
 
@@ -319,7 +329,11 @@ fn stress_stage(
     st.max_stretch = sums.max_stretch;
     st.energy.thermoelastic += sums.thermoelastic;
     st.energy.thermoelastic_abs += sums.thermoelastic.abs();
-    Ok((sums.elastic, sums.plastic))
+    let stabilization = match (&disc.stabilization, &mut ws.stabilization) {
+        (Some(t), Some(s)) => nodal_stabilization::stage(&ws.team, t, s, &st.d, input.avx2),
+        _ => 0.0,
+    };
+    Ok((sums.elastic + stabilization, sums.plastic))
 }
 
 /// Stage 3: the force gather into `ws.f_int` (N), fused with the predictor on `st.v` when
@@ -341,7 +355,7 @@ fn gather(
         &ws.team,
         &disc.scatter,
         &ws.buf,
-        None,
+        ws.stabilization.as_ref().map(|s| &s.force[..]),
         &mut ws.f_int,
         predictor,
     );
@@ -639,6 +653,8 @@ impl SolidSimulation {
             + st.fill.len() * size_of::<Option<Filled>>()
             + st.self_touching.len() * size_of::<bool>()
             + d.cells.len() * size_of::<[u32; 8]>()
+            + d.stabilization.as_ref().map_or(0, |t| t.memory_bytes())
+            + ws.stabilization.as_ref().map_or(0, |s| s.memory_bytes())
             + heat
     }
     /// Mean number of particles whose shape functions reach an integration point (-).

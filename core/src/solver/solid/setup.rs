@@ -8,9 +8,9 @@ use super::fill;
 use super::heat::{update_eigenvalue, HeatSurface};
 use super::self_contact::SolidSelfContact;
 use super::{SolidDisc, SolidSimulation, SolidState, SolidWorkspace};
-use crate::cylinder_grid::{CylinderGrid, Sector};
+use crate::cylinder_grid::{CylinderGrid, Sector, MAX_OCTANTS};
 use crate::error::{Error, Result};
-use crate::integration::{point_shapes, smoothed};
+use crate::integration::{orthant_shapes, point_shapes, smoothed};
 use crate::material::{HenckyJ2, PointState3};
 use crate::math::Real;
 use crate::rk_shape::{for_each_index, KernelCloud, Lattice, ShapeTable, Site};
@@ -24,6 +24,7 @@ use crate::solver::fields::Smoothing;
 use crate::solver::heat::Heat;
 use crate::solver::layout::{Scatter, MAX_GROUP_3D};
 use crate::solver::mass_scaling::{scaled, stiffness_bounds, Plan};
+use crate::solver::nodal_stabilization::{Forces, Tables};
 use crate::solver::point_outputs::PointOut;
 use crate::solver::setup::{check_fixed_step, lumped_masses};
 use crate::solver::simulation::StageTimes;
@@ -49,7 +50,49 @@ struct Particles {
     layer_points: usize,
     /// Each particle's cell extents (m): its supports over `discretization.support`.
     extents: Vec<[Real; 3]>,
+    /// With SCNI stabilized (`discretization.scni_stabilization`): the octants' smoothed
+    /// gradients (rows `8 L + k`) and volumes (m^3).
+    octants: Option<(ShapeTable<3>, Vec<Real>)>,
 }
+
+/// Does the scene stabilize nodal integration (`discretization.scni_stabilization` above 0
+/// with `integration = "scni"`)?
+fn stabilized(scene: &SolidScene) -> bool {
+    scene.discretization.integration == IntegrationRule::Scni
+        && scene
+            .discretization
+            .scni_stabilization
+            .is_some_and(|c| c > 0.0)
+}
+
+/// The octants of the O-grid's nodal domains ([`CylinderGrid::octant_domains`]) with
+/// their smoothed gradients `B^k_I = (1 / V_k) sum_g N_I(x_g) n w_g` (1/m), built
+/// [`OCTANT_BLOCK`] domains at a time so that the boundary points' shape functions are
+/// never all held at once; [`MAX_OCTANTS`] rows per domain.
+fn cylinder_octants(
+    grid: &CylinderGrid,
+    cloud: &KernelCloud<3>,
+) -> Result<(ShapeTable<3>, Vec<Real>)> {
+    let own = grid.particle_octants();
+    let mut table = ShapeTable {
+        offsets: vec![0],
+        ..Default::default()
+    };
+    let mut volumes = Vec::with_capacity(MAX_OCTANTS * own.len());
+    for (b, block) in own.chunks(OCTANT_BLOCK).enumerate() {
+        let o = grid.octant_domains(block);
+        let first = b * OCTANT_BLOCK;
+        let on_faces = cloud.shape_table(&o.sites, &|q| {
+            format!("boundary point {q} of the octants of nodal domains {first}..")
+        })?;
+        table.append(smoothed(None, &on_faces, &o.boundaries, &o.volumes));
+        volumes.extend(o.volumes);
+    }
+    Ok((table, volumes))
+}
+
+/// Nodal domains whose octants' boundary points [`cylinder_octants`] evaluates at once.
+const OCTANT_BLOCK: usize = 64;
 
 /// The cylinder's O-grid ([`CylinderGrid`]) with each particle's own supports, `support`
 /// times its cells' extent.
@@ -102,7 +145,12 @@ fn cylinder(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
     let mut nodal = cloud.shape_table(&grid.positions, &|j| format!("particle {j}"))?;
     nodal.drop_gradients();
     let h_min = smallest_edge(&grid.positions, &grid.cells);
+    let octants = match stabilized(scene) {
+        true => Some(cylinder_octants(&grid, &cloud)?),
+        false => None,
+    };
     Ok(Particles {
+        octants,
         extents: grid.supports(1.0),
         layer_points,
         positions: grid.positions.clone(),
@@ -141,6 +189,13 @@ fn lattice(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
     });
     let mut nodal = lattice.shape_table(&sites, &|j| format!("particle {j}"))?;
     nodal.drop_gradients();
+    let octants = match stabilized(scene) {
+        true => {
+            let (octants, table) = orthant_shapes::<3, MAX_OCTANTS>(&lattice)?;
+            Some((table, octants.areas))
+        }
+        false => None,
+    };
     let id = |i: [usize; 3]| (i[0] + particles[0] * (i[1] + particles[1] * i[2])) as u32;
     let mut cells = Vec::new();
     for_each_index([0; 3], particles.map(|n| n - 1), |[i, j, k]| {
@@ -175,6 +230,7 @@ fn lattice(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
         h_min: h[0].min(h[1]).min(h[2]),
         layer_points,
         extents: vec![h; particles.iter().product()],
+        octants,
     })
 }
 
@@ -240,6 +296,12 @@ impl SolidSimulation {
         );
         material.thermoelastic = scene.thermal.as_ref().and_then(|t| t.thermoelastic());
         let wave_speed = material.wave_speed(rho);
+        let stabilization = p.octants.as_ref().map(|(table, volumes)| {
+            let m = &scene.material;
+            let mu = m.youngs_modulus_pa / (2.0 * (1.0 + m.poisson_ratio));
+            let c = scene.discretization.scni_stabilization.unwrap_or(0.0);
+            Tables::new::<MAX_OCTANTS>(c, mu, table, volumes, np)
+        });
         let depth = SEARCH_DEPTH_SPACINGS * p.h_min;
         let mut tools = Vec::with_capacity(scene.tools.len() + p.planes.len());
         for (i, t) in scene.tools.iter().enumerate() {
@@ -309,6 +371,7 @@ impl SolidSimulation {
             inv_radius: vec![0.0; npts],
             reference_jacobian: vec![1.0; npts],
             scatter,
+            stabilization,
             nodal: p.nodal,
             neighbours: p.pt.entries() as Real / npts as Real,
             sum_abs,
@@ -341,6 +404,7 @@ impl SolidSimulation {
             v_prev: v.clone(),
             contact: ToolContact::new(np, ntools),
             self_contact,
+            stabilization: disc.stabilization.as_ref().map(|_| Forces::new(np)),
             team: Team::default(),
         };
         let mut st = SolidState {
