@@ -252,12 +252,21 @@ fn rows<const D: usize>(
     for (i, f) in range.zip(fs.iter_mut()) {
         let entries = t.rows[i] as usize..t.rows[i + 1] as usize;
         let mut sums = [[0.0; D]; SUMS];
-        let (columns, stiffness) = (&t.columns[entries.clone()], &t.stiffness[entries]);
-        for (e, (&j, &k)) in columns.iter().zip(stiffness).enumerate() {
-            let (sum, dj) = (&mut sums[e % SUMS], d[j as usize]);
-            for (s, x) in sum.iter_mut().zip(dj) {
+        let add = |sum: &mut [Real; D], j: u32, k: Real| {
+            for (s, x) in sum.iter_mut().zip(d[j as usize]) {
                 *s = k.mul_add(x, *s);
             }
+        };
+        let (columns, stiffness) = (&t.columns[entries.clone()], &t.stiffness[entries]);
+        let (full, rest) = (columns.chunks_exact(SUMS), stiffness.chunks_exact(SUMS));
+        let (tail_columns, tail_stiffness) = (full.remainder(), rest.remainder());
+        for (js, ks) in full.zip(rest) {
+            for ((sum, &j), &k) in sums.iter_mut().zip(js).zip(ks) {
+                add(sum, j, k);
+            }
+        }
+        for ((sum, &j), &k) in sums.iter_mut().zip(tail_columns).zip(tail_stiffness) {
+            add(sum, j, k);
         }
         *f = std::array::from_fn(|c| (sums[0][c] + sums[1][c]) + (sums[2][c] + sums[3][c]));
         for (fc, dc) in f.iter().zip(&d[i]) {
