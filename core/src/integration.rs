@@ -97,10 +97,10 @@ pub const fn orthant_boundary_points(d: usize) -> usize {
     2 * d * (1 << (d - 1))
 }
 
-/// Nodal domains whose orthants' boundary points are evaluated at once by
-/// [`orthant_shapes`]: the points' shape functions of a block are freed before the next
-/// (in 3D a domain has 192 of them, each with some 60-90 particles).
-const ORTHANT_BLOCK: usize = 64;
+/// Nodal domains whose boundary points are evaluated at once ([`smoothed_blocks`]): the
+/// points' shape functions of a block are freed before the next (in 3D a domain has 54 of
+/// them, its octants 192, each with some 60-90 particles).
+const DOMAIN_BLOCK: usize = 64;
 
 /// A face of a box: one corner, the edge vectors from it that span the face (`D - 1` of
 /// them) and the outward unit normal; positions relative to the box's particle (m).
@@ -203,26 +203,32 @@ fn domain_bounds<const D: usize>(lattice: &Lattice<D>) -> Vec<([usize; D], [Real
     out
 }
 
-/// The nodal domains of SCNI: one point per particle at its domain's centroid with the
-/// domain's measure (area in 2D, volume in 3D), and for each domain the 3-point Gauss
-/// rule (tensor product 3x3 on a face in 3D) on each edge or face as boundary sites with
-/// their outward normal times the quadrature weight (m^(D-1)); [`SCNI_EDGE_POINTS`] per
-/// domain in 2D. Everything is formed relative to the domain's particle, so interior
-/// domains get the same bits.
-pub fn nodal_domains<const D: usize>(
-    lattice: &Lattice<D>,
-) -> (PointSet<D>, Vec<Site<D>>, Vec<[Real; D]>) {
+/// The edge rule of SCNI's nodal domains: 3-point Gauss `(position along the edge,
+/// weight)` on `[0, 1]` (tensor product 3x3 on a face in 3D).
+fn scni_rule() -> [(Real, Real); 3] {
     let g = (0.6_f64).sqrt() / 2.0;
-    let gauss = [
+    [
         (0.5 - g, 5.0 / 18.0),
         (0.5, 8.0 / 18.0),
         (0.5 + g, 5.0 / 18.0),
-    ];
+    ]
+}
+
+/// The nodal domains of SCNI: one point per particle at its domain's centroid with the
+/// domain's measure (area in 2D, volume in 3D), and for each domain [`scni_rule`] on each
+/// edge or face as boundary sites with their outward normal times the quadrature weight
+/// (m^(D-1)); [`SCNI_EDGE_POINTS`] per domain in 2D. Everything is formed relative to the
+/// domain's particle, so interior domains get the same bits. ([`point_shapes`] forms them a
+/// block at a time.)
+#[cfg(test)]
+fn nodal_domains<const D: usize>(
+    lattice: &Lattice<D>,
+) -> (PointSet<D>, Vec<Site<D>>, Vec<[Real; D]>) {
     smoothing_cells(
         lattice,
         &domain_bounds(lattice),
         |lo, hi| [(lo, hi)],
-        &gauss,
+        &scni_rule(),
     )
 }
 
@@ -319,16 +325,7 @@ pub fn point_shapes<const D: usize>(
 ) -> Result<(PointSet<D>, ShapeTable<D>)> {
     Ok(match rule {
         IntegrationRule::Scni => {
-            let (points, edges, nw) = nodal_domains(lattice);
-            let per_domain = edges.len() / points.sites.len();
-            let at_centre =
-                lattice.shape_table(&points.sites, &|p| format!("nodal integration point {p}"))?;
-            let on_edges = lattice.shape_table(&edges, &|q| {
-                format!("boundary point {q} of nodal domain {}", q / per_domain)
-            })?;
-            let boundaries = DomainBoundaries::consecutive(nw, points.areas.len());
-            let pt = smoothed(Some(&at_centre), &on_edges, &boundaries, &points.areas);
-            (points, pt)
+            smoothed_blocks(lattice, |lo, hi| [(lo, hi)], &scni_rule(), true, "")?
         }
         rule => {
             let points = grid_points(rule, lattice);
@@ -353,30 +350,60 @@ pub fn orthant_shapes<const D: usize, const K: usize>(
     let g = 0.5 / 3.0_f64.sqrt();
     let gauss = [(0.5 - g, 0.5), (0.5 + g, 0.5)];
     let name = if D == 2 { "quadrant" } else { "octant" };
-    let per_orthant = orthant_boundary_points(D);
-    let domains = domain_bounds(lattice);
+    smoothed_blocks(lattice, orthants::<D, K>, &gauss, false, name)
+}
+
+/// The smoothing cells `split` cuts the lattice's nodal domains into ([`smoothing_cells`]
+/// with the edge rule `rule`) as points, and their smoothed shape table ([`smoothed`]:
+/// `N_I` at each cell's centroid when `centre`, and the smoothed gradients), built
+/// [`DOMAIN_BLOCK`] domains at a time so that the boundary points' shape functions are
+/// never all held at once; each row depends on its own points only, so the table is the
+/// one an evaluation of all at once gives. `name` names a cell in errors when a domain has
+/// several.
+fn smoothed_blocks<const D: usize, const K: usize>(
+    lattice: &Lattice<D>,
+    split: impl Fn([Real; D], [Real; D]) -> [([Real; D], [Real; D]); K] + Copy,
+    rule: &[(Real, Real)],
+    centre: bool,
+    name: &str,
+) -> Result<(PointSet<D>, ShapeTable<D>)> {
+    let per_cell = 2 * D * rule.len().pow(D as u32 - 1);
     let mut points = PointSet::default();
     let mut table = ShapeTable {
         offsets: vec![0],
         ..Default::default()
     };
-    for (b, block) in domains.chunks(ORTHANT_BLOCK).enumerate() {
-        let (orthants, edges, nw) = smoothing_cells(lattice, block, orthants::<D, K>, &gauss);
-        let first = b * ORTHANT_BLOCK * K * per_orthant;
+    for (b, block) in domain_bounds(lattice).chunks(DOMAIN_BLOCK).enumerate() {
+        let (cells, edges, nw) = smoothing_cells(lattice, block, split, rule);
+        let (first_cell, first_edge) = (b * DOMAIN_BLOCK * K, b * DOMAIN_BLOCK * K * per_cell);
+        let at_centre = match centre {
+            true => Some(lattice.shape_table(&cells.sites, &|p| {
+                format!("nodal integration point {}", first_cell + p)
+            })?),
+            false => None,
+        };
         let on_edges = lattice.shape_table(&edges, &|q| {
-            let q = first + q;
-            format!(
-                "boundary point {q} of {name} {} of nodal domain {}",
-                q / per_orthant % K,
-                q / (K * per_orthant)
-            )
+            let q = first_edge + q;
+            let domain = q / (K * per_cell);
+            match K {
+                1 => format!("boundary point {q} of nodal domain {domain}"),
+                _ => format!(
+                    "boundary point {q} of {name} {} of nodal domain {domain}",
+                    q / per_cell % K
+                ),
+            }
         })?;
-        let boundaries = DomainBoundaries::consecutive(nw, orthants.areas.len());
-        table.append(smoothed(None, &on_edges, &boundaries, &orthants.areas));
-        points.sites.extend(orthants.sites);
-        points.positions.extend(orthants.positions);
-        points.areas.extend(orthants.areas);
-        points.cells.extend(orthants.cells);
+        let boundaries = DomainBoundaries::consecutive(nw, cells.areas.len());
+        table.append(smoothed(
+            at_centre.as_ref(),
+            &on_edges,
+            &boundaries,
+            &cells.areas,
+        ));
+        points.sites.extend(cells.sites);
+        points.positions.extend(cells.positions);
+        points.areas.extend(cells.areas);
+        points.cells.extend(cells.cells);
     }
     Ok((points, table))
 }

@@ -110,9 +110,9 @@ impl<const D: usize> Tables<D> {
         particles: usize,
     ) -> Tables<D> {
         let domains = orthants.rows() / K;
-        // Each domain's particles (ascending) with `w_k C^k_I` and `C^k_I`.
+        // Each domain's particles (ascending) with `C^k_I`.
         let mut by_domain = vec![0u32];
-        let (mut members, mut weighted, mut centred) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut members, mut centred) = (Vec::new(), Vec::new());
         let mut row: std::collections::BTreeMap<u32, [[Real; D]; K]> = Default::default();
         for l in 0..domains {
             row.clear();
@@ -132,9 +132,6 @@ impl<const D: usize> Tables<D> {
                 let centred_i: [[Real; D]; K] =
                     std::array::from_fn(|k| std::array::from_fn(|j| b[k][j] - mean[j]));
                 members.push(i);
-                weighted.push(std::array::from_fn::<[Real; D], K, _>(|k| {
-                    centred_i[k].map(|x| c * mu * w[k] * x)
-                }));
                 centred.push(centred_i);
             }
             by_domain.push(members.len() as u32);
@@ -156,7 +153,9 @@ impl<const D: usize> Tables<D> {
                 let mut touched = Vec::new();
                 for i in part(b, PARTICLES, particles) {
                     for &(l, at) in &reach[i] {
-                        let ci = &weighted[at];
+                        let w = &weights[K * l..K * (l + 1)];
+                        let ci: [[Real; D]; K] =
+                            std::array::from_fn(|k| centred[at][k].map(|x| c * mu * w[k] * x));
                         for e in by_domain[l] as usize..by_domain[l + 1] as usize {
                             // sum_k sum_j in four running sums (the K D products come in
                             // fours: D K = 8 in 2D, 24 in 3D).

@@ -278,7 +278,7 @@ impl SolidSimulation {
             .shape()
             .ok_or_else(|| Error::Request("workpiece: the shape's keys are missing".into()))?;
         let t_shapes = Instant::now();
-        let p = match shape {
+        let mut p = match shape {
             SolidShape::Cylinder { .. } => cylinder(&shape, scene)?,
             SolidShape::Box { .. } => lattice(&shape, scene)?,
         };
@@ -296,11 +296,12 @@ impl SolidSimulation {
         );
         material.thermoelastic = scene.thermal.as_ref().and_then(|t| t.thermoelastic());
         let wave_speed = material.wave_speed(rho);
-        let stabilization = p.octants.as_ref().map(|(table, volumes)| {
+        // The octants' table is freed once the stiffness is assembled.
+        let stabilization = p.octants.take().map(|(table, volumes)| {
             let m = &scene.material;
             let mu = m.youngs_modulus_pa / (2.0 * (1.0 + m.poisson_ratio));
             let c = scene.discretization.scni_stabilization.unwrap_or(0.0);
-            Tables::new::<MAX_OCTANTS>(c, mu, table, volumes, np)
+            Tables::new::<MAX_OCTANTS>(c, mu, &table, &volumes, np)
         });
         let depth = SEARCH_DEPTH_SPACINGS * p.h_min;
         let mut tools = Vec::with_capacity(scene.tools.len() + p.planes.len());
