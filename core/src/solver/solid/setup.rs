@@ -8,9 +8,9 @@ use super::fill;
 use super::heat::{update_eigenvalue, HeatSurface};
 use super::self_contact::SolidSelfContact;
 use super::{SolidDisc, SolidSimulation, SolidState, SolidWorkspace};
-use crate::cylinder_grid::{CylinderGrid, Sector, MAX_OCTANTS};
+use crate::cylinder_grid::{CylinderGrid, NodalDomains, Sector, MAX_OCTANTS};
 use crate::error::{Error, Result};
-use crate::integration::{orthant_shapes, point_shapes, smoothed};
+use crate::integration::{orthant_shapes, point_shapes, smoothed, DomainBoundaries};
 use crate::material::{HenckyJ2, PointState3};
 use crate::math::Real;
 use crate::rk_shape::{for_each_index, KernelCloud, Lattice, ShapeTable, Site};
@@ -94,6 +94,67 @@ fn cylinder_octants(
 /// Nodal domains whose octants' boundary points [`cylinder_octants`] evaluates at once.
 const OCTANT_BLOCK: usize = 64;
 
+/// Nodal domains whose boundary points [`nodal_table`] evaluates at once: a point on a face
+/// two blocks share is evaluated in both, so larger than [`OCTANT_BLOCK`] (64 gave the
+/// quarter Taylor bar a quarter more work than one block).
+const DOMAIN_BLOCK: usize = 256;
+
+/// SCNI's smoothed shape table on the O-grid's nodal domains ([`CylinderGrid::nodal_domains`]:
+/// `N_I` at each centroid and the smoothed gradients), built [`DOMAIN_BLOCK`] domains at a
+/// time: each block's centroids and the boundary points its terms name (a point two blocks
+/// share is evaluated in each) are evaluated, smoothed and freed before the next. Each
+/// point's shape functions are its own, so the table is the one an evaluation of all at
+/// once gives.
+fn nodal_table(domains: &NodalDomains, cloud: &KernelCloud<3>) -> Result<ShapeTable<3>> {
+    let b = &domains.boundaries;
+    let n = domains.volumes.len();
+    let mut table = ShapeTable {
+        offsets: vec![0],
+        ..Default::default()
+    };
+    // The block's row of each boundary point it names (u32::MAX: none yet).
+    let mut local = vec![u32::MAX; domains.sites.len()];
+    for start in (0..n).step_by(DOMAIN_BLOCK) {
+        let block = start..(start + DOMAIN_BLOCK).min(n);
+        let terms = b.offsets[block.start]..b.offsets[block.end];
+        let mut rows = Vec::new();
+        for &q in &b.rows[terms.clone()] {
+            if local[q as usize] == u32::MAX {
+                local[q as usize] = rows.len() as u32;
+                rows.push(q);
+            }
+        }
+        let sites: Vec<[Real; 3]> = rows.iter().map(|&q| domains.sites[q as usize]).collect();
+        let on_faces = cloud.shape_table(&sites, &|r| {
+            format!("boundary point {} of the nodal domains", rows[r])
+        })?;
+        let at_centre = cloud.shape_table(&domains.centroids[block.clone()], &|p| {
+            format!("nodal integration point {}", block.start + p)
+        })?;
+        let boundaries = DomainBoundaries {
+            offsets: b.offsets[block.start..=block.end]
+                .iter()
+                .map(|o| o - terms.start)
+                .collect(),
+            rows: b.rows[terms.clone()]
+                .iter()
+                .map(|&q| local[q as usize])
+                .collect(),
+            nw: b.nw[terms].to_vec(),
+        };
+        table.append(smoothed(
+            Some(&at_centre),
+            &on_faces,
+            &boundaries,
+            &domains.volumes[block],
+        ));
+        for &q in &rows {
+            local[q as usize] = u32::MAX;
+        }
+    }
+    Ok(table)
+}
+
 /// The cylinder's O-grid ([`CylinderGrid`]) with each particle's own supports, `support`
 /// times its cells' extent.
 fn cylinder(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
@@ -119,18 +180,7 @@ fn cylinder(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
     let cloud = KernelCloud::with_supports(grid.positions.clone(), grid.volumes.clone(), supports);
     let (points, weights, pt, layer_points) = if rule == IntegrationRule::Scni {
         let domains = grid.nodal_domains();
-        let at_centre = cloud.shape_table(&domains.centroids, &|p| {
-            format!("nodal integration point {p}")
-        })?;
-        let on_faces = cloud.shape_table(&domains.sites, &|q| {
-            format!("boundary point {q} of the nodal domains")
-        })?;
-        let pt = smoothed(
-            Some(&at_centre),
-            &on_faces,
-            &domains.boundaries,
-            &domains.volumes,
-        );
+        let pt = nodal_table(&domains, &cloud)?;
         let per_layer = domains.centroids.len() / (cells[2] + 1);
         (domains.centroids, domains.volumes, pt, per_layer)
     } else {
