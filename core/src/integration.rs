@@ -90,13 +90,6 @@ pub fn rule_points<const D: usize>(rule: IntegrationRule) -> Vec<([Real; D], Rea
 /// 3D, 3x3 Gauss on each of 6 faces: 54).
 pub const SCNI_EDGE_POINTS: usize = 12;
 
-/// Boundary quadrature points per orthant of a nodal domain in `d` dimensions (the
-/// stabilization's smoothed gradients, [`orthant_shapes`]): 2-point Gauss on each of a
-/// quadrant's 4 edges in 2D (8), 2 x 2 on each of an octant's 6 faces in 3D (24).
-pub const fn orthant_boundary_points(d: usize) -> usize {
-    2 * d * (1 << (d - 1))
-}
-
 /// Nodal domains whose boundary points are evaluated at once ([`smoothed_blocks`]): the
 /// points' shape functions of a block are freed before the next (in 3D a domain has 54 of
 /// them, its octants 192, each with some 60-90 particles).
@@ -340,10 +333,9 @@ pub fn point_shapes<const D: usize>(
 /// The `K = 2^D` orthants of every nodal domain of the lattice ([`orthants`]), for the
 /// stabilization of nodal integration: the orthants as points (centroid, measure; cell =
 /// the domain's particle), `K` per domain in particle order, and their smoothed gradients
-/// `B^k_I = (1 / A_k) sum_g N_I(x_g) n w_g` (1/m; no values `N_I`) from
-/// [`orthant_boundary_points`] Gauss points on each orthant's edges or faces. The boundary
-/// points are evaluated [`ORTHANT_BLOCK`] domains at a time; each row depends on its own
-/// points only, so the table is the one an evaluation of all at once gives.
+/// `B^k_I = (1 / A_k) sum_g N_I(x_g) n w_g` (1/m; no values `N_I`) from 2-point Gauss on
+/// each orthant's edges (2 x 2 on each face in 3D), a block of domains at a time
+/// ([`smoothed_blocks`]).
 pub fn orthant_shapes<const D: usize, const K: usize>(
     lattice: &Lattice<D>,
 ) -> Result<(PointSet<D>, ShapeTable<D>)> {
