@@ -20,11 +20,14 @@ impl History {
         History::of(columns(sim.scene()))
     }
 
-    /// Record the current state. The penetration is measured over every particle against
+    /// Record the current state. Every particle's isolation is measured (a particle that
+    /// left the body is kept for the summary's warning, `rkforge_core::solver::detachment`).
+    /// The penetration is measured over every particle against
     /// every tool and symmetry plane, and the boundary against itself (and kept as the run's
     /// largest); a particle deeper than the scene's bound is returned as an error, after the
     /// row is recorded (with the run's largest depths).
     pub fn record(&mut self, sim: &mut Simulation) -> Result<(), rkforge_core::Error> {
+        sim.measure_isolation();
         let measured = sim.measure_penetration();
         let depths = match &measured {
             Ok(d) => Penetration::of(d),
@@ -41,11 +44,13 @@ impl History<SolidSimulation> {
         History::of(solid_columns(sim.scene()))
     }
 
-    /// Record the current state of a 3D run, the penetration measured over every particle
+    /// Record the current state of a 3D run, every particle's isolation measured (as in 2D)
+    /// and the penetration measured over every particle
     /// against every tool and symmetry plane ([`SolidSimulation::measure_penetration`]); a
     /// particle deeper than the scene's bound is returned as an error, after the row is
     /// recorded (with the run's largest depths).
     pub fn record_solid(&mut self, sim: &mut SolidSimulation) -> Result<(), rkforge_core::Error> {
+        sim.measure_isolation();
         let measured = sim.measure_penetration();
         let depths = match &measured {
             Ok((tools, planes)) => [*tools, *planes],

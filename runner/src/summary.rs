@@ -65,9 +65,14 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "critical_initial_s": sim.critical_dt0(),
             "stable_estimate_now_s": sim.stable_dt(),
         },
-        "workpiece": { "x_range_m": x.x, "y_range_m": x.y },
+        "workpiece": {
+            "x_range_m": x.x,
+            "y_range_m": x.y,
+            "max_isolation_rel": sim.state().isolation.max,
+            "detached": sim.state().isolation.detached,
+        },
         "mass_scaling": sim.mass_scaling(),
-        "warnings": sim.quasi_static_warning().into_iter().chain(sim.surface_warning()).collect::<Vec<_>>(),
+        "warnings": sim.quasi_static_warning().into_iter().chain(sim.surface_warning()).chain(sim.detached_warning()).collect::<Vec<_>>(),
         "tools": (0..sim.tools().len()).map(|k| tool_in(&sample, k)).collect::<Vec<_>>(),
         "contact": {
             "max_penetration_m": sim.max_penetration(),
@@ -159,11 +164,13 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
         "smallest_spacing_m": sim.h_min(),
         "critical_dt_s": sim.critical_dt0(),
         "mass_scaling": sim.mass_scaling(),
-        "warnings": sim.quasi_static_warning().into_iter().collect::<Vec<_>>(),
+        "warnings": sim.quasi_static_warning().into_iter().chain(sim.detached_warning()).collect::<Vec<_>>(),
         "workpiece": {
             "x_range_m": b.extents[0],
             "y_range_m": b.extents[1],
             "z_range_m": b.extents[2],
+            "max_isolation_rel": st.isolation.max,
+            "detached": st.isolation.detached,
         },
         "contact": {
             "max_penetration_m": st.max_penetration,

@@ -49,6 +49,7 @@
 mod conduction;
 mod contact_stage;
 mod critical_step;
+pub mod detachment;
 mod discretization;
 mod energy;
 #[cfg(test)]

@@ -6,6 +6,7 @@
 use super::conduction::update_eigenvalue;
 use super::contact_stage;
 use super::critical_step::measure_critical_step;
+use super::detachment::{nearest_in_rows, Isolation};
 use super::discretization::{Discretization, Thermal, Transfer};
 use super::energy::Energy;
 use super::heat::Heat;
@@ -143,6 +144,7 @@ impl Simulation {
                 lambda0: 0.0,
             }),
         });
+        let initial_spacing = nearest_in_rows(&nodal, &ref_pos);
         let mut disc = Discretization {
             material,
             nx,
@@ -160,6 +162,7 @@ impl Simulation {
             scatter,
             stabilization,
             nodal,
+            initial_spacing,
             boundary,
             outline,
             constraints,
@@ -197,6 +200,7 @@ impl Simulation {
             plane_held,
             self_touching,
             max_beyond_plane: 0.0,
+            isolation: Isolation::default(),
             plane_feedback_max: 0.0,
             max_inside_itself: 0.0,
             max_crossings: 0,

@@ -4,6 +4,7 @@
 //! ([`Simulation::run_toward`]).
 
 use super::contact_stage;
+use super::detachment::point_distances;
 use super::discretization::{Discretization, MassScalingReport};
 use super::energy::{Energy, StepEnergy};
 use super::point_outputs::PointOut;
@@ -18,6 +19,7 @@ use crate::laps;
 use crate::material::{HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::ShapeTable;
+use crate::scene::IntegrationRule;
 use crate::scene::Scene;
 use crate::tools::Tool;
 use std::time::{Duration, Instant};
@@ -450,7 +452,7 @@ impl Simulation {
         table(&d.nodal)
             + d.scatter.memory_bytes()
             + self.ws.buf.len() * r2
-            + np * (5 * r2 + 2 * 8)
+            + np * (5 * r2 + 3 * 8)
             + npts
                 * (r2 + 3 * 8 + std::mem::size_of::<PointState>() + std::mem::size_of::<PointOut>())
             + d.boundary.len() * 4
@@ -565,6 +567,31 @@ impl Simulation {
     /// particle, where it lies and the depth.
     pub fn measure_penetration(&mut self) -> Result<penetration::Depths> {
         penetration::measure(&self.scene, &self.disc, &self.tools, &mut self.st)
+    }
+
+    /// Every particle's isolation now (its nearest integration point over that distance at
+    /// the start, `detachment.rs`), recorded in the state: the largest (-).
+    pub fn measure_isolation(&mut self) -> Real {
+        let d = &self.disc;
+        let positions = d.positions(&self.st.d);
+        let nodal = self.scene.discretization.integration == IntegrationRule::Scni;
+        let nearest = point_distances(
+            &d.scatter,
+            &d.points.positions,
+            &self.st.d,
+            &positions,
+            nodal,
+        );
+        let (initial, time) = (&d.initial_spacing, self.st.time);
+        self.st
+            .isolation
+            .measure(&positions, &nearest, initial, time)
+    }
+
+    /// The warning of a run in which a particle left the body, naming it (`detachment.rs`).
+    pub fn detached_warning(&self) -> Option<String> {
+        let j = self.st.isolation.detached.as_ref()?.particle as usize;
+        self.st.isolation.warning(&self.disc.original[j])
     }
 
     /// Every particle against every tool at any depth and every symmetry plane, and the

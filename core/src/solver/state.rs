@@ -1,5 +1,6 @@
 //! The whole changing state of a simulation, saved and restored as one value.
 
+use super::detachment::Isolation;
 use super::energy::Energy;
 use super::heat::Heat;
 use crate::contact::Stick;
@@ -62,6 +63,10 @@ pub struct State {
     /// over the steps' checks and the samples.
     #[serde(default)]
     pub max_beyond_plane: Real,
+    /// The particles' isolation at the samples, and the first that left the body
+    /// (`detachment.rs`).
+    #[serde(default)]
+    pub isolation: Isolation,
     /// Largest collective feedback of the penalty of a tool without separation or a
     /// symmetry plane over the particles it held (-; [`crate::contact::penalty_feedback`]).
     #[serde(default)]

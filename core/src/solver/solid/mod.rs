@@ -55,6 +55,7 @@ mod setup;
 mod tests;
 mod volume;
 
+use super::detachment::{point_distances, Isolation};
 use super::discretization::{MassScalingReport, Thermal};
 use super::energy::{Energy, StepEnergy};
 use super::fields::{smoothed, Smoothing};
@@ -105,8 +106,11 @@ impl BodyReadings {
 #[derive(Debug, Clone)]
 pub(super) struct SolidDisc {
     material: HenckyJ2,
-    /// Reference particle positions `X_I` (m).
+    /// Reference particle positions `X_I` (m): the start's, or the last kernel
+    /// re-reference's.
     ref_pos: Vec<[Real; 3]>,
+    /// The particles' positions at the start (m), which a warning names them by.
+    original: Vec<[Real; 3]>,
     /// Particle volumes (m^3).
     volumes: Vec<Real>,
     /// Row-sum lumped masses `m_I` (kg) and their inverses.
@@ -133,6 +137,10 @@ pub(super) struct SolidDisc {
     sum_abs: Vec<Real>,
     /// Smallest particle spacing (m).
     h_min: Real,
+    /// Each particle's distance to the nearest integration point it reaches at the start
+    /// (m), the
+    /// scale of the isolation watch ([`crate::solver::detachment`]).
+    initial_spacing: Vec<Real>,
     /// Critical step of the undeformed discretisation (s).
     critical_dt0: Real,
     /// Hexahedral cells of 8 particles (for the frames).
@@ -227,6 +235,10 @@ pub struct SolidState {
     /// The laps (folds of the surface onto itself) found so far, in the order they formed.
     #[serde(default)]
     pub laps: Vec<SolidLap>,
+    /// The particles' isolation at the samples, and the first that left the body
+    /// ([`crate::solver::detachment`]).
+    #[serde(default)]
+    pub isolation: Isolation,
 }
 
 /// The normal contact force of one particle on one scene tool at a contact stage.
@@ -642,9 +654,9 @@ impl SolidSimulation {
         nodal
             + d.scatter.memory_bytes()
             + ws.buf.len() * r3
-            // reference positions, d, v, f_int, v_prev; volumes, masses and their
-            // inverses, the move bounds
-            + np * (5 * r3 + 4 * 8)
+            // reference and initial positions, d, v, f_int, v_prev; volumes, masses and
+            // their inverses, the move bounds, the initial spacings
+            + np * (6 * r3 + 5 * 8)
             // positions, weights, 1/R, J_ref; histories and outputs
             + npts * (r3 + 3 * 8 + size_of::<PointState3>() + size_of::<PointOut>())
             + st.held.len() * size_of::<bool>()
@@ -935,6 +947,31 @@ impl SolidSimulation {
     /// particle)`, depth 0 when none has.
     pub fn self_penetration_now(&self) -> (Real, usize) {
         self.ws.self_contact.passed_through(&self.positions())
+    }
+
+    /// Every particle's isolation now (its nearest integration point over that distance at
+    /// the start, [`crate::solver::detachment`]), recorded in the state: the largest (-).
+    pub fn measure_isolation(&mut self) -> Real {
+        let positions = self.positions();
+        let d = &self.disc;
+        let nearest = point_distances(
+            &d.scatter,
+            &d.point_positions,
+            &self.st.d,
+            &positions,
+            d.nodal_points,
+        );
+        let (initial, time) = (&d.initial_spacing, self.st.time);
+        self.st
+            .isolation
+            .measure(&positions, &nearest, initial, time)
+    }
+
+    /// The warning of a run in which a particle left the body, naming it
+    /// ([`crate::solver::detachment`]).
+    pub fn detached_warning(&self) -> Option<String> {
+        let j = self.st.isolation.detached.as_ref()?.particle as usize;
+        self.st.isolation.warning(&self.disc.original[j])
     }
 
     /// [`SolidSimulation::penetration_now`] recorded in the state's maxima; a depth past

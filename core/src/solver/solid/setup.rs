@@ -18,6 +18,7 @@ use crate::scene::solid::{CylinderPart, SolidScene, SolidShape, ToolShape};
 use crate::scene::IntegrationRule;
 use crate::solid_tool::SolidTool;
 use crate::solver::critical_step::{critical_step, stiffening};
+use crate::solver::detachment::{nearest_in_rows, Isolation};
 use crate::solver::discretization::{Thermal, Transfer};
 use crate::solver::energy::Energy;
 use crate::solver::fields::Smoothing;
@@ -415,6 +416,7 @@ impl SolidSimulation {
             inv_mass: mass.iter().map(|m| 1.0 / m).collect(),
             mass,
             material,
+            original: p.positions.clone(),
             ref_pos: p.positions,
             volumes: p.volumes,
             point_positions: p.points,
@@ -427,6 +429,7 @@ impl SolidSimulation {
             neighbours: p.pt.entries() as Real / npts as Real,
             sum_abs,
             h_min: p.h_min,
+            initial_spacing: Vec::new(),
             critical_dt0: p.h_min / wave_speed,
             cells: p.cells,
             scene_tools,
@@ -446,6 +449,7 @@ impl SolidSimulation {
             heat_surface,
             flow_smoothing,
         };
+        disc.initial_spacing = nearest_in_rows(&disc.nodal, &disc.ref_pos);
         update_eigenvalue(&mut disc)?;
         let temp0 = scene.thermal.as_ref().map(|t| t.initial_temperature_c);
         let mut ws = SolidWorkspace {
@@ -471,6 +475,7 @@ impl SolidSimulation {
             stick: vec![None; np * ntools],
             max_penetration: 0.0,
             max_beyond_plane: 0.0,
+            isolation: Isolation::default(),
             plane_feedback_max: 0.0,
             first_contact_s: None,
             kinetic_to_internal_max: 0.0,
