@@ -21,6 +21,9 @@ walls and a flat top. The depth comes from the part's planform (all in mm):
 The die starts with its land at z_land = 11 mm, on the billet's top face, and comes down
 9 mm to z_land = 2 (half the flash gap). Run:
     python3 scripts/conrod_die.py scenes/dies/conrod_upper.stl
+A second argument places the land at another height (mm) for a lower bar, as the billets
+tried in docs/forging.md ("A billet that fills the boss"):
+    python3 scripts/conrod_die.py /tmp/conrod_upper_10.stl 10
 """
 
 import math
@@ -84,14 +87,15 @@ def depth(x, y):
     return cavity + gutter
 
 
-def triangles():
-    """The die's closed surface, each triangle wound with its normal out of the die."""
+def triangles(z_land=Z_LAND):
+    """The die's closed surface with its land at `z_land` (mm), each triangle wound with
+    its normal out of the die."""
     nx = round((X_RANGE[1] - X_RANGE[0]) / STEP)
     ny = round((Y_RANGE[1] - Y_RANGE[0]) / STEP)
     xs = [X_RANGE[0] + i * STEP for i in range(nx + 1)]
     ys = [Y_RANGE[0] + j * STEP for j in range(ny + 1)]
-    face = [[(x, y, Z_LAND + depth(x, y)) for y in ys] for x in xs]
-    top = [[(x, y, TOP) for y in ys] for x in xs]
+    face = [[(x, y, z_land + depth(x, y)) for y in ys] for x in xs]
+    top = [[(x, y, TOP + z_land - Z_LAND) for y in ys] for x in xs]
     out = []
     for i in range(nx):
         for j in range(ny):
@@ -102,7 +106,8 @@ def triangles():
     # centre; the rim walked counter-clockwise seen from above.
     rim = [(i, 0) for i in range(nx)] + [(nx, j) for j in range(ny)]
     rim += [(i, ny) for i in range(nx, 0, -1)] + [(0, j) for j in range(ny, 0, -1)]
-    centre = ((X_RANGE[0] + X_RANGE[1]) / 2.0, (Y_RANGE[0] + Y_RANGE[1]) / 2.0, TOP)
+    centre = ((X_RANGE[0] + X_RANGE[1]) / 2.0, (Y_RANGE[0] + Y_RANGE[1]) / 2.0,
+              TOP + z_land - Z_LAND)
     for k, (i, j) in enumerate(rim):
         i2, j2 = rim[(k + 1) % len(rim)]
         lo0, lo1 = face[i][j], face[i2][j2]
@@ -127,7 +132,8 @@ def cavity_volume(z_land):
 
 def main():
     path = sys.argv[1] if len(sys.argv) > 1 else "scenes/dies/conrod_upper.stl"
-    tris = triangles()
+    z_land = float(sys.argv[2]) if len(sys.argv) > 2 else Z_LAND
+    tris = triangles(z_land)
     with open(path, "wb") as f:
         f.write(b"rkforge conrod upper die, mm (scripts/conrod_die.py)".ljust(80, b" "))
         f.write(struct.pack("<I", len(tris)))
