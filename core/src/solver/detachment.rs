@@ -80,17 +80,30 @@ pub fn nearest_in_rows<const D: usize>(
         .collect()
 }
 
-/// [`nearest_points`] of the particles at `particles` (m) among the integration points of
-/// `scatter` at the displacement coefficients `d` (m): the points at `x_p = X_p + sum_I
-/// N_I(x_p) d_I` from their reference positions `reference` (m). `nodal`: the points are the
-/// particles' own (SCNI), each left out of its particle's search.
-pub(super) fn point_distances<const D: usize>(
-    scatter: &Scatter<D>,
-    reference: &[[Real; D]],
-    d: &[[Real; D]],
-    particles: &[[Real; D]],
-    nodal: bool,
-) -> Vec<Real> {
+/// A body at an output sample, as the isolation watch reads it.
+pub(super) struct Body<'a, const D: usize> {
+    /// The point shape functions.
+    pub scatter: &'a Scatter<D>,
+    /// The points' reference positions `X_p` (m).
+    pub points: &'a [[Real; D]],
+    /// The displacement coefficients `d_I` (m).
+    pub d: &'a [[Real; D]],
+    /// The particles' physical positions (m).
+    pub particles: &'a [[Real; D]],
+    /// The points are the particles' own (SCNI), each left out of its particle's search.
+    pub nodal: bool,
+}
+
+/// [`nearest_points`] of the body's particles among its integration points at their
+/// physical positions `x_p = X_p + sum_I N_I(x_p) d_I`.
+pub(super) fn point_distances<const D: usize>(body: &Body<'_, D>) -> Vec<Real> {
+    let Body {
+        scatter,
+        points: reference,
+        d,
+        particles,
+        nodal,
+    } = *body;
     let points: Vec<[Real; D]> = reference
         .iter()
         .enumerate()
@@ -136,6 +149,17 @@ pub struct Isolation {
 }
 
 impl Isolation {
+    /// Measures the isolation of every particle of `body` against the initial nearest
+    /// distances `initial` (m) at time `time_s`; returns the largest now (-).
+    pub(super) fn measure_body<const D: usize>(
+        &mut self,
+        body: &Body<'_, D>,
+        initial: &[Real],
+        time_s: Real,
+    ) -> Real {
+        self.measure(body.particles, &point_distances(body), initial, time_s)
+    }
+
     /// Measures the isolation of every particle at `positions` (m) against the initial
     /// nearest distances `initial` (m) at time `time_s`; returns the largest now (-).
     pub fn measure<const D: usize>(
@@ -165,9 +189,10 @@ impl Isolation {
     }
 
     /// The run's warning when a particle left the body, naming it with its position at the
-    /// start `initial` (m).
-    pub fn warning(&self, initial: &[Real]) -> Option<String> {
+    /// start (`initial`: every particle's, m).
+    pub fn warning<const D: usize>(&self, initial: &[[Real; D]]) -> Option<String> {
         let d = self.detached.as_ref()?;
+        let initial = initial[d.particle as usize];
         Some(format!(
             "particle {} (at {:?} m at the start) left the body at t = {:.4e} s: at {:?} m the nearest integration point it reaches lay {:.1} of its initial spacings away (from {DETACHED_REL} on a particle counts as detached; the largest over the run was {:.1}). The material there is not resolved (a corner or fin squeezed out as a lone particle); the fill points, extents, volume and laps it reaches may be wrong",
             d.particle, initial, d.time_s, d.position_m, d.isolation, self.max
@@ -197,7 +222,7 @@ mod tests {
         let stretched: Vec<[Real; 2]> = particles.iter().map(|x| [3.0 * x[0], 0.0]).collect();
         let near = nearest_points(&stretched, &points(&stretched), pairs());
         assert!((watch.measure(&stretched, &near, &h, 1.0) - 3.0).abs() < 1e-12);
-        assert!(watch.detached.is_none() && watch.warning(&[0.0, 0.0]).is_none());
+        assert!(watch.detached.is_none() && watch.warning(&particles).is_none());
         // The last particle thrown 5 m off sideways while the material's points stay (a
         // particle the points do not follow): it is named, with the time.
         let mut thrown = particles.clone();
@@ -210,7 +235,7 @@ mod tests {
         );
         let d = watch.detached.clone().expect("detached");
         assert_eq!((d.particle, d.time_s), (5, 2.0));
-        let w = watch.warning(&[5.0, 0.0]).expect("warning");
+        let w = watch.warning(&particles).expect("warning");
         assert!(
             w.contains("particle 5") && w.contains("left the body"),
             "{w}"

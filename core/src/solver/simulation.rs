@@ -4,7 +4,7 @@
 //! ([`Simulation::run_toward`]).
 
 use super::contact_stage;
-use super::detachment::point_distances;
+use super::detachment::Body;
 use super::discretization::{Discretization, MassScalingReport};
 use super::energy::{Energy, StepEnergy};
 use super::point_outputs::PointOut;
@@ -573,25 +573,22 @@ impl Simulation {
     /// the start, `detachment.rs`), recorded in the state: the largest (-).
     pub fn measure_isolation(&mut self) -> Real {
         let d = &self.disc;
-        let positions = d.positions(&self.st.d);
-        let nodal = self.scene.discretization.integration == IntegrationRule::Scni;
-        let nearest = point_distances(
-            &d.scatter,
-            &d.points.positions,
-            &self.st.d,
-            &positions,
-            nodal,
-        );
-        let (initial, time) = (&d.initial_spacing, self.st.time);
+        let body = Body {
+            scatter: &d.scatter,
+            points: &d.points.positions,
+            d: &self.st.d,
+            particles: &d.positions(&self.st.d),
+            nodal: self.scene.discretization.integration == IntegrationRule::Scni,
+        };
+        let time = self.st.time;
         self.st
             .isolation
-            .measure(&positions, &nearest, initial, time)
+            .measure_body(&body, &d.initial_spacing, time)
     }
 
     /// The warning of a run in which a particle left the body, naming it (`detachment.rs`).
     pub fn detached_warning(&self) -> Option<String> {
-        let j = self.st.isolation.detached.as_ref()?.particle as usize;
-        self.st.isolation.warning(&self.disc.original[j])
+        self.st.isolation.warning(&self.disc.original)
     }
 
     /// Every particle against every tool at any depth and every symmetry plane, and the

@@ -55,7 +55,7 @@ mod setup;
 mod tests;
 mod volume;
 
-use super::detachment::{point_distances, Isolation};
+use super::detachment::{Body, Isolation};
 use super::discretization::{MassScalingReport, Thermal};
 use super::energy::{Energy, StepEnergy};
 use super::fields::{smoothed, Smoothing};
@@ -952,26 +952,24 @@ impl SolidSimulation {
     /// Every particle's isolation now (its nearest integration point over that distance at
     /// the start, [`crate::solver::detachment`]), recorded in the state: the largest (-).
     pub fn measure_isolation(&mut self) -> Real {
-        let positions = self.positions();
         let d = &self.disc;
-        let nearest = point_distances(
-            &d.scatter,
-            &d.point_positions,
-            &self.st.d,
-            &positions,
-            d.nodal_points,
-        );
-        let (initial, time) = (&d.initial_spacing, self.st.time);
+        let body = Body {
+            scatter: &d.scatter,
+            points: &d.point_positions,
+            d: &self.st.d,
+            particles: &self.positions(),
+            nodal: d.nodal_points,
+        };
+        let time = self.st.time;
         self.st
             .isolation
-            .measure(&positions, &nearest, initial, time)
+            .measure_body(&body, &d.initial_spacing, time)
     }
 
     /// The warning of a run in which a particle left the body, naming it
     /// ([`crate::solver::detachment`]).
     pub fn detached_warning(&self) -> Option<String> {
-        let j = self.st.isolation.detached.as_ref()?.particle as usize;
-        self.st.isolation.warning(&self.disc.original[j])
+        self.st.isolation.warning(&self.disc.original)
     }
 
     /// [`SolidSimulation::penetration_now`] recorded in the state's maxima; a depth past
