@@ -69,7 +69,6 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "x_range_m": x.x,
             "y_range_m": x.y,
             "max_isolation_rel": sim.state().isolation.max,
-            "detached": sim.state().isolation.detached,
         },
         "mass_scaling": sim.mass_scaling(),
         "warnings": sim.quasi_static_warning().into_iter().chain(sim.surface_warning()).chain(sim.detached_warning()).collect::<Vec<_>>(),
@@ -110,6 +109,11 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             .reference()
             .map(|r| (r.count, r.time_s, r.fit_residual, r.short_sites));
         summary["rereference"] = rereference_entry(stretch, last, sim.energy().remap);
+    }
+    // Only a run in which a particle left the body has the entry (a study's table gets its
+    // columns from such runs alone).
+    if let Some(d) = &sim.state().isolation.detached {
+        summary["workpiece"]["detached"] = json!(d);
     }
     summary
 }
@@ -170,7 +174,6 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
             "y_range_m": b.extents[1],
             "z_range_m": b.extents[2],
             "max_isolation_rel": st.isolation.max,
-            "detached": st.isolation.detached,
         },
         "contact": {
             "max_penetration_m": st.max_penetration,
@@ -206,6 +209,9 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
         summary["rereference"] = rereference_entry(stretch, last, sim.energy().remap);
     }
     place(&mut summary, &solid_columns(scene), &sample);
+    if let Some(d) = &st.isolation.detached {
+        summary["workpiece"]["detached"] = json!(d);
+    }
     summary
 }
 
