@@ -1,7 +1,7 @@
 //! Particles that have left the body: a particle whose physical position `x_I = X_I + sum_J
 //! N_J(X_I) d_J` lies far from all the material its kernel reaches is a lone point, no
 //! longer part of a resolved continuum (a corner squeezed out of the body: the 1 mm conrod
-//! with a longer bar, q2 with the kernel re-referenced, threw the bar's top corner 35 mm
+//! with a longer bar, q2 with the kernel re-referenced, threw the bar's top corner 34 mm
 //! out along the parting plane; docs/forging.md). Nothing else watches for it: the particle
 //! lies outside the tools and on or inside the planes, and it moves the fill points,
 //! extents, volume and laps it reaches, so a run reports it.
@@ -12,8 +12,8 @@
 //! over its distance to the nearest other particle of its kernel neighbourhood at the start,
 //! `h_I` (-). A stretched body keeps its points between its particles: the flash pressed
 //! out 55 mm under its land from a 4 mm side (`scenes/flash_quarter.toml`) reached 3.7, the
-//! other shipped scenes less (docs/forging.md). The run keeps the largest, and the first particle past
-//! [`DETACHED_REL`].
+//! other shipped scenes less (docs/method.md). The run keeps the largest, and the first
+//! particle past [`DETACHED_REL`].
 
 use super::layout::Scatter;
 use crate::math::Real;

@@ -57,9 +57,8 @@ pub(super) struct Discretization {
     /// `N_I(X_J)` in row `J`, for positions and contact; its gradients are freed after
     /// setup (nothing reads them).
     pub nodal: ShapeTable,
-    /// Each particle's distance to the nearest integration point it reaches at the start
-    /// (m), the
-    /// scale of the isolation watch (`detachment.rs`).
+    /// Each particle's distance at the start to the nearest other particle of its row of
+    /// `nodal` (m): the scale of the isolation watch (`detachment.rs`).
     pub initial_spacing: Vec<Real>,
     /// Boundary particles, counter-clockwise (the contact slaves).
     pub boundary: Vec<u32>,

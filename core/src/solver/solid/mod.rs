@@ -137,9 +137,8 @@ pub(super) struct SolidDisc {
     sum_abs: Vec<Real>,
     /// Smallest particle spacing (m).
     h_min: Real,
-    /// Each particle's distance to the nearest integration point it reaches at the start
-    /// (m), the
-    /// scale of the isolation watch ([`crate::solver::detachment`]).
+    /// Each particle's distance at the start to the nearest other particle of its row of
+    /// `nodal` (m): the scale of the isolation watch ([`crate::solver::detachment`]).
     initial_spacing: Vec<Real>,
     /// Critical step of the undeformed discretisation (s).
     critical_dt0: Real,
