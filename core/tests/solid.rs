@@ -1598,3 +1598,40 @@ fn stabilized_nodal_integration_holds_the_blocks_free_faces() {
         "{report}"
     );
 }
+
+/// Bug: the two tools of a quasi-static upsetting did not balance at the samples. On the
+/// shipped hot upsetting in 3D (`scenes/hot_upsetting_3d.toml`, sampled every 10 ms) the
+/// ram's and the anvil's forces differed by 1.6 % at every sample, while the die's work
+/// and the end state were right: the steps before each sample were cut by up to a half
+/// once the natural step had shrunk a little, and the contact force answered that for a
+/// few steps, just when the sample was taken. Since session 59 the steps to an instant are
+/// planned and kept (`solver/stable_step.rs`, docs/method.md "Steps that land on an
+/// instant"): over the first 4 mm (20 samples, from the third on) they balance to 0.01 %
+/// (measured); the bound is 0.2 %.
+#[test]
+fn the_two_tools_of_a_slow_upsetting_balance_at_every_sample() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/hot_upsetting_3d.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let scene = SolidScene::from_str_named(&text, "hot_upsetting_3d.toml").unwrap();
+    let every = scene.output.history_interval_s.unwrap();
+    assert_eq!(
+        (scene.tools[0].name.as_str(), scene.tools[1].name.as_str()),
+        ("anvil", "ram")
+    );
+    let mut sim = SolidSimulation::new(&scene).unwrap();
+    let mut worst: f64 = 0.0;
+    for k in 1..=20 {
+        sim.run_toward(k as f64 * every, u64::MAX, |_, _| true)
+            .unwrap();
+        let (anvil, ram) = (sim.tools()[0].axial_force(), sim.tools()[1].axial_force());
+        if k >= 3 {
+            assert!(anvil > 1e3, "sample {k}: the anvil takes {anvil} N");
+            worst = worst.max((anvil + ram).abs() / anvil);
+        }
+    }
+    assert!(
+        worst < 2e-3,
+        "the tools' forces differ by {worst} of the anvil's"
+    );
+}
