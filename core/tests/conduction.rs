@@ -356,6 +356,7 @@ fn a_transfer_coefficient_of_the_contact_pressure() {
     scene.time.mass_scaling = Some(rkforge_core::scene::MassScaling {
         factor: Some(1e4),
         target_dt_s: None,
+        at_rereferences: None,
     });
     let bottom = &mut scene.tools[0];
     bottom.heat_transfer_w_per_m2_k = 0.0;
@@ -426,6 +427,7 @@ fn steady_profile_through_a_rereferenced_block() {
     scene.time.mass_scaling = Some(rkforge_core::scene::MassScaling {
         factor: Some(1e6),
         target_dt_s: None,
+        at_rereferences: None,
     });
     scene.material.hardening = rkforge_core::material::Hardening::Linear {
         yield_stress_pa: 100e6,

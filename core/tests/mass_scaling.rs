@@ -13,6 +13,7 @@ fn uniform(f: f64) -> Option<MassScaling> {
     Some(MassScaling {
         factor: Some(f),
         target_dt_s: None,
+        at_rereferences: None,
     })
 }
 
@@ -20,6 +21,7 @@ fn target(dt: f64) -> Option<MassScaling> {
     Some(MassScaling {
         factor: None,
         target_dt_s: Some(dt),
+        at_rereferences: None,
     })
 }
 

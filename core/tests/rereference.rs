@@ -4,6 +4,7 @@
 
 mod common;
 
+use rkforge_core::scene::AtRereference;
 use rkforge_core::{IntegrationRule, Kinematics, Scene, Simulation};
 
 /// `d_I = (F - I) X_I` for the particles at `x` (m): RK shape functions reproduce it, so
@@ -116,13 +117,17 @@ fn a_rereference_between_two_homogeneous_steps_keeps_the_stress_path() {
     }
 }
 
-/// The shipped impression-die scene on its coarse test grid, re-referencing at `stretch`.
+/// The shipped impression-die scene on its coarse test grid, re-referencing at `stretch`
+/// with its selective mass scaling's target held at the re-references.
 fn hub(stretch: Option<f64>) -> Scene {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/closed_die_hub.toml");
     let mut scene = Scene::from_file(&path).unwrap();
     scene.workpiece.particles = [13, 37];
     scene.discretization.rereference_stretch = stretch;
+    if let Some(m) = scene.time.mass_scaling.as_mut() {
+        m.at_rereferences = stretch.map(|_| AtRereference::Target);
+    }
     scene
 }
 
@@ -130,7 +135,8 @@ fn bits(v: &[[f64; 2]]) -> Vec<[u64; 2]> {
     v.iter().map(|x| x.map(f64::to_bits)).collect()
 }
 
-/// A stretch the run never reaches leaves every bit of the Lagrangian run.
+/// A stretch the run never reaches leaves every bit of the Lagrangian run (the mass
+/// scaling's hold included).
 #[test]
 fn a_rereference_that_never_triggers_changes_no_bit() {
     let mut runs = [None, Some(10.0)].map(|s| Simulation::new(&hub(s)).unwrap());
@@ -176,11 +182,15 @@ fn a_rollback_across_a_rereference_repeats_its_bits() {
 /// The impression-die scene re-referenced through its stroke: the run's own checks pass
 /// (energy balance, no particle past the penetration bound), no particle lies deeper than
 /// 5 % of the spacing in a tool at any of 24 samples, and the volume holds to the figure the
-/// docs give for this grid (`docs/forging.md`, kernel re-referencing).
+/// docs give for this grid (`docs/forging.md`, kernel re-referencing); its selective mass
+/// scaling holds the target step at each re-reference (the last one's critical step at
+/// least the target over `dt_safety`, mass only added).
 #[test]
 fn the_impression_die_runs_through_its_stroke_re_referenced() {
     let scene = hub(Some(2.0));
+    let target = scene.time.mass_scaling.and_then(|m| m.target_dt_s).unwrap();
     let mut sim = Simulation::new(&scene).unwrap();
+    let start = (sim.masses().to_vec(), sim.mass_scaling().unwrap());
     let h = sim.spacing()[0].min(sim.spacing()[1]);
     let end = scene.time.end_s;
     for k in 1..=24 {
@@ -198,6 +208,18 @@ fn the_impression_die_runs_through_its_stroke_re_referenced() {
     let volume = sim.volume() / sim.reference_volume() - 1.0;
     assert!(volume.abs() < 0.02, "volume change {volume}");
     assert!(sim.energy().balance_error_rel() < 1e-3);
+    let end = sim.mass_scaling().unwrap();
+    assert!(
+        scene.time.dt_safety * end.critical_dt_s >= target,
+        "{end:?}"
+    );
+    assert!(
+        end.added_mass_rel > start.1.added_mass_rel,
+        "{end:?} {:?}",
+        start.1
+    );
+    assert!(sim.masses().iter().zip(&start.0).all(|(m, m0)| m >= m0));
+    assert_eq!(r.masses.as_deref(), Some(sim.masses()));
 }
 
 /// The scene refuses re-referencing with SCNI, naming the key.

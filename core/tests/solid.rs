@@ -1362,6 +1362,7 @@ heat_transfer_w_per_m2_k = 1.0e5
         scene.time.mass_scaling = Some(rkforge_core::scene::MassScaling {
             factor: Some(1.0e6),
             target_dt_s: None,
+            at_rereferences: None,
         });
         scene
     };

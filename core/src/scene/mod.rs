@@ -40,7 +40,7 @@ pub use output::{OutputSpec, DEFAULT_HISTORY_ROWS};
 pub use reference::Reference;
 pub use self_contact::SelfContactSpec;
 pub use solid::{SceneFile, SolidScene};
-pub use time::{MassScaling, TimeSpec};
+pub use time::{AtRereference, MassScaling, TimeSpec};
 pub use tools::{FillPoint, HeatContact, Motion, ToolSpec};
 pub use workpiece::Workpiece;
 
@@ -147,7 +147,7 @@ impl Scene {
         self.output.check(&mut out);
         self.checks.check(&mut out);
         if let Some(mass_scaling) = &self.time.mass_scaling {
-            mass_scaling.check(&mut out);
+            mass_scaling.check(&mut out, self.discretization.rereference_stretch.is_some());
         }
         out.0
     }

@@ -478,7 +478,7 @@ impl SolidScene {
         super::discretization::check_scni_stabilization(d.scni_stabilization, &mut out);
         self.time.check(&mut out);
         if let Some(mass_scaling) = &self.time.mass_scaling {
-            mass_scaling.check(&mut out);
+            mass_scaling.check(&mut out, d.rereference_stretch.is_some());
         }
         let mut names = std::collections::BTreeSet::new();
         for (i, t) in self.tools.iter().enumerate() {
@@ -1028,6 +1028,12 @@ separation = false
                 "end_s = 1e-6",
                 "end_s = 1e-6\nmass_scaling = { factor = 0.5 }",
                 "time.mass_scaling.factor",
+                19,
+            ),
+            (
+                "end_s = 1e-6",
+                "end_s = 1e-6\nmass_scaling = { target_dt_s = 1e-6, at_rereferences = \"target\" }",
+                "time.mass_scaling.at_rereferences",
                 19,
             ),
         ];

@@ -39,6 +39,30 @@ pub struct MassScaling {
     /// step of the undeformed discretisation, to reach `target_dt_s` (s).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_dt_s: Option<Real>,
+    /// Selective scaling with kernel re-referencing (`discretization.rereference_stretch`):
+    /// what the masses do on each re-reference's new shape functions ([`AtRereference`];
+    /// `step` when absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at_rereferences: Option<AtRereference>,
+}
+
+/// What selective mass scaling does at a kernel re-reference, whose new shape functions
+/// have a critical step of their own (measured again). What each costs and buys on the
+/// conrod is in docs/forging.md, "Mass scaling at the re-references".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum AtRereference {
+    /// The masses of the start are kept: the step follows the new shape functions, up or
+    /// down.
+    Keep,
+    /// Mass is added only where the new shape functions would step shorter than the run
+    /// stepped just before (`dt_safety` times the critical step then, at most the target):
+    /// a re-reference never shortens the step. The default: a re-reference that steps
+    /// longer, as most do, changes no mass and no bit.
+    Step,
+    /// The target is held again: mass added wherever the deformed body's particles came
+    /// close, as at the start.
+    Target,
 }
 
 fn default_safety() -> Real {
@@ -73,8 +97,16 @@ impl TimeSpec {
 
 impl MassScaling {
     /// One of a uniform factor (at least 1) or a target step (positive), under the dotted
-    /// keys `time.mass_scaling.*`.
-    pub(crate) fn check(&self, out: &mut Checks) {
+    /// keys `time.mass_scaling.*`; a target held at re-references needs the scene to
+    /// re-reference its kernel (`rereferenced`).
+    pub(crate) fn check(&self, out: &mut Checks, rereferenced: bool) {
+        if self.at_rereferences.is_some() {
+            out.check(
+                self.target_dt_s.is_some() && rereferenced,
+                "time.mass_scaling.at_rereferences",
+                "acts on a `target_dt_s` at the kernel's re-references: give `target_dt_s` and `discretization.rereference_stretch`".into(),
+            );
+        }
         match (self.factor, self.target_dt_s) {
             (Some(f), None) => out.check(
                 f.is_finite() && f >= 1.0,

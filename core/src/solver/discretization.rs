@@ -5,6 +5,7 @@
 //! stages read it; none writes it.
 
 use super::layout::Scatter;
+use super::mass_scaling::Target;
 use super::nodal_stabilization::Tables;
 use super::outline::Outline;
 use crate::constraints::Constraints;
@@ -73,6 +74,8 @@ pub(super) struct Discretization {
     pub critical_dt0: Real,
     /// What mass scaling added, if the scene scales.
     pub mass_scaling: Option<MassScalingReport>,
+    /// What selective mass scaling holds at each kernel re-reference.
+    pub scaling_target: Option<Target>,
     /// The heat settings of a scene with `[thermal]`.
     pub thermal: Option<Thermal>,
 }

@@ -44,6 +44,7 @@ use super::discretization::{Discretization, Thermal};
 use super::energy::kinetic_energy;
 use super::heat::Heat;
 use super::layout::MAX_GROUP;
+use super::mass_scaling::{hold, row_sum_bounds};
 use super::outline::Outline;
 use super::state::{Reference, State};
 use super::workspace::Workspace;
@@ -157,6 +158,7 @@ pub(super) fn now(
         .map(|j| disc.nodal.interpolate(j, &ws.v_prev))
         .collect();
     let kinetic_before = kinetic_energy(&disc.mass, &st.v);
+    let before = st.stable_dt;
     let temperature_now =
         particle_temperatures(&disc.nodal, st.heat.as_ref(), disc.thermal.as_ref());
     let previous = st.reference.as_ref();
@@ -170,8 +172,10 @@ pub(super) fn now(
         point_jacobian,
         fit_residual: 0.0,
         short_sites: previous.map_or(0, |r| r.short_sites),
+        masses: None,
     };
     reference.short_sites += install(scene, disc, tools, st, ws, &reference)? as u64;
+    reference.masses = hold_target(scene, disc, st, ws, before)?;
     let (v, r1) = fit(&disc.nodal, &v_now);
     let (v_prev, r2) = fit(&disc.nodal, &v_before);
     reference.fit_residual = r1.max(r2);
@@ -259,6 +263,10 @@ pub(super) fn install(
     )?;
     let np = reference.particles.len();
     disc.scatter.rebuild(pt, np, MAX_GROUP, &mut ws.buf);
+    if let Some(mass) = &reference.masses {
+        disc.inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+        disc.mass.clone_from(mass);
+    }
     if let Some(c) = &disc.constraints {
         disc.constraints = Constraints::new(c.rows.clone(), &nodal, &disc.mass)?;
     }
@@ -279,17 +287,80 @@ pub(super) fn install(
     }
     disc.reference_jacobian
         .clone_from(&reference.point_jacobian);
-    // The critical step of the new shape functions, measured with unstressed points as at
-    // the start (the stressed ones would answer with their stress, not stiffness).
+    disc.critical_dt0 = measure_unstressed(scene, disc, st, ws)?;
+    if let (Some(mass), Some(target)) = (&reference.masses, &disc.scaling_target) {
+        let report = target.report(mass, disc.critical_dt0);
+        disc.mass_scaling = Some(report);
+    }
+    // Conduction's largest eigenvalue on the new shape functions.
+    conduction::update_eigenvalue(disc, st.step, st.time)?;
+    Ok(short)
+}
+
+/// The critical step of the current shape functions and masses (s), measured with
+/// unstressed points as at the start (the stressed ones would answer with their stress,
+/// not stiffness); the state is left as it was.
+fn measure_unstressed(
+    scene: &Scene,
+    disc: &Discretization,
+    st: &mut State,
+    ws: &mut Workspace,
+) -> Result<Real> {
     let (points, out) = (st.points.clone(), ws.out.clone());
     st.points = vec![PointState::default(); points.len()];
     let measured = measure_critical_step(scene, disc, st, ws);
     st.points = points;
     ws.out = out;
-    disc.critical_dt0 = measured?;
-    // Conduction's largest eigenvalue on the new shape functions.
-    conduction::update_eigenvalue(disc, st.step, st.time)?;
-    Ok(short)
+    measured
+}
+
+/// Selective mass scaling on the new shape functions, as the scene's
+/// `time.mass_scaling.at_rereferences` asks (`mass_scaling::hold`, with `before` the
+/// critical step the run followed before the re-reference, s, and the stiffness bounds
+/// `k_I = M sum_p w_p g_I sum_J g_J`, `g_I = |grad N_I| + |N_I| / R` in axisymmetry, from
+/// the new shape functions): the masses installed with the essential conditions'
+/// projection, the critical step and the report updated. Returns the masses, `None` where
+/// the masses are kept.
+fn hold_target(
+    scene: &Scene,
+    disc: &mut Discretization,
+    st: &mut State,
+    ws: &mut Workspace,
+    before: Real,
+) -> Result<Option<Vec<Real>>> {
+    let Some(target) = disc.scaling_target.take() else {
+        return Ok(None);
+    };
+    let axi = scene.model.kinematics == Kinematics::Axisymmetric;
+    let np = disc.mass.len();
+    let stiffness = row_sum_bounds(&disc.weights, target.modulus, np, |p, g| {
+        let inv_r = disc.inv_radius[p];
+        g.extend(disc.scatter.point_row(p).map(|(i, [n, nx, ny])| {
+            let grad = nx.hypot(ny);
+            (i, if axi { grad + (n * inv_r).abs() } else { grad })
+        }))
+    });
+    let held = hold(
+        &target,
+        before,
+        &stiffness,
+        disc.mass.clone(),
+        disc.critical_dt0,
+        scene.time.dt_safety,
+        |mass| {
+            if let Some(c) = &disc.constraints {
+                disc.constraints = Constraints::new(c.rows.clone(), &disc.nodal, &mass)?;
+            }
+            disc.inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+            disc.mass = mass;
+            measure_unstressed(scene, disc, st, ws)
+        },
+    );
+    disc.scaling_target = Some(target);
+    let (mass, report) = held?;
+    disc.critical_dt0 = report.critical_dt_s;
+    disc.mass_scaling = Some(report);
+    Ok(Some(mass))
 }
 
 /// The temperature field at the particles before the shape functions change (2D and 3D; a

@@ -92,6 +92,7 @@ impl Simulation {
             Some(f) => Plan::Uniform(f),
             None => Plan::Selective {
                 target: ms.target_dt_s.unwrap_or(0.0),
+                modulus: rho * wave_speed * wave_speed,
                 stiffness: stiffness_bounds(
                     &pt,
                     &weights,
@@ -169,6 +170,7 @@ impl Simulation {
             planes,
             critical_dt0: stable_dt,
             mass_scaling: None,
+            scaling_target: None,
             thermal,
         };
         let mut ws = Workspace {

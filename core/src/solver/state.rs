@@ -176,4 +176,8 @@ pub struct Reference {
     /// ([`crate::rk_shape::cover_sites`]).
     #[serde(default)]
     pub short_sites: u64,
+    /// The lumped masses (kg) with which selective mass scaling holds its target on these
+    /// shape functions (`mass_scaling::hold`); `None` without it.
+    #[serde(default)]
+    pub masses: Option<Vec<Real>>,
 }

@@ -62,6 +62,7 @@ use super::fields::{smoothed, Smoothing};
 use super::heat::Heat;
 use super::heat_readings;
 use super::layout::Scatter;
+use super::mass_scaling::Target;
 use super::nodal_stabilization::{self, Forces, Tables};
 use super::point_outputs::PointOut;
 use super::quasi_static;
@@ -157,6 +158,8 @@ pub(super) struct SolidDisc {
     flow_smoothing: Smoothing,
     /// What mass scaling added, if the scene scales ([`super::mass_scaling`]).
     mass_scaling: Option<MassScalingReport>,
+    /// What selective mass scaling holds at each kernel re-reference.
+    scaling_target: Option<Target>,
     /// The points are the particles' (SCNI: one per nodal domain, in particle order), not
     /// the cells'.
     nodal_points: bool,

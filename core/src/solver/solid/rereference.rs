@@ -38,6 +38,7 @@ use crate::scene::solid::SolidScene;
 use crate::solver::energy::kinetic_energy;
 use crate::solver::fields::Smoothing;
 use crate::solver::layout::MAX_GROUP_3D;
+use crate::solver::mass_scaling::{hold, row_sum_bounds};
 use crate::solver::rereference::{
     carry_temperatures, failed, fit, particle_temperatures, shapes_on,
 };
@@ -67,6 +68,10 @@ pub struct SolidReference {
     /// ([`crate::rk_shape::cover_sites`]).
     #[serde(default)]
     pub short_sites: u64,
+    /// The lumped masses (kg) with which selective mass scaling holds its target on these
+    /// shape functions ([`crate::solver`]'s `mass_scaling::hold`); `None` without it.
+    #[serde(default)]
+    pub masses: Option<Vec<Real>>,
 }
 
 /// `det` of a row-major 3 x 3 matrix.
@@ -174,6 +179,7 @@ pub(super) fn now(
         .map(|j| disc.nodal.interpolate(j, &ws.v_prev))
         .collect();
     let kinetic_before = kinetic_energy(&disc.mass, &st.v);
+    let before = st.stable_dt;
     let temperature_now =
         particle_temperatures(&disc.nodal, st.heat.as_ref(), disc.thermal.as_ref());
     let mut reference = SolidReference {
@@ -186,8 +192,10 @@ pub(super) fn now(
         point_jacobian,
         fit_residual: 0.0,
         short_sites: st.reference.as_ref().map_or(0, |r| r.short_sites),
+        masses: None,
     };
     reference.short_sites += install(scene, disc, st, ws, &reference)? as u64;
+    reference.masses = hold_target(scene, disc, st, ws, before)?;
     let (v, r1) = fit(&disc.nodal, &v_now);
     let (v_prev, r2) = fit(&disc.nodal, &v_before);
     reference.fit_residual = r1.max(r2);
@@ -263,13 +271,31 @@ pub(super) fn install(
     disc.point_positions.clone_from(&reference.points);
     disc.reference_jacobian
         .clone_from(&reference.point_jacobian);
-    // The critical step of the new shape functions, measured with unstressed, unheated
-    // points as at the start (the stressed ones would answer with their stress, not
-    // stiffness).
+    if let Some(mass) = &reference.masses {
+        set_masses(disc, mass.clone());
+    }
+    disc.critical_dt0 = measure_unstressed(disc, st, ws)?;
+    if let (Some(mass), Some(target)) = (&reference.masses, &disc.scaling_target) {
+        let report = target.report(mass, disc.critical_dt0);
+        disc.mass_scaling = Some(report);
+    }
+    // Conduction's largest eigenvalue on the new shape functions.
+    update_eigenvalue(disc)?;
+    Ok(short)
+}
+
+/// The critical step of the current shape functions and masses (s), measured with
+/// unstressed, unheated points as at the start (the stressed ones would answer with their
+/// stress, not stiffness); the state is left as it was.
+fn measure_unstressed(
+    disc: &SolidDisc,
+    st: &mut SolidState,
+    ws: &mut SolidWorkspace,
+) -> Result<Real> {
     let saved = (
         std::mem::replace(
             &mut st.points,
-            vec![PointState3::default(); reference.points.len()],
+            vec![PointState3::default(); disc.weights.len()],
         ),
         ws.out.clone(),
         st.heat.clone(),
@@ -278,8 +304,54 @@ pub(super) fn install(
     );
     let measured = measure_critical_step(disc, st, ws);
     (st.points, ws.out, st.heat, st.dt_prev, st.d) = saved;
-    disc.critical_dt0 = measured?;
-    // Conduction's largest eigenvalue on the new shape functions.
-    update_eigenvalue(disc)?;
-    Ok(short)
+    measured
+}
+
+/// Lumped masses `m_I` (kg) and their inverses.
+fn set_masses(disc: &mut SolidDisc, mass: Vec<Real>) {
+    disc.inv_mass = mass.iter().map(|m| 1.0 / m).collect();
+    disc.mass = mass;
+}
+
+/// Selective mass scaling on the new shape functions, as the scene's
+/// `time.mass_scaling.at_rereferences` asks (`mass_scaling::hold`, with `before` the
+/// critical step the run followed before the re-reference, s, and the stiffness bounds
+/// `k_I = M sum_p w_p |grad N_I| sum_J |grad N_J|` from the new shape functions): the
+/// masses installed, the critical step and the report updated. Returns the masses, `None`
+/// where the masses are kept.
+fn hold_target(
+    scene: &SolidScene,
+    disc: &mut SolidDisc,
+    st: &mut SolidState,
+    ws: &mut SolidWorkspace,
+    before: Real,
+) -> Result<Option<Vec<Real>>> {
+    let Some(target) = disc.scaling_target.take() else {
+        return Ok(None);
+    };
+    let np = disc.mass.len();
+    let stiffness = row_sum_bounds(&disc.weights, target.modulus, np, |p, g| {
+        g.extend(
+            disc.scatter
+                .point_entries(p)
+                .map(|(i, _, grad)| (i, grad.iter().map(|x| x * x).sum::<Real>().sqrt())),
+        )
+    });
+    let held = hold(
+        &target,
+        before,
+        &stiffness,
+        disc.mass.clone(),
+        disc.critical_dt0,
+        scene.time.dt_safety,
+        |mass| {
+            set_masses(disc, mass);
+            measure_unstressed(disc, st, ws)
+        },
+    );
+    disc.scaling_target = Some(target);
+    let (mass, report) = held?;
+    disc.critical_dt0 = report.critical_dt_s;
+    disc.mass_scaling = Some(report);
+    Ok(Some(mass))
 }

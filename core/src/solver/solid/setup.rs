@@ -434,6 +434,7 @@ impl SolidSimulation {
             cells: p.cells,
             scene_tools,
             mass_scaling: None,
+            scaling_target: None,
             nodal_points: scene.discretization.integration == IntegrationRule::Scni,
             extents: p.extents,
             track_stretch: scene.discretization.rereference_stretch.is_some(),
@@ -513,6 +514,7 @@ impl SolidSimulation {
                 Some(f) => Plan::Uniform(f),
                 None => Plan::Selective {
                     target: ms.target_dt_s.unwrap_or(0.0),
+                    modulus: rho * wave_speed * wave_speed,
                     stiffness: stiffness_bounds(
                         &p.pt,
                         &disc.weights,
@@ -525,7 +527,7 @@ impl SolidSimulation {
             };
             let v0 = scene.workpiece.initial_velocity_m_per_s;
             let unscaled = disc.mass.clone();
-            let report = scaled(
+            let (report, target) = scaled(
                 plan,
                 unscaled,
                 disc.critical_dt0,
@@ -544,6 +546,7 @@ impl SolidSimulation {
             )?;
             disc.critical_dt0 = report.critical_dt_s;
             disc.mass_scaling = Some(report);
+            disc.scaling_target = target.and_then(|t| t.acting(scene.time.mass_scaling));
         }
         st.stable_dt = disc.critical_dt0;
         super::stress_stage(&disc, &mut st, &mut ws)?;

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::scene::solid::SolidScene;
+use crate::scene::AtRereference;
 
 /// A coarse quarter Taylor bar (the paper's copper at 227 m/s on the FE wall).
 pub(crate) fn quarter_bar(cells: [usize; 3], rule: &str, end_s: Real) -> SolidScene {
@@ -251,6 +252,134 @@ fn a_rollback_across_a_rereference_repeats_its_bits() {
     sim.step(None).unwrap();
     fresh.step(None).unwrap();
     assert_eq!(fresh.state(), sim.state());
+}
+
+/// A quarter copper cylinder (radius 5 mm, length 10 mm, cells [2, 2, 8], q2) upset 3 mm
+/// at 1 m/s between frictionless flat dies, the step held at 0.5 us by selective mass
+/// scaling (some 25 times the wave's step) and the kernel re-referenced at a stretch of
+/// 1.1.
+fn scaled_rereferenced_upset() -> SolidScene {
+    let text = r#"
+name = "scaled_reref3d"
+[model]
+kinematics = "3d"
+[workpiece]
+shape = "cylinder"
+radius_m = 0.005
+length_m = 0.01
+part = "quarter"
+cells = [2, 2, 8]
+[material]
+density_kg_per_m3 = 8960.0
+youngs_modulus_pa = 124.0e9
+poisson_ratio = 0.34
+hardening = { law = "linear", yield_stress_pa = 60.0e6, modulus_pa = 300.0e6 }
+[discretization]
+integration = "q2"
+rereference_stretch = 1.1
+[time]
+end_s = 3.0e-3
+mass_scaling = { target_dt_s = 0.5e-6, at_rereferences = "target" }
+[[tools]]
+name = "anvil"
+point_m = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+axis = [0.0, 0.0, -1.0]
+motion = { kind = "fixed" }
+[[tools]]
+name = "ram"
+point_m = [0.0, 0.0, 0.01]
+normal = [0.0, 0.0, -1.0]
+axis = [0.0, 0.0, -1.0]
+motion = { kind = "constant", velocity_m_per_s = 1.0 }
+"#;
+    SolidScene::from_str_named(text, "scaled_reref3d.toml").unwrap()
+}
+
+/// Selective mass scaling holds its target at every re-reference: the new shape functions
+/// on the crushed body would step shorter, so mass is added there as at the start (the
+/// critical step with it at least the target over `dt_safety`, no particle lighter than
+/// before, the kinetic energy it adds booked so the account closes); a rollback across the
+/// re-references restores the masses with the shape functions, in the same simulation and
+/// a fresh one.
+#[test]
+fn a_rereference_holds_the_mass_scaling_target() {
+    let scene = scaled_rereferenced_upset();
+    let target = scene.time.mass_scaling.and_then(|m| m.target_dt_s).unwrap();
+    let mut sim = SolidSimulation::new(&scene).unwrap();
+    let start = (sim.masses().to_vec(), sim.mass_scaling().unwrap());
+    sim.run_toward(1.5e-3, u64::MAX, |_, _| true).unwrap();
+    let saved = sim.state().clone();
+    let count = |s: &SolidSimulation| s.reference().map_or(0, |r| r.count);
+    let at_save = count(&sim);
+    sim.run_toward(3.0e-3, u64::MAX, |_, _| true).unwrap();
+    let end = sim.mass_scaling().unwrap();
+    eprintln!(
+        "re-references {} ({at_save} at the save): added mass {:.3} -> {:.3}, critical step {:e} -> {:e} s, remap {:e} J, balance {:e}",
+        count(&sim),
+        start.1.added_mass_rel,
+        end.added_mass_rel,
+        start.1.critical_dt_s,
+        end.critical_dt_s,
+        sim.energy().remap,
+        sim.energy().balance_error_rel()
+    );
+    assert!(at_save >= 1 && count(&sim) > at_save, "{at_save}");
+    assert!(
+        scene.time.dt_safety * end.critical_dt_s >= target,
+        "{end:?}"
+    );
+    assert!(end.added_mass_rel > start.1.added_mass_rel, "{end:?}");
+    assert!(sim.masses().iter().zip(&start.0).all(|(m, m0)| m >= m0));
+    let held = sim.reference().and_then(|r| r.masses.clone());
+    assert_eq!(held.as_deref(), Some(sim.masses()));
+    assert!(
+        sim.energy().balance_error_rel() < 1e-3,
+        "{:?}",
+        sim.energy()
+    );
+    let first = (sim.positions(), sim.state().clone(), sim.masses().to_vec());
+    sim.restore(saved).unwrap();
+    sim.run_toward(3.0e-3, u64::MAX, |_, _| true).unwrap();
+    assert_eq!(sim.positions(), first.0);
+    assert_eq!(*sim.state(), first.1);
+    let mut fresh = SolidSimulation::new(&scene).unwrap();
+    fresh.restore(first.1.clone()).unwrap();
+    assert_eq!(fresh.masses(), &first.2[..]);
+    assert_eq!(fresh.mass_scaling(), sim.mass_scaling());
+    sim.step(None).unwrap();
+    fresh.step(None).unwrap();
+    assert_eq!(fresh.state(), sim.state());
+}
+
+/// Mass scaling at the re-references of the upset, `keep`, `step` and `target`: where no
+/// re-reference shortens the step (each new critical step at least the one the run
+/// followed), `step` adds nothing and runs the bits of `keep`; `target` adds mass.
+/// (`mass_scaling`'s unit test has `step` acting.)
+#[test]
+fn at_rereferences_step_adds_no_mass_where_the_step_does_not_fall() {
+    let runs = [AtRereference::Keep, AtRereference::Step, AtRereference::Target].map(|mode| {
+        let mut scene = scaled_rereferenced_upset();
+        scene.time.mass_scaling.as_mut().unwrap().at_rereferences = Some(mode);
+        let mut sim = SolidSimulation::new(&scene).unwrap();
+        let mut steps = Vec::new();
+        while sim.time() < 3.0e-3 {
+            let before = (sim.stable_dt(), sim.reference().map_or(0, |r| r.count));
+            sim.step(None).unwrap();
+            if sim.reference().map_or(0, |r| r.count) > before.1 {
+                steps.push((before.0, sim.mass_scaling().unwrap().critical_dt_s));
+            }
+        }
+        let added = sim.mass_scaling().unwrap().added_mass_rel;
+        eprintln!("{mode:?}: critical step before / after each re-reference {steps:?}, added mass {added:.3}");
+        (steps, added, sim.positions())
+    });
+    let [keep, step, target] = &runs;
+    assert!(step.0.len() >= 2);
+    assert!(step.0.iter().all(|(before, after)| after > before));
+    assert_eq!(step.1, keep.1);
+    assert_eq!(step.2, keep.2);
+    assert!(target.1 > keep.1 * 1.2, "{} {}", target.1, keep.1);
 }
 
 /// Re-referencing is refused by its key with SCNI (no nodal domains on the deformed
