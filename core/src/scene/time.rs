@@ -56,8 +56,9 @@ pub enum AtRereference {
     /// down.
     Keep,
     /// Mass is added only where the new shape functions would step shorter than the run
-    /// stepped just before (`dt_safety` times the critical step then, at most the target):
-    /// a re-reference never shortens the step. The default: a re-reference that steps
+    /// stepped just before (their critical step under the one it followed, or under
+    /// `target_dt_s / dt_safety` if that is shorter): a re-reference never shortens the
+    /// step. The default: a re-reference that steps
     /// longer, as most do, changes no mass and no bit.
     Step,
     /// The target is held again: mass added wherever the deformed body's particles came

@@ -117,7 +117,9 @@ pub struct MassScalingReport {
     pub scaled_particles: usize,
     /// Critical step of the undeformed discretisation without scaling (s).
     pub critical_dt_unscaled_s: Real,
-    /// Critical step with the scaled masses (s).
+    /// Critical step with the scaled masses (s): the start's, or the last kernel
+    /// re-reference's where the masses act there (`time.mass_scaling.at_rereferences` not
+    /// `keep`).
     pub critical_dt_s: Real,
 }
 

@@ -259,41 +259,27 @@ fn a_rollback_across_a_rereference_repeats_its_bits() {
 /// scaling (some 25 times the wave's step) and the kernel re-referenced at a stretch of
 /// 1.1.
 fn scaled_rereferenced_upset() -> SolidScene {
-    let text = r#"
-name = "scaled_reref3d"
-[model]
-kinematics = "3d"
-[workpiece]
-shape = "cylinder"
-radius_m = 0.005
-length_m = 0.01
-part = "quarter"
-cells = [2, 2, 8]
-[material]
-density_kg_per_m3 = 8960.0
-youngs_modulus_pa = 124.0e9
-poisson_ratio = 0.34
-hardening = { law = "linear", yield_stress_pa = 60.0e6, modulus_pa = 300.0e6 }
-[discretization]
-integration = "q2"
-rereference_stretch = 1.1
-[time]
-end_s = 3.0e-3
-mass_scaling = { target_dt_s = 0.5e-6, at_rereferences = "target" }
-[[tools]]
-name = "anvil"
-point_m = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-axis = [0.0, 0.0, -1.0]
-motion = { kind = "fixed" }
-[[tools]]
-name = "ram"
-point_m = [0.0, 0.0, 0.01]
-normal = [0.0, 0.0, -1.0]
-axis = [0.0, 0.0, -1.0]
-motion = { kind = "constant", velocity_m_per_s = 1.0 }
-"#;
-    SolidScene::from_str_named(text, "scaled_reref3d.toml").unwrap()
+    let mut text = HOT_REREFERENCED_UPSET.to_string();
+    let thermal = text.find("[thermal]").unwrap();
+    let time = text.find("[time]").unwrap();
+    text.replace_range(thermal..time, "");
+    for (from, to) in [
+        ("hot_reref3d", "scaled_reref3d"),
+        ("\"q4\"", "\"q2\""),
+        (
+            "end_s = 0.02\nmass_scaling = { factor = 1.0e4 }",
+            "end_s = 3.0e-3\nmass_scaling = { target_dt_s = 0.5e-6, at_rereferences = \"target\" }",
+        ),
+        (
+            "friction = 0.2\ntemperature_c = 20.0\nheat_transfer_w_per_m2_k = 2.0e4\n",
+            "",
+        ),
+        ("velocity_m_per_s = 0.1", "velocity_m_per_s = 1.0"),
+    ] {
+        assert!(text.contains(from), "{from}");
+        text = text.replace(from, to);
+    }
+    SolidScene::from_str_named(&text, "scaled_reref3d.toml").unwrap()
 }
 
 /// Selective mass scaling holds its target at every re-reference: the new shape functions
@@ -406,7 +392,11 @@ fn rereferencing_refuses_scni_and_takes_a_body_whose_heat_moves() {
 /// upset 2 mm in 20 ms between dies at 20 C (2e4 W/(m^2 K)) with Coulomb friction 0.2,
 /// conduction and air at 20 C: a body whose heat moves, re-referenced at a stretch of 1.1.
 fn hot_rereferenced_upset() -> SolidScene {
-    let text = r#"
+    SolidScene::from_str_named(HOT_REREFERENCED_UPSET, "hot_reref3d.toml").unwrap()
+}
+
+/// The scene of [`hot_rereferenced_upset`].
+const HOT_REREFERENCED_UPSET: &str = r#"
 name = "hot_reref3d"
 [model]
 kinematics = "3d"
@@ -452,8 +442,6 @@ friction = 0.2
 temperature_c = 20.0
 heat_transfer_w_per_m2_k = 2.0e4
 "#;
-    SolidScene::from_str_named(text, "hot_reref3d.toml").unwrap()
-}
 
 /// The temperature field at the particles, `sum_I N_I(X_J) T_I` (degrees C).
 fn field_at_particles(sim: &SolidSimulation) -> Vec<Real> {
