@@ -105,9 +105,15 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
         *path(&mut summary, &c) = json!(c.value(&sample));
     }
     if let Some(stretch) = scene.discretization.rereference_stretch {
-        let last = sim
-            .reference()
-            .map(|r| (r.count, r.time_s, r.fit_residual, r.short_sites));
+        let last = sim.reference().map(|r| {
+            (
+                r.count,
+                r.time_s,
+                r.fit_residual,
+                r.short_sites,
+                r.flat_sites,
+            )
+        });
         summary["rereference"] = rereference_entry(stretch, last, sim.energy().remap);
     }
     // Only a run in which a particle left the body has the entry (a study's table gets its
@@ -121,8 +127,9 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
 /// The `rereference` entry of a scene that re-references the kernel (only such a scene
 /// has it, 2D or 3D): the stretch that triggers one, how many were made and the time of
 /// the last with its velocity fit's residual, and the sites whose supports were grown over
-/// all of them (`last`: count, s, -, -), and the kinetic energy the remaps changed (J).
-fn rereference_entry(stretch: f64, last: Option<(u32, f64, f64, u64)>, remap_j: f64) -> Value {
+/// all of them, too few covering and then too flat a cover (`last`: count, s, -, -, -), and
+/// the kinetic energy the remaps changed (J).
+fn rereference_entry(stretch: f64, last: Option<(u32, f64, f64, u64, u64)>, remap_j: f64) -> Value {
     json!({
         "stretch": stretch,
         "count": last.map_or(0, |l| l.0),
@@ -130,6 +137,7 @@ fn rereference_entry(stretch: f64, last: Option<(u32, f64, f64, u64)>, remap_j: 
         "remap_J": remap_j,
         "velocity_fit_residual": last.map(|l| l.2),
         "supports_grown": last.map_or(0, |l| l.3),
+        "supports_grown_flat": last.map_or(0, |l| l.4),
     })
 }
 
@@ -203,9 +211,15 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
         summary["stage_seconds"]["heat"] = json!(t.heat.as_secs_f64());
     }
     if let Some(stretch) = scene.discretization.rereference_stretch {
-        let last = sim
-            .reference()
-            .map(|r| (r.count, r.time_s, r.fit_residual, r.short_sites));
+        let last = sim.reference().map(|r| {
+            (
+                r.count,
+                r.time_s,
+                r.fit_residual,
+                r.short_sites,
+                r.flat_sites,
+            )
+        });
         summary["rereference"] = rereference_entry(stretch, last, sim.energy().remap);
     }
     place(&mut summary, &solid_columns(scene), &sample);

@@ -53,7 +53,7 @@ use crate::error::{Error, Result};
 use crate::material::simo1992_hencky_j2::elastic_left_cauchy_green;
 use crate::material::PointState;
 use crate::math::Real;
-use crate::rk_shape::{cover_sites, KernelCloud, ShapeTable};
+use crate::rk_shape::{condition_sites, cover_sites, KernelCloud, ShapeTable, MAX_CONDITION};
 use crate::scene::{Kinematics, Scene};
 use crate::tools::Tool;
 
@@ -172,9 +172,12 @@ pub(super) fn now(
         point_jacobian,
         fit_residual: 0.0,
         short_sites: previous.map_or(0, |r| r.short_sites),
+        flat_sites: previous.map_or(0, |r| r.flat_sites),
         masses: None,
     };
-    reference.short_sites += install(scene, disc, tools, st, ws, &reference)? as u64;
+    let (short, flat) = install(scene, disc, tools, st, ws, &reference)?;
+    reference.short_sites += short as u64;
+    reference.flat_sites += flat as u64;
     reference.masses = hold_target(scene, disc, st, ws, before)?;
     let (v, r1) = fit(&disc.nodal, &v_now);
     let (v_prev, r2) = fit(&disc.nodal, &v_before);
@@ -236,8 +239,8 @@ fn point_motion(disc: &Discretization, d: &[[Real; 2]], p: usize, axi: bool) -> 
 
 /// Builds the shape functions, the scatter, the essential conditions, the contact stage
 /// and the critical step on `reference`, and conduction's eigenvalue; the rest of the
-/// state is left to the caller. Returns how many sites' supports were grown
-/// ([`shapes_on`]).
+/// state is left to the caller. Returns how many sites' supports were grown, too few
+/// covering and too flat a cover ([`shapes_on`]).
 pub(super) fn install(
     scene: &Scene,
     disc: &mut Discretization,
@@ -245,7 +248,7 @@ pub(super) fn install(
     st: &mut State,
     ws: &mut Workspace,
     reference: &Reference,
-) -> Result<usize> {
+) -> Result<(usize, usize)> {
     let axi = scene.model.kinematics == Kinematics::Axisymmetric;
     let s = scene.discretization.support;
     let supports = reference
@@ -253,7 +256,7 @@ pub(super) fn install(
         .iter()
         .map(|g| [s[0] * g[0].hypot(g[1]), s[1] * g[2].hypot(g[3])])
         .collect();
-    let (cloud, pt, nodal, short) = shapes_on(
+    let (cloud, pt, nodal, grown) = shapes_on(
         &reference.particles,
         &reference.volumes,
         supports,
@@ -294,7 +297,7 @@ pub(super) fn install(
     }
     // Conduction's largest eigenvalue on the new shape functions.
     conduction::update_eigenvalue(disc, st.step, st.time)?;
-    Ok(short)
+    Ok(grown)
 }
 
 /// The critical step of the current shape functions and masses (s), measured with
@@ -409,7 +412,9 @@ pub(super) fn carry_temperatures<const D: usize>(
 /// points' table at `points` (m) and the particles' own (values only), with how many
 /// particles and points were covered by fewer than `2^D` supports, whose nearest
 /// particles' supports were grown to reach them ([`cover_sites`], with the scene's
-/// support `s` in spacings per direction).
+/// support `s` in spacings per direction), and how many then had a moment matrix
+/// conditioned worse than [`MAX_CONDITION`], for which more supports were grown
+/// ([`condition_sites`]).
 pub(super) fn shapes_on<const D: usize>(
     particles: &[[Real; D]],
     volumes: &[Real],
@@ -417,9 +422,17 @@ pub(super) fn shapes_on<const D: usize>(
     points: &[[Real; D]],
     count: u32,
     s: [Real; D],
-) -> Result<(KernelCloud<D>, ShapeTable<D>, ShapeTable<D>, usize)> {
+) -> Result<(KernelCloud<D>, ShapeTable<D>, ShapeTable<D>, (usize, usize))> {
     let short = cover_sites(particles, &mut supports, particles, 1 << D, s)
         + cover_sites(particles, &mut supports, points, 1 << D, s);
+    let flat = condition_sites(
+        particles,
+        volumes,
+        &mut supports,
+        particles,
+        MAX_CONDITION,
+        s,
+    ) + condition_sites(particles, volumes, &mut supports, points, MAX_CONDITION, s);
     let cloud = KernelCloud::with_supports(particles.to_vec(), volumes.to_vec(), supports);
     let pt = cloud.shape_table(points, &|p| {
         format!("integration point {p} at re-reference {count}")
@@ -428,7 +441,7 @@ pub(super) fn shapes_on<const D: usize>(
         format!("particle {j} at re-reference {count}")
     })?;
     nodal.drop_gradients();
-    Ok((cloud, pt, nodal, short))
+    Ok((cloud, pt, nodal, (short, flat)))
 }
 
 /// The coefficients `c` with `sum_I N_I(X_J) c_I = target_J` at every particle: the

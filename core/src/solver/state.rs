@@ -176,6 +176,13 @@ pub struct Reference {
     /// ([`crate::rk_shape::cover_sites`]).
     #[serde(default)]
     pub short_sites: u64,
+    /// Particles and points, summed over the re-references so far, where the covering
+    /// particles left the moment matrix's condition above
+    /// [`crate::rk_shape::MAX_CONDITION`] (a sheet that the axis-aligned supports do not
+    /// span) and more supports were grown to reach them
+    /// ([`crate::rk_shape::condition_sites`]).
+    #[serde(default)]
+    pub flat_sites: u64,
     /// The lumped masses (kg) with which selective mass scaling holds its target on these
     /// shape functions (`mass_scaling::hold`); `None` without it.
     #[serde(default)]

@@ -68,6 +68,13 @@ pub struct SolidReference {
     /// ([`crate::rk_shape::cover_sites`]).
     #[serde(default)]
     pub short_sites: u64,
+    /// Particles and points, summed over the re-references so far, where the covering
+    /// particles left the moment matrix's condition above
+    /// [`crate::rk_shape::MAX_CONDITION`] (a sheet that the axis-aligned supports do not
+    /// span) and more supports were grown to reach them
+    /// ([`crate::rk_shape::condition_sites`]).
+    #[serde(default)]
+    pub flat_sites: u64,
     /// The lumped masses (kg) with which selective mass scaling holds its target on these
     /// shape functions ([`crate::solver`]'s `mass_scaling::hold`); `None` without it.
     #[serde(default)]
@@ -192,9 +199,12 @@ pub(super) fn now(
         point_jacobian,
         fit_residual: 0.0,
         short_sites: st.reference.as_ref().map_or(0, |r| r.short_sites),
+        flat_sites: st.reference.as_ref().map_or(0, |r| r.flat_sites),
         masses: None,
     };
-    reference.short_sites += install(scene, disc, st, ws, &reference)? as u64;
+    let (short, flat) = install(scene, disc, st, ws, &reference)?;
+    reference.short_sites += short as u64;
+    reference.flat_sites += flat as u64;
     reference.masses = hold_target(scene, disc, st, ws, before)?;
     let (v, r1) = fit(&disc.nodal, &v_now);
     let (v_prev, r2) = fit(&disc.nodal, &v_before);
@@ -232,22 +242,22 @@ fn current_reference(disc: &SolidDisc, st: &SolidState) -> (Vec<[Real; 9]>, Vec<
 }
 
 /// Builds the shape functions, the scatter and the critical step on `reference`; the rest
-/// of the state is left to the caller. Returns how many sites' supports were grown
-/// ([`shapes_on`]).
+/// of the state is left to the caller. Returns how many sites' supports were grown, too few
+/// covering and too flat a cover ([`shapes_on`]).
 pub(super) fn install(
     scene: &SolidScene,
     disc: &mut SolidDisc,
     st: &mut SolidState,
     ws: &mut SolidWorkspace,
     reference: &SolidReference,
-) -> Result<usize> {
+) -> Result<(usize, usize)> {
     let s = scene.discretization.support;
     let supports = reference
         .cells
         .iter()
         .map(|g| std::array::from_fn(|k| s * g[3 * k].hypot(g[3 * k + 1]).hypot(g[3 * k + 2])))
         .collect();
-    let (_, pt, nodal, short) = shapes_on(
+    let (_, pt, nodal, grown) = shapes_on(
         &reference.particles,
         &reference.volumes,
         supports,
@@ -281,7 +291,7 @@ pub(super) fn install(
     }
     // Conduction's largest eigenvalue on the new shape functions.
     update_eigenvalue(disc)?;
-    Ok(short)
+    Ok(grown)
 }
 
 /// The critical step of the current shape functions and masses (s), measured with
