@@ -18,7 +18,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 n = int(sys.argv[1]) if len(sys.argv) > 1 else 3
 exe = ROOT / "target" / "release" / "rkforge"
 subprocess.run(["cargo", "build", "--release", "-q", "--workspace"], cwd=ROOT, check=True)
-tmp = pathlib.Path(tempfile.mkdtemp())
+tmp_dir = tempfile.TemporaryDirectory()  # removed at exit
+tmp = pathlib.Path(tmp_dir.name)
 fmu = tmp / "taylor_bar.fmu"
 subprocess.run([exe, "fmu", ROOT / "scenes" / "taylor_bar.toml", "--out", fmu], check=True, capture_output=True)
 run_t, fmu_t = [], []

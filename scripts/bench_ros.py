@@ -86,7 +86,8 @@ def main():
                    cwd=ROOT, check=True)
     threads = ["--threads", str(a.threads)] if a.threads else []
     env = {**os.environ, "ROS_DOMAIN_ID": DOMAIN}
-    out = pathlib.Path(tempfile.mkdtemp())
+    out_dir = tempfile.TemporaryDirectory()  # removed when main returns
+    out = pathlib.Path(out_dir.name)
     tools = re.findall(r'^name = "(\w+)"', pathlib.Path(a.scene).read_text(), re.M)[1:]
     peer = None
     if a.peer:

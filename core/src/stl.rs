@@ -274,10 +274,12 @@ pub(crate) mod tests {
         }
     }
 
-    fn dir() -> std::path::PathBuf {
-        let d = std::env::temp_dir().join(format!("rkforge_stl_{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        d
+    /// A fresh directory for one test's files, removed when it drops.
+    fn dir() -> tempfile::TempDir {
+        tempfile::Builder::new()
+            .prefix("rkforge_stl_")
+            .tempdir()
+            .unwrap()
     }
 
     /// A box written as binary and as ASCII, in metres and millimetres, reads back as the
@@ -285,13 +287,14 @@ pub(crate) mod tests {
     #[test]
     fn a_closed_box_reads_in_both_forms_and_units() {
         let mesh = box_mesh([0.0, 0.0, 0.0], [0.02, 0.01, 0.03]);
+        let dir = dir();
         for (ascii, unit, per) in [
             (false, LengthUnit::M, 1.0),
             (true, LengthUnit::M, 1.0),
             (false, LengthUnit::Mm, 1e-3),
             (true, LengthUnit::Mm, 1e-3),
         ] {
-            let path = dir().join(format!("box_{ascii}_{per}.stl"));
+            let path = dir.path().join(format!("box_{ascii}_{per}.stl"));
             write_stl(&path, &mesh, ascii, per);
             let read = TriangleMesh::read(&path, unit).unwrap();
             assert_eq!(read.triangles.len(), 12);
@@ -333,7 +336,8 @@ pub(crate) mod tests {
             assert!(e.contains(reason), "{e}");
         }
         assert!(good.check().is_ok());
-        let path = dir().join("not_stl.stl");
+        let dir = dir();
+        let path = dir.path().join("not_stl.stl");
         std::fs::write(&path, "hello").unwrap();
         let e = TriangleMesh::read(&path, LengthUnit::M).unwrap_err();
         assert!(e.contains("STL"), "{e}");

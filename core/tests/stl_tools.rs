@@ -7,7 +7,7 @@ use common::solid_scenes::{box_scene, ALUMINIUM};
 use rkforge_core::outputs::{solid_columns, Sample};
 use rkforge_core::scene::{SceneFile, SolidScene};
 use rkforge_core::solver::{DiePressure, SolidSimulation};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The closed box `lo..hi` (in the file's unit) as 12 triangles with outward normals,
 /// reversed when `inverted`, less its last triangle when `open`.
@@ -66,10 +66,13 @@ fn write_binary(path: &Path, triangles: &[[[f32; 3]; 3]]) {
     stl_io::write_stl(&mut std::fs::File::create(path).unwrap(), t.iter()).unwrap();
 }
 
-/// A folder of this test's own.
-fn folder(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rkforge_stl_{name}_{}", std::process::id()));
-    std::fs::create_dir_all(d.join("dies")).unwrap();
+/// A folder of this test's own with a folder `dies` in it, removed when it drops.
+fn folder(name: &str) -> tempfile::TempDir {
+    let d = tempfile::Builder::new()
+        .prefix(&format!("rkforge_stl_{name}_"))
+        .tempdir()
+        .unwrap();
+    std::fs::create_dir(d.path().join("dies")).unwrap();
     d
 }
 
@@ -144,14 +147,14 @@ fn run(scene: &SolidScene) -> (Vec<[f64; 2]>, SolidSimulation) {
 fn stl_box_dies_give_the_plane_dies_force_stroke() {
     let dir = folder("upset");
     write_ascii(
-        &dir.join("dies/anvil.stl"),
+        &dir.path().join("dies/anvil.stl"),
         &cuboid([-5.0, -5.0, -5.0], [15.0, 15.0, 0.0], false, false),
     );
     write_binary(
-        &dir.join("dies/ram.stl"),
+        &dir.path().join("dies/ram.stl"),
         &cuboid([-5.0, -5.0, 7.5], [15.0, 15.0, 12.5], false, false),
     );
-    let scene_file = dir.join("upset.toml");
+    let scene_file = dir.path().join("upset.toml");
     let planes = scene(&upset_text(ANVIL_PLANE, RAM_PLANE), &scene_file).unwrap();
     let stl = |f: &str| format!("shape = \"stl\"\nfile = \"dies/{f}.stl\"\nunit = \"mm\"");
     let dies = scene(&upset_text(&stl("anvil"), &stl("ram")), &scene_file).unwrap();
@@ -187,14 +190,14 @@ fn stl_box_dies_give_the_plane_dies_force_stroke() {
 fn a_punch_with_edges_indents_with_bounded_penetration() {
     let dir = folder("punch");
     write_ascii(
-        &dir.join("dies/anvil.stl"),
+        &dir.path().join("dies/anvil.stl"),
         &cuboid([-5.0, -5.0, -5.0], [15.0, 15.0, 0.0], false, false),
     );
     write_binary(
-        &dir.join("dies/punch.stl"),
+        &dir.path().join("dies/punch.stl"),
         &cuboid([-5.0, -5.0, 7.5], [3.0, 3.0, 12.5], false, false),
     );
-    let scene_file = dir.join("punch.toml");
+    let scene_file = dir.path().join("punch.toml");
     let punch = "shape = \"stl\"\nfile = \"dies/punch.stl\"\nunit = \"mm\"";
     let anvil = "shape = \"stl\"\nfile = \"dies/anvil.stl\"\nunit = \"mm\"";
     let s = scene(&upset_text(anvil, punch), &scene_file).unwrap();
@@ -225,10 +228,10 @@ fn a_punch_with_edges_indents_with_bounded_penetration() {
 fn bad_stl_files_are_refused_with_the_file_and_reason() {
     let dir = folder("bad");
     let box_mm = |inverted, open| cuboid([-5.0, -5.0, 7.5], [15.0, 15.0, 12.5], inverted, open);
-    write_binary(&dir.join("dies/open.stl"), &box_mm(false, true));
-    write_binary(&dir.join("dies/flipped.stl"), &box_mm(true, false));
-    write_ascii(&dir.join("dies/in_mm.stl"), &box_mm(false, false));
-    let scene_file = dir.join("bad.toml");
+    write_binary(&dir.path().join("dies/open.stl"), &box_mm(false, true));
+    write_binary(&dir.path().join("dies/flipped.stl"), &box_mm(true, false));
+    write_ascii(&dir.path().join("dies/in_mm.stl"), &box_mm(false, false));
+    let scene_file = dir.path().join("bad.toml");
     for (file, unit, reason) in [
         ("open", "mm", "open surface"),
         ("flipped", "mm", "inverted"),
@@ -276,11 +279,11 @@ fn heat_readings(sim: &SolidSimulation) -> (f64, Vec<f64>) {
 fn stl_box_dies_take_the_plane_dies_heat() {
     let dir = folder("heat");
     write_ascii(
-        &dir.join("dies/anvil.stl"),
+        &dir.path().join("dies/anvil.stl"),
         &cuboid([-5.0, -5.0, -5.0], [15.0, 15.0, 0.0], false, false),
     );
     write_binary(
-        &dir.join("dies/ram.stl"),
+        &dir.path().join("dies/ram.stl"),
         &cuboid([-5.0, -5.0, 7.5], [15.0, 15.0, 12.5], false, false),
     );
     let hot = |anvil: &str, ram: &str| {
@@ -292,7 +295,7 @@ fn stl_box_dies_take_the_plane_dies_heat() {
             )
         )
     };
-    let scene_file = dir.join("upset.toml");
+    let scene_file = dir.path().join("upset.toml");
     let stl = |f: &str| format!("shape = \"stl\"\nfile = \"dies/{f}.stl\"\nunit = \"mm\"");
     let planes = scene(&hot(ANVIL_PLANE, RAM_PLANE), &scene_file).unwrap();
     let dies = scene(&hot(&stl("anvil"), &stl("ram")), &scene_file).unwrap();
@@ -413,10 +416,10 @@ fn column(sim: &SolidSimulation, name: &str) -> f64 {
 #[test]
 fn flat_dies_report_the_contact_area_and_pressure_of_a_quarter_block() {
     let dir = folder("contact");
-    let file = dir.join("block.toml");
+    let file = dir.path().join("block.toml");
     let mut areas = Vec::new();
     for stl in [false, true] {
-        let (anvil, ram) = block_dies(&dir, 0.0, stl);
+        let (anvil, ram) = block_dies(dir.path(), 0.0, stl);
         let s = scene(&block_text(&anvil, &ram, 250e-6, "", 1.0), &file).unwrap();
         let sim = run_to_end(&s);
         let r = sim.readings();
@@ -514,13 +517,13 @@ fn refined(mut triangles: Vec<[[f32; 3]; 3]>, levels: usize) -> Vec<[[f32; 3]; 3
 #[test]
 fn a_die_finer_than_the_particles_carries_each_particles_pressure_over_its_patch() {
     let dir = folder("fine_ram");
-    let file = dir.join("block.toml");
+    let file = dir.path().join("block.toml");
     let ram = refined(
         cuboid([-5.0, -5.0, 10.0], [15.0, 15.0, 15.0], false, false),
         5,
     );
     assert_eq!(ram.len(), 12 * 1024);
-    write_binary(&dir.join("dies/ram.stl"), &ram);
+    write_binary(&dir.path().join("dies/ram.stl"), &ram);
     let ram = "shape = \"stl\"\nfile = \"dies/ram.stl\"\nunit = \"mm\"";
     let s = scene(&block_text(ANVIL_PLANE, ram, 250e-6, "", 1.0), &file).unwrap();
     let sim = run_to_end(&s);
@@ -596,7 +599,7 @@ fn a_die_finer_than_the_particles_carries_each_particles_pressure_over_its_patch
 #[test]
 fn fill_points_on_a_die_fill_at_the_stroke_the_gap_gives() {
     let dir = folder("fill");
-    let file = dir.join("block.toml");
+    let file = dir.path().join("block.toml");
     let fill = |points: &[(&str, [f64; 3])]| -> String {
         points
             .iter()
@@ -615,7 +618,7 @@ fn fill_points_on_a_die_fill_at_the_stroke_the_gap_gives() {
     ];
     let mut strokes = Vec::new();
     for stl in [false, true] {
-        let (anvil, ram) = block_dies(&dir, 0.5, stl);
+        let (anvil, ram) = block_dies(dir.path(), 0.5, stl);
         let s = scene(
             &block_text(&anvil, &ram, 500e-6, &fill(&on_face), 0.1),
             &file,
@@ -657,7 +660,7 @@ fn fill_points_on_a_die_fill_at_the_stroke_the_gap_gives() {
         ("centre", [0.0, 0.0, 0.0105]),
         ("centre", [0.0, 0.0, 0.0105]),
     ]);
-    let (anvil, ram) = block_dies(&dir, 0.5, false);
+    let (anvil, ram) = block_dies(dir.path(), 0.5, false);
     let e = scene(&block_text(&anvil, &ram, 500e-6, &twice, 0.1), &file).unwrap_err();
     assert!(e.contains("tools[1].fill_points[1].name"), "{e}");
 }
@@ -764,8 +767,8 @@ fn cylinder_against_stl(
     tol: f64,
 ) -> CylinderRun {
     let dir = folder(name);
-    write_binary(&dir.join("dies/cylinder.stl"), &stl);
-    let file = dir.join("cylinder.toml");
+    write_binary(&dir.path().join("dies/cylinder.stl"), &stl);
+    let file = dir.path().join("cylinder.toml");
     let by_stl = "shape = \"stl\"\nfile = \"dies/cylinder.stl\"\nunit = \"mm\"";
     let exact = run_cylinder(&scene(&pressed_block_text(y, analytic, end), &file).unwrap());
     let faceted = run_cylinder(&scene(&pressed_block_text(y, by_stl, end), &file).unwrap());

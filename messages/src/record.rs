@@ -292,13 +292,22 @@ mod tests {
     use rkforge_core::solver::SolidSimulation;
     use rkforge_core::{Scene, Simulation};
 
-    /// Temporary file `rkforge_<name>_<pid>.<ext>`.
-    fn temp(name: &str, ext: &str) -> PathBuf {
-        std::env::temp_dir().join(format!("rkforge_{name}_{}.{ext}", std::process::id()))
+    /// A temporary directory, removed when it drops, and in it the paths of a recording
+    /// `<name>.mcap` and of its scene file `<name>.toml`.
+    fn temp(name: &str) -> (tempfile::TempDir, PathBuf, PathBuf) {
+        let dir = tempfile::Builder::new()
+            .prefix("rkforge_record_")
+            .tempdir()
+            .unwrap();
+        let (mcap, toml) = (
+            dir.path().join(format!("{name}.mcap")),
+            dir.path().join(format!("{name}.toml")),
+        );
+        (dir, mcap, toml)
     }
 
     /// The MCAP bytes of `samples` samples of the scene `text` (at t = 0, then one per step)
-    /// and the simulation at the last one; `name` keeps the temporary files of tests apart.
+    /// and the simulation at the last one; the scene file is `<name>.toml`.
     fn record(
         text: &str,
         name: &str,
@@ -324,7 +333,7 @@ mod tests {
         step: impl Fn(&mut S),
     ) -> (Vec<u8>, S) {
         let topics = crate::topics(scene, "/rkforge").unwrap();
-        let (path, scene_file) = (temp(name, "mcap"), temp(name, "toml"));
+        let (_dir, path, scene_file) = temp(name);
         std::fs::write(&scene_file, text).unwrap();
         let provenance = Provenance {
             scene,
@@ -339,8 +348,6 @@ mod tests {
         }
         rec.finish(r#"{"steps": 3}"#).unwrap();
         let bytes = std::fs::read(&path).unwrap();
-        std::fs::remove_file(&path).unwrap();
-        std::fs::remove_file(&scene_file).unwrap();
         (bytes, sim)
     }
 
@@ -477,7 +484,7 @@ mod tests {
         );
         assert_eq!(summary.attachment_indexes.len(), 1);
         let a = mcap::read::attachment(&bytes, &summary.attachment_indexes[0]).unwrap();
-        assert_eq!(a.name, format!("rkforge_meta_{}.toml", std::process::id()));
+        assert_eq!(a.name, "meta.toml");
         assert_eq!(a.media_type, "application/toml");
         assert_eq!(&*a.data, text.as_bytes());
         // A mass-scaled scene says so in the same record.
@@ -539,7 +546,7 @@ mod tests {
             scene_file: Path::new("no/such/scene.toml"),
             writer: "test",
         };
-        let path = temp("missing", "mcap");
+        let (_dir, path, _) = temp("missing");
         let e = Recorder::create(&path, &topics, &provenance, Compression::Zstd)
             .err()
             .unwrap();
@@ -555,7 +562,7 @@ mod tests {
         let text = include_str!("../../scenes/taylor_bar.toml");
         let scene = Scene::from_str_named(text, "t").unwrap();
         let topics = crate::topics(&scene, "/rkforge").unwrap();
-        let (path, scene_file) = (temp("bad", "mcap"), temp("bad", "toml"));
+        let (_dir, path, scene_file) = temp("bad");
         std::fs::write(&scene_file, text).unwrap();
         let provenance = Provenance {
             scene: &scene,
@@ -571,7 +578,5 @@ mod tests {
         let e = rec.write(&bad).unwrap_err();
         assert!(e.contains("1 messages for 9 channels"), "{e}");
         rec.finish("{}").unwrap();
-        std::fs::remove_file(&path).unwrap();
-        std::fs::remove_file(&scene_file).unwrap();
     }
 }

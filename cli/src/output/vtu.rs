@@ -398,7 +398,6 @@ mod tests {
     use super::*;
     use quick_xml::events::Event;
     use quick_xml::{Reader, XmlVersion};
-    use std::path::PathBuf;
 
     /// An XML element with its attributes, text content and children.
     #[derive(Debug, Default)]
@@ -485,10 +484,12 @@ mod tests {
         document.children.remove(0)
     }
 
-    fn temp_dir(test: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("rkforge_vtu_{}_{test}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("create temp dir");
-        dir
+    /// A fresh directory for one test's files, removed when it drops.
+    fn temp_dir(test: &str) -> tempfile::TempDir {
+        tempfile::Builder::new()
+            .prefix(&format!("rkforge_vtu_{test}_"))
+            .tempdir()
+            .expect("create temp dir")
     }
 
     /// A 3 x 3 node grid with 2 x 2 quads, counter-clockwise corners.
@@ -527,7 +528,8 @@ mod tests {
         let velocity: Vec<[f64; 2]> = (0..9)
             .map(|i| [f64::from(i).sin(), -f64::from(i).cos() * 1e-7])
             .collect();
-        let path = temp_dir("grid").join("frame_0001.vtu");
+        let dir = temp_dir("grid");
+        let path = dir.path().join("frame_0001.vtu");
         write_vtu(
             &path,
             &positions,
@@ -585,7 +587,8 @@ mod tests {
 
     #[test]
     fn empty_mesh_is_valid() {
-        let path = temp_dir("empty").join("empty.vtu");
+        let dir = temp_dir("empty");
+        let path = dir.path().join("empty.vtu");
         write_vtu(&path, &[], &[], &[("s", &[])], &[]).expect("write vtu");
         let piece = parse(&path)
             .child("UnstructuredGrid")
@@ -600,8 +603,7 @@ mod tests {
     fn invalid_input_is_rejected_without_writing() {
         let (positions, quads) = grid();
         let dir = temp_dir("invalid");
-        let path = dir.join("bad.vtu");
-        let _ = std::fs::remove_file(&path);
+        let path = dir.path().join("bad.vtu");
         let short = [0.0; 8];
         let short_vec = [[0.0; 2]; 10];
         let full = [0.0; 9];
@@ -674,7 +676,8 @@ mod tests {
             .collect();
         let strain = [0.1 + 0.2, f64::NAN];
         let damage = [f64::INFINITY, f64::NEG_INFINITY];
-        let path = temp_dir("hex").join("frame_0001.vtu");
+        let dir = temp_dir("hex");
+        let path = dir.path().join("frame_0001.vtu");
         write_vtu_3d(
             &path,
             &positions,
@@ -731,7 +734,8 @@ mod tests {
         let positions = [[0.0, 0.0, 0.1], [1e-3, 0.0, 0.1], [0.0, 2e-3, 0.1 + 1e-9]];
         let triangles = [[0, 1, 2], [2, 1, 0]];
         let pressure = [1.25e8, 0.0];
-        let path = temp_dir("die").join("die_ram_0000.vtu");
+        let dir = temp_dir("die");
+        let path = dir.path().join("die_ram_0000.vtu");
         write_vtu_triangles(&path, &positions, &triangles, &[("pressure_Pa", &pressure)])
             .expect("write vtu");
         let root = parse(&path);
@@ -758,7 +762,8 @@ mod tests {
     #[test]
     fn frames_without_cell_data_have_no_cell_data_element() {
         let (positions, hexes) = block();
-        let path = temp_dir("hex_no_cells").join("frame.vtu");
+        let dir = temp_dir("hex_no_cells");
+        let path = dir.path().join("frame.vtu");
         write_vtu_3d(&path, &positions, &hexes, &[], &[], &[]).expect("write vtu");
         let piece = parse(&path);
         let piece = piece.child("UnstructuredGrid").child("Piece");
@@ -773,8 +778,8 @@ mod tests {
     #[test]
     fn invalid_hex_input_is_rejected_without_writing() {
         let (positions, hexes) = block();
-        let path = temp_dir("hex_invalid").join("bad.vtu");
-        let _ = std::fs::remove_file(&path);
+        let dir = temp_dir("hex_invalid");
+        let path = dir.path().join("bad.vtu");
         let points = [0.0; 12];
         let cells = [0.0; 2];
         let bad_hexes = [[0, 1, 4, 3, 6, 7, 10, 12]];
@@ -840,7 +845,8 @@ mod tests {
 
     #[test]
     fn pvd_lists_frames() {
-        let path = temp_dir("pvd").join("run.pvd");
+        let dir = temp_dir("pvd");
+        let path = dir.path().join("run.pvd");
         let frames = vec![
             (0.0, "frame_0000.vtu".to_string()),
             (1e-3 / 3.0, "frames/a&b_0001.vtu".to_string()),

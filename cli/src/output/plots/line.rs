@@ -449,7 +449,8 @@ mod tests {
 
     #[test]
     fn line_plot_writes_png() {
-        let path = temp_dir("line").join("force.png");
+        let dir = temp_dir("line");
+        let path = dir.path().join("force.png");
         let x: Vec<f64> = (0..200).map(|i| f64::from(i) * 0.01).collect();
         let y: Vec<f64> = x.iter().map(|s| 120.0 * s.powf(0.8)).collect();
         let coarse: Vec<f64> = (0..10).map(|i| f64::from(i) * 0.2).collect();
@@ -523,19 +524,19 @@ mod tests {
             ),
         ];
         for (k, (case, series, markers)) in cases.iter().enumerate() {
-            let path = dir.join(format!("case_{k}.png"));
+            let path = dir.path().join(format!("case_{k}.png"));
             match line_plot(&path, case, "x", "y", series, markers) {
                 Ok(()) => assert_eq!(png_size(&path), LINE_SIZE, "{case}"),
                 Err(e) => assert!(!e.is_empty(), "{case}"),
             }
         }
         let mismatched = [series("bad", vec![0.0, 1.0], vec![0.0])];
-        let err = line_plot(&dir.join("bad.png"), "t", "x", "y", &mismatched, &[])
+        let err = line_plot(&dir.path().join("bad.png"), "t", "x", "y", &mismatched, &[])
             .expect_err("mismatched lengths");
         assert!(err.contains("bad"), "{err}");
         let ok = [series("ok", vec![0.0, 1.0], vec![0.0, 1.0])];
-        assert!(line_plot(&dir.join("plot.jpg"), "t", "x", "y", &ok, &[]).is_err());
-        let missing = dir.join("no_such_dir").join("plot.png");
+        assert!(line_plot(&dir.path().join("plot.jpg"), "t", "x", "y", &ok, &[]).is_err());
+        let missing = dir.path().join("no_such_dir").join("plot.png");
         assert!(line_plot(&missing, "t", "x", "y", &ok, &[]).is_err());
     }
 

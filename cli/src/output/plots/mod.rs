@@ -342,13 +342,13 @@ fn draw_axes<DB: DrawingBackend>(
 mod tests {
     use super::*;
     use std::ops::Range;
-    use std::path::PathBuf;
 
-    /// A fresh directory for one test's images.
-    pub(super) fn temp_dir(test: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("rkforge_plots_{}_{test}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("create temp dir");
-        dir
+    /// A fresh directory for one test's images, removed when it drops.
+    pub(super) fn temp_dir(test: &str) -> tempfile::TempDir {
+        tempfile::Builder::new()
+            .prefix(&format!("rkforge_plots_{test}_"))
+            .tempdir()
+            .expect("create temp dir")
     }
 
     /// Checks the PNG signature and returns width and height from the IHDR chunk.

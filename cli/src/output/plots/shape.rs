@@ -612,7 +612,7 @@ mod tests {
     fn shape_plot_writes_png_with_equal_aspect() {
         let dir = temp_dir("shape");
         let (positions, quads, values) = billet(10, 15, 0.25);
-        let path = dir.join("shape.png");
+        let path = dir.path().join("shape.png");
         let marked = Stage {
             title: String::new(),
             marks: vec![([0.01, 0.0], true), ([0.03, 0.0], false)],
@@ -701,7 +701,7 @@ mod tests {
             ("nothing", &[], &[], vec![], &no_tools),
         ];
         for (k, (case, positions, quads, values, tools)) in cases.iter().enumerate() {
-            let path = dir.join(format!("case_{k}.png"));
+            let path = dir.path().join(format!("case_{k}.png"));
             let labels = ("x", "y");
             match shape_plot(
                 &path,
@@ -716,7 +716,7 @@ mod tests {
                 Err(e) => assert!(!e.is_empty(), "{case}"),
             }
         }
-        let path = dir.join("err.png");
+        let path = dir.path().join("err.png");
         let plot = |positions: &[[f64; 2]], quads: &[[u32; 4]], values: &[f64], scale: f64| {
             let labels = ("x", "y");
             shape_plot(
@@ -762,7 +762,7 @@ mod tests {
             })
             .collect();
         let quads = &meshes[0].1;
-        let path = dir.join("stages.png");
+        let path = dir.path().join("stages.png");
         let plot = |path: &Path, stages: &[Stage]| {
             stages_plot(path, "t", quads, stages, "v", ("r [mm]", "z [mm]"), 1e3)
         };
@@ -771,11 +771,11 @@ mod tests {
         assert_eq!(w, SHAPE_WIDTH + 2 * STAGE_EXTRA_WIDTH);
         assert!(h >= MIN_PLOT_H, "height {h}");
 
-        plot(&dir.join("one.png"), &stages[..1]).expect("one stage");
-        assert_eq!(png_size(&dir.join("one.png")).0, SHAPE_WIDTH);
+        plot(&dir.path().join("one.png"), &stages[..1]).expect("one stage");
+        assert_eq!(png_size(&dir.path().join("one.png")).0, SHAPE_WIDTH);
         assert!(plot(&path, &[]).is_err());
         let many: Vec<Stage> = std::iter::repeat_n(stages[2].clone(), 41).collect();
-        let grid = dir.join("grid.png");
+        let grid = dir.path().join("grid.png");
         plot(&grid, &many).expect("many stages");
         let (w, h) = png_size(&grid);
         let columns = MAX_COLUMNS as u32;

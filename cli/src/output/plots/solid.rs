@@ -874,7 +874,7 @@ mod tests {
             panel(80e-6, 0.4, View::OUTSIDE),
             panel(80e-6, 0.4, View::SECTIONS),
         ];
-        let path = dir.join("taylor.png");
+        let path = dir.path().join("taylor.png");
         solid_plot(&path, "Quarter Taylor bar", &panels).expect("solid plot");
         let plan = SolidPlan::new("t", &panels).expect("plan");
         assert_eq!(png_size(&path), plan.layout.size);
@@ -899,7 +899,8 @@ mod tests {
     fn unit_cube_of_eight_hexes_is_drawn() {
         let (positions, hexes) = block([2, 2, 2]);
         let positions = positions.iter().map(|p| p.map(|c| 0.5e-3 * c)).collect();
-        let path = temp_dir("cube").join("cube.png");
+        let dir = temp_dir("cube");
+        let path = dir.path().join("cube.png");
         let panels = [SolidPanel {
             time: 1e-3,
             positions,
@@ -928,7 +929,7 @@ mod tests {
     #[test]
     fn bad_inputs_are_errors_and_nothing_panics() {
         let dir = temp_dir("solid_bad");
-        let path = dir.join("bad.png");
+        let path = dir.path().join("bad.png");
         let (positions, hexes) = block([2, 1, 1]);
         let good = SolidPanel {
             time: 0.0,
@@ -956,7 +957,12 @@ mod tests {
             ..good.clone()
         };
         assert!(solid_plot(&path, "t", &[bad_view]).is_err(), "view");
-        assert!(solid_plot(&dir.join("bad.jpg"), "t", std::slice::from_ref(&good)).is_err());
+        assert!(solid_plot(
+            &dir.path().join("bad.jpg"),
+            "t",
+            std::slice::from_ref(&good)
+        )
+        .is_err());
         let all_nan = SolidPanel {
             positions: vec![[f64::NAN; 3]; good.positions.len()],
             ..good.clone()
@@ -1024,7 +1030,7 @@ mod tests {
             ),
         ];
         for (k, (case, panel)) in cases.into_iter().enumerate() {
-            let path = dir.join(format!("case_{k}.png"));
+            let path = dir.path().join(format!("case_{k}.png"));
             match solid_plot(&path, case, &[good.clone(), panel, all_nan.clone()]) {
                 Ok(()) => assert!(png_size(&path).0 >= MIN_WIDTH, "{case}"),
                 Err(e) => assert!(!e.is_empty(), "{case}"),

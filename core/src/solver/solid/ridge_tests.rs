@@ -4,13 +4,14 @@
 use super::*;
 use crate::scene::solid::SolidScene;
 use crate::stl::TriangleMesh;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// A folder of this test's own.
-fn folder(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rkforge_ridges_{name}_{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A folder of this test's own, removed when it drops.
+fn folder(name: &str) -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix(&format!("rkforge_ridges_{name}_"))
+        .tempdir()
+        .unwrap()
 }
 
 /// Writes `mesh` (m) as an ASCII STL file in metres, its triangles turned out of the die
@@ -265,8 +266,8 @@ fn check(name: &str, with: &Ran, without: &Ran, untouched: bool, jump: Real) {
 #[test]
 fn a_knife_edge_cannot_cut_between_two_particle_rows() {
     let dir = folder("knife");
-    knife(&dir, 4.5e-3);
-    let (with, without) = with_and_without(&dir);
+    knife(dir.path(), 4.5e-3);
+    let (with, without) = with_and_without(dir.path());
     check("knife", &with, &without, true, 0.05);
 }
 
@@ -282,8 +283,8 @@ fn a_knife_edge_cannot_cut_between_two_particle_rows() {
 #[test]
 fn a_knife_edge_a_quarter_between_two_rows_is_held() {
     let dir = folder("quarter");
-    knife(&dir, 4.25e-3);
-    let (with, without) = with_and_without(&dir);
+    knife(dir.path(), 4.25e-3);
+    let (with, without) = with_and_without(dir.path());
     check("quarter", &with, &without, false, 0.1);
 }
 
@@ -293,8 +294,8 @@ fn a_knife_edge_a_quarter_between_two_rows_is_held() {
 #[test]
 fn a_knife_edge_over_a_particle_row_is_held() {
     let dir = folder("row");
-    knife(&dir, 4.0e-3);
-    let (with, without) = with_and_without(&dir);
+    knife(dir.path(), 4.0e-3);
+    let (with, without) = with_and_without(dir.path());
     check("row", &with, &without, false, 0.05);
 }
 
@@ -306,9 +307,9 @@ fn a_knife_edge_over_a_particle_row_is_held() {
 fn a_pyramid_tip_between_four_particles_is_held() {
     let dir = folder("pyramid");
     write_stl(
-        &dir.join("die.stl"),
+        &dir.path().join("die.stl"),
         pyramid([4.5e-3, 2.5e-3, 4.02e-3], 4e-3, 2e-3),
     );
-    let (with, without) = with_and_without(&dir);
+    let (with, without) = with_and_without(dir.path());
     check("pyramid", &with, &without, true, 0.05);
 }
