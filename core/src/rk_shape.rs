@@ -409,9 +409,9 @@ pub fn cover_sites<const D: usize>(
 /// [`condition_sites`] leaves at a re-referenced kernel's sites. A site of a box lattice
 /// measures 9-23 (supports of 1.5-2 spacings); where it passes 1e3 the covering particles
 /// lie nearly on a plane (a line in 2D) and the shape functions' gradients across it grow as
-/// the condition does. The conrod's 0.5 mm grid measured 17-40 at its steepest sites through
-/// its fourteenth re-reference, 600 at the fifteenth and 1.2e4-1.7e4 at the sixteenth, with
-/// `sum_I |N_I|` up to 18 and `sum_I |grad N_I|` 90 times the median site's.
+/// the condition does. The conrod's 0.5 mm grid measured 17-85 at its steepest sites through
+/// its fourteenth re-reference, up to 620 at the fifteenth and 1.7e3-1.7e4 at the sixteenth,
+/// with `sum_I |N_I|` up to 18 and `sum_I |grad N_I|` 90 times the median site's.
 pub const MAX_CONDITION: Real = 1e3;
 
 /// How many times [`condition_sites`] visits the sites at most.
