@@ -305,11 +305,7 @@ impl<const D: usize> KernelCloud<D> {
                 ),
                 Some(a) => {
                     // The basis is scaled by the neighbours' mean support (conditioning only).
-                    let n = nb.len().max(1) as Real;
-                    let scale = nb.iter().fold([0.0; D], |s, &i| {
-                        let ai = a[i as usize];
-                        std::array::from_fn(|k| s[k] + ai[k] / n)
-                    });
+                    let scale = mean_support(&nb, a);
                     evaluate(
                         x,
                         &offsets,
@@ -450,13 +446,9 @@ pub fn condition_sites<const D: usize>(
     for _ in 0..CONDITION_PASSES {
         let mut any = false;
         for (site, &x) in sites.iter().enumerate() {
-            // The particles that could reach `x`: within the largest support in any direction
-            // (the one missing may be the direction whose supports are short).
-            let reach = largest.iter().copied().fold(0.0, Real::max);
-            grid.query(positions, x, [reach; D], &mut nb);
-            let (mut covering, mut rest): (Vec<u32>, Vec<u32>) = nb
-                .iter()
-                .partition(|&&i| covers(x, positions[i as usize], supports[i as usize]));
+            grid.query(positions, x, largest, &mut nb);
+            nb.retain(|&i| covers(x, positions[i as usize], supports[i as usize]));
+            let mut covering = nb.clone();
             let condition_now = |covering: &[u32], supports: &[[Real; D]]| {
                 condition(x, covering, positions, volumes, supports)
             };
@@ -464,6 +456,15 @@ pub fn condition_sites<const D: usize>(
                 continue;
             }
             (above[site], any) = (true, true);
+            // The particles that could reach `x`: within the largest support in any direction
+            // (the one missing may be the direction whose supports are short).
+            let reach = largest.iter().copied().fold(0.0, Real::max);
+            grid.query(positions, x, [reach; D], &mut nb);
+            let mut rest: Vec<u32> = nb
+                .iter()
+                .copied()
+                .filter(|&i| !covers(x, positions[i as usize], supports[i as usize]))
+                .collect();
             let distance = |i: u32| {
                 let xi = positions[i as usize];
                 (0..D).map(|k| (x[k] - xi[k]).powi(2)).sum::<Real>()
@@ -499,11 +500,7 @@ fn condition<const D: usize>(
     volumes: &[Real],
     supports: &[[Real; D]],
 ) -> Real {
-    let n = nb.len().max(1) as Real;
-    let scale = nb.iter().fold([0.0; D], |s, &i| {
-        let ai = supports[i as usize];
-        std::array::from_fn(|k| s[k] + ai[k] / n)
-    });
+    let scale = mean_support(nb, supports);
     let terms = nb.iter().map(|&i| {
         let xi = positions[i as usize];
         let d: [Real; D] = std::array::from_fn(|k| x[k] - xi[k]);
@@ -535,16 +532,32 @@ fn moment_matrix<const D: usize, const N: usize>(
 ) -> SMatrix<Real, N, N> {
     let mut m = SMatrix::<Real, N, N>::zeros();
     for (d, w) in terms {
-        let h = SVector::<Real, N>::from_fn(|r, _| {
-            if r == 0 {
-                1.0
-            } else {
-                -d[r - 1] / scale[r - 1]
-            }
-        });
+        let h = basis::<D, N>(d, scale);
         m += h * h.transpose() * w;
     }
     m
+}
+
+/// The linear basis `H(X_I - x) = [1, -(x - X_I)_k / scale_k]` (-) at the offset
+/// `d = x - X_I` (m), scaled by `scale` (m) for conditioning, `N = D + 1`.
+fn basis<const D: usize, const N: usize>(d: [Real; D], scale: [Real; D]) -> SVector<Real, N> {
+    SVector::from_fn(|r, _| {
+        if r == 0 {
+            1.0
+        } else {
+            -d[r - 1] / scale[r - 1]
+        }
+    })
+}
+
+/// The mean of the support radii `supports` (m) of the neighbours `nb`, per direction: the
+/// scale of a variable-support cloud's basis.
+fn mean_support<const D: usize>(nb: &[u32], supports: &[[Real; D]]) -> [Real; D] {
+    let n = nb.len().max(1) as Real;
+    nb.iter().fold([0.0; D], |s, &i| {
+        let ai = supports[i as usize];
+        std::array::from_fn(|k| s[k] + ai[k] / n)
+    })
 }
 
 /// A point of a [`Lattice`] given by a particle and its offset from it: the position is
@@ -735,15 +748,7 @@ fn moments<const D: usize, const N: usize>(
         v[k + 1] = -1.0 / scale[k];
         v
     });
-    let basis = |d: [Real; D]| {
-        SVector::<Real, N>::from_fn(|r, _| {
-            if r == 0 {
-                1.0
-            } else {
-                -d[r - 1] / scale[r - 1]
-            }
-        })
-    };
+    let basis = |d: [Real; D]| basis::<D, N>(d, scale);
     for (&i, &di) in nb.iter().zip(d) {
         let v = volumes[i as usize];
         let (phi, g) = window(di, support(i));
