@@ -210,6 +210,32 @@ def test_sweep_writes_csv_markdown_and_the_pareto_plot(rkforge_bin, tmp_path):
     assert bad.returncode == 1 and "--resolution `11by26`" in bad.stderr
 
 
+def test_sweep_holds_the_added_mass_of_a_selectively_scaled_scene(rkforge_bin, tmp_path):
+    # The press upsetting scales its masses to a 20 us step: at one target a grid twice as
+    # fine would add four times the mass (another, heavier problem); the sweep holds it.
+    scene = tmp_path / "press.toml"
+    scene.write_text(scene_variant("press_upsetting.toml", {
+        "end_s = 1.5                      # 30 mm at 20 mm/s": "end_s = 0.05",
+        "history_interval_s = 0.01": "history_interval_s = 0.005",
+    }))
+    out = tmp_path / "sweep"
+    proc = subprocess.run([rkforge_bin, "sweep", str(scene), "--resolution", "11x31,21x61",
+                           "--integration", "q2", "--dt-safety", "0.5,0.9", "--out", str(out)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    with open(out / "sweep.csv") as f:
+        rows = {(r["nx"], r["dt_safety"]): r for r in csv.DictReader(f)}
+    own = float(rows[("11", "0.5")]["added_mass_rel"])
+    assert own > 1000, own
+    for key, r in rows.items():
+        assert 0.8 * own < float(r["added_mass_rel"]) <= own * (1 + 1e-9), (key, r["added_mass_rel"], own)
+    # The same mass: the finer grid steps twice as often, the larger safety less often.
+    steps = {k: int(r["steps"]) for k, r in rows.items()}
+    assert 1.8 < steps[("21", "0.5")] / steps[("11", "0.5")] < 2.2, steps
+    assert steps[("11", "0.9")] < steps[("11", "0.5")], steps
+    assert "Mass scaling held" in (out / "sweep.md").read_text()
+
+
 BLOCK_SHORT = {
     "particles = [21, 21]": "particles = [9, 9]",
     "end_s = 0.015": "end_s = 0.002",
