@@ -5,7 +5,7 @@
 //! `SolidSimulation`) from mark to mark of its [`schedule`] (history rows every
 //! `output.history_interval_s`, frame times merged in), or by a number of steps, with a
 //! hook between steps (commands, cancels), and records the [`History`]; the run ends with
-//! the [`summary`] ([`solid_summary`] in 3D). [`drive`] runs a scene to its end through one,
+//! the [`summary()`] ([`solid_summary`] in 3D). [`drive`] runs a scene to its end through one,
 //! for the command line and the Python package, with what a caller adds at the samples and
 //! frames (files, plots, MCAP, a progress bar) through an [`Observer`]; the ROS node and
 //! the FMU step their own [`Run`] as their services and communication points order.
@@ -22,7 +22,7 @@ pub use summary::{
 };
 
 impl<S: Body> Outcome<S> {
-    /// How the run ended, for [`summary`].
+    /// How the run ended, for [`summary()`].
     pub fn ending(&self) -> Ending<'_> {
         match (&self.failure, self.stopped) {
             (None, _) => Ending::Finished,

@@ -6,9 +6,9 @@
 //! `HenckyJ2::update_batch`, shared with 2D; only these differ:
 //!
 //! - step 1: `b_e = F C_p^{-1} F^T` (-), symmetric, its principal values `lambda_i^2` and
-//!   directions `n_i` by [`sym_spectral3`] (cyclic Jacobi: exact for a diagonal `b_e`, as
-//!   at the undeformed state or along the axes of a uniaxial state, and accurate for
-//!   nearly repeated `lambda_i`);
+//!   directions `n_i` by [`crate::math::sym_spectral3`] (cyclic Jacobi: exact for a
+//!   diagonal `b_e`, as at the undeformed state or along the axes of a uniaxial state, and
+//!   accurate for nearly repeated `lambda_i`);
 //! - step 5: after the return, `b_e = sum exp(2 eps_i) n_i n_i^T` and
 //!   `C_p^{-1} = F^{-1} b_e F^{-T}` (-), `F^{-1} = adj F / det F`;
 //! - step 6: Kirchhoff `tau = sum tau_i n_i n_i^T` (Pa) and first Piola-Kirchhoff

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
     /// Interval between rows of the time history (s); default: end time / 200
-    /// ([`Scene::history_interval`]).
+    /// ([`crate::Scene::history_interval`]).
     #[serde(default)]
     pub history_interval_s: Option<Real>,
     /// Number of VTK frames and shape plots over the run (0 for none).

@@ -1,4 +1,4 @@
-//! PNG figures for reports, by kind: [`line`] plots (histories, forces, energy, sweeps),
+//! PNG figures for reports, by kind: [`line`](mod@line) plots (histories, forces, energy, sweeps),
 //! [`shape`] plots (deformed shapes and forging stages, coloured through [`colour_bar`]) and
 //! [`solid`] plots (deformed 3D bodies, shaded, coloured the same way).
 //!
