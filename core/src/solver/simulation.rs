@@ -169,7 +169,7 @@ impl Simulation {
         let tool_dt = stable_step::tool_limit(scene, tools, st, disc.h_min())?;
         let (elastic, plastic) = timed(&mut times.stress, || stress::run(scene, disc, st, ws))?;
         let dt = timed(&mut times.integration, || {
-            stable_step::length(scene, st, tool_dt, max_dt)
+            stable_step::length(&scene.time, st.stable_dt, st.dt_prev, tool_dt, max_dt)
         })?;
         timed(&mut times.internal_force, || {
             update::forces(disc, tools, st, ws, Some(dt))

@@ -67,7 +67,7 @@ use super::nodal_stabilization::{self, Forces, Tables};
 use super::point_outputs::PointOut;
 use super::quasi_static;
 use super::simulation::{stepping_loop, Ran, StageTimes, Stepping};
-use super::stable_step::{landing_slack, landing_step, tool_step_limit, StepLength};
+use super::stable_step::{self, tool_step_limit};
 use super::state::Filled;
 use super::stress::{self, has_avx2, Inputs};
 use super::update::{self, Motion, Predictor};
@@ -356,7 +356,7 @@ fn gather(
     disc: &SolidDisc,
     st: &mut SolidState,
     ws: &mut SolidWorkspace,
-    step: Option<StepLength>,
+    step: Option<stable_step::StepLength>,
 ) {
     let predictor = step.map(|s| Predictor {
         dt_avg: s.avg,
@@ -426,22 +426,8 @@ impl SolidSimulation {
                 ),
             });
         }
-        let full = scene
-            .time
-            .dt_s
-            .unwrap_or(scene.time.dt_safety * st.stable_dt)
-            .min(tool_dt);
-        let dt = landing_step(full, max_dt, st.dt_prev, landing_slack(scene.time.dt_s));
-        if dt.is_nan() || dt <= 0.0 {
-            return Err(Error::Request(format!(
-                "step length {dt} s is not positive"
-            )));
-        }
-        let step = StepLength {
-            dt,
-            full,
-            avg: 0.5 * (dt + st.dt_prev),
-        };
+        let step = stable_step::length(&scene.time, st.stable_dt, st.dt_prev, tool_dt, max_dt)?;
+        let dt = step.dt;
         timed(&mut times.internal_force, || {
             gather(disc, st, ws, Some(step))
         });
@@ -453,14 +439,14 @@ impl SolidSimulation {
             }
             let at_end: Vec<Real> = tools.iter().map(|t| t.state.stroke).collect();
             for t in tools.iter_mut() {
-                t.state.stroke += (full - dt) * t.state.velocity;
+                t.state.stroke += (step.full - dt) * t.state.velocity;
             }
             let mut touch = ws.contact.stage(&ws.team, disc, tools, st, &ws.out, step);
             let on_itself = SelfStage {
                 tools: &tools[..disc.scene_tools],
                 out: &ws.out,
                 du: ws.contact.move_bound(),
-                dt: full,
+                dt: step.full,
                 dt_avg: step.avg,
             };
             touch.any |= ws
