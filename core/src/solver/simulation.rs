@@ -166,7 +166,14 @@ impl Simulation {
             times,
         } = self;
         rereference::if_due(scene, disc, tools, st, ws)?;
-        let tool_dt = stable_step::tool_limit(scene, tools, st, disc.h_min())?;
+        let tool_dt = stable_step::tool_limit(
+            &scene.time,
+            tools,
+            st.step,
+            st.time,
+            st.stable_dt,
+            disc.h_min(),
+        )?;
         let (elastic, plastic) = timed(&mut times.stress, || stress::run(scene, disc, st, ws))?;
         let dt = timed(&mut times.integration, || {
             stable_step::length(&scene.time, st.stable_dt, st.dt_prev, tool_dt, max_dt)
@@ -303,7 +310,7 @@ impl Simulation {
     }
     /// The step the next call to `step` will take when not limited (s).
     pub fn next_dt(&self) -> Real {
-        stable_step::next_dt(&self.scene, &self.st)
+        stable_step::natural_step(&self.scene.time, self.st.stable_dt)
     }
     /// Energy account.
     pub fn energy(&self) -> Energy {

@@ -2,12 +2,11 @@
 //! (`critical_step.rs`) and the stable estimate on the current deformation, the tools'
 //! speed limit, and the equal steps that land on a requested instant.
 
-use super::state::State;
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::scene::Motion;
-use crate::scene::{Scene, TimeSpec};
-use crate::tools::{Driven, Tool};
+use crate::scene::TimeSpec;
+use crate::tools::Driven;
 
 /// How far below the natural step a landing plan puts its steps (-): the room the natural
 /// step has to shrink, as the body deforms, before the plan must change.
@@ -139,21 +138,26 @@ pub(super) fn tool_step_limit<T: Driven>(
     Ok(limited)
 }
 
-/// The step the next call to `step` takes when not limited (s): the scene's fixed
-/// `time.dt_s`, or `dt_safety` times the stable estimate.
-pub(super) fn next_dt(scene: &Scene, st: &State) -> Real {
-    scene
-        .time
-        .dt_s
-        .unwrap_or(scene.time.dt_safety * st.stable_dt)
+/// The natural step (s): the scene's fixed `time.dt_s`, or `dt_safety` times the stable
+/// estimate `stable_dt` (s); the step the next call to `step` takes when neither the tools
+/// nor a landing shorten it.
+pub(super) fn natural_step(time: &TimeSpec, stable_dt: Real) -> Real {
+    time.dt_s.unwrap_or(time.dt_safety * stable_dt)
 }
 
-/// The step's first check ([`tool_step_limit`] on the natural step): the longest step the
-/// tools' speeds allow (s), or an error naming the step, the time and the tool too fast
-/// for it, before anything changes.
-pub(super) fn tool_limit(scene: &Scene, tools: &[Tool], st: &State, h_min: Real) -> Result<Real> {
-    tool_step_limit(tools, st.time, next_dt(scene, st), h_min)
-        .map_err(|what| Error::Request(format!("step {} (t = {:.6e} s): {what}", st.step, st.time)))
+/// The step's first check, for both dimensions ([`tool_step_limit`] on the natural step at
+/// `stable_dt`, s): the longest step the tools' speeds allow (s), or an error naming the
+/// step `step` at time `t` (s) and the tool too fast for it, before anything changes.
+pub(super) fn tool_limit<T: Driven>(
+    time: &TimeSpec,
+    tools: &[T],
+    step: u64,
+    t: Real,
+    stable_dt: Real,
+    h_min: Real,
+) -> Result<Real> {
+    tool_step_limit(tools, t, natural_step(time, stable_dt), h_min)
+        .map_err(|what| Error::Request(format!("step {step} (t = {t:.6e} s): {what}")))
 }
 
 /// The lengths of one step (s).
@@ -180,7 +184,7 @@ pub(super) fn length(
     tool_dt: Real,
     max_dt: Option<Real>,
 ) -> Result<StepLength> {
-    let full = time.dt_s.unwrap_or(time.dt_safety * stable_dt).min(tool_dt);
+    let full = natural_step(time, stable_dt).min(tool_dt);
     let ceiling = stable_dt.min(tool_dt);
     let dt = landing_step(full, max_dt, dt_prev, landing_slack(time.dt_s), ceiling);
     if dt.is_nan() || dt <= 0.0 {

@@ -67,7 +67,7 @@ use super::nodal_stabilization::{self, Forces, Tables};
 use super::point_outputs::PointOut;
 use super::quasi_static;
 use super::simulation::{stepping_loop, Ran, StageTimes, Stepping};
-use super::stable_step::{self, tool_step_limit};
+use super::stable_step;
 use super::state::Filled;
 use super::stress::{self, has_avx2, Inputs};
 use super::update::{self, Motion, Predictor};
@@ -408,13 +408,14 @@ impl SolidSimulation {
             times,
         } = self;
         rereference::if_due(scene, disc, st, ws)?;
-        let natural = scene
-            .time
-            .dt_s
-            .unwrap_or(scene.time.dt_safety * st.stable_dt);
-        let tool_dt = tool_step_limit(tools, st.time, natural, disc.h_min).map_err(|what| {
-            Error::Request(format!("step {} (t = {:.6e} s): {what}", st.step, st.time))
-        })?;
+        let tool_dt = stable_step::tool_limit(
+            &scene.time,
+            tools,
+            st.step,
+            st.time,
+            st.stable_dt,
+            disc.h_min,
+        )?;
         let (elastic, plastic) = timed(&mut times.stress, || stress_stage(disc, st, ws))?;
         if st.stable_dt < CRUSHED * disc.critical_dt0 {
             return Err(Error::Diverged {
