@@ -3,10 +3,13 @@
 
 Runs `scenes/conrod_3d.toml` on the grids given (particles along x, y, z of the eighth bar),
 each with the same mass scaling (every mass times 2000 unless told: the scene's target step
-would add more mass on a finer grid, docs/forging.md "One mass for every grid"), and prints one row per grid: the force at chosen strokes,
-the end force at 9 mm, the mean force over the last half millimetre (the die's work from
-8.5 to 9 mm over 0.5 mm), the work to 9 mm, the added mass and the largest kinetic to
-internal energy ratio. Then, for each figure, the three finest grids' Richardson estimate
+would add more mass on a finer grid, docs/forging.md "One mass for every grid"), and
+prints one row per grid: the force at chosen strokes, the end force at 9 mm, the mean force
+over the last half millimetre (the die's work from 8.5 to 9 mm over 0.5 mm), the work to
+9 mm, the stroke at which the force first reaches 300 and 350 kN (`s@300`, `s@350`: the end's
+steep rise read along the stroke, where a force read at one stroke moves with the instant
+the cavity fills), the added mass and the largest kinetic to internal
+energy ratio. Then, for each figure, the three finest grids' Richardson estimate
 as Celik et al. (2008, "Procedure for estimation and reporting of uncertainty due to
 discretization in CFD applications", J. Fluids Eng. 130, 078001) give it for grids refined
 by unequal ratios: the observed order p, the extrapolated value and the fine grid's
@@ -38,6 +41,7 @@ SCENE = ROOT / "scenes" / "conrod_3d.toml"
 BAR_MM = (28.0, 7.0, 11.0)
 GRIDS = ["29x8x12", "41x11x17", "57x15x23", "68x18x27"]
 STROKES_MM = [5.0, 7.0, 8.0, 8.5, 9.0]
+FORCES_KN = [300.0, 350.0]
 
 
 def spacing_mm(grid):
@@ -81,32 +85,43 @@ def figures(out):
                 return values[k - 1] + t * (values[k] - values[k - 1])
         raise SystemExit(f"{out}: the run ends at {stroke[-1]:.3f} mm, before {s} mm")
 
+    def reaching(f):
+        """The stroke (mm) at which the force first reaches f kN, interpolated."""
+        for k in range(1, len(stroke)):
+            if force[k] >= f:
+                t = (f - force[k - 1]) / (force[k] - force[k - 1])
+                return stroke[k - 1] + t * (stroke[k] - stroke[k - 1])
+        return math.nan
+
     summary = json.loads((out / "summary.json").read_text())
     fig = {f"F{s:g}": at(force, s) for s in STROKES_MM}
     fig["mean8.5-9"] = (at(work, 9.0) - at(work, 8.5)) / 0.5
     fig["W9"] = at(work, 9.0)
+    for f in FORCES_KN:
+        fig[f"s@{f:g}"] = reaching(f)
     fig["added"] = summary.get("mass_scaling", {}).get("added_mass_rel", 0.0)
     fig["K/I"] = summary["energy"]["kinetic_to_internal_max"]
     fig["steps"] = summary["steps"]
     return fig
 
 
-def celik(h, phi):
+def celik(h, phi, digits=1):
     """Celik et al. (2008) for three grids, h[0] the finest: (p, extrapolated, GCI) or a
     reason why no estimate exists."""
     r21, r32 = h[1] / h[0], h[2] / h[1]
     e21, e32 = phi[1] - phi[0], phi[2] - phi[1]
     if e21 == 0.0 or e32 == 0.0:
         return "two grids agree exactly"
+    diffs = f"differences {e21:+.{digits + 1}f} fine, {e32:+.{digits + 1}f} coarse"
     if e32 / e21 < 0.0:
         if abs(e21) < abs(e32):
             half = (max(phi) - min(phi)) / 2.0
             mid = (max(phi) + min(phi)) / 2.0
-            return (f"oscillating convergence (differences {e21:+.2f} fine, {e32:+.2f} coarse): "
-                    f"{mid:.1f} +- {half:.1f} ({100 * half / mid:.2f} %, half the range)")
-        return f"oscillates with a growing amplitude (differences {e21:+.2f} fine, {e32:+.2f} coarse)"
+            return (f"oscillating convergence ({diffs}): {mid:.{digits}f} +- {half:.{digits}f} "
+                    f"({100 * half / mid:.2f} %, half the range)")
+        return f"oscillates with a growing amplitude ({diffs})"
     if abs(e32) <= abs(e21):
-        return f"diverges (differences {e21:+.2f} fine, {e32:+.2f} coarse: they grow as the grid refines)"
+        return f"diverges ({diffs}: they grow as the grid refines)"
     p = math.log(abs(e32 / e21)) / math.log(r21)
     for _ in range(200):
         q = math.log((r21**p - 1.0) / (r32**p - 1.0))
@@ -152,20 +167,22 @@ def main():
     print("| h (mm) | " + " | ".join(keys) + " |")
     print("|---" * (len(keys) + 1) + "|")
     for h, fig in rows:
-        cells = [f"{fig[k]:.4f}" if k == "K/I" else f"{fig[k]:.1f}" if isinstance(fig[k], float)
+        cells = [f"{fig[k]:.4f}" if k == "K/I" else f"{fig[k]:.3f}" if k.startswith("s@")
+                 else f"{fig[k]:.1f}" if isinstance(fig[k], float)
                  else str(fig[k]) for k in keys]
         print(f"| {h:.3f} | " + " | ".join(cells) + " |")
     if len(rows) >= 3:
         fine = rows[-3:][::-1]
         h = [r[0] for r in fine]
         print(f"\nthe three finest grids (h = {h[0]:.3f}, {h[1]:.3f}, {h[2]:.3f} mm):")
-        for k in keys[: len(STROKES_MM) + 2]:
-            est = celik(h, [r[1][k] for r in fine])
+        for k in keys[: len(STROKES_MM) + 2] + [f"s@{f:g}" for f in FORCES_KN]:
+            digits = 3 if k.startswith("s@") else 1
+            est = celik(h, [r[1][k] for r in fine], digits)
             if isinstance(est, str):
                 print(f"  {k}: {est}")
             else:
                 p, ext, gci = est
-                print(f"  {k}: order {p:.2f}, extrapolated {ext:.1f}, GCI {100 * gci:.2f} %")
+                print(f"  {k}: order {p:.2f}, extrapolated {ext:.{digits}f}, GCI {100 * gci:.2f} %")
 
 
 if __name__ == "__main__":
