@@ -99,6 +99,7 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
                     progress: false,
                     frames: false,
                     mcap: None,
+                    restart: Default::default(),
                 };
                 let report = run::run(&s, &opts)
                     .map_err(|e| format!("{} ({}): {e}", scene.name, rule.name()))?;

@@ -20,6 +20,7 @@ use rkforge_core::scene::Friction;
 use rkforge_core::scene::SolidScene;
 use rkforge_core::scene_overrides::{parse_value, split_arg, split_values, Overridable};
 use rkforge_core::{IntegrationRule, Scene, SceneSource};
+use rkforge_runner::checkpoint::Restart;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -179,6 +180,15 @@ struct RunArgs {
     /// Chunk compression of the MCAP file: `zstd` or `none`.
     #[arg(long, default_value = "zstd")]
     mcap_compression: rkforge_messages::record::Compression,
+    /// Write a checkpoint into the output folder (`checkpoint.cbor`) at the first history
+    /// sample or frame after every this many seconds of wall time (0: at every one), so that
+    /// a killed run can go on with --resume; removed when the run ends.
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    checkpoint_every_s: Option<f64>,
+    /// Go on from the checkpoint in the output folder, written by a run of the same scene,
+    /// overrides and frames: the same bits as a run that never stopped.
+    #[arg(long)]
+    resume: bool,
 }
 
 fn main() -> ExitCode {
@@ -254,7 +264,13 @@ fn run_solid_command(a: &RunArgs, mut scene: SolidScene) -> Result<(), String> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&scene.name));
-    let report = run_solid::run(&scene, &out, !a.no_frames, mcap_options(a).as_ref())?;
+    let report = run_solid::run(
+        &scene,
+        &out,
+        !a.no_frames,
+        mcap_options(a).as_ref(),
+        restart(a)?,
+    )?;
     println!(
         "{}",
         rkforge_runner::references_beside(&scene.name, &scene.reference, &report.summary)
@@ -283,6 +299,30 @@ fn mcap_options(a: &RunArgs) -> Option<McapOptions> {
     })
 }
 
+/// The checkpoints and resumption `--checkpoint-every-s` and `--resume` ask for.
+fn restart(a: &RunArgs) -> Result<Restart, String> {
+    let every = match a.checkpoint_every_s {
+        Some(s) if !(s.is_finite() && s >= 0.0) => {
+            return Err(format!(
+                "--checkpoint-every-s {s}: give a number of seconds, 0 or more"
+            ))
+        }
+        Some(s) => Some(std::time::Duration::from_secs_f64(s)),
+        None => None,
+    };
+    if a.mcap.is_some() && (every.is_some() || a.resume) {
+        return Err(
+            "--mcap: a recording cannot be resumed; record without --checkpoint-every-s and \
+             --resume, or leave out --mcap"
+                .into(),
+        );
+    }
+    Ok(Restart {
+        every,
+        resume: a.resume,
+    })
+}
+
 fn run_command(a: RunArgs) -> Result<(), String> {
     set_threads(a.threads)?;
     if let Some(scene) = solid_scene(&a.scene, &a.set)? {
@@ -301,6 +341,7 @@ fn run_command(a: RunArgs) -> Result<(), String> {
         progress: !a.quiet,
         frames: !a.no_frames,
         mcap: mcap_options(&a),
+        restart: restart(&a)?,
     };
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
@@ -480,6 +521,7 @@ fn default_run() -> Result<(), String> {
         progress: true,
         frames: true,
         mcap: None,
+        restart: Default::default(),
     };
     println!(
         "rkforge: {} ({}), the paper's Table 3 setting",

@@ -4,12 +4,15 @@ use crate::output::{plots, vtu, HistoryPlots};
 use crate::recording::{Mcap, McapOptions};
 use indicatif::{ProgressBar, ProgressStyle};
 use rkforge_core::{Kinematics, Scene, Simulation};
-use rkforge_runner::Observer;
+use rkforge_runner::checkpoint::{self, Restart};
+use rkforge_runner::{Checkpoints, Observer, Run};
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::path::PathBuf;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// A frame's shape for the plots.
+#[derive(Serialize, Deserialize)]
 struct Shape {
     /// Time (s).
     time: f64,
@@ -38,6 +41,8 @@ pub struct Options {
     /// Record the ROS 2 topics of `rkforge-ros` (namespace `/rkforge`) at every history
     /// sample to an MCAP file; SIGINT and SIGTERM then stop the run and finish the files.
     pub mcap: Option<McapOptions>,
+    /// Checkpoints written, and whether the run goes on from its checkpoint in `out`.
+    pub restart: Restart,
 }
 
 /// What a finished run produced.
@@ -94,6 +99,7 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     let mut sim = Simulation::new(scene).map_err(|e| e.to_string())?;
     let end = scene.time.end_s;
     let frames = if opts.frames { scene.output.frames } else { 0 };
+    let mut started = checkpoint::start::<_, Taken>(&mut sim, frames, &opts.out, opts.restart)?;
     let mut outputs = Outputs {
         opts,
         bar: progress_bar(opts.progress, end),
@@ -101,15 +107,16 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
             Some(m) => Some(Mcap::start(m, scene)?),
             None => None,
         },
-        frames: Vec::new(),
-        shapes: Vec::new(),
+        taken: std::mem::take(&mut started.taken),
+        checkpoints: started.checkpoints.take(),
     };
-    let outcome = rkforge_runner::drive(&mut sim, frames, &mut outputs)?;
+    let outcome = started.go(&mut sim, frames, &opts.out, &mut outputs)?;
     outputs.bar.finish_and_clear();
     let clock = Instant::now();
     outcome.history.write(&opts.out.join("history.csv"))?;
     if frames > 0 {
-        vtu::write_pvd(&opts.out.join("frames.pvd"), &outputs.frames).map_err(|e| e.to_string())?;
+        vtu::write_pvd(&opts.out.join("frames.pvd"), &outputs.taken.frames)
+            .map_err(|e| e.to_string())?;
     }
     // Plots come before the summary so that their time is in it; the summary is written
     // even when a plot fails, and the plot's error is returned after it.
@@ -117,17 +124,18 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
         outcome
             .history
             .plots(&sim, &opts.out)
-            .and_then(|()| write_stages(&sim, opts, &outputs.shapes))
+            .and_then(|()| write_stages(&sim, opts, &outputs.taken.shapes))
     } else {
         Ok(())
     };
     let output_time = outcome.output_time + clock.elapsed();
-    let summary = rkforge_runner::summary(
+    let mut summary = rkforge_runner::summary(
         &sim,
-        wall.elapsed().as_secs_f64(),
-        output_time.as_secs_f64(),
+        started.wall_s + wall.elapsed().as_secs_f64(),
+        started.output_s + output_time.as_secs_f64(),
         outcome.ending(),
     );
+    started.mark(&mut summary);
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())?;
     std::fs::write(opts.out.join("summary.json"), &text)
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
@@ -148,13 +156,21 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
 }
 
 /// What `rkforge run` adds to the bare run: frames and the shapes of the stage plot, the
-/// MCAP recording and the progress bar.
+/// MCAP recording, the progress bar and the checkpoints.
 struct Outputs<'a> {
     opts: &'a Options,
     bar: ProgressBar,
     mcap: Option<Mcap>,
+    taken: Taken,
+    checkpoints: Option<Checkpoints>,
+}
+
+/// The frames taken so far: what a checkpoint keeps of them.
+#[derive(Default, Serialize, Deserialize)]
+struct Taken {
     /// Time and file of each VTK frame, for frames.pvd.
     frames: Vec<(f64, String)>,
+    /// Each frame's shape, for the stage plot.
     shapes: Vec<Shape>,
 }
 
@@ -167,7 +183,7 @@ impl Observer for Outputs<'_> {
     }
 
     fn frame(&mut self, sim: &Simulation) -> Result<(), String> {
-        write_frame(sim, self.opts, &mut self.frames, &mut self.shapes)
+        write_frame(sim, self.opts, &mut self.taken)
     }
 
     fn stop(&self, sim: &Simulation) -> Option<String> {
@@ -177,6 +193,13 @@ impl Observer for Outputs<'_> {
     fn progress(&mut self, sim: &Simulation) {
         let end = sim.scene().time.end_s;
         self.bar.set_position((sim.time() / end * 1000.0) as u64);
+    }
+
+    fn checkpoint(&mut self, sim: &Simulation, run: &Run, output: Duration) -> Result<(), String> {
+        match &mut self.checkpoints {
+            Some(c) => c.write_if_due(sim, run, &self.taken, output),
+            None => Ok(()),
+        }
     }
 }
 
@@ -216,16 +239,11 @@ fn axis_labels(sim: &Simulation) -> (&'static str, &'static str) {
 }
 
 /// A VTK frame and the shape kept for the stage plot.
-fn write_frame(
-    sim: &Simulation,
-    opts: &Options,
-    list: &mut Vec<(f64, String)>,
-    shapes: &mut Vec<Shape>,
-) -> Result<(), String> {
+fn write_frame(sim: &Simulation, opts: &Options, taken: &mut Taken) -> Result<(), String> {
     let dir = opts.out.join("frames");
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     let f = sim.fields();
-    let name = format!("frame_{:04}.vtu", list.len());
+    let name = format!("frame_{:04}.vtu", taken.frames.len());
     let mut scalars: Vec<(&str, &[f64])> = vec![
         ("plastic_strain", &f.plastic_strain),
         ("von_mises_Pa", &f.von_mises),
@@ -245,7 +263,7 @@ fn write_frame(
         ],
     )
     .map_err(|e| format!("cannot write {name}: {e}"))?;
-    list.push((sim.time(), format!("frames/{name}")));
+    taken.frames.push((sim.time(), format!("frames/{name}")));
     let tools = sim.tools().iter().map(|t| t.vertices()).collect();
     let marks = sim
         .fill_points()
@@ -261,7 +279,7 @@ fn write_frame(
             points: lap.particles.iter().map(|&j| f.positions[j]).collect(),
         })
         .collect();
-    shapes.push(Shape {
+    taken.shapes.push(Shape {
         time: sim.time(),
         positions: f.positions,
         plastic_strain: f.plastic_strain,

@@ -13,17 +13,20 @@
 //! the symmetry planes; with `[thermal]`, `temperature.png`: the last frame's temperature
 //! from both sides. With `--mcap`, the ROS 2 topics of a 3D scene at every history sample
 //! ([`crate::recording`]), SIGINT and SIGTERM stopping the run at the next sample with its
-//! files finished.
+//! files finished. With checkpoints ([`rkforge_runner::checkpoint`]), the frames taken so far
+//! are kept in each.
 
 use crate::output::plots::{solid_plot, SolidPanel, View};
 use crate::output::vtu::{write_pvd, write_vtu_3d, write_vtu_triangles};
 use crate::recording::{Mcap, McapOptions};
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::{DiePressure, SolidSimulation};
-use rkforge_runner::{drive, solid_summary, Observer};
+use rkforge_runner::checkpoint::{self, Restart};
+use rkforge_runner::{solid_summary, Checkpoints, Observer, Run};
+use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// What a finished (or failed) 3D run produced.
 pub struct SolidReport {
@@ -36,27 +39,36 @@ pub struct SolidReport {
 /// Run `scene` to its end time, writing `summary.json` and `history.csv` into `out`, and
 /// with `mcap` the recording (its summary record is summary.json's text). A run that fails
 /// midway, or that a signal stops while it records, still writes them, the summary with
-/// `"status": "error"` (or `"stopped"`) and the reason.
+/// `"status": "error"` (or `"stopped"`) and the reason. `restart` says whether it goes on
+/// from its checkpoint in `out` and how often it writes one.
 pub fn run(
     scene: &SolidScene,
     out: &Path,
     frames: bool,
     mcap: Option<&McapOptions>,
+    restart: Restart,
 ) -> Result<SolidReport, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let wall = Instant::now();
     let mut sim = SolidSimulation::new(scene).map_err(|e| e.to_string())?;
     let nframes = if frames { scene.output.frames } else { 0 };
+    let mut started = checkpoint::start::<_, Vec<Frame>>(&mut sim, nframes, out, restart)?;
     let mut shots = Shots {
-        frames: Vec::new(),
+        frames: std::mem::take(&mut started.taken),
         mcap: mcap.map(|m| Mcap::start(m, scene)).transpose()?,
+        checkpoints: started.checkpoints.take(),
     };
-    let outcome = drive(&mut sim, nframes, &mut shots)?;
+    let outcome = started.go(&mut sim, nframes, out, &mut shots)?;
     if !shots.frames.is_empty() {
         write_frames(&sim, &shots.frames, out, &scene.name)?;
     }
     outcome.history.write(&out.join("history.csv"))?;
-    let summary = solid_summary(&sim, wall.elapsed().as_secs_f64(), outcome.ending());
+    let mut summary = solid_summary(
+        &sim,
+        started.wall_s + wall.elapsed().as_secs_f64(),
+        outcome.ending(),
+    );
+    started.mark(&mut summary);
     let text = serde_json::to_string_pretty(&summary).map_err(|e| e.to_string())? + "\n";
     std::fs::write(out.join("summary.json"), &text)
         .map_err(|e| format!("cannot write summary.json: {e}"))?;
@@ -70,10 +82,11 @@ pub fn run(
 }
 
 /// What a 3D run adds to the bare run: the frames, taken as it goes and written at its end,
-/// and the MCAP recording of its samples.
+/// the MCAP recording of its samples and the checkpoints.
 struct Shots {
     frames: Vec<Frame>,
     mcap: Option<Mcap>,
+    checkpoints: Option<Checkpoints>,
 }
 
 impl Observer<SolidSimulation> for Shots {
@@ -92,11 +105,24 @@ impl Observer<SolidSimulation> for Shots {
     fn stop(&self, sim: &SolidSimulation) -> Option<String> {
         self.mcap.as_ref().and_then(|m| m.interrupted(sim.time()))
     }
+
+    fn checkpoint(
+        &mut self,
+        sim: &SolidSimulation,
+        run: &Run<SolidSimulation>,
+        output: Duration,
+    ) -> Result<(), String> {
+        match &mut self.checkpoints {
+            Some(c) => c.write_if_due(sim, run, &self.frames, output),
+            None => Ok(()),
+        }
+    }
 }
 
 /// One frame of the body: time (s), particle positions (m), each cell's plastic strain
 /// (-) and in a scene with `[thermal]` its temperature (degrees C), the means over the
 /// cell's integration points.
+#[derive(Serialize, Deserialize)]
 struct Frame {
     time: f64,
     positions: Vec<[f64; 3]>,

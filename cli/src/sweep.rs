@@ -118,6 +118,7 @@ impl Sweepable for Scene {
             progress: false,
             frames: false,
             mcap: None,
+            restart: Default::default(),
         };
         Ok(run::run(self, &opts)?.summary)
     }
@@ -193,7 +194,7 @@ impl Sweepable for SolidScene {
         }
     }
     fn run(&self, out: &Path) -> Result<Value, String> {
-        let report = run_solid::run(self, out, false, None)?;
+        let report = run_solid::run(self, out, false, None, Default::default())?;
         match report.error {
             Some(e) => Err(e),
             None => Ok(report.summary),

@@ -14,11 +14,9 @@ use rkforge_model_description::FmuScene;
 use rkforge_runner::{Mark, Run, Runnable, Until};
 
 /// A simulation an FMU steps: what the instance reads, commands and saves of either kind.
-pub(crate) trait Forging: Runnable {
-    /// Its scene.
-    type Scene: FmuScene<Body = Self> + Overridable + Clone;
-    /// Everything that changes during a run (what an FMU state saves).
-    type State: Clone;
+pub(crate) trait Forging:
+    Runnable<Scene: FmuScene<Body = Self> + Overridable + Clone>
+{
     /// Set up the simulation of `scene`.
     fn build(scene: &Self::Scene) -> Result<Self>;
     /// Whether tool `k` touches the workpiece.
@@ -29,12 +27,8 @@ pub(crate) trait Forging: Runnable {
     fn velocity_at(&self, k: usize, t: f64) -> f64;
     /// Command tool `k`'s velocity (m/s).
     fn command(&mut self, k: usize, v: f64) -> Result<()>;
-    /// The state.
-    fn saved(&self) -> &Self::State;
     /// Whether `state` has this simulation's discretisation.
     fn fits(&self, state: &Self::State) -> bool;
-    /// Go on from `state`.
-    fn restore_state(&mut self, state: Self::State) -> Result<()>;
     /// The contact pressure at tool `k`'s stations (Pa); none in 3D.
     fn pressure(&self, k: usize) -> Vec<f64>;
     /// Keep `state` in a snapshot.
@@ -56,21 +50,13 @@ macro_rules! shared {
         fn command(&mut self, k: usize, v: f64) -> Result<()> {
             self.set_tool_velocity(k, v)
         }
-        fn saved(&self) -> &Self::State {
-            self.state()
-        }
         fn fits(&self, state: &Self::State) -> bool {
             self.state().d.len() == state.d.len()
-        }
-        fn restore_state(&mut self, state: Self::State) -> Result<()> {
-            self.restore(state)
         }
     };
 }
 
 impl Forging for Simulation {
-    type Scene = Scene;
-    type State = State;
     fn build(scene: &Scene) -> Result<Simulation> {
         Simulation::new(scene)
     }
@@ -90,8 +76,6 @@ impl Forging for Simulation {
 }
 
 impl Forging for SolidSimulation {
-    type Scene = SolidScene;
-    type State = SolidState;
     fn build(scene: &SolidScene) -> Result<SolidSimulation> {
         SolidSimulation::new(scene)
     }

@@ -139,9 +139,9 @@ trait NodeSim: Runnable + Published<Scene: Overridable + Clone + Sync> {
     /// # Errors
     ///
     /// The setup failed (the solver's reason).
-    fn start(scene: &Self::Scene) -> Result<Self, String>;
+    fn start(scene: &<Self as Published>::Scene) -> Result<Self, String>;
     /// The end time of `scene` and the interval between its history rows (s).
-    fn sampling(scene: &Self::Scene) -> (f64, f64);
+    fn sampling(scene: &<Self as Published>::Scene) -> (f64, f64);
     /// Set tool `tool`'s velocity along its axis (m/s), overriding the scene's motion.
     ///
     /// # Errors
@@ -200,8 +200,8 @@ fn run(a: &Args) -> Result<(), String> {
 /// Run the scene `text` (of the file `a.scene`) as a simulation of kind `S`.
 fn run_scene<S: NodeSim>(a: &Args, text: &str) -> Result<(), String> {
     let file = a.scene.display().to_string();
-    let mut source =
-        SceneSource::<S::Scene>::of_text(text, &file, Vec::new()).map_err(|e| e.to_string())?;
+    let mut source = SceneSource::<<S as Published>::Scene>::of_text(text, &file, Vec::new())
+        .map_err(|e| e.to_string())?;
     source.set_args(&a.set).map_err(|e| e.to_string())?;
     let scene = source.scene().clone();
     let topics = rkforge_ros::topics(&scene, &a.namespace)?;
@@ -356,7 +356,7 @@ fn schedule(end: f64, interval: f64) -> Result<Vec<Mark>, String> {
 /// against its bound), as `rkforge run` does.
 fn simulate<S: NodeSim>(
     sim: &mut S,
-    scene: &S::Scene,
+    scene: &<S as Published>::Scene,
     schedule: Vec<Mark>,
     rx: &mut Receiver<ToSim>,
     tx: &Sender<FromSim>,

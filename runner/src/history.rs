@@ -75,6 +75,23 @@ impl<S: Body> History<S> {
         }
     }
 
+    /// `history` (empty) with the `rows` of a checkpoint.
+    ///
+    /// # Errors
+    ///
+    /// A row has another number of columns than the history.
+    pub fn with_rows(mut history: Self, rows: Vec<Vec<f64>>) -> Result<Self, String> {
+        if let Some(r) = rows.iter().find(|r| r.len() != history.names.len()) {
+            return Err(format!(
+                "a history row has {} columns, the scene's history {}",
+                r.len(),
+                history.names.len()
+            ));
+        }
+        history.rows = rows;
+        Ok(history)
+    }
+
     /// Record a row of `sample`.
     pub fn push(&mut self, sample: &Sample<'_, S>) {
         self.rows

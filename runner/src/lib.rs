@@ -10,10 +10,12 @@
 //! frames (files, plots, MCAP, a progress bar) through an [`Observer`]; the ROS node and
 //! the FMU step their own [`Run`] as their services and communication points order.
 
+pub mod checkpoint;
 pub mod history;
 pub mod runnable;
 pub mod summary;
 
+pub use checkpoint::{Checkpoints, Resumed};
 pub use history::History;
 pub use runnable::Runnable;
 pub use summary::{
@@ -114,6 +116,26 @@ impl<S: Runnable> Run<S> {
             next: 0,
             history: sim.new_history(),
         }
+    }
+
+    /// A run resumed at mark `next` of `marks` with its `history` so far
+    /// ([`checkpoint::resume`]).
+    pub fn at(marks: Vec<Mark>, next: usize, history: History<S>) -> Run<S> {
+        Run {
+            marks,
+            next,
+            history,
+        }
+    }
+
+    /// The next mark's place in the schedule.
+    pub fn next(&self) -> usize {
+        self.next
+    }
+
+    /// The number of frames in the schedule.
+    pub fn frames(&self) -> usize {
+        self.marks.iter().filter(|m| m.frame).count()
     }
 
     /// Back to the first mark with an empty history, for a simulation rebuilt at t = 0.
@@ -226,6 +248,18 @@ pub trait Observer<S = Simulation> {
     }
     /// After each instant of the schedule.
     fn progress(&mut self, _sim: &S) {}
+    /// After each instant's outputs, with the run and the output time (s) spent so far in
+    /// this process: where a caller writes a [`checkpoint`] when one is due.
+    ///
+    /// # Errors
+    ///
+    /// The checkpoint cannot be written, which ends the run at once.
+    fn checkpoint(&mut self, _sim: &S, _run: &Run<S>, _output: Duration) -> Result<(), String>
+    where
+        S: Runnable,
+    {
+        Ok(())
+    }
 }
 
 /// An observer that does nothing: the bare run.
@@ -259,14 +293,38 @@ pub fn drive<S: Runnable>(
     observer: &mut impl Observer<S>,
 ) -> Result<Outcome<S>, String> {
     let mut run = Run::new(sim, schedule(sim, frames)?);
-    let mut output_time = Duration::ZERO;
     let clock = Instant::now();
-    let mut failure = run.record(sim).err().map(|e| e.to_string());
+    let failure = run.record(sim).err().map(|e| e.to_string());
     observer.sample(sim)?;
     if frames > 0 {
         observer.frame(sim)?;
     }
-    output_time += clock.elapsed();
+    drive_on(sim, run, failure, clock.elapsed(), observer)
+}
+
+/// Go on with `run` of `sim` to its end, as [`drive`] does after the start: a run resumed
+/// from a [`checkpoint`] ([`checkpoint::resume`]).
+///
+/// # Errors
+///
+/// The observer failed.
+pub fn resume<S: Runnable>(
+    sim: &mut S,
+    run: Run<S>,
+    observer: &mut impl Observer<S>,
+) -> Result<Outcome<S>, String> {
+    drive_on(sim, run, None, Duration::ZERO, observer)
+}
+
+/// The loop of [`drive`] and [`resume`]: from `run`'s next mark to its end, `failure` a
+/// failure already met and `output_time` the output time spent so far.
+fn drive_on<S: Runnable>(
+    sim: &mut S,
+    mut run: Run<S>,
+    mut failure: Option<String>,
+    mut output_time: Duration,
+    observer: &mut impl Observer<S>,
+) -> Result<Outcome<S>, String> {
     let mut recorded = true;
     let mut stopped = false;
     while failure.is_none() && !run.finished() {
@@ -296,6 +354,9 @@ pub fn drive<S: Runnable>(
         }
         output_time += clock.elapsed();
         observer.progress(sim);
+        if failure.is_none() {
+            observer.checkpoint(sim, &run, output_time)?;
+        }
     }
     if failure.is_some() && !recorded {
         let clock = Instant::now();

@@ -4,11 +4,29 @@
 
 use crate::History;
 use rkforge_core::outputs::Body;
-use rkforge_core::solver::SolidSimulation;
-use rkforge_core::{Error, Ran, Simulation};
+use rkforge_core::scene::SolidScene;
+use rkforge_core::solver::{SolidSimulation, SolidState};
+use rkforge_core::{Error, Ran, Scene, Simulation, State};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
 
 /// A simulation a [`Run`](crate::Run) steps and records.
 pub trait Runnable: Body + Send {
+    /// Its scene.
+    type Scene: Serialize;
+    /// Everything that changes during a run: what a checkpoint and an FMU state save.
+    type State: Clone + Serialize + DeserializeOwned;
+    /// The scene it runs, every override applied.
+    fn scene(&self) -> &Self::Scene;
+    /// The state.
+    fn saved(&self) -> &Self::State;
+    /// Go on from `state`, saved from a simulation of the same scene: stepping on gives the
+    /// bits the saved run gave.
+    ///
+    /// # Errors
+    ///
+    /// The state belongs to another discretisation.
+    fn restore_state(&mut self, state: Self::State) -> Result<(), Error>;
     /// The scene's end time (s).
     fn end_time(&self) -> f64;
     /// The interval between history rows (s), `output.history_interval_s` or its default.
@@ -39,11 +57,22 @@ pub trait Runnable: Body + Send {
 }
 
 impl Runnable for Simulation {
+    type Scene = Scene;
+    type State = State;
+    fn scene(&self) -> &Scene {
+        Simulation::scene(self)
+    }
+    fn saved(&self) -> &State {
+        self.state()
+    }
+    fn restore_state(&mut self, state: State) -> Result<(), Error> {
+        self.restore(state)
+    }
     fn end_time(&self) -> f64 {
-        self.scene().time.end_s
+        Simulation::scene(self).time.end_s
     }
     fn history_interval(&self) -> f64 {
-        self.scene().history_interval()
+        Runnable::scene(self).history_interval()
     }
     fn new_history(&self) -> History<Self> {
         History::new(self)
@@ -62,11 +91,22 @@ impl Runnable for Simulation {
 }
 
 impl Runnable for SolidSimulation {
+    type Scene = SolidScene;
+    type State = SolidState;
+    fn scene(&self) -> &SolidScene {
+        SolidSimulation::scene(self)
+    }
+    fn saved(&self) -> &SolidState {
+        self.state()
+    }
+    fn restore_state(&mut self, state: SolidState) -> Result<(), Error> {
+        self.restore(state)
+    }
     fn end_time(&self) -> f64 {
-        self.scene().time.end_s
+        SolidSimulation::scene(self).time.end_s
     }
     fn history_interval(&self) -> f64 {
-        self.scene().history_interval()
+        Runnable::scene(self).history_interval()
     }
     fn new_history(&self) -> History<Self> {
         History::solid(self)

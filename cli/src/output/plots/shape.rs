@@ -33,7 +33,7 @@ pub struct Stage<'a> {
 }
 
 /// A lap (the surface folded onto itself) as a shape plot marks it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Lap {
     /// Its label, e.g. "lap 1".
     pub label: String,

@@ -52,7 +52,7 @@ use std::f64::consts::PI;
 
 /// The contact pressure on a tool over triangles (an STL die's own, or a plane's contact
 /// patch), where the tool is now.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DiePressure {
     /// The triangles' vertices (m).
     pub vertices: Vec<[Real; 3]>,
