@@ -56,70 +56,56 @@ pub trait Runnable: Body + Send {
     ) -> Result<Ran, Error>;
 }
 
+/// The methods of [`Runnable`] that both simulations answer with their own inherent methods
+/// of the same names.
+macro_rules! shared {
+    ($sim:ty) => {
+        fn scene(&self) -> &Self::Scene {
+            <$sim>::scene(self)
+        }
+        fn saved(&self) -> &Self::State {
+            self.state()
+        }
+        fn restore_state(&mut self, state: Self::State) -> Result<(), Error> {
+            self.restore(state)
+        }
+        fn end_time(&self) -> f64 {
+            <$sim>::scene(self).time.end_s
+        }
+        fn history_interval(&self) -> f64 {
+            <$sim>::scene(self).history_interval()
+        }
+        fn step_toward(
+            &mut self,
+            t_end: f64,
+            max_steps: u64,
+            between: impl FnMut(&mut Self, u64) -> bool + Send,
+        ) -> Result<Ran, Error> {
+            self.run_toward(t_end, max_steps, between)
+        }
+    };
+}
+
 impl Runnable for Simulation {
     type Scene = Scene;
     type State = State;
-    fn scene(&self) -> &Scene {
-        Simulation::scene(self)
-    }
-    fn saved(&self) -> &State {
-        self.state()
-    }
-    fn restore_state(&mut self, state: State) -> Result<(), Error> {
-        self.restore(state)
-    }
-    fn end_time(&self) -> f64 {
-        Simulation::scene(self).time.end_s
-    }
-    fn history_interval(&self) -> f64 {
-        Runnable::scene(self).history_interval()
-    }
+    shared!(Simulation);
     fn new_history(&self) -> History<Self> {
         History::new(self)
     }
     fn record_in(&mut self, history: &mut History<Self>) -> Result<(), Error> {
         history.record(self)
     }
-    fn step_toward(
-        &mut self,
-        t_end: f64,
-        max_steps: u64,
-        between: impl FnMut(&mut Self, u64) -> bool + Send,
-    ) -> Result<Ran, Error> {
-        self.run_toward(t_end, max_steps, between)
-    }
 }
 
 impl Runnable for SolidSimulation {
     type Scene = SolidScene;
     type State = SolidState;
-    fn scene(&self) -> &SolidScene {
-        SolidSimulation::scene(self)
-    }
-    fn saved(&self) -> &SolidState {
-        self.state()
-    }
-    fn restore_state(&mut self, state: SolidState) -> Result<(), Error> {
-        self.restore(state)
-    }
-    fn end_time(&self) -> f64 {
-        SolidSimulation::scene(self).time.end_s
-    }
-    fn history_interval(&self) -> f64 {
-        Runnable::scene(self).history_interval()
-    }
+    shared!(SolidSimulation);
     fn new_history(&self) -> History<Self> {
         History::solid(self)
     }
     fn record_in(&mut self, history: &mut History<Self>) -> Result<(), Error> {
         history.record_solid(self)
-    }
-    fn step_toward(
-        &mut self,
-        t_end: f64,
-        max_steps: u64,
-        between: impl FnMut(&mut Self, u64) -> bool + Send,
-    ) -> Result<Ran, Error> {
-        self.run_toward(t_end, max_steps, between)
     }
 }
