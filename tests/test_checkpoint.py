@@ -110,3 +110,55 @@ def test_a_checkpoint_of_another_scene_is_refused(rkforge_bin, tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode != 0
     assert "frames" in proc.stderr and "--no-frames" in proc.stderr, proc.stderr
+
+
+KILLED_IN_PYTHON = """
+import sys
+import rkforge
+scene = rkforge.Scene.from_file(sys.argv[1])
+rkforge.run(scene, threads=1, checkpoint=sys.argv[2], checkpoint_every_s=0)
+"""
+
+
+def test_a_killed_python_run_resumes_to_the_same_bits(tmp_path):
+    """`rkforge.run(..., checkpoint=folder)` killed in a process of its own, then run again
+    with the same folder: the history of a run that never stopped, to the bit."""
+    import sys
+
+    import numpy as np
+    import rkforge
+
+    path = tmp_path / "bar.toml"
+    path.write_text(scene_variant("taylor_bar_3d.toml", BAR_3D))
+    scene = rkforge.Scene.from_file(path)
+    whole, whole_history = rkforge.run(scene, threads=1)
+    folder = tmp_path / "checkpoints"
+    run = subprocess.Popen([sys.executable, "-c", KILLED_IN_PYTHON, str(path), str(folder)],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 600
+    while not (folder / "checkpoint.cbor").exists() and time.monotonic() < deadline:
+        assert run.poll() is None, run.stderr.read()
+        time.sleep(0.01)
+    time.sleep(1.0)
+    assert run.poll() is None, "the run ended before it was killed: lengthen the scene"
+    run.kill()
+    run.wait(timeout=60)
+    summary, history = rkforge.run(scene, threads=1, checkpoint=folder)
+    assert list(history.columns) == list(whole_history.columns)
+    assert np.array_equal(history.to_numpy().view(np.uint64),
+                          whole_history.to_numpy().view(np.uint64))
+    assert summary["steps"] == whole["steps"] and len(summary["resumed_at_s"]) == 1
+    assert not (folder / "checkpoint.cbor").exists()
+    # A checkpoint of another scene is refused, naming the key.
+    other = rkforge.Scene.from_file(path)
+    other.set("time.end_s", 70e-6)
+    run = subprocess.Popen([sys.executable, "-c", KILLED_IN_PYTHON, str(path), str(folder)],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    while not (folder / "checkpoint.cbor").exists() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    run.kill()
+    run.wait(timeout=60)
+    with pytest.raises(ValueError, match="`time.end_s` differs"):
+        rkforge.run(other, checkpoint=folder)
+    with pytest.raises(ValueError, match="checkpoint_every_s"):
+        rkforge.run(scene, checkpoint=folder, checkpoint_every_s=-1.0)

@@ -99,7 +99,8 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     let mut sim = Simulation::new(scene).map_err(|e| e.to_string())?;
     let end = scene.time.end_s;
     let frames = if opts.frames { scene.output.frames } else { 0 };
-    let mut started = checkpoint::start::<_, Taken>(&mut sim, frames, &opts.out, opts.restart)?;
+    let mut started =
+        checkpoint::start::<_, Taken>(&mut sim, frames, Some(&opts.out), opts.restart)?;
     let mut outputs = Outputs {
         opts,
         bar: progress_bar(opts.progress, end),
@@ -110,7 +111,7 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
         taken: std::mem::take(&mut started.taken),
         checkpoints: started.checkpoints.take(),
     };
-    let outcome = started.go(&mut sim, frames, &opts.out, &mut outputs)?;
+    let outcome = started.go(&mut sim, frames, &mut outputs)?;
     outputs.bar.finish_and_clear();
     let clock = Instant::now();
     outcome.history.write(&opts.out.join("history.csv"))?;

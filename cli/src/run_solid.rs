@@ -52,13 +52,13 @@ pub fn run(
     let wall = Instant::now();
     let mut sim = SolidSimulation::new(scene).map_err(|e| e.to_string())?;
     let nframes = if frames { scene.output.frames } else { 0 };
-    let mut started = checkpoint::start::<_, Vec<Frame>>(&mut sim, nframes, out, restart)?;
+    let mut started = checkpoint::start::<_, Vec<Frame>>(&mut sim, nframes, Some(out), restart)?;
     let mut shots = Shots {
         frames: std::mem::take(&mut started.taken),
         mcap: mcap.map(|m| Mcap::start(m, scene)).transpose()?,
         checkpoints: started.checkpoints.take(),
     };
-    let outcome = started.go(&mut sim, nframes, out, &mut shots)?;
+    let outcome = started.go(&mut sim, nframes, &mut shots)?;
     if !shots.frames.is_empty() {
         write_frames(&sim, &shots.frames, out, &scene.name)?;
     }

@@ -13,7 +13,8 @@
 """
 from __future__ import annotations
 
-from typing import Optional, Tuple
+import os
+from typing import Optional, Tuple, Union
 
 import pandas as pd
 
@@ -48,6 +49,8 @@ def run(
     integration: Optional[str] = None,
     threads: Optional[int] = None,
     check: bool = True,
+    checkpoint: Optional[Union[str, os.PathLike]] = None,
+    checkpoint_every_s: float = 600.0,
 ) -> Tuple[dict, pd.DataFrame]:
     """Run ``scene`` to its end time as ``rkforge run --no-frames`` does.
 
@@ -59,8 +62,20 @@ def run(
     pool of that many threads (results do not depend on it). A run that fails midway raises
     :class:`SimulationError` carrying ``summary`` (``"status": "error"``) and ``history`` up
     to the failure; with ``check=False`` they are returned instead.
+
+    With ``checkpoint`` (a folder), the run writes ``checkpoint.cbor`` there every
+    ``checkpoint_every_s`` seconds of wall time; a run given a folder that holds the
+    checkpoint of a killed run of the same scene goes on from it, to the same bits as a run
+    that never stopped (the summary then has ``resumed_at_s``), and a run that ends removes
+    it. A checkpoint of another scene raises ``ValueError`` naming the first key that differs.
     """
-    summary, columns, rows, failure = run_scene(scene, integration, threads)
+    summary, columns, rows, failure = run_scene(
+        scene,
+        integration,
+        threads,
+        None if checkpoint is None else os.fspath(checkpoint),
+        checkpoint_every_s,
+    )
     history = pd.DataFrame(rows, columns=columns)
     if failure is not None and check:
         error = SimulationError(failure)

@@ -114,7 +114,11 @@ class Simulation:
         """The summary as summary.json has it."""
 
 def run_scene(
-    scene: Scene, integration: Optional[str] = None, threads: Optional[int] = None
+    scene: Scene,
+    integration: Optional[str] = None,
+    threads: Optional[int] = None,
+    checkpoint: Optional[str] = None,
+    checkpoint_every_s: float = 600.0,
 ) -> Tuple[Dict[str, Any], List[str], npt.NDArray[np.float64], Optional[str]]:
     """The whole run as ``rkforge run --no-frames``: summary, history columns and rows,
     failure."""

@@ -633,54 +633,107 @@ type RunResult<'py> = (
 );
 
 /// A finished run's summary, history columns, rows (flat) and failure.
-fn ran<S: outputs::Body>(
-    summary: serde_json::Value,
-    outcome: rkforge_runner::Outcome<S>,
-) -> (serde_json::Value, Vec<String>, Vec<f64>, Option<String>) {
+type Ran = (serde_json::Value, Vec<String>, Vec<f64>, Option<String>);
+
+/// A finished run's summary, history columns, rows (flat) and failure.
+fn ran<S: outputs::Body>(summary: serde_json::Value, outcome: rkforge_runner::Outcome<S>) -> Ran {
     let columns = outcome.history.columns().to_vec();
     let rows: Vec<f64> = outcome.history.rows().iter().flatten().copied().collect();
     (summary, columns, rows, outcome.failure)
 }
 
+/// Checkpoints of a run in Python: written into a folder every interval of wall time.
+struct Saving {
+    checkpoints: Option<rkforge_runner::Checkpoints>,
+}
+
+impl<S: rkforge_runner::Runnable> rkforge_runner::Observer<S> for Saving {
+    fn checkpoint(
+        &mut self,
+        sim: &S,
+        run: &rkforge_runner::Run<S>,
+        output: std::time::Duration,
+    ) -> Result<(), String> {
+        match &mut self.checkpoints {
+            Some(c) => c.write_if_due(sim, run, &(), output),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Run `sim` to its end without frames, with checkpoints in `folder` every `every` of wall
+/// time when a folder is given (going on from the one there, if there is one), and its
+/// summary from `summary(sim, wall_s, output_s, ending)`.
+fn drive_saving<S: rkforge_runner::Runnable>(
+    sim: &mut S,
+    folder: Option<&std::path::Path>,
+    every: std::time::Duration,
+    summary: impl Fn(&S, f64, f64, rkforge_runner::Ending<'_>) -> serde_json::Value,
+) -> PyResult<Ran> {
+    use rkforge_runner::checkpoint::{self, Restart};
+    let wall = Instant::now();
+    if let Some(dir) = folder {
+        std::fs::create_dir_all(dir).map_err(|e| {
+            PyValueError::new_err(format!("checkpoint: cannot create {}: {e}", dir.display()))
+        })?;
+    }
+    let how = Restart {
+        every: Some(every),
+        resume: folder.is_some_and(|dir| dir.join(checkpoint::FILE).exists()),
+    };
+    let mut started =
+        checkpoint::start::<S, ()>(sim, 0, folder, how).map_err(PyValueError::new_err)?;
+    let mut saving = Saving {
+        checkpoints: started.checkpoints.take(),
+    };
+    let outcome = started
+        .go(sim, 0, &mut saving)
+        .map_err(PyRuntimeError::new_err)?;
+    let mut summary = summary(
+        sim,
+        started.wall_s + wall.elapsed().as_secs_f64(),
+        started.output_s + outcome.output_time.as_secs_f64(),
+        outcome.ending(),
+    );
+    started.mark(&mut summary);
+    Ok(ran(summary, outcome))
+}
+
 /// The whole run of a scene, as `rkforge run --no-frames` does it: returns the summary
 /// (dict), the history's column names and its rows (a 2D array), and the failure, if any.
+/// With `checkpoint` (a folder), a checkpoint is written there every `checkpoint_every_s`
+/// of wall time and a run finds the one left by a run of the same scene that was killed,
+/// and goes on from it to the same bits.
 #[pyfunction]
-#[pyo3(signature = (scene, integration = None, threads = None))]
+#[pyo3(signature = (scene, integration = None, threads = None, checkpoint = None, checkpoint_every_s = 600.0))]
 pub fn run_scene<'py>(
     py: Python<'py>,
     scene: &Scene,
     integration: Option<&str>,
     threads: Option<usize>,
+    checkpoint: Option<std::path::PathBuf>,
+    checkpoint_every_s: f64,
 ) -> PyResult<RunResult<'py>> {
+    if !(checkpoint_every_s.is_finite() && checkpoint_every_s >= 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "checkpoint_every_s = {checkpoint_every_s}: give a number of seconds, 0 or more"
+        )));
+    }
+    let every = std::time::Duration::from_secs_f64(checkpoint_every_s);
     let scene = configured(scene, integration)?;
     let pool = pool(threads)?;
     let (summary, columns, rows, failure) = py.detach(|| {
         guarded(|| {
             let go = || -> PyResult<_> {
-                let wall = Instant::now();
+                let folder = checkpoint.as_deref();
                 match scene.build().map_err(to_py)? {
                     Sim::Plane(mut sim) => {
-                        let outcome =
-                            rkforge_runner::drive(&mut *sim, 0, &mut rkforge_runner::Quiet)
-                                .map_err(PyRuntimeError::new_err)?;
-                        let summary = rkforge_runner::summary(
-                            &sim,
-                            wall.elapsed().as_secs_f64(),
-                            outcome.output_time.as_secs_f64(),
-                            outcome.ending(),
-                        );
-                        Ok(ran(summary, outcome))
+                        drive_saving(&mut *sim, folder, every, rkforge_runner::summary)
                     }
                     Sim::Solid(mut sim) => {
-                        let outcome =
-                            rkforge_runner::drive(&mut *sim, 0, &mut rkforge_runner::Quiet)
-                                .map_err(PyRuntimeError::new_err)?;
-                        let summary = rkforge_runner::solid_summary(
-                            &sim,
-                            wall.elapsed().as_secs_f64(),
-                            outcome.ending(),
-                        );
-                        Ok(ran(summary, outcome))
+                        drive_saving(&mut *sim, folder, every, |s, wall, _, ending| {
+                            rkforge_runner::solid_summary(s, wall, ending)
+                        })
                     }
                 }
             };

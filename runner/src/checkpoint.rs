@@ -200,12 +200,14 @@ pub struct Started<S: Runnable, Fr> {
     pub output_s: f64,
     /// The simulated times at which the run was resumed (s); empty for a fresh start.
     pub resumed_at_s: Vec<f64>,
+    /// The checkpoint file of the run's folder, if it has one.
+    file: Option<PathBuf>,
 }
 
 impl<S: Runnable, Fr> Started<S, Fr> {
     /// Run `sim` to its end from where it starts, with `frames` frames ([`crate::drive`],
     /// [`crate::resume`]). A run that ends (finished or failed, not stopped by the
-    /// observer) removes its checkpoint from `out`.
+    /// observer) removes the checkpoint from its folder: the folder now holds the run's end.
     ///
     /// # Errors
     ///
@@ -214,16 +216,14 @@ impl<S: Runnable, Fr> Started<S, Fr> {
         &mut self,
         sim: &mut S,
         frames: usize,
-        out: &Path,
         observer: &mut impl crate::Observer<S>,
     ) -> Result<crate::Outcome<S>, String> {
         let outcome = match self.run.take() {
             Some(run) => crate::resume(sim, run, observer)?,
             None => crate::drive(sim, frames, observer)?,
         };
-        if !outcome.stopped {
-            let path = out.join(FILE);
-            if let Err(e) = std::fs::remove_file(&path) {
+        if let (false, Some(path)) = (outcome.stopped, &self.file) {
+            if let Err(e) = std::fs::remove_file(path) {
                 if e.kind() != std::io::ErrorKind::NotFound {
                     return Err(format!(
                         "cannot remove the checkpoint {}: {e}",
@@ -244,7 +244,8 @@ impl<S: Runnable, Fr> Started<S, Fr> {
     }
 }
 
-/// Set up a run of `sim` with `frames` frames, its outputs in `out`, as `how` asks.
+/// Set up a run of `sim` with `frames` frames and its checkpoint file in `folder`, as `how`
+/// asks; without a folder, a fresh run without checkpoints.
 ///
 /// # Errors
 ///
@@ -252,30 +253,35 @@ impl<S: Runnable, Fr> Started<S, Fr> {
 pub fn start<S: Runnable, Fr: Default + DeserializeOwned>(
     sim: &mut S,
     frames: usize,
-    out: &Path,
+    folder: Option<&Path>,
     how: Restart,
 ) -> Result<Started<S, Fr>, String> {
-    let path = out.join(FILE);
-    if !how.resume {
+    let file = folder.map(|f| f.join(FILE));
+    let Some(path) = file.as_deref().filter(|_| how.resume) else {
         return Ok(Started {
             run: None,
             taken: Fr::default(),
-            checkpoints: how.every.map(|every| Checkpoints::new(&path, every)),
+            checkpoints: file
+                .as_deref()
+                .zip(how.every)
+                .map(|(path, every)| Checkpoints::new(path, every)),
             wall_s: 0.0,
             output_s: 0.0,
             resumed_at_s: Vec::new(),
+            file,
         });
-    }
-    let resumed: Resumed<S, Fr> = resume(&path, sim, frames)?;
+    };
+    let resumed: Resumed<S, Fr> = resume(path, sim, frames)?;
     Ok(Started {
         checkpoints: how
             .every
-            .map(|every| Checkpoints::after(&path, every, &resumed)),
+            .map(|every| Checkpoints::after(path, every, &resumed)),
         run: Some(resumed.run),
         taken: resumed.taken,
         wall_s: resumed.wall_s,
         output_s: resumed.output_s,
         resumed_at_s: resumed.resumed_at_s,
+        file: file.clone(),
     })
 }
 
