@@ -108,6 +108,8 @@ def figures(out):
 def celik(h, phi, digits=1):
     """Celik et al. (2008) for three grids, h[0] the finest: (p, extrapolated, GCI) or a
     reason why no estimate exists."""
+    if any(math.isnan(v) for v in phi):
+        return "a grid never reaches it"
     r21, r32 = h[1] / h[0], h[2] / h[1]
     e21, e32 = phi[1] - phi[0], phi[2] - phi[1]
     if e21 == 0.0 or e32 == 0.0:
