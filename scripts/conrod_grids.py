@@ -24,7 +24,7 @@ validation of CFD simulations - Part 1", J. Fluids Eng. 123, 793-802); or why th
 The grid spacing is h = (V / cells)^(1/3), V the eighth bar's volume and cells the lattice's
 (nx - 1)(ny - 1)(nz - 1). Runs go one after the other on one thread each (`--threads`);
 `--reuse` reads the runs already in --out. Uses target/release/rkforge (or $RKFORGE_BIN).
-A run on the 0.42 mm grid at one mass takes two hours here (7150 s, 55 120 steps).
+A run on the 0.42 mm grid at one mass takes two hours here (6861 s, 55 127 steps).
 """
 
 import argparse
