@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 
 import pandas as pd
 import pytest
@@ -19,7 +20,7 @@ from conftest import scene_variant
 distributed = pytest.importorskip("distributed")
 
 #: Columns that hold timings (not results) and the histories (compared one by one).
-TIMES = ["wall_s", "case_wall_s", "history"]
+TIMES = ["wall_s", "case_wall_s", "resumed_at_s", "history"]
 
 #: Friction x press speed: 8 cases of a coarse block forging, about a second each.
 CASES = {
@@ -145,7 +146,10 @@ def test_the_study_on_a_dask_cluster_gives_the_local_rows_bit_for_bit(cluster, l
     assert_same_histories(remote, local)
 
 
-def test_a_worker_killed_mid_study_loses_no_case(cluster, local):
+def test_a_worker_killed_mid_study_loses_no_case(cluster, local, tmp_path):
+    """A worker killed while it runs a case: the case is rescheduled on the other worker
+    and, with checkpoints in a folder both reach, goes on from its last one; the table is the
+    local study's, bit for bit."""
     ours = {p.pid for p in cluster.workers}
     pids = cluster.worker_pids()
     assert set(pids.values()) == ours
@@ -153,20 +157,33 @@ def test_a_worker_killed_mid_study_loses_no_case(cluster, local):
     lock = threading.Lock()
 
     def on_case(i, result):
-        # At the first finished case, kill a worker that is running another case.
+        # At the first finished case, kill a worker while it runs a case that has written a
+        # checkpoint (waiting for one, if none has yet).
         with lock:
             if killed:
                 return
-            for addr, keys in cluster.client.processing().items():
-                pid = pids.get(addr)
-                if keys and pid in ours:
-                    os.kill(pid, signal.SIGKILL)
-                    killed.update(pid=pid, running=list(keys))
-                    return
+            deadline = time.monotonic() + 60
+            while time.monotonic() < deadline:
+                for addr, keys in cluster.client.processing().items():
+                    pid = pids.get(addr)
+                    for key in keys:
+                        case = int(str(key).split("-")[2])
+                        if pid in ours and (tmp_path / f"case-{case}" / "checkpoint.cbor").exists():
+                            os.kill(pid, signal.SIGKILL)
+                            killed.update(pid=pid, case=case, running=list(keys))
+                            return
+                time.sleep(0.005)
 
     remote = rkforge.study(block_scene(), CASES, client=cluster.client, progress=False,
-                           on_case=on_case, timeout=TIMEOUT)
-    assert killed, "no worker was running a case when the first one finished"
+                           on_case=on_case, timeout=TIMEOUT, checkpoints=tmp_path,
+                           checkpoint_every_s=0)
+    assert killed, "no worker was running a case with a checkpoint after the first one finished"
+    resumed = [i for i, r in enumerate(remote["resumed_at_s"]) if r is not None]
+    print(f"killed {killed}: cases that went on from a checkpoint: {resumed}")
+    # The killed case went on from its checkpoint on the other worker (unless it finished in
+    # the microseconds between the look at its checkpoint and the kill: then it was not
+    # running and none is resumed).
+    assert resumed in ([killed["case"]], []), resumed
     assert len(cluster.client.scheduler_info()["workers"]) == 1
     pd.testing.assert_frame_equal(results(remote), results(local), check_exact=True)
     assert_same_histories(remote, local)

@@ -100,6 +100,8 @@ struct SweepArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
+    #[command(flatten)]
+    checkpoints: CheckpointArgs,
 }
 
 #[derive(clap::Args)]
@@ -180,15 +182,44 @@ struct RunArgs {
     /// Chunk compression of the MCAP file: `zstd` or `none`.
     #[arg(long, default_value = "zstd")]
     mcap_compression: rkforge_messages::record::Compression,
-    /// Write a checkpoint into the output folder (`checkpoint.cbor`) at the first history
-    /// sample or frame after every this many seconds of wall time (0: at every one), so that
-    /// a killed run can go on with --resume; removed when the run ends.
+    #[command(flatten)]
+    checkpoints: CheckpointArgs,
+}
+
+/// Checkpoints of long runs, and going on after a kill.
+#[derive(clap::Args)]
+struct CheckpointArgs {
+    /// Write a checkpoint into the output folder (`checkpoint.cbor`; a sweep: into each
+    /// run's folder) at the first history sample or frame after every this many seconds of
+    /// wall time (0: at every one), so that a killed run can go on with --resume; removed
+    /// when the run ends.
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     checkpoint_every_s: Option<f64>,
     /// Go on from the checkpoint in the output folder, written by a run of the same scene,
-    /// overrides and frames: the same bits as a run that never stopped.
+    /// overrides and frames: the same bits as a run that never stopped. A sweep keeps the
+    /// runs it finished before (their scene.json the same scene) and goes on from each
+    /// run's checkpoint.
     #[arg(long)]
     resume: bool,
+}
+
+impl CheckpointArgs {
+    /// The checkpoints and resumption `--checkpoint-every-s` and `--resume` ask for.
+    fn restart(&self) -> Result<Restart, String> {
+        let every = match self.checkpoint_every_s {
+            Some(s) if !(s.is_finite() && s >= 0.0) => {
+                return Err(format!(
+                    "--checkpoint-every-s {s}: give a number of seconds, 0 or more"
+                ))
+            }
+            Some(s) => Some(std::time::Duration::from_secs_f64(s)),
+            None => None,
+        };
+        Ok(Restart {
+            every,
+            resume: self.resume,
+        })
+    }
 }
 
 fn main() -> ExitCode {
@@ -299,28 +330,17 @@ fn mcap_options(a: &RunArgs) -> Option<McapOptions> {
     })
 }
 
-/// The checkpoints and resumption `--checkpoint-every-s` and `--resume` ask for.
+/// The checkpoints and resumption of a run, which a recording cannot have.
 fn restart(a: &RunArgs) -> Result<Restart, String> {
-    let every = match a.checkpoint_every_s {
-        Some(s) if !(s.is_finite() && s >= 0.0) => {
-            return Err(format!(
-                "--checkpoint-every-s {s}: give a number of seconds, 0 or more"
-            ))
-        }
-        Some(s) => Some(std::time::Duration::from_secs_f64(s)),
-        None => None,
-    };
-    if a.mcap.is_some() && (every.is_some() || a.resume) {
+    let restart = a.checkpoints.restart()?;
+    if a.mcap.is_some() && (restart.every.is_some() || restart.resume) {
         return Err(
             "--mcap: a recording cannot be resumed; record without --checkpoint-every-s and \
              --resume, or leave out --mcap"
                 .into(),
         );
     }
-    Ok(Restart {
-        every,
-        resume: a.resume,
-    })
+    Ok(restart)
 }
 
 fn run_command(a: RunArgs) -> Result<(), String> {
@@ -506,7 +526,8 @@ fn sweep_scenes<S: sweep::Sweepable>(
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(format!("sweep_{}", scene.name())));
-    let table = sweep::sweep(cases, &grids, &rules, &a.dt_safety, &out)?;
+    let restart = a.checkpoints.restart()?;
+    let table = sweep::sweep(cases, &grids, &rules, &a.dt_safety, &out, restart)?;
     println!("{table}");
     println!("sweep.csv, sweep.md and sweep.png in {}", out.display());
     Ok(())

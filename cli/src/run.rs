@@ -197,10 +197,7 @@ impl Observer for Outputs<'_> {
     }
 
     fn checkpoint(&mut self, sim: &Simulation, run: &Run, output: Duration) -> Result<(), String> {
-        match &mut self.checkpoints {
-            Some(c) => c.write_if_due(sim, run, &self.taken, output),
-            None => Ok(()),
-        }
+        checkpoint::keep(self.checkpoints.as_mut(), sim, run, &self.taken, output)
     }
 }
 

@@ -112,10 +112,7 @@ impl Observer<SolidSimulation> for Shots {
         run: &Run<SolidSimulation>,
         output: Duration,
     ) -> Result<(), String> {
-        match &mut self.checkpoints {
-            Some(c) => c.write_if_due(sim, run, &self.frames, output),
-            None => Ok(()),
-        }
+        checkpoint::keep(self.checkpoints.as_mut(), sim, run, &self.frames, output)
     }
 }
 

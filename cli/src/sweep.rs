@@ -11,6 +11,10 @@
 //! run's target follows its critical step and step safety ([`hold_added_mass`]), so that
 //! every run adds about the mass the scene's own run adds and the grids refine one problem.
 //!
+//! With checkpoints (`--checkpoint-every-s`), each run writes its own into its folder, and a
+//! sweep killed midway goes on with `--resume` ([`run_kept`]): the runs it finished are kept,
+//! the one it was in goes on from its checkpoint, the rest run.
+//!
 //! One path for both kinds of scene: [`Sweepable`] is what differs between a 2D [`Scene`]
 //! (a grid is `[nx, ny]` particles) and a 3D [`SolidScene`] (a cylinder's `cells` or a
 //! box's `particles`, three numbers): how a grid is set, written and compared, and how one
@@ -22,12 +26,14 @@ use rkforge_core::scene::solid::ShapeKind;
 use rkforge_core::scene::{SolidScene, TimeSpec};
 use rkforge_core::solver::{MassScalingReport, SolidSimulation};
 use rkforge_core::{IntegrationRule, Scene, Simulation};
+use rkforge_runner::checkpoint::{self, Restart};
+use serde::Serialize;
 use serde_json::Value;
 use std::fmt::Write as _;
 use std::path::Path;
 
 /// A scene the sweep runs on a grid of resolutions, rules and safety factors.
-pub trait Sweepable: Sized {
+pub trait Sweepable: Sized + Serialize {
     /// The scene's name.
     fn name(&self) -> &str;
     /// The numbers of a grid (`--resolution`): 2 in 2D, 3 in 3D.
@@ -64,12 +70,12 @@ pub trait Sweepable: Sized {
     ///
     /// The scene is invalid on this grid or with this rule, the key named.
     fn variant(&self, rule: IntegrationRule, grid: &[usize], safety: f64) -> Result<Self, String>;
-    /// One run into `out` without frames; its summary.
+    /// One run into `out` without frames, with checkpoints as `restart` asks; its summary.
     ///
     /// # Errors
     ///
-    /// The run failed.
-    fn run(&self, out: &Path) -> Result<Value, String>;
+    /// The run failed, or its checkpoint does not fit.
+    fn run(&self, out: &Path, restart: Restart) -> Result<Value, String>;
 }
 
 impl Sweepable for Scene {
@@ -112,13 +118,13 @@ impl Sweepable for Scene {
         s.time.dt_safety = safety;
         Ok(s)
     }
-    fn run(&self, out: &Path) -> Result<Value, String> {
+    fn run(&self, out: &Path, restart: Restart) -> Result<Value, String> {
         let opts = run::Options {
             out: out.to_path_buf(),
             progress: false,
             frames: false,
             mcap: None,
-            restart: Default::default(),
+            restart,
         };
         Ok(run::run(self, &opts)?.summary)
     }
@@ -193,8 +199,8 @@ impl Sweepable for SolidScene {
             None => Ok(s),
         }
     }
-    fn run(&self, out: &Path) -> Result<Value, String> {
-        let report = run_solid::run(self, out, false, None, Default::default())?;
+    fn run(&self, out: &Path, restart: Restart) -> Result<Value, String> {
+        let report = run_solid::run(self, out, false, None, restart)?;
         match report.error {
             Some(e) => Err(e),
             None => Ok(report.summary),
@@ -235,6 +241,51 @@ fn hold_added_mass(time: &mut TimeSpec, step_rel: f64, safety_rel: f64) {
     {
         *t *= step_rel * safety_rel;
     }
+}
+
+/// The file in each run's folder that holds the scene it ran, once it has finished.
+const SCENE_FILE: &str = "scene.json";
+
+/// One run of `scene` into `dir`, with checkpoints as `restart` asks, and its summary. A
+/// sweep resumed (`restart.resume`) keeps a run that finished before (its `scene.json`, written
+/// after its summary, the same scene), goes on from a run's checkpoint, and runs the rest
+/// afresh; a fresh run first removes the `scene.json` of an earlier one.
+///
+/// # Errors
+///
+/// The run failed; its folder holds a finished run or a checkpoint of another scene (the
+/// first differing key named).
+fn run_kept<S: Sweepable>(scene: &S, dir: &Path, restart: Restart) -> Result<Value, String> {
+    let as_run = serde_json::to_value(scene).map_err(|e| e.to_string())?;
+    let file = dir.join(SCENE_FILE);
+    let read = |name: &str| -> Option<Value> {
+        let text = std::fs::read_to_string(dir.join(name)).ok()?;
+        serde_json::from_str(&text).ok()
+    };
+    let resume = restart.resume && dir.join(checkpoint::FILE).exists();
+    if restart.resume && !resume {
+        if let (Some(kept), Some(summary)) = (read(SCENE_FILE), read("summary.json")) {
+            if let Some(key) = checkpoint::first_difference(&as_run, &kept, "") {
+                return Err(format!(
+                    "{} holds a run of another scene: `{key}` differs (resume with the sweep \
+                     command that wrote it, or sweep into another --out)",
+                    dir.display()
+                ));
+            }
+            if summary["status"] == "ok" {
+                return Ok(summary);
+            }
+        }
+    }
+    if let Err(e) = std::fs::remove_file(&file) {
+        if e.kind() != std::io::ErrorKind::NotFound {
+            return Err(format!("cannot remove {}: {e}", file.display()));
+        }
+    }
+    let summary = scene.run(dir, Restart { resume, ..restart })?;
+    let text = serde_json::to_string_pretty(&as_run).map_err(|e| e.to_string())?;
+    std::fs::write(&file, text).map_err(|e| format!("cannot write {}: {e}", file.display()))?;
+    Ok(summary)
 }
 
 /// A grid as written on the command line and in run folders: `21x51`, `8x4x60`.
@@ -325,13 +376,15 @@ struct Assessed {
 
 /// Run the grid for every case, write sweep.csv, sweep.md and sweep.png into `out`, return
 /// the table. Each case has its own reference (its physics differs); its runs go to
-/// `out/<key=value,...>/` when there are `--set` keys, else to `out/`.
+/// `out/<key=value,...>/` when there are `--set` keys, else to `out/`, each with checkpoints
+/// as `restart` asks ([`run_kept`]).
 pub fn sweep<S: Sweepable>(
     cases: &[Case<S>],
     grids: &[Vec<usize>],
     rules: &[IntegrationRule],
     safeties: &[f64],
     out: &Path,
+    restart: Restart,
 ) -> Result<String, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let keys: Vec<&str> = cases
@@ -359,7 +412,7 @@ pub fn sweep<S: Sweepable>(
         } else {
             out.join(label.replace(['/', '\\', ' ', '"', '\''], "_"))
         };
-        let a = assess(&case.scene, grids, rules, safeties, &dir)?;
+        let a = assess(&case.scene, grids, rules, safeties, &dir, restart)?;
         if csv.is_empty() {
             for k in &keys {
                 let _ = write!(csv, "{k},");
@@ -475,6 +528,7 @@ fn assess<S: Sweepable>(
     rules: &[IntegrationRule],
     safeties: &[f64],
     out: &Path,
+    restart: Restart,
 ) -> Result<Assessed, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let mut grids = grids.to_vec();
@@ -507,7 +561,7 @@ fn assess<S: Sweepable>(
                             let safety_rel = safety / scene.time().dt_safety;
                             hold_added_mass(s.time_mut(), rel, safety_rel);
                         }
-                        s.run(&out.join(&label))
+                        run_kept(&s, &out.join(&label), restart)
                     })
                     .map_err(|e| format!("{label}: {e}"))?;
                 let (n, values) = quantities(&summary);

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 import time
 import uuid
 from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Union
@@ -12,7 +13,7 @@ import pandas as pd
 Cases = Union[Mapping[str, Sequence[Any]], Sequence[Mapping[str, Any]]]
 
 #: Summary keys that are not figures of the case (timing and the machine it ran on).
-_NOT_FIGURES = ("stage_seconds", "threads", "wall_s", "error", "status")
+_NOT_FIGURES = ("stage_seconds", "threads", "wall_s", "error", "status", "resumed_at_s")
 
 
 def expand(cases: Cases) -> List[Dict[str, Any]]:
@@ -33,9 +34,11 @@ def expand(cases: Cases) -> List[Dict[str, Any]]:
     return out
 
 
-def run_case(scene, overrides: Dict[str, Any], integration: Optional[str], threads: Optional[int]) -> dict:
-    """One case: the scene with ``overrides`` run to its end. Never raises: a bad override
-    or a failed run gives ``status`` "error" and the error text."""
+def run_case(scene, overrides: Dict[str, Any], integration: Optional[str], threads: Optional[int],
+             checkpoint: Optional[str] = None, checkpoint_every_s: float = 600.0) -> dict:
+    """One case: the scene with ``overrides`` run to its end, with checkpoints in the folder
+    ``checkpoint`` if given (going on from the one a killed attempt left there). Never
+    raises: a bad override or a failed run gives ``status`` "error" and the error text."""
     from . import run  # the package is imported on Dask workers too
 
     start = time.perf_counter()
@@ -44,7 +47,8 @@ def run_case(scene, overrides: Dict[str, Any], integration: Optional[str], threa
         case_scene = scene.copy()
         for key, value in overrides.items():
             case_scene.set(key, value)
-        summary, history = run(case_scene, integration=integration, threads=threads, check=False)
+        summary, history = run(case_scene, integration=integration, threads=threads, check=False,
+                               checkpoint=checkpoint, checkpoint_every_s=checkpoint_every_s)
         error = summary.get("error")
     except Exception as e:  # noqa: BLE001 - a case's error becomes its row
         error = f"{type(e).__name__}: {e}"
@@ -99,6 +103,8 @@ def study(
     progress: bool = True,
     on_case: Optional[Callable[[int, dict], None]] = None,
     timeout: Optional[float] = None,
+    checkpoints: Optional[Union[str, os.PathLike]] = None,
+    checkpoint_every_s: float = 600.0,
 ) -> pd.DataFrame:
     """Run ``scene`` once per case and return one row per case.
 
@@ -110,10 +116,20 @@ def study(
     is called as each case finishes. ``timeout`` (s) bounds the wait for the cluster's
     results (``TimeoutError`` past it).
 
+    ``checkpoints`` (a folder every worker can reach, e.g. on a shared file system) gives
+    each case a folder ``case-<index>`` in it where its run writes a checkpoint every
+    ``checkpoint_every_s`` seconds of wall time (:func:`rkforge.run`'s ``checkpoint``): a
+    case whose worker died, retried by Dask, or a case of the same study called again after
+    the client was lost, goes on from its last checkpoint to the same bits instead of from
+    the start. A case's folder that holds a checkpoint of another scene makes that case an
+    error row naming the first key that differs.
+
     Columns: ``case`` (its index), the inputs (named by their dotted keys), ``status``
     ("ok" or "error"), ``error`` (the error text), ``wall_s`` (the run's wall time as
-    summary.json has it), ``case_wall_s`` (the case's wall time on its worker, Python
-    included), then the summary's figures (:func:`figures`). A failed case is a row with
+    summary.json has it, over every attempt of a case that went on from its checkpoint),
+    ``case_wall_s`` (the case's wall time on its worker, Python included), ``resumed_at_s``
+    (the simulated times a case went on from its checkpoints, None for a case run in one
+    go), then the summary's figures (:func:`figures`). A failed case is a row with
     its error. The last column, ``history``, holds each case's history DataFrame (None for
     a case whose scene was refused).
     """
@@ -132,17 +148,22 @@ def study(
             on_case(i, result)
 
     try:
+        if checkpoint_every_s is None or not checkpoint_every_s >= 0:
+            raise ValueError(f"checkpoint_every_s = {checkpoint_every_s}: give a number of seconds, 0 or more")
+        folders = [None if checkpoints is None else os.path.join(os.fspath(checkpoints), f"case-{i}")
+                   for i in range(len(explicit))]
         if client is None:
             for i, case in enumerate(explicit):
-                done(i, run_case(scene, case, integration, threads))
+                done(i, run_case(scene, case, integration, threads, folders[i], checkpoint_every_s))
         else:
             from distributed import as_completed
 
             token = uuid.uuid4().hex
             futures = {}
             for i, case in enumerate(explicit):
-                f = client.submit(run_case, scene, case, integration, threads,
-                                  key=f"rkforge-case-{i}-{token}", pure=False, retries=retries)
+                f = client.submit(run_case, scene, case, integration, threads, folders[i],
+                                  checkpoint_every_s, key=f"rkforge-case-{i}-{token}",
+                                  pure=False, retries=retries)
                 futures[f] = i
             for future in as_completed(futures, timeout=timeout):
                 i = futures[future]
@@ -162,7 +183,7 @@ def study(
         row = {"case": i}
         row.update({k: case.get(k) for k in keys})
         row.update(status=r["status"], error=r["error"], wall_s=summary.get("wall_s", math.nan),
-                   case_wall_s=r["case_wall_s"])
+                   case_wall_s=r["case_wall_s"], resumed_at_s=summary.get("resumed_at_s"))
         row.update(figures(r["summary"]))
         rows.append(row)
     table = pd.DataFrame(rows)

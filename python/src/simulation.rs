@@ -654,10 +654,7 @@ impl<S: rkforge_runner::Runnable> rkforge_runner::Observer<S> for Saving {
         run: &rkforge_runner::Run<S>,
         output: std::time::Duration,
     ) -> Result<(), String> {
-        match &mut self.checkpoints {
-            Some(c) => c.write_if_due(sim, run, &(), output),
-            None => Ok(()),
-        }
+        rkforge_runner::checkpoint::keep(self.checkpoints.as_mut(), sim, run, &(), output)
     }
 }
 

@@ -5,13 +5,14 @@
 //! A [`Checkpoint`] holds the scene as it was run, the schedule's place (the next mark and the
 //! number of frames), the history's rows so far, the simulation's whole changing state
 //! ([`Runnable::saved`], what an FMU state saves) and what the caller took of the frames so
-//! far, with the wall time spent. It is written as CBOR (RFC 8949, `ciborium`: every float
+//! far, with the wall time spent, in all and per stage. It is written as CBOR (RFC 8949, `ciborium`: every float
 //! its 8 bytes, so the state comes back to the bit) to a temporary file that is then renamed
 //! over the last one, so a process killed while it writes leaves the previous checkpoint
 //! whole. [`Checkpoints`] writes one at the first instant of the schedule after each
 //! interval of wall time; a run that reaches its end removes its checkpoint.
 
 use crate::{History, Run, Runnable};
+use rkforge_core::StageTimes;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -45,6 +46,10 @@ pub struct Checkpoint<Sc, St, Fr> {
     pub wall_s: f64,
     /// Of it, the time spent on outputs (s).
     pub output_s: f64,
+    /// Of it, the time spent in each stage of the simulation (a checkpoint written before
+    /// they were kept reads as zeros).
+    #[serde(default)]
+    pub stage_times: StageTimes,
     /// The simulated times at which the run was resumed before (s).
     pub resumed_at_s: Vec<f64>,
 }
@@ -138,6 +143,7 @@ impl Checkpoints {
             taken,
             wall_s: self.before_s + self.started.elapsed().as_secs_f64(),
             output_s: self.before_output_s + output_s,
+            stage_times: sim.stage_times(),
             resumed_at_s: self.resumed_at_s.clone(),
         };
         let partial = self.path.with_extension("cbor.partial");
@@ -171,6 +177,25 @@ impl Checkpoints {
         } else {
             Ok(())
         }
+    }
+}
+
+/// [`Checkpoints::write_if_due`] for an observer that may keep none: what every observer's
+/// [`crate::Observer::checkpoint`] does with its checkpoints.
+///
+/// # Errors
+///
+/// The file cannot be written.
+pub fn keep<S: Runnable, Fr: Serialize>(
+    checkpoints: Option<&mut Checkpoints>,
+    sim: &S,
+    run: &Run<S>,
+    taken: &Fr,
+    output: Duration,
+) -> Result<(), String> {
+    match checkpoints {
+        Some(c) => c.write_if_due(sim, run, taken, output),
+        None => Ok(()),
     }
 }
 
@@ -236,7 +261,7 @@ impl<S: Runnable, Fr> Started<S, Fr> {
     }
 
     /// Mark a summary (summary.json) of a resumed run: the simulated times it was resumed
-    /// at, `resumed_at_s` (its `wall_s` counts every process, its stage times the last).
+    /// at, `resumed_at_s` (its `wall_s` and stage times count every process).
     pub fn mark(&self, summary: &mut serde_json::Value) {
         if !self.resumed_at_s.is_empty() {
             summary["resumed_at_s"] = serde_json::json!(self.resumed_at_s);
@@ -335,6 +360,7 @@ pub fn resume<S: Runnable, Fr: DeserializeOwned>(
     }
     sim.restore_state(saved.state)
         .map_err(|e| at(e.to_string()))?;
+    *sim.stage_times_mut() += saved.stage_times;
     let marks = crate::schedule(sim, frames)?;
     if saved.next > marks.len() {
         return Err(at(format!(
@@ -355,8 +381,9 @@ pub fn resume<S: Runnable, Fr: DeserializeOwned>(
     })
 }
 
-/// The dotted path of the first key where `a` and `b` differ, if they do.
-fn first_difference(a: &serde_json::Value, b: &serde_json::Value, at: &str) -> Option<String> {
+/// The dotted path of the first key where `a` and `b` differ, if they do (`at` the path
+/// of both, "" at the top): how a scene that does not fit a saved run is named.
+pub fn first_difference(a: &serde_json::Value, b: &serde_json::Value, at: &str) -> Option<String> {
     use serde_json::Value;
     let name = |k: &str| {
         if at.is_empty() {
@@ -396,11 +423,13 @@ mod tests {
     use rkforge_core::{Scene, Simulation};
     use serde_json::json;
 
-    /// Writes one checkpoint, at mark `at`, with the number of frames taken as `taken`.
+    /// Writes one checkpoint, at mark `at`, with the number of frames taken as `taken`, and
+    /// keeps the stage times it wrote.
     struct OneCheckpoint {
         at: usize,
         frames: usize,
         checkpoints: Checkpoints,
+        times: StageTimes,
     }
 
     impl<S: Runnable> Observer<S> for OneCheckpoint {
@@ -412,6 +441,7 @@ mod tests {
             if run.next() == self.at {
                 self.checkpoints
                     .write(sim, run, &self.frames, output.as_secs_f64())?;
+                self.times = sim.stage_times();
             }
             Ok(())
         }
@@ -426,12 +456,20 @@ mod tests {
             at,
             frames: 0,
             checkpoints: Checkpoints::new(&path, Duration::ZERO),
+            times: StageTimes::default(),
         };
         let mut sim = fresh();
         let whole = drive(&mut sim, frames, &mut observer).unwrap();
         assert!(whole.failure.is_none(), "{:?}", whole.failure);
         let mut again = fresh();
+        let own = again.stage_times();
         let resumed: Resumed<S, usize> = resume(&path, &mut again, frames).unwrap();
+        // The stage times go on from the checkpoint's, this process's setup added.
+        let (saved, now) = (observer.times, again.stage_times());
+        assert!(saved.stress > Duration::ZERO && saved.contact > Duration::ZERO);
+        assert_eq!(now.stress, saved.stress);
+        assert_eq!(now.contact, saved.contact);
+        assert_eq!(now.setup, saved.setup + own.setup);
         let rows = resumed.run.history().rows().len();
         assert!(rows > 1 && rows < whole.history.rows().len(), "{rows}");
         let time = *resumed.resumed_at_s.last().unwrap();
@@ -440,6 +478,7 @@ mod tests {
             at: usize::MAX,
             frames: resumed.taken,
             checkpoints: Checkpoints::new(&path, Duration::ZERO),
+            times: StageTimes::default(),
         };
         let rest = crate::resume(&mut again, resumed.run, &mut counted).unwrap();
         assert!(rest.failure.is_none());
@@ -508,6 +547,7 @@ mod tests {
             at: 2,
             frames: 0,
             checkpoints: Checkpoints::new(&path, Duration::ZERO),
+            times: StageTimes::default(),
         };
         drive(&mut Simulation::new(&scene).unwrap(), 0, &mut observer).unwrap();
         let changed = Scene::from_str_named(&text.replace("0.0006", "0.0007"), "block").unwrap();

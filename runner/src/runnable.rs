@@ -6,7 +6,7 @@ use crate::History;
 use rkforge_core::outputs::Body;
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::{SolidSimulation, SolidState};
-use rkforge_core::{Error, Ran, Scene, Simulation, State};
+use rkforge_core::{Error, Ran, Scene, Simulation, StageTimes, State};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
@@ -27,6 +27,10 @@ pub trait Runnable: Body + Send {
     ///
     /// The state belongs to another discretisation.
     fn restore_state(&mut self, state: Self::State) -> Result<(), Error>;
+    /// The wall time spent in each stage so far.
+    fn stage_times(&self) -> StageTimes;
+    /// The same, to add to (a resumed run adds the times of the processes before).
+    fn stage_times_mut(&mut self) -> &mut StageTimes;
     /// The scene's end time (s).
     fn end_time(&self) -> f64;
     /// The interval between history rows (s), `output.history_interval_s` or its default.
@@ -68,6 +72,12 @@ macro_rules! shared {
         }
         fn restore_state(&mut self, state: Self::State) -> Result<(), Error> {
             self.restore(state)
+        }
+        fn stage_times(&self) -> StageTimes {
+            self.times
+        }
+        fn stage_times_mut(&mut self) -> &mut StageTimes {
+            &mut self.times
         }
         fn end_time(&self) -> f64 {
             <$sim>::scene(self).time.end_s

@@ -25,7 +25,7 @@ use crate::tools::Tool;
 use std::time::{Duration, Instant};
 
 /// Wall time spent in each stage.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StageTimes {
     /// Whole setup: particles, shape functions, masses, constraints, critical step.
     pub setup: Duration,
@@ -41,6 +41,20 @@ pub struct StageTimes {
     pub integration: Duration,
     /// The heat stage (conduction and surface flows), when the scene's heat moves.
     pub heat: Duration,
+}
+
+impl std::ops::AddAssign for StageTimes {
+    /// Add another process's times of the same run, stage by stage (a resumed run's times
+    /// cover every process that ran it, each one's setup included).
+    fn add_assign(&mut self, o: StageTimes) {
+        self.setup += o.setup;
+        self.shape_functions += o.shape_functions;
+        self.stress += o.stress;
+        self.internal_force += o.internal_force;
+        self.contact += o.contact;
+        self.integration += o.integration;
+        self.heat += o.heat;
+    }
 }
 
 /// Runs `f`, adding its wall time to `into`.
