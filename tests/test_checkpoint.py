@@ -240,7 +240,7 @@ def test_a_studys_killed_case_goes_on_from_its_checkpoint(tmp_path):
     """`rkforge.study(..., checkpoints=folder)`: a case killed in a process of its own (as a
     Dask worker dies) and the study called again go on from the case's checkpoint; the
     table is the bits of a study that never stopped, the case's `resumed_at_s` says where it
-    went on."""
+    went on; called once more, the study reads its finished cases back."""
     import sys
 
     import pandas as pd
@@ -264,6 +264,21 @@ def test_a_studys_killed_case_goes_on_from_its_checkpoint(tmp_path):
                                   check_exact=True)
     for a, b in zip(table["history"], straight["history"]):
         pd.testing.assert_frame_equal(a, b, check_exact=True)
-    assert not any(folder.glob("case-*/checkpoint.cbor"))
+    assert sorted(p.name for p in folder.glob("case-*/*")) == ["result.json", "result.json"]
+    # Called again, the study reads every case back from its folder and runs none: the same
+    # table (the summaries' own wall times included) and histories, the files untouched.
+    stamps = [p.stat().st_mtime_ns for p in sorted(folder.glob("case-*/result.json"))]
+    again = rkforge.study(scene, cases, progress=False, threads=1, checkpoints=folder)
+    pd.testing.assert_frame_equal(again.drop(columns=["case_wall_s", "history"]),
+                                  table.drop(columns=["case_wall_s", "history"]), check_exact=True)
+    for a, b in zip(again["history"], table["history"]):
+        pd.testing.assert_frame_equal(a, b, check_exact=True)
+    assert stamps == [p.stat().st_mtime_ns for p in sorted(folder.glob("case-*/result.json"))]
+    # A case whose folder holds another scene's result is an error row saying so; the
+    # case that matches is read back.
+    other = rkforge.study(scene, {"tools.top.friction": [0.2, 0.3]}, progress=False,
+                          checkpoints=folder)
+    assert list(other["status"]) == ["error", "ok"]
+    assert "holds the result of another scene" in other["error"][0]
     with pytest.raises(ValueError, match="checkpoint_every_s"):
         rkforge.study(scene, cases, progress=False, checkpoints=folder, checkpoint_every_s=-1)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import os
 import time
@@ -34,11 +35,43 @@ def expand(cases: Cases) -> List[Dict[str, Any]]:
     return out
 
 
+#: The file in a case's checkpoint folder that keeps its finished result.
+RESULT = "result.json"
+
+
+def _kept(folder: str, scene_toml: str, integration: Optional[str]):
+    """The summary and history of the case finished before in ``folder`` (its
+    :data:`RESULT`), or None; raises ValueError if that case ran another scene."""
+    import pandas as pd
+
+    path = os.path.join(folder, RESULT)
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        kept = json.load(f)
+    if kept["scene"] != scene_toml or kept["integration"] != integration:
+        raise ValueError(f"{folder} holds the result of another scene or rule: give the study "
+                         "the cases it ran, or another checkpoints folder")
+    return kept["summary"], pd.DataFrame(kept["rows"], columns=kept["columns"], dtype=float)
+
+
+def _keep(folder: str, scene_toml: str, integration: Optional[str], summary: dict, history) -> None:
+    """Write a finished case's result into ``folder`` (beside, then renamed over: a kill
+    while it writes leaves no partial file)."""
+    path = os.path.join(folder, RESULT)
+    with open(path + ".partial", "w") as f:
+        json.dump({"scene": scene_toml, "integration": integration, "summary": summary,
+                   "columns": list(history.columns), "rows": history.to_numpy().tolist()}, f)
+    os.replace(path + ".partial", path)
+
+
 def run_case(scene, overrides: Dict[str, Any], integration: Optional[str], threads: Optional[int],
              checkpoint: Optional[str] = None, checkpoint_every_s: float = 600.0) -> dict:
-    """One case: the scene with ``overrides`` run to its end, with checkpoints in the folder
-    ``checkpoint`` if given (going on from the one a killed attempt left there). Never
-    raises: a bad override or a failed run gives ``status`` "error" and the error text."""
+    """One case: the scene with ``overrides`` run to its end. With a folder ``checkpoint``,
+    a case finished there before is read back, not run; else the run writes checkpoints
+    there (going on from the one a killed attempt left) and keeps its result there when it
+    ends. Never raises: a bad override or a failed run gives ``status`` "error" and the
+    error text."""
     from . import run  # the package is imported on Dask workers too
 
     start = time.perf_counter()
@@ -47,8 +80,16 @@ def run_case(scene, overrides: Dict[str, Any], integration: Optional[str], threa
         case_scene = scene.copy()
         for key, value in overrides.items():
             case_scene.set(key, value)
-        summary, history = run(case_scene, integration=integration, threads=threads, check=False,
-                               checkpoint=checkpoint, checkpoint_every_s=checkpoint_every_s)
+        scene_toml = case_scene.to_toml()
+        kept = None if checkpoint is None else _kept(checkpoint, scene_toml, integration)
+        if kept is not None:
+            summary, history = kept
+        else:
+            summary, history = run(case_scene, integration=integration, threads=threads,
+                                   check=False, checkpoint=checkpoint,
+                                   checkpoint_every_s=checkpoint_every_s)
+            if checkpoint is not None and summary.get("error") is None:
+                _keep(checkpoint, scene_toml, integration, summary, history)
         error = summary.get("error")
     except Exception as e:  # noqa: BLE001 - a case's error becomes its row
         error = f"{type(e).__name__}: {e}"
@@ -118,11 +159,13 @@ def study(
 
     ``checkpoints`` (a folder every worker can reach, e.g. on a shared file system) gives
     each case a folder ``case-<index>`` in it where its run writes a checkpoint every
-    ``checkpoint_every_s`` seconds of wall time (:func:`rkforge.run`'s ``checkpoint``): a
-    case whose worker died, retried by Dask, or a case of the same study called again after
-    the client was lost, goes on from its last checkpoint to the same bits instead of from
-    the start. A case's folder that holds a checkpoint of another scene makes that case an
-    error row naming the first key that differs.
+    ``checkpoint_every_s`` seconds of wall time (:func:`rkforge.run`'s ``checkpoint``) and,
+    when it finishes, its result (``result.json``: the scene as run, the summary and the
+    history). A case whose worker died, retried by Dask, goes on from its last checkpoint
+    to the same bits instead of from the start; the same study called again (after the
+    client was lost, say) reads its finished cases back and goes on with the rest. A case's
+    folder that holds a checkpoint or result of another scene makes that case an error row
+    saying so (the checkpoint's names the first key that differs).
 
     Columns: ``case`` (its index), the inputs (named by their dotted keys), ``status``
     ("ok" or "error"), ``error`` (the error text), ``wall_s`` (the run's wall time as
