@@ -48,6 +48,7 @@ def straight_and_resumed(rkforge_bin, tmp_path, scene, settle_s):
     proc = subprocess.run(args + ["--out", str(cut), "--resume", "--checkpoint-every-s", "0"],
                           capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr
+    assert "resumed from its checkpoint at t = " in proc.stdout, proc.stdout
     return whole, cut
 
 

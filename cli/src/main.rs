@@ -307,6 +307,7 @@ fn run_solid_command(a: &RunArgs, mut scene: SolidScene) -> Result<(), String> {
         rkforge_runner::references_beside(&scene.name, &scene.reference, &report.summary)
     );
     let s = &report.summary;
+    print_resumed(s);
     println!(
         "{:.3} us per particle-step; energy balance {:.2e}; deepest in a tool {:.3e} m, beyond a symmetry plane {:.3e} m",
         s["us_per_particle_step"].as_f64().unwrap_or(0.0),
@@ -328,6 +329,20 @@ fn mcap_options(a: &RunArgs) -> Option<McapOptions> {
         scene_file: a.scene.clone(),
         compression: a.mcap_compression,
     })
+}
+
+/// Say where a resumed run went on from its checkpoints (summary.json's `resumed_at_s`).
+fn print_resumed(summary: &serde_json::Value) {
+    if let Some(at) = summary["resumed_at_s"].as_array() {
+        let times: Vec<String> = at
+            .iter()
+            .map(|t| format!("{:.4e} s", t.as_f64().unwrap_or(f64::NAN)))
+            .collect();
+        println!(
+            "resumed from its checkpoint at t = {} (wall and stage times over every process)",
+            times.join(", ")
+        );
+    }
 }
 
 /// The checkpoints and resumption of a run, which a recording cannot have.
@@ -365,6 +380,7 @@ fn run_command(a: RunArgs) -> Result<(), String> {
     };
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
+    print_resumed(&report.summary);
     println!("{}", report.stages());
     for w in report.summary["warnings"].as_array().into_iter().flatten() {
         eprintln!("warning: {}", w.as_str().unwrap_or_default());
@@ -551,6 +567,7 @@ fn default_run() -> Result<(), String> {
     );
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
+    print_resumed(&report.summary);
     println!("{}", report.stages());
     println!(
         "results in {} (summary.json, history.csv, frames/, *.png)",

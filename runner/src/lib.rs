@@ -249,7 +249,8 @@ pub trait Observer<S = Simulation> {
     /// After each instant of the schedule.
     fn progress(&mut self, _sim: &S) {}
     /// After each instant's outputs, with the run and the output time (s) spent so far in
-    /// this process: where a caller writes a [`checkpoint`] when one is due.
+    /// this process: where a caller writes a [`checkpoint`] when one is due (its writing
+    /// is output time too).
     ///
     /// # Errors
     ///
@@ -352,11 +353,11 @@ fn drive_on<S: Runnable>(
         if mark.frame {
             observer.frame(sim)?;
         }
-        output_time += clock.elapsed();
         observer.progress(sim);
         if failure.is_none() {
-            observer.checkpoint(sim, &run, output_time)?;
+            observer.checkpoint(sim, &run, clock.elapsed() + output_time)?;
         }
+        output_time += clock.elapsed();
     }
     if failure.is_some() && !recorded {
         let clock = Instant::now();
