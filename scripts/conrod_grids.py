@@ -185,6 +185,16 @@ def main():
             else:
                 p, ext, gci = est
                 print(f"  {k}: order {p:.2f}, extrapolated {ext:.{digits}f}, GCI {100 * gci:.2f} %")
+    if len(rows) >= 4:
+        print("\nthe force at 9 mm over each triple of neighbouring grids (coarse to fine):")
+        for k in range(len(rows) - 2):
+            triple = rows[k:k + 3][::-1]
+            h = [r[0] for r in triple]
+            est = celik(h, [r[1]["F9"] for r in triple])
+            if not isinstance(est, str):
+                p, ext, gci = est
+                est = f"order {p:.2f}, extrapolated {ext:.1f}, GCI {100 * gci:.2f} %"
+            print(f"  h = {h[2]:.3f} / {h[1]:.3f} / {h[0]:.3f} mm: {est}")
 
 
 if __name__ == "__main__":
