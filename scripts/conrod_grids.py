@@ -17,6 +17,8 @@ convergence index GCI = 1.25 |e_a| / (r^p - 1); for differences of alternating s
 size falls as the grid refines (oscillating convergence), the uncertainty as half the
 range of the three (Stern et al. 2001, "Comprehensive approach to verification and
 validation of CFD simulations - Part 1", J. Fluids Eng. 123, 793-802); or why there is none.
+Given four grids or more, the force at 9 mm is also assessed on every triple of neighbouring
+grids, to show whether the grids before the finest three behave alike.
 
     scripts/conrod_grids.py --out out/conrod_grids
     scripts/conrod_grids.py --out out/conrod_grids --grids 29x8x12,41x11x17,57x15x23 --reuse
@@ -136,6 +138,14 @@ def celik(h, phi, digits=1):
     return p, ext, gci
 
 
+def describe(est, digits=1):
+    """One line for a `celik` result: the estimate, or the reason there is none."""
+    if isinstance(est, str):
+        return est
+    p, ext, gci = est
+    return f"order {p:.2f}, extrapolated {ext:.{digits}f}, GCI {100 * gci:.2f} %"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--grids", default=",".join(GRIDS),
@@ -179,21 +189,13 @@ def main():
         print(f"\nthe three finest grids (h = {h[0]:.3f}, {h[1]:.3f}, {h[2]:.3f} mm):")
         for k in keys[: len(STROKES_MM) + 2] + [f"s@{f:g}" for f in FORCES_KN]:
             digits = 3 if k.startswith("s@") else 1
-            est = celik(h, [r[1][k] for r in fine], digits)
-            if isinstance(est, str):
-                print(f"  {k}: {est}")
-            else:
-                p, ext, gci = est
-                print(f"  {k}: order {p:.2f}, extrapolated {ext:.{digits}f}, GCI {100 * gci:.2f} %")
+            print(f"  {k}: {describe(celik(h, [r[1][k] for r in fine], digits), digits)}")
     if len(rows) >= 4:
         print("\nthe force at 9 mm over each triple of neighbouring grids (coarse to fine):")
         for k in range(len(rows) - 2):
             triple = rows[k:k + 3][::-1]
             h = [r[0] for r in triple]
-            est = celik(h, [r[1]["F9"] for r in triple])
-            if not isinstance(est, str):
-                p, ext, gci = est
-                est = f"order {p:.2f}, extrapolated {ext:.1f}, GCI {100 * gci:.2f} %"
+            est = describe(celik(h, [r[1]["F9"] for r in triple]))
             print(f"  h = {h[2]:.3f} / {h[1]:.3f} / {h[0]:.3f} mm: {est}")
 
 
