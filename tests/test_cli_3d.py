@@ -49,6 +49,24 @@ def test_summary_is_the_bar_after_impact(coarse_run):
     assert "Foulk et al. 2021, converged FE" in stdout and "us per particle-step" in stdout
 
 
+def test_stage_timers_account_for_the_wall_time(coarse_run):
+    out, stdout = coarse_run
+    s = json.loads((out / "summary.json").read_text())
+    t = s["stage_seconds"]
+    stages = ["stress", "internal_force", "contact", "integration", "output"]
+    for key in ["setup", "shape_functions", *stages]:
+        assert t[key] >= 0.0, key
+    assert t["shape_functions"] <= t["setup"]
+    # Disjoint parts of the run, as in 2D (tests/test_cli.py): never more than the wall time,
+    # and most of it.
+    total = t["setup"] + sum(t[k] for k in stages)
+    assert 0.5 * s["wall_s"] < total <= s["wall_s"], s
+    # 81 history samples, frames and their pictures were taken and written: output has a cost,
+    # and the stage line names it.
+    assert t["output"] > 0.0
+    assert "stages: setup" in stdout and "output" in stdout
+
+
 def test_history_has_the_readings_and_the_wall_force(coarse_run):
     out, _ = coarse_run
     with open(out / "history.csv") as f:

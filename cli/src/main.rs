@@ -315,6 +315,7 @@ fn run_solid_command(a: &RunArgs, mut scene: SolidScene) -> Result<(), String> {
         s["contact"]["max_penetration_m"].as_f64().unwrap_or(0.0),
         s["contact"]["max_beyond_plane_m"].as_f64().unwrap_or(0.0),
     );
+    println!("{}", run::stage_line(s));
     println!("results in {}", out.display());
     match report.error {
         Some(e) => Err(e),
@@ -381,7 +382,7 @@ fn run_command(a: RunArgs) -> Result<(), String> {
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
     print_resumed(&report.summary);
-    println!("{}", report.stages());
+    println!("{}", run::stage_line(&report.summary));
     for w in report.summary["warnings"].as_array().into_iter().flatten() {
         eprintln!("warning: {}", w.as_str().unwrap_or_default());
     }
@@ -568,7 +569,7 @@ fn default_run() -> Result<(), String> {
     let report = run::run(&scene, &opts)?;
     println!("{}", report.table());
     print_resumed(&report.summary);
-    println!("{}", report.stages());
+    println!("{}", run::stage_line(&report.summary));
     println!(
         "results in {} (summary.json, history.csv, frames/, *.png)",
         opts.out.display()

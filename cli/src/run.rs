@@ -57,37 +57,38 @@ impl Report {
     pub fn table(&self) -> String {
         rkforge_runner::reference_table(&self.scene, &self.summary)
     }
+}
 
-    /// Where the wall time went: each stage of `stage_seconds` with its share of the run.
-    pub fn stages(&self) -> String {
-        let t = &self.summary["stage_seconds"];
-        let get = |k: &str| t[k].as_f64().unwrap_or(0.0);
-        let wall = self.summary["wall_s"].as_f64().unwrap_or(0.0);
-        let share = |x: f64| if wall > 0.0 { 100.0 * x / wall } else { 0.0 };
-        let stages = [
-            ("stress", "strain and stress"),
-            ("internal_force", "internal force"),
-            ("contact", "contact"),
-            ("integration", "integration"),
-            ("output", "output"),
-        ];
-        let mut line = format!(
-            "stages: setup {:.2} s (shape functions {:.2} s)",
-            get("setup"),
-            get("shape_functions")
-        );
-        let mut counted = get("setup");
-        // The heat stage, in a scene whose heat moves.
-        let heat = t.get("heat").map(|_| ("heat", "heat"));
-        for (key, name) in stages.into_iter().chain(heat) {
-            counted += get(key);
-            line += &format!(", {name} {:.2} s ({:.0} %)", get(key), share(get(key)));
-        }
-        line + &format!(
-            ", other {:.2} s of {wall:.2} s wall",
-            (wall - counted).max(0.0)
-        )
+/// Where the wall time of a run went, from its summary (2D or 3D): each stage of
+/// `stage_seconds` with its share of the run.
+pub fn stage_line(summary: &Value) -> String {
+    let t = &summary["stage_seconds"];
+    let get = |k: &str| t[k].as_f64().unwrap_or(0.0);
+    let wall = summary["wall_s"].as_f64().unwrap_or(0.0);
+    let share = |x: f64| if wall > 0.0 { 100.0 * x / wall } else { 0.0 };
+    let stages = [
+        ("stress", "strain and stress"),
+        ("internal_force", "internal force"),
+        ("contact", "contact"),
+        ("integration", "integration"),
+        ("output", "output"),
+    ];
+    let mut line = format!(
+        "stages: setup {:.2} s (shape functions {:.2} s)",
+        get("setup"),
+        get("shape_functions")
+    );
+    let mut counted = get("setup");
+    // The heat stage, in a scene whose heat moves.
+    let heat = t.get("heat").map(|_| ("heat", "heat"));
+    for (key, name) in stages.into_iter().chain(heat) {
+        counted += get(key);
+        line += &format!(", {name} {:.2} s ({:.0} %)", get(key), share(get(key)));
     }
+    line + &format!(
+        ", other {:.2} s of {wall:.2} s wall",
+        (wall - counted).max(0.0)
+    )
 }
 
 /// Run `scene` to its end time, writing results into `opts.out`. A run that fails midway

@@ -59,13 +59,16 @@ pub fn run(
         checkpoints: started.checkpoints.take(),
     };
     let outcome = started.go(&mut sim, nframes, &mut shots)?;
+    let clock = Instant::now();
     if !shots.frames.is_empty() {
         write_frames(&sim, &shots.frames, out, &scene.name)?;
     }
     outcome.history.write(&out.join("history.csv"))?;
+    let output_time = outcome.output_time + clock.elapsed();
     let mut summary = solid_summary(
         &sim,
         started.wall_s + wall.elapsed().as_secs_f64(),
+        started.output_s + output_time.as_secs_f64(),
         outcome.ending(),
     );
     started.mark(&mut summary);

@@ -115,7 +115,7 @@ impl Sim {
         let ending = rkforge_runner::Ending::Finished;
         match self {
             Sim::Plane(s) => rkforge_runner::summary(s, wall, 0.0, ending),
-            Sim::Solid(s) => rkforge_runner::solid_summary(s, wall, ending),
+            Sim::Solid(s) => rkforge_runner::solid_summary(s, wall, 0.0, ending),
         }
     }
 }
@@ -445,7 +445,7 @@ impl Simulation {
                         .collect(),
                 ),
                 Sim::Solid(sim) => {
-                    rkforge_runner::solid_summary(sim, 0.0, rkforge_runner::Ending::Finished)
+                    rkforge_runner::solid_summary(sim, 0.0, 0.0, rkforge_runner::Ending::Finished)
                         ["tools"]
                         .clone()
                 }
@@ -728,9 +728,7 @@ pub fn run_scene<'py>(
                         drive_saving(&mut *sim, folder, every, rkforge_runner::summary)
                     }
                     Sim::Solid(mut sim) => {
-                        drive_saving(&mut *sim, folder, every, |s, wall, _, ending| {
-                            rkforge_runner::solid_summary(s, wall, ending)
-                        })
+                        drive_saving(&mut *sim, folder, every, rkforge_runner::solid_summary)
                     }
                 }
             };

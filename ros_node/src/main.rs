@@ -180,7 +180,7 @@ impl NodeSim for SolidSimulation {
             .map_err(|e| e.to_string())
     }
     fn run_summary(&self, wall_s: f64, ending: Ending<'_>) -> Value {
-        rkforge_runner::solid_summary(self, wall_s, ending)
+        rkforge_runner::solid_summary(self, wall_s, 0.0, ending)
     }
 }
 

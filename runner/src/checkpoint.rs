@@ -110,6 +110,16 @@ impl Checkpoints {
         }
     }
 
+    /// The same checkpoints counting `setup`, the wall time this process spent setting the
+    /// simulation up before they were, in the run's wall time (a resumed run's `wall_s`
+    /// then covers each process's setup, as its stage times do).
+    pub fn counting_setup(self, setup: Duration) -> Self {
+        Checkpoints {
+            started: self.started.checked_sub(setup).unwrap_or(self.started),
+            ..self
+        }
+    }
+
     /// The checkpoint file.
     pub fn path(&self) -> &Path {
         &self.path
@@ -282,6 +292,7 @@ pub fn start<S: Runnable, Fr: Default + DeserializeOwned>(
     how: Restart,
 ) -> Result<Started<S, Fr>, String> {
     let file = folder.map(|f| f.join(FILE));
+    let setup = sim.stage_times().setup;
     let Some(path) = file.as_deref().filter(|_| how.resume) else {
         return Ok(Started {
             run: None,
@@ -289,7 +300,7 @@ pub fn start<S: Runnable, Fr: Default + DeserializeOwned>(
             checkpoints: file
                 .as_deref()
                 .zip(how.every)
-                .map(|(path, every)| Checkpoints::new(path, every)),
+                .map(|(path, every)| Checkpoints::new(path, every).counting_setup(setup)),
             wall_s: 0.0,
             output_s: 0.0,
             resumed_at_s: Vec::new(),
@@ -300,7 +311,7 @@ pub fn start<S: Runnable, Fr: Default + DeserializeOwned>(
     Ok(Started {
         checkpoints: how
             .every
-            .map(|every| Checkpoints::after(path, every, &resumed)),
+            .map(|every| Checkpoints::after(path, every, &resumed).counting_setup(setup)),
         run: Some(resumed.run),
         taken: resumed.taken,
         wall_s: resumed.wall_s,

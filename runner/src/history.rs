@@ -27,13 +27,12 @@ impl History {
     /// largest); a particle deeper than the scene's bound is returned as an error, after the
     /// row is recorded (with the run's largest depths).
     pub fn record(&mut self, sim: &mut Simulation) -> Result<(), rkforge_core::Error> {
-        sim.measure_isolation();
-        let measured = sim.measure_penetration();
+        let (positions, measured) = sim.measure_sample();
         let depths = match &measured {
             Ok(d) => Penetration::of(d),
             Err(_) => Penetration::largest(sim),
         };
-        self.push(&Sample::with_penetration(sim, depths));
+        self.push(&Sample::<Simulation>::measured(sim, positions, depths));
         measured.map(|_| ())
     }
 }
@@ -46,17 +45,16 @@ impl History<SolidSimulation> {
 
     /// Record the current state of a 3D run, every particle's isolation measured (as in 2D)
     /// and the penetration measured over every particle
-    /// against every tool and symmetry plane ([`SolidSimulation::measure_penetration`]); a
+    /// against every tool and symmetry plane ([`SolidSimulation::measure_sample`]); a
     /// particle deeper than the scene's bound is returned as an error, after the row is
     /// recorded (with the run's largest depths).
     pub fn record_solid(&mut self, sim: &mut SolidSimulation) -> Result<(), rkforge_core::Error> {
-        sim.measure_isolation();
-        let measured = sim.measure_penetration();
+        let (positions, measured) = sim.measure_sample();
         let depths = match &measured {
             Ok((tools, planes)) => [*tools, *planes],
             Err(_) => [sim.state().max_penetration, sim.state().max_beyond_plane],
         };
-        self.push(&Sample::with_depths(sim, depths));
+        self.push(&Sample::<SolidSimulation>::measured(sim, positions, depths));
         measured.map(|_| ())
     }
 }

@@ -441,7 +441,7 @@ mod tests {
         assert_eq!(time.len(), 5);
         assert_eq!(time.last(), Some(&4.0e-6));
         assert!(outcome.history.column("wall.force_z_N").is_some());
-        let s = solid_summary(&sim, 1.0, outcome.ending());
+        let s = solid_summary(&sim, 1.0, 0.0, outcome.ending());
         assert_eq!(s["status"], "ok");
         assert_eq!(s["end_time_s"], 4.0e-6);
     }

@@ -144,8 +144,15 @@ fn rereference_entry(stretch: f64, last: Option<(u32, f64, f64, u64, u64)>, rema
 /// The summary of a 3D run (summary.json) that took `wall_s` (s) of wall time and ended
 /// as `ending` says: how it ended, the discretisation and its cost, the bounds as ranges,
 /// the largest penetrations, each tool's force vector, the stage times, and the register's
-/// figures ([`rkforge_core::outputs::SOLID_REGISTER`]) at the paths their names give.
-pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> Value {
+/// figures ([`rkforge_core::outputs::SOLID_REGISTER`]) at the paths their names give;
+/// `output_s` is the time the caller spent sampling the history and writing files, as in
+/// [`summary`].
+pub fn solid_summary(
+    sim: &SolidSimulation,
+    wall_s: f64,
+    output_s: f64,
+    ending: Ending<'_>,
+) -> Value {
     let (status, error) = match ending {
         Ending::Finished => ("ok", None),
         Ending::Stopped(reason) => ("stopped", Some(reason)),
@@ -205,6 +212,7 @@ pub fn solid_summary(sim: &SolidSimulation, wall_s: f64, ending: Ending<'_>) -> 
             "internal_force": t.internal_force.as_secs_f64(),
             "contact": t.contact.as_secs_f64(),
             "integration": t.integration.as_secs_f64(),
+            "output": output_s,
         },
     });
     if scene.transfers_heat() {

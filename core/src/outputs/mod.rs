@@ -536,6 +536,7 @@ pub struct Sample<'a, S: Body = Simulation> {
 /// The measures a sample of a 2D simulation takes once.
 #[derive(Default)]
 pub struct PlaneCache {
+    positions: OnceCell<Vec<[Real; 2]>>,
     extents: OnceCell<Extents>,
     penetration: OnceCell<Penetration>,
     fields: OnceCell<Fields>,
@@ -558,16 +559,27 @@ impl<'a, S: Body> Sample<'a, S> {
 }
 
 impl<'a> Sample<'a> {
-    /// The simulation now with the penetration already measured.
-    pub fn with_penetration(sim: &'a Simulation, p: Penetration) -> Sample<'a> {
+    /// The simulation now with what [`Simulation::measure_sample`] measured: the particles'
+    /// physical `positions` (m) and the penetration `p`.
+    pub fn measured(sim: &'a Simulation, positions: Vec<[Real; 2]>, p: Penetration) -> Sample<'a> {
         let sample = Sample::new(sim);
+        sample.cache.positions.get_or_init(|| positions);
         sample.cache.penetration.get_or_init(|| p);
         sample
     }
 
+    /// The particles' physical positions (m, [`Simulation::positions`]), formed when first
+    /// read.
+    pub fn positions(&self) -> &[[Real; 2]] {
+        self.cache.positions.get_or_init(|| self.sim.positions())
+    }
+
     /// Bounds of the deformed workpiece over all particles (m), [`Simulation::extents`].
     pub fn extents(&self) -> Extents {
-        *self.cache.extents.get_or_init(|| self.sim.extents())
+        *self
+            .cache
+            .extents
+            .get_or_init(|| crate::geometry::bounds(self.positions()))
     }
 
     /// The penetration now ([`Simulation::penetration`], measured when first read).
@@ -575,7 +587,7 @@ impl<'a> Sample<'a> {
         *self
             .cache
             .penetration
-            .get_or_init(|| Penetration::of(&self.sim.penetration()))
+            .get_or_init(|| Penetration::of(&self.sim.penetration_at(self.positions())))
     }
 
     /// The particle fields, [`Simulation::fields`].

@@ -273,29 +273,60 @@ const POINT_FIELDS: [Output<SolidSimulation>; 5] = [
 /// The measures a sample of a 3D simulation takes once.
 #[derive(Default)]
 pub struct SolidCache {
+    positions: OnceCell<Vec<[Real; 3]>>,
     readings: OnceCell<BodyReadings>,
     penetration: OnceCell<[Real; 2]>,
 }
 
 impl<'a> Sample<'a, SolidSimulation> {
-    /// The simulation now with the penetration already measured (m, in the tools and
+    /// The simulation now with what [`SolidSimulation::measure_sample`] measured: the
+    /// particles' physical `positions` (m) and the penetration `p` (m, in the tools and
     /// beyond the symmetry planes).
-    pub fn with_depths(sim: &'a SolidSimulation, p: [Real; 2]) -> Sample<'a, SolidSimulation> {
+    pub fn measured(
+        sim: &'a SolidSimulation,
+        positions: Vec<[Real; 3]>,
+        p: [Real; 2],
+    ) -> Sample<'a, SolidSimulation> {
         let sample = Sample::new(sim);
+        sample.cache.positions.get_or_init(|| positions);
         sample.cache.penetration.get_or_init(|| p);
         sample
     }
 
+    /// The particles' physical positions (m, [`SolidSimulation::positions`]), formed when
+    /// first read.
+    pub fn positions(&self) -> &[[Real; 3]] {
+        self.cache.positions.get_or_init(|| self.sim.positions())
+    }
+
     /// The workpiece's radius and bounds ([`SolidSimulation::readings`]).
     pub fn readings(&self) -> BodyReadings {
-        *self.cache.readings.get_or_init(|| self.sim.readings())
+        *self
+            .cache
+            .readings
+            .get_or_init(|| BodyReadings::of(self.positions()))
+    }
+
+    /// The workpiece's volume ([`SolidSimulation::volume`], m^3).
+    pub fn volume(&self) -> Real {
+        self.sim.volume_at(self.positions())
+    }
+
+    /// The workpiece's surface area ([`SolidSimulation::surface_area`], m^2).
+    pub fn surface_area(&self) -> Real {
+        self.sim.surface_area_at(self.positions())
+    }
+
+    /// The area in contact with scene tool `t` ([`SolidSimulation::contact_area`], m^2).
+    pub fn contact_area(&self, t: usize) -> Real {
+        self.sim.contact_area_at(t, self.positions())
     }
 
     /// The deepest particle in a tool and beyond a symmetry plane (m), measured when first
     /// read ([`SolidSimulation::penetration_now`]).
     pub fn penetration(&self) -> [Real; 2] {
         *self.cache.penetration.get_or_init(|| {
-            let [tools, planes] = self.sim.penetration_now();
+            let [tools, planes] = self.sim.penetration_at(self.positions());
             [tools.0, planes.0]
         })
     }

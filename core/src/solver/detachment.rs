@@ -35,25 +35,33 @@ pub fn nearest_points<const D: usize>(
 ) -> Vec<Real> {
     let mut nearest = vec![Real::INFINITY; particles.len()];
     for (p, i) in pairs {
-        let d2 = (0..D)
-            .map(|k| (points[p][k] - particles[i][k]).powi(2))
-            .sum::<Real>();
-        nearest[i] = nearest[i].min(d2);
+        nearest[i] = nearest[i].min(squared_distance(&points[p], &particles[i]));
     }
+    finish_nearest(&mut nearest, particles, points);
+    nearest
+}
+
+/// `|a - b|^2` (m^2).
+fn squared_distance<const D: usize>(a: &[Real; D], b: &[Real; D]) -> Real {
+    (0..D).map(|k| (a[k] - b[k]).powi(2)).sum::<Real>()
+}
+
+/// The squared distances `nearest` (m^2) of [`nearest_points`] made distances (m), a
+/// particle in no pair given its distance to the nearest point of all.
+fn finish_nearest<const D: usize>(
+    nearest: &mut [Real],
+    particles: &[[Real; D]],
+    points: &[[Real; D]],
+) {
     for (i, d) in nearest.iter_mut().enumerate() {
         if d.is_infinite() {
             *d = points
                 .iter()
-                .map(|x| {
-                    (0..D)
-                        .map(|k| (x[k] - particles[i][k]).powi(2))
-                        .sum::<Real>()
-                })
+                .map(|x| squared_distance(x, &particles[i]))
                 .fold(Real::INFINITY, Real::min);
         }
         *d = d.sqrt();
     }
-    nearest
 }
 
 /// Each particle's distance (m) to the nearest other particle of its row in `table` (one
@@ -95,7 +103,9 @@ pub(super) struct Body<'a, const D: usize> {
 }
 
 /// [`nearest_points`] of the body's particles among its integration points at their
-/// physical positions `x_p = X_p + sum_I N_I(x_p) d_I`.
+/// physical positions `x_p = X_p + sum_I N_I(x_p) d_I`, group by group of the scatter
+/// ([`Scatter::groups`]): each group's points formed over its list, then its pairs
+/// measured (each point's sum in its list's order, as a one-point loop forms it).
 pub(super) fn point_distances<const D: usize>(body: &Body<'_, D>) -> Vec<Real> {
     let Body {
         scatter,
@@ -104,26 +114,31 @@ pub(super) fn point_distances<const D: usize>(body: &Body<'_, D>) -> Vec<Real> {
         particles,
         nodal,
     } = *body;
-    let points: Vec<[Real; D]> = reference
-        .iter()
-        .enumerate()
-        .map(|(p, x)| {
-            let mut x = *x;
-            for (i, n, _) in scatter.point_entries(p) {
-                for k in 0..D {
-                    x[k] += n * d[i][k];
+    let mut points = reference.to_vec();
+    let mut nearest = vec![Real::INFINITY; particles.len()];
+    for group in scatter.groups() {
+        let x = &mut points[group.first..group.first + group.size];
+        for k in 0..group.len() {
+            let (n, i) = group.values::<D>(k);
+            for (q, (x, n)) in x.iter_mut().zip(n).enumerate() {
+                let d = &d[i + group.shift(q)];
+                for c in 0..D {
+                    x[c] += n * d[c];
                 }
             }
-            x
-        })
-        .collect();
-    let pairs = (0..points.len()).flat_map(|p| {
-        scatter
-            .point_entries(p)
-            .filter(move |&(i, n, _)| n != 0.0 && !(nodal && i == p))
-            .map(move |(i, _, _)| (p, i))
-    });
-    nearest_points(particles, &points, pairs)
+        }
+        for k in 0..group.len() {
+            let (n, i) = group.values::<D>(k);
+            for (q, (x, &n)) in x.iter().zip(n).enumerate() {
+                let i = i + group.shift(q);
+                if n != 0.0 && !(nodal && i == group.first + q) {
+                    nearest[i] = nearest[i].min(squared_distance(x, &particles[i]));
+                }
+            }
+        }
+    }
+    finish_nearest(&mut nearest, particles, &points);
+    nearest
 }
 
 /// A particle that left the body: the first sample at which one passed [`DETACHED_REL`].

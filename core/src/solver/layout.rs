@@ -368,7 +368,77 @@ impl<const D: usize> Scatter<D> {
     }
 }
 
+/// One group of points over one particle list ([`Scatter::group`]): its points
+/// `first..first + size`, each list entry's particle and values for each point.
+pub(super) struct Group<'a> {
+    /// The group's first point.
+    pub first: usize,
+    /// Its number of points.
+    pub size: usize,
+    base: usize,
+    strip: bool,
+    list: &'a [u32],
+    block: &'a [Real],
+}
+
+impl Group<'_> {
+    /// Entries in the group's particle list.
+    pub fn len(&self) -> usize {
+        self.list.len()
+    }
+
+    /// The particle of list entry `k` for the group's point `q` (a strip's points 2 and 3
+    /// read the particle one above).
+    pub fn particle(&self, k: usize, q: usize) -> usize {
+        self.base + self.list[k] as usize + self.shift(q)
+    }
+
+    /// Entry `k`'s values for the group's point `q`: `N` and `dN/dX_c` (1, 1/m), zero where
+    /// the particle is only in another point's list.
+    pub fn entry<const D: usize>(&self, k: usize, q: usize) -> (Real, [Real; D]) {
+        let g = self.size;
+        let v = &self.block[(D + 1) * g * k..(D + 1) * g * (k + 1)];
+        (v[q], std::array::from_fn(|c| v[(c + 1) * g + q]))
+    }
+
+    /// Entry `k`'s `N` (-) for each of the group's points, in a `D`-dimensional table, and
+    /// its particle for the group's first point ([`Group::shift`] gives the others').
+    pub fn values<const D: usize>(&self, k: usize) -> (&[Real], usize) {
+        let at = (D + 1) * self.size * k;
+        (
+            &self.block[at..at + self.size],
+            self.base + self.list[k] as usize,
+        )
+    }
+
+    /// How far the group's point `q` reads past the first point's particle at each entry:
+    /// 1 for a strip's points 2 and 3, else 0.
+    pub fn shift(&self, q: usize) -> usize {
+        usize::from(self.strip && q >= 2)
+    }
+}
+
 impl<const D: usize> Scatter<D> {
+    /// The group starting at point `first` (`group[first] > 0`).
+    fn group_at(&self, first: usize) -> Group<'_> {
+        let [a, b] = self.list_range[first];
+        Group {
+            first,
+            size: self.group[first] as usize,
+            base: self.base[first] as usize,
+            strip: self.strip[first],
+            list: &self.lists[a as usize..b as usize],
+            block: &self.table[self.table_start[first] as usize..],
+        }
+    }
+
+    /// Every group of points, in point order.
+    pub(super) fn groups(&self) -> impl Iterator<Item = Group<'_>> + '_ {
+        (0..self.group.len())
+            .filter(|&p| self.group[p] > 0)
+            .map(|p| self.group_at(p))
+    }
+
     /// Point `p`'s entries in its group's block: each particle of the group's list with
     /// `N` and its gradient `dN/dX_k` (1, 1/m), zero where the particle is only in another
     /// point's list.
@@ -377,21 +447,11 @@ impl<const D: usize> Scatter<D> {
         p: usize,
     ) -> impl Iterator<Item = (usize, Real, [Real; D])> + '_ {
         let first = (0..=p).rev().find(|&q| self.group[q] > 0).unwrap_or(0);
-        let (g, q) = (self.group[first] as usize, p - first);
-        let [a, b] = self.list_range[first];
-        let block = &self.table[self.table_start[first] as usize..];
-        let base = self.base[first] as usize + usize::from(self.strip[first] && q >= 2);
-        self.lists[a as usize..b as usize]
-            .iter()
-            .enumerate()
-            .map(move |(k, &i)| {
-                let v = &block[(D + 1) * g * k..(D + 1) * g * (k + 1)];
-                (
-                    base + i as usize,
-                    v[q],
-                    std::array::from_fn(|c| v[(c + 1) * g + q]),
-                )
-            })
+        let (group, q) = (self.group_at(first), p - first);
+        (0..group.len()).map(move |k| {
+            let (n, grad) = group.entry::<D>(k, q);
+            (group.particle(k, q), n, grad)
+        })
     }
 
     /// Point `p`'s shape function values: each particle of its group's list with `N_I`

@@ -11,7 +11,7 @@
 //!   gap reached half the bound (the corrector only pushes a particle in contact out), at
 //!   their physical positions; past the bound in a tool or beyond a plane the run stops with
 //!   the step, time, particle, where it lies and the depth;
-//! - at each output sample ([`measure`], [`super::Simulation::measure_penetration`]), every particle against
+//! - at each output sample ([`measure`], [`super::Simulation::measure_sample`]), every particle against
 //!   every segment of every tool at any depth and against every plane; and every ring
 //!   particle against the rest of the boundary ring: how deep it lies inside another part
 //!   of the workpiece (the ring covers a point near it twice,
@@ -160,26 +160,27 @@ fn deep_self_contacts(
     worst
 }
 
-/// [`depths`] now, also kept as the run's largest; past the scene's bound in a tool or
-/// beyond a plane an error naming the particle, where it lies and the depth.
+/// [`depths`] with the particles at their physical `positions` now (m), also kept as the
+/// run's largest; past the scene's bound in a tool or beyond a plane an error naming the
+/// particle, where it lies and the depth.
 pub(super) fn measure(
     scene: &Scene,
     disc: &Discretization,
     tools: &[Tool],
     st: &mut State,
+    positions: &[[Real; 2]],
 ) -> Result<Depths> {
-    let d = depths(disc, tools, st);
+    let d = depths(disc, tools, positions);
     record(scene, disc, tools, st, d)?;
     Ok(d)
 }
 
-/// Every particle against every tool at any depth and every symmetry plane, and the
-/// boundary ring against itself, now (zero depths when nothing lies inside), without
-/// keeping it.
-pub(super) fn depths(disc: &Discretization, tools: &[Tool], st: &State) -> Depths {
+/// Every particle at its physical position `positions` (m) against every tool at any depth
+/// and every symmetry plane, and the boundary ring against itself (zero depths when
+/// nothing lies inside), without keeping it.
+pub(super) fn depths(disc: &Discretization, tools: &[Tool], positions: &[[Real; 2]]) -> Depths {
     let mut d = Depths::default();
-    for j in 0..disc.ref_pos.len() {
-        let x = disc.position(&st.d, j);
+    for (j, &x) in positions.iter().enumerate() {
         for (t, tool) in tools.iter().enumerate() {
             if let Some(depth) = tool.depth_inside(x) {
                 if depth > d.tools.depth {
@@ -202,7 +203,11 @@ pub(super) fn depths(disc: &Discretization, tools: &[Tool], st: &State) -> Depth
             }
         }
     }
-    let ring = disc.ring(&st.d);
+    let ring: Vec<[Real; 2]> = disc
+        .boundary
+        .iter()
+        .map(|&j| positions[j as usize])
+        .collect();
     d.itself = inside_itself(disc, &ring);
     d.crossings = crossings(&ring, CROSSING_TOLERANCE_SPACINGS * disc.h_min());
     d

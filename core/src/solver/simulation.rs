@@ -582,29 +582,63 @@ impl Simulation {
         )
     }
 
-    /// Every particle against every tool at any depth and every symmetry plane, and the
-    /// boundary ring against itself, now (`penetration.rs`); also kept as the run's
-    /// largest; past the scene's bound in a tool or beyond a plane an error naming the
-    /// particle, where it lies and the depth.
-    pub fn measure_penetration(&mut self) -> Result<penetration::Depths> {
-        penetration::measure(&self.scene, &self.disc, &self.tools, &mut self.st)
+    /// A history sample's measures of the whole body over the particles' physical positions,
+    /// formed once: every particle's isolation (its nearest integration point over that
+    /// distance at the start, `detachment.rs`), and every particle against every tool at
+    /// any depth and every symmetry plane and the boundary ring against itself
+    /// (`penetration.rs`), both recorded in the state (the run's largest). Returns the
+    /// positions (m) with the depths.
+    ///
+    /// # Errors
+    ///
+    /// A particle lies past the scene's bound in a tool or beyond a plane: the error names
+    /// it, where it lies and the depth (the isolation is measured first).
+    pub fn measure_sample(&mut self) -> (Vec<[Real; 2]>, Result<penetration::Depths>) {
+        let positions = self.positions();
+        self.measure_isolation(&positions);
+        let depths = self.measure_penetration_at(&positions);
+        (positions, depths)
     }
 
-    /// Every particle's isolation now (its nearest integration point over that distance at
-    /// the start, `detachment.rs`), recorded in the state: the largest (-).
-    pub fn measure_isolation(&mut self) -> Real {
+    /// Every particle's isolation with the particles at `positions` (m, now): its nearest
+    /// integration point over that distance at the start, recorded in the state; the
+    /// largest (-).
+    fn measure_isolation(&mut self, positions: &[[Real; 2]]) -> Real {
         let d = &self.disc;
         let body = Body {
             scatter: &d.scatter,
             points: &d.points.positions,
             d: &self.st.d,
-            particles: &d.positions(&self.st.d),
+            particles: positions,
             nodal: self.scene.discretization.integration == IntegrationRule::Scni,
         };
         let time = self.st.time;
         self.st
             .isolation
             .measure_body(&body, &d.initial_spacing, time)
+    }
+
+    /// Every particle against every tool at any depth and every symmetry plane, and the
+    /// boundary ring against itself, now (`penetration.rs`); also kept as the run's
+    /// largest; past the scene's bound in a tool or beyond a plane an error naming the
+    /// particle, where it lies and the depth.
+    ///
+    /// # Errors
+    ///
+    /// The penetration bound is exceeded.
+    pub fn measure_penetration(&mut self) -> Result<penetration::Depths> {
+        self.measure_penetration_at(&self.positions())
+    }
+
+    /// [`Simulation::measure_penetration`] with the particles at `positions` (m, now).
+    fn measure_penetration_at(&mut self, positions: &[[Real; 2]]) -> Result<penetration::Depths> {
+        penetration::measure(
+            &self.scene,
+            &self.disc,
+            &self.tools,
+            &mut self.st,
+            positions,
+        )
     }
 
     /// The warning of a run in which a particle left the body, naming it (`detachment.rs`).
@@ -616,6 +650,11 @@ impl Simulation {
     /// boundary ring against itself, now (zero depths when nothing lies inside), without
     /// keeping it (`penetration.rs`).
     pub fn penetration(&self) -> penetration::Depths {
-        penetration::depths(&self.disc, &self.tools, &self.st)
+        self.penetration_at(&self.positions())
+    }
+
+    /// [`Simulation::penetration`] with the particles at `positions` (m, now).
+    pub fn penetration_at(&self, positions: &[[Real; 2]]) -> penetration::Depths {
+        penetration::depths(&self.disc, &self.tools, positions)
     }
 }

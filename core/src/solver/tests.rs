@@ -1,9 +1,11 @@
 //! Tests of the solver's internals: grouped and SIMD stress stages, shared blocks and
 //! contact skipping against their plain counterparts, bit for bit.
 
+use super::detachment;
 use super::layout::Scatter;
 use super::Simulation;
 use crate::integration::point_shapes;
+use crate::math::Real;
 use crate::rk_shape::{Lattice, ShapeTable};
 use crate::{IntegrationRule, Scene};
 
@@ -140,6 +142,56 @@ fn point_rows_from_the_shared_blocks_are_the_table_rows() {
             }
             assert_eq!(read, own, "{rule:?}: point {p}");
         }
+    }
+}
+
+/// The isolation's pass over the scatter's groups (each group's points formed over its
+/// list, then its pairs) gives the distances of the plain formulation, bit for bit: each
+/// point formed alone over its own entries, then every (point, particle) pair with
+/// `N != 0` ([`detachment::nearest_points`]), on a deformed bar with each rule (q2's strips,
+/// q4's cells, SCNI's own points left out).
+#[test]
+fn isolation_by_groups_gives_the_bits_of_single_points() {
+    for rule in RULES {
+        let scene = taylor(rule, [11, 26]);
+        let mut sim = Simulation::new(&scene).unwrap();
+        for _ in 0..400 {
+            sim.step(None).unwrap();
+        }
+        assert!(sim.max_plastic_strain() > 0.05, "{rule:?}: plastic flow");
+        let (d, sc) = (&sim.st.d, &sim.disc.scatter);
+        let reference = &sim.disc.points.positions;
+        let particles = sim.positions();
+        let nodal = rule == IntegrationRule::Scni;
+        let points: Vec<[Real; 2]> = (0..reference.len())
+            .map(|p| {
+                let mut x = reference[p];
+                for (i, n, _) in sc.point_entries(p) {
+                    for k in 0..2 {
+                        x[k] += n * d[i][k];
+                    }
+                }
+                x
+            })
+            .collect();
+        let pairs = (0..points.len()).flat_map(|p| {
+            sc.point_entries(p)
+                .filter(move |&(i, n, _)| n != 0.0 && !(nodal && i == p))
+                .map(move |(i, _, _)| (p, i))
+        });
+        let plain = detachment::nearest_points(&particles, &points, pairs);
+        let grouped = detachment::point_distances(&detachment::Body {
+            scatter: sc,
+            points: reference,
+            d,
+            particles: &particles,
+            nodal,
+        });
+        assert_eq!(
+            grouped.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            plain.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            "{rule:?}"
+        );
     }
 }
 

@@ -103,7 +103,11 @@ impl SolidSimulation {
     /// The area of the workpiece's surface now (m^2), `A_s = sum |a_q|` over the quarters of
     /// its faces (the faces on symmetry planes not among them).
     pub fn surface_area(&self) -> Real {
-        let x = self.positions();
+        self.surface_area_at(&self.positions())
+    }
+
+    /// [`SolidSimulation::surface_area`] with the particles at `x` (m, now).
+    pub fn surface_area_at(&self, x: &[[Real; 3]]) -> Real {
         self.disc.heat_surface.area(|j| x[j])
     }
 
@@ -111,7 +115,11 @@ impl SolidSimulation {
     /// sum |a_q . n_J|` over the particles the last contact stage pressed on it (see the
     /// module doc).
     pub fn contact_area(&self, t: usize) -> Real {
-        let x = self.positions();
+        self.contact_area_at(t, &self.positions())
+    }
+
+    /// [`SolidSimulation::contact_area`] with the particles at `x` (m, now).
+    pub fn contact_area_at(&self, t: usize, x: &[[Real; 3]]) -> Real {
         pressed_on(&self.st, t)
             .filter_map(|p| {
                 self.disc

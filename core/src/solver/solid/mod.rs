@@ -97,6 +97,19 @@ pub struct BodyReadings {
 }
 
 impl BodyReadings {
+    /// The readings of particles at `positions` (m).
+    pub fn of(positions: &[[Real; 3]]) -> BodyReadings {
+        let mut extents = [[Real::INFINITY, Real::NEG_INFINITY]; 3];
+        let mut radius: Real = 0.0;
+        for p in positions {
+            radius = radius.max((p[0] * p[0] + p[1] * p[1]).sqrt());
+            for (e, &x) in extents.iter_mut().zip(p) {
+                *e = [e[0].min(x), e[1].max(x)];
+            }
+        }
+        BodyReadings { radius, extents }
+    }
+
     /// The length along z, `z_max - z_min` (m).
     pub fn height(&self) -> Real {
         self.extents[2][1] - self.extents[2][0]
@@ -887,15 +900,7 @@ impl SolidSimulation {
     /// coordinate, `[[x_min, x_max], [y_min, y_max], [z_min, z_max]]`; the length along z is
     /// `z_max - z_min` (a bar that has left the wall is measured, not its flight).
     pub fn readings(&self) -> BodyReadings {
-        let mut extents = [[Real::INFINITY, Real::NEG_INFINITY]; 3];
-        let mut radius: Real = 0.0;
-        for p in self.positions() {
-            radius = radius.max((p[0] * p[0] + p[1] * p[1]).sqrt());
-            for (e, x) in extents.iter_mut().zip(p) {
-                *e = [e[0].min(x), e[1].max(x)];
-            }
-        }
-        BodyReadings { radius, extents }
+        BodyReadings::of(&self.positions())
     }
 
     /// The deepest physical particle position inside a scene tool and beyond a symmetry
@@ -903,8 +908,13 @@ impl SolidSimulation {
     /// each with the particle and the plane: `[tools, symmetry planes]` as `(depth,
     /// particle, plane)`, depth 0 when none lies inside.
     pub fn penetration_now(&self) -> [(Real, usize, usize); 2] {
+        self.penetration_at(&self.positions())
+    }
+
+    /// [`SolidSimulation::penetration_now`] with the particles at `positions` (m).
+    pub fn penetration_at(&self, positions: &[[Real; 3]]) -> [(Real, usize, usize); 2] {
         let mut worst = [(0.0 as Real, 0usize, 0usize); 2];
-        for (j, p) in self.positions().iter().enumerate() {
+        for (j, p) in positions.iter().enumerate() {
             for (t, plane) in self.tools.iter().enumerate() {
                 let depth = plane.inside_by(*p);
                 let w = &mut worst[plane.symmetry as usize];
@@ -938,15 +948,31 @@ impl SolidSimulation {
         self.ws.self_contact.passed_through(&self.positions())
     }
 
-    /// Every particle's isolation now (its nearest integration point over that distance at
-    /// the start, [`crate::solver::detachment`]), recorded in the state: the largest (-).
-    pub fn measure_isolation(&mut self) -> Real {
+    /// A history sample's measures of the whole body over the particles' physical positions,
+    /// formed once: every particle's isolation ([`crate::solver::detachment`]) and
+    /// [`SolidSimulation::measure_penetration`], both recorded in the state. Returns the
+    /// positions (m) with the depths in the tools and beyond the planes (m).
+    ///
+    /// # Errors
+    ///
+    /// The penetration bound is exceeded (the isolation is measured first).
+    pub fn measure_sample(&mut self) -> (Vec<[Real; 3]>, Result<(Real, Real)>) {
+        let positions = self.positions();
+        self.measure_isolation(&positions);
+        let depths = self.measure_penetration_at(&positions);
+        (positions, depths)
+    }
+
+    /// Every particle's isolation with the particles at `positions` (m, now): its nearest
+    /// integration point over that distance at the start, recorded in the state; the
+    /// largest (-).
+    fn measure_isolation(&mut self, positions: &[[Real; 3]]) -> Real {
         let d = &self.disc;
         let body = Body {
             scatter: &d.scatter,
             points: &d.point_positions,
             d: &self.st.d,
-            particles: &self.positions(),
+            particles: positions,
             nodal: d.nodal_points,
         };
         let time = self.st.time;
@@ -970,7 +996,12 @@ impl SolidSimulation {
     ///
     /// The penetration bound is exceeded.
     pub fn measure_penetration(&mut self) -> Result<(Real, Real)> {
-        let worst = self.penetration_now();
+        self.measure_penetration_at(&self.positions())
+    }
+
+    /// [`SolidSimulation::measure_penetration`] with the particles at `positions` (m, now).
+    fn measure_penetration_at(&mut self, positions: &[[Real; 3]]) -> Result<(Real, Real)> {
+        let worst = self.penetration_at(positions);
         self.st.max_penetration = self.st.max_penetration.max(worst[0].0);
         self.st.max_beyond_plane = self.st.max_beyond_plane.max(worst[1].0);
         let bound = self.scene.checks.max_penetration_rel * self.disc.h_min;

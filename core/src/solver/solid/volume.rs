@@ -64,7 +64,12 @@ impl SolidSimulation {
     /// physical positions `x_J = X_J + sum_I N_I(X_J) d_I`, each cell trilinear between
     /// its 8 particles ([`hexahedron_volume`]).
     pub fn volume(&self) -> Real {
-        cells_volume(&self.disc.cells, &self.positions())
+        self.volume_at(&self.positions())
+    }
+
+    /// [`SolidSimulation::volume`] with the particles at `positions` (m).
+    pub fn volume_at(&self, positions: &[[Real; 3]]) -> Real {
+        cells_volume(&self.disc.cells, positions)
     }
 
     /// The same cells' volume at the start (m^3), through the particles' reference
