@@ -1,4 +1,5 @@
 """Shared fixtures: the rkforge binary and scene files derived from the shipped scenes."""
+import json
 import os
 import pathlib
 import subprocess
@@ -62,3 +63,23 @@ def stl_box(path, lo, hi):
             lines += ["      vertex %r %r %r" % tuple(corner(i)) for i in tri]
             lines += ["    endloop", "  endfacet"]
     path.write_text("\n".join(lines + ["endsolid die", ""]))
+
+
+def assert_stages_account_for_the_wall_time(out, stdout):
+    """A finished run's `stage_seconds` (2D or 3D): each stage timed, the stages disjoint parts
+    of the run that never add up to more than its wall time and account for most of it (the
+    rest is loop control and the progress bar), output timed (the run wrote frames and
+    plots), and the stage line printed. How the time splits between stages is a measurement,
+    not asserted: on a busy machine a preempted plot can outlast the stress stage of a small
+    run."""
+    s = json.loads((out / "summary.json").read_text())
+    t = s["stage_seconds"]
+    stages = ["stress", "internal_force", "contact", "integration", "output"]
+    for key in ["setup", "shape_functions", *stages]:
+        assert t[key] >= 0.0, key
+    assert t["shape_functions"] <= t["setup"]
+    total = t["setup"] + sum(t[k] for k in stages)
+    assert 0.5 * s["wall_s"] < total <= s["wall_s"], s
+    assert t["output"] > 0.0
+    assert "stages: setup" in stdout and "strain and stress" in stdout and "output" in stdout
+

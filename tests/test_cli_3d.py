@@ -10,7 +10,7 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from conftest import ROOT, scene_variant, stl_box
+from conftest import ROOT, assert_stages_account_for_the_wall_time, scene_variant, stl_box
 
 COARSE = {"cells = [8, 4, 60]": "cells = [4, 2, 24]"}
 
@@ -50,21 +50,8 @@ def test_summary_is_the_bar_after_impact(coarse_run):
 
 
 def test_stage_timers_account_for_the_wall_time(coarse_run):
-    out, stdout = coarse_run
-    s = json.loads((out / "summary.json").read_text())
-    t = s["stage_seconds"]
-    stages = ["stress", "internal_force", "contact", "integration", "output"]
-    for key in ["setup", "shape_functions", *stages]:
-        assert t[key] >= 0.0, key
-    assert t["shape_functions"] <= t["setup"]
-    # Disjoint parts of the run, as in 2D (tests/test_cli.py): never more than the wall time,
-    # and most of it.
-    total = t["setup"] + sum(t[k] for k in stages)
-    assert 0.5 * s["wall_s"] < total <= s["wall_s"], s
-    # 81 history samples, frames and their pictures were taken and written: output has a cost,
-    # and the stage line names it.
-    assert t["output"] > 0.0
-    assert "stages: setup" in stdout and "output" in stdout
+    # As in 2D; the 3D run counts its samples, frames and pictures as output too.
+    assert_stages_account_for_the_wall_time(*coarse_run)
 
 
 def test_history_has_the_readings_and_the_wall_force(coarse_run):
