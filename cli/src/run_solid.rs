@@ -119,14 +119,18 @@ impl Observer<SolidSimulation> for Shots {
     }
 }
 
-/// One frame of the body: time (s), particle positions (m), each cell's plastic strain
-/// (-) and in a scene with `[thermal]` its temperature (degrees C), the means over the
-/// cell's integration points.
+/// One frame of the body: time (s); each particle's physical position, displacement (m) and
+/// velocity (m/s, at the last half step), as the 2D frames have them; each cell's plastic
+/// strain (-), von Mises stress (Pa) and in a scene with `[thermal]` its temperature
+/// (degrees C), the means over the cell's integration points.
 #[derive(Serialize, Deserialize)]
 struct Frame {
     time: f64,
     positions: Vec<[f64; 3]>,
+    displacement: Vec<[f64; 3]>,
+    velocity: Vec<[f64; 3]>,
     plastic_strain: Vec<f64>,
+    von_mises: Vec<f64>,
     temperature: Option<Vec<f64>>,
     /// Each tool's pressure, with its name.
     dies: Vec<(String, DiePressure)>,
@@ -137,7 +141,10 @@ impl Frame {
         Frame {
             time: sim.time(),
             positions: sim.positions(),
+            displacement: sim.displacements(),
+            velocity: sim.velocities(),
             plastic_strain: sim.cell_means(&sim.point_plastic_strain()),
+            von_mises: sim.cell_means(&sim.point_von_mises()),
             temperature: sim.point_temperature().map(|t| sim.cell_means(t)),
             dies: (0..sim.tools().len())
                 .map(|k| (sim.tools()[k].name.clone(), sim.die_pressure(k)))
@@ -184,7 +191,10 @@ fn write_frames(
     let mut listed = Vec::new();
     for (k, f) in shots.iter().enumerate() {
         let file = format!("frame_{k:04}.vtu");
-        let mut cell_fields: Vec<(&str, &[f64])> = vec![("plastic_strain", &f.plastic_strain)];
+        let mut cell_fields: Vec<(&str, &[f64])> = vec![
+            ("plastic_strain", &f.plastic_strain),
+            ("von_mises_Pa", &f.von_mises),
+        ];
         if let Some(t) = &f.temperature {
             cell_fields.push(("temperature_C", t));
         }
@@ -193,7 +203,10 @@ fn write_frames(
             &f.positions,
             sim.cells(),
             &[],
-            &[],
+            &[
+                ("displacement_m", &f.displacement),
+                ("velocity_m_per_s", &f.velocity),
+            ],
             &cell_fields,
         )
         .map_err(|e| format!("cannot write {file}: {e}"))?;

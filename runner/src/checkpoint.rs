@@ -18,8 +18,9 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-/// The format of the checkpoint files this build writes and reads.
-pub const FORMAT: u32 = 1;
+/// The format of the checkpoint files this build writes and reads: 2 since a 3D run's frames
+/// carry the particles' displacements and velocities and the cells' von Mises stress.
+pub const FORMAT: u32 = 2;
 
 /// The checkpoint file in a run's output folder.
 pub const FILE: &str = "checkpoint.cbor";
