@@ -1,4 +1,5 @@
 """Shared fixtures: the rkforge binary and scene files derived from the shipped scenes."""
+import faulthandler
 import json
 import os
 import pathlib
@@ -10,6 +11,20 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 # The FMU driver and the press plants of examples/presses are imported by the FMU tests.
 sys.path.insert(0, str(ROOT / "examples" / "presses"))
+
+# The longest a test may take (s); the longest takes about a minute with both cores loaded.
+WATCHDOG_S = 900
+
+
+@pytest.fixture(autouse=True)
+def watchdog():
+    """A test that hangs (a DDS peer library stuck in native code holding the GIL, as
+    cyclonedds once did inside `Topic(...)`; a process that never answers) prints every
+    thread's stack and ends the session after `WATCHDOG_S`, instead of holding CI until its
+    limit. faulthandler's watchdog is a native thread: it needs no GIL to fire."""
+    faulthandler.dump_traceback_later(WATCHDOG_S, exit=True)
+    yield
+    faulthandler.cancel_dump_traceback_later()
 
 
 @pytest.fixture(scope="session")

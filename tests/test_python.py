@@ -360,6 +360,13 @@ def test_outputs_come_from_the_register():
     assert [o["name"] for o in scene.outputs() if o["history"]] == list(row)
     assert register["time_s"]["fmu"] is False
     assert register["particles.von_mises_Pa"]["kind"] == "per particle"
+    # The force averaged since the last sample(): the impulse's change over the time's.
+    sim.run_to(2e-3)
+    later = sim.outputs()
+    mean = (later["top.impulse_N_s"] - row["top.impulse_N_s"]) / (later["time_s"] - row["time_s"])
+    assert later["top.force_mean_N"] == mean < 0.0
+    assert sum(later[f"{t['name']}.work_J"] for t in summary["tools"]) == pytest.approx(
+        later["energy.tool_work_J"], rel=1e-12)
 
 
 def test_stepping_releases_the_gil():

@@ -3,7 +3,7 @@
 //! a 2D or a 3D simulation), with the signal flag that stops the run there and lets it
 //! finish its files.
 
-use rkforge_messages::frame::{sample, Published};
+use rkforge_messages::frame::{Published, Sampler};
 use rkforge_messages::record::{Compression, Provenance, Recorder};
 use rkforge_messages::PublishedScene;
 use std::path::PathBuf;
@@ -23,6 +23,8 @@ pub struct McapOptions {
 /// The MCAP recording of a run and the signal flag that stops it.
 pub struct Mcap {
     recorder: Recorder,
+    /// The outputs' interval means since the last record.
+    sampler: Sampler,
     stop: Arc<AtomicBool>,
 }
 
@@ -43,6 +45,7 @@ impl Mcap {
         };
         Ok(Mcap {
             recorder: Recorder::create(&opts.path, &topics, &provenance, opts.compression)?,
+            sampler: Sampler::default(),
             stop: rkforge_messages::signals::stop_flag()?,
         })
     }
@@ -53,7 +56,7 @@ impl Mcap {
     ///
     /// The file cannot be written.
     pub fn record<S: Published>(&mut self, sim: &S) -> Result<(), String> {
-        self.recorder.write(&sample(sim))
+        self.recorder.write(&self.sampler.sample(sim))
     }
 
     /// The failure to report if a signal asked the run to stop; `time` (s) is the run's

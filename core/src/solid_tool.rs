@@ -15,7 +15,7 @@ use crate::math::{dot, Real};
 use crate::scene::solid::{SolidToolSpec, ToolShape};
 use crate::scene::Motion;
 use crate::stl::TriangleMesh;
-use crate::tools::{Driven, Penetration};
+use crate::tools::{Account, Driven, Penetration};
 use crate::triangle_surface::{clip_to_box, Proximity, Ridge, TriangleSurface};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -35,6 +35,8 @@ pub struct SolidToolState {
     pub normal_force: Real,
     /// Largest force magnitude so far (N).
     pub peak_force: Real,
+    /// What the tool received from the workpiece since the start.
+    pub account: Account,
 }
 
 /// The surface of a rigid tool at the start of its motion.

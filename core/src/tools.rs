@@ -61,6 +61,33 @@ pub struct ToolState {
     pub normal_force: Real,
     /// Largest force magnitude so far (N).
     pub peak_force: Real,
+    /// What the tool received from the workpiece since the start.
+    pub account: Account,
+}
+
+/// What a tool received from the workpiece since the start of the run, booked at each
+/// contact stage with the step's corrector length `dt_avg` (s), over which the stage's
+/// force changes the particles' momentum in the central-difference step (Belytschko, Liu
+/// and Moran 2000, sec. 6.2.1): the tool's impulse and the work of its motion.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct Account {
+    /// Impulse of the workpiece's force along the axis, `I = sum_n F_n dt_avg,n` (N s),
+    /// `F_n` the force along the axis at step `n` (positive pushing the tool along +axis):
+    /// the momentum the workpiece gave up to the tool.
+    pub impulse: Real,
+    /// Work of the tool on the workpiece, `W = -sum_n F_n v_n dt_avg,n` (J), `v_n` the
+    /// tool's velocity along its axis over the step: positive while it presses; the sum
+    /// over the tools is the energy account's `tool_work`.
+    pub work: Real,
+}
+
+impl Account {
+    /// Book one step: the force along the axis `force` (N), the velocity along the axis
+    /// `velocity` (m/s) and the corrector's step `dt_avg` (s).
+    pub fn book(&mut self, force: Real, velocity: Real, dt_avg: Real) {
+        self.impulse += force * dt_avg;
+        self.work -= force * velocity * dt_avg;
+    }
 }
 
 /// Largest penetration still treated as contact, in particle spacings; deeper points behind

@@ -6,7 +6,7 @@
 //! [`Plant`].
 
 use crate::stepping::{EarlyReturn, Forging, Observer, Stepper};
-use rkforge_core::outputs::{Column, Sample};
+use rkforge_core::outputs::{Column, Sample, Since};
 use rkforge_core::scene::solid::is_solid;
 use rkforge_core::scene_parameters::Parameter;
 use rkforge_core::solver::{SolidSimulation, SolidState};
@@ -64,10 +64,11 @@ fn output_value<S: Forging>(
 fn outputs_of<S: Forging>(
     table: &[Variable],
     sim: &S,
+    since: Option<&Since>,
     columns: &[Column<S>],
     commands: &[Option<f64>],
 ) -> Vec<(u32, f64)> {
-    let sample = Sample::new(sim);
+    let sample = Sample::new(sim).since(since);
     table
         .iter()
         .filter(|v| v.causality == Causality::Output)
@@ -145,6 +146,8 @@ struct Model<S: Forging> {
     columns: Vec<Column<S>>,
     /// The simulation, once built.
     sim: Option<Stepper<S>>,
+    /// The start of the last communication step, where the interval means start.
+    since: Option<Since>,
 }
 
 impl<S: Forging> Model<S> {
@@ -173,11 +176,13 @@ where
             }
         }
         self.sim = Some(Stepper::new(sim));
+        self.since = None;
         Ok(())
     }
 
     fn clear(&mut self) {
         self.sim = None;
+        self.since = None;
     }
 
     fn time(&self) -> Option<f64> {
@@ -190,7 +195,8 @@ where
 
     fn output(&self, binding: Binding, commands: &[Option<f64>]) -> Option<f64> {
         let sim = self.sim.as_ref()?.sim();
-        output_value(binding, &Sample::new(sim), &self.columns, commands)
+        let sample = Sample::new(sim).since(self.since.as_ref());
+        output_value(binding, &sample, &self.columns, commands)
     }
 
     fn command(&mut self, k: usize, v: f64) -> Result<()> {
@@ -212,11 +218,12 @@ where
             .sim
             .as_mut()
             .ok_or_else(|| request("not initialised".into()))?;
+        let since = &*self.since.insert(Since::of(stepper.sim()));
         let mut report = report.map(|w| {
             move |sim: &S| {
                 (w.observe)(
                     w.start + sim.time_now(),
-                    &outputs_of(w.table, sim, columns, w.commands),
+                    &outputs_of(w.table, sim, Some(since), columns, w.commands),
                 )
             }
         });
@@ -234,6 +241,7 @@ where
         if let Some(s) = &self.sim {
             S::put(s.sim().saved(), snapshot);
         }
+        snapshot.since.clone_from(&self.since);
     }
 
     fn restore(&mut self, snapshot: &Snapshot, c: &Configured<'_>) -> Result<()> {
@@ -245,6 +253,7 @@ where
                 if let Some(s) = self.sim.as_mut() {
                     s.sim_mut().restore_state(state.clone())?;
                 }
+                self.since.clone_from(&snapshot.since);
             }
             None => self.sim = None,
         }
@@ -266,6 +275,7 @@ where
     let model = Model::<S> {
         columns: fmu_columns(&scene),
         sim: None,
+        since: None,
     };
     Ok((
         Box::new(model),
@@ -289,6 +299,9 @@ pub struct Snapshot {
     /// The state of a 3D simulation (absent from a 2D FMU's serialized states).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) solid: Option<Box<SolidState>>,
+    /// Where the outputs' interval means start (the start of the last communication step).
+    #[serde(default)]
+    pub(crate) since: Option<Since>,
 }
 
 /// One co-simulation instance.
@@ -750,6 +763,7 @@ impl Instance {
             commands: self.commands.clone(),
             state: None,
             solid: None,
+            since: None,
         };
         self.model.save(&mut s);
         s

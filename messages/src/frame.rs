@@ -41,7 +41,7 @@ use crate::msgs::{
 };
 use crate::PublishedScene;
 use rkforge_core::math::{dot, Real};
-use rkforge_core::outputs::{self, Body, Column};
+use rkforge_core::outputs::{self, Body, Column, Since};
 use rkforge_core::solid_tool::{normal_to, Cylinder, Surface};
 use rkforge_core::solver::SolidSimulation;
 use rkforge_core::Simulation;
@@ -398,16 +398,38 @@ pub fn stamp(nanos: u64) -> Time {
     }
 }
 
-/// The messages of the current state of `sim`, a 2D or a 3D simulation.
+/// Successive samples of one run, each one's interval means
+/// ([`outputs::force_mean`]) since the sample before (the first's since the start).
+#[derive(Debug, Default)]
+pub struct Sampler {
+    since: Option<Since>,
+}
+
+impl Sampler {
+    /// The messages of `sim` now ([`sample`]); the next sample's interval means start here.
+    pub fn sample<S: Published>(&mut self, sim: &S) -> Sample {
+        let s = sample(sim, self.since.as_ref());
+        self.since = Some(Since::of(sim));
+        s
+    }
+
+    /// Where the next sample's interval means start (none: at the start of the run).
+    pub fn since(&self) -> Option<&Since> {
+        self.since.as_ref()
+    }
+}
+
+/// The messages of the current state of `sim`, a 2D or a 3D simulation, the interval means
+/// of its outputs since `since` (none: since the start; [`Sampler`] keeps it).
 #[must_use]
-pub fn sample<S: Published>(sim: &S) -> Sample {
+pub fn sample<S: Published>(sim: &S, since: Option<&Since>) -> Sample {
     let time = sim.time_now();
     let n = nanos(time);
     let header = Header {
         stamp: stamp(n),
         frame_id: FRAME_ID.to_owned(),
     };
-    let now = outputs::Sample::new(sim);
+    let now = outputs::Sample::new(sim).since(since);
     let tools = S::tool_readings(&now);
     let mut messages = Vec::with_capacity(tools.len() + 8);
     for t in &tools {
@@ -537,7 +559,7 @@ mod tests {
         for _ in 0..20 {
             sim.step(None).unwrap();
         }
-        let s = sample(&sim);
+        let s = sample(&sim, None);
         let topics = crate::topics(sim.scene(), "/rkforge").unwrap();
         let published = topics.iter().filter(|t| t.publish).count();
         assert_eq!(s.messages.len(), published);
@@ -600,7 +622,7 @@ mod tests {
     #[test]
     fn a_3d_sample_holds_the_body_in_space() {
         let sim = ofhc_3d();
-        let s = sample(&sim);
+        let s = sample(&sim, None);
         let topics = crate::topics(sim.scene(), "/rkforge").unwrap();
         assert_eq!(s.messages.len(), topics.len());
         assert_eq!(s.messages.len(), 7);

@@ -285,9 +285,10 @@ fn offered_qos(t: &Topic) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::{sample, Published};
+    use crate::frame::{Published, Sampler};
     use crate::msgs::{Outputs, RosMessage};
     use rkforge_core::outputs;
+    use rkforge_core::outputs::Since;
     use rkforge_core::scene::SolidScene;
     use rkforge_core::solver::SolidSimulation;
     use rkforge_core::{Scene, Simulation};
@@ -306,14 +307,15 @@ mod tests {
         (dir, mcap, toml)
     }
 
-    /// The MCAP bytes of `samples` samples of the scene `text` (at t = 0, then one per step)
-    /// and the simulation at the last one; the scene file is `<name>.toml`.
+    /// The MCAP bytes of `samples` samples of the scene `text` (at t = 0, then one per step),
+    /// the simulation at the last one and where the last one's interval means started; the
+    /// scene file is `<name>.toml`.
     fn record(
         text: &str,
         name: &str,
         samples: usize,
         compression: Compression,
-    ) -> (Vec<u8>, Simulation) {
+    ) -> (Vec<u8>, Simulation, Option<Since>) {
         let scene = Scene::from_str_named(text, "block").unwrap();
         let sim = Simulation::new(&scene).unwrap();
         record_run(&scene, sim, text, name, samples, compression, |s| {
@@ -331,7 +333,7 @@ mod tests {
         samples: usize,
         compression: Compression,
         step: impl Fn(&mut S),
-    ) -> (Vec<u8>, S) {
+    ) -> (Vec<u8>, S, Option<Since>) {
         let topics = crate::topics(scene, "/rkforge").unwrap();
         let (_dir, path, scene_file) = temp(name);
         std::fs::write(&scene_file, text).unwrap();
@@ -341,14 +343,17 @@ mod tests {
             writer: "test",
         };
         let mut rec = Recorder::create(&path, &topics, &provenance, compression).unwrap();
-        rec.write(&sample(&sim)).unwrap();
+        let mut sampler = Sampler::default();
+        let mut since = None;
+        rec.write(&sampler.sample(&sim)).unwrap();
         for _ in 1..samples {
             step(&mut sim);
-            rec.write(&sample(&sim)).unwrap();
+            since = sampler.since().cloned();
+            rec.write(&sampler.sample(&sim)).unwrap();
         }
         rec.finish(r#"{"steps": 3}"#).unwrap();
         let bytes = std::fs::read(&path).unwrap();
-        (bytes, sim)
+        (bytes, sim, since)
     }
 
     /// A 3D run's recording: the topics of a 3D scene (no die fill, no laps), the 3D
@@ -359,10 +364,11 @@ mod tests {
             .replace("cells = [8, 4, 60]", "cells = [4, 2, 8]");
         let scene = SolidScene::from_str_named(&text, "bar").unwrap();
         let sim = SolidSimulation::new(&scene).unwrap();
-        let (bytes, sim) = record_run(&scene, sim, &text, "rec3d", 3, Compression::Zstd, |s| {
-            s.run_toward(s.time() + 1e-6, u64::MAX, |_, _| true)
-                .unwrap();
-        });
+        let (bytes, sim, since) =
+            record_run(&scene, sim, &text, "rec3d", 3, Compression::Zstd, |s| {
+                s.run_toward(s.time() + 1e-6, u64::MAX, |_, _| true)
+                    .unwrap();
+            });
         let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
         let stats = summary.stats.unwrap();
         assert_eq!((stats.message_count, stats.channel_count), (3 * 7, 7));
@@ -379,7 +385,7 @@ mod tests {
             .collect();
         let message = msgs.iter().rfind(|m| m.channel.topic == "/rkforge/outputs");
         let o = Outputs::from_cdr(&message.unwrap().data).unwrap();
-        let now = outputs::Sample::new(&sim);
+        let now = outputs::Sample::new(&sim).since(since.as_ref());
         let values: Vec<u64> = outputs::solid_columns(sim.scene())
             .iter()
             .map(|c| c.value(&now).to_bits())
@@ -414,7 +420,7 @@ mod tests {
     #[test]
     fn a_recording_reads_back_with_every_message() {
         for compression in [Compression::Zstd, Compression::None] {
-            let (bytes, sim) = record(&small_block(), "rec", 4, compression);
+            let (bytes, sim, since) = record(&small_block(), "rec", 4, compression);
             let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
             let stats = summary.stats.unwrap();
             assert_eq!(stats.message_count, 4 * 10);
@@ -437,7 +443,7 @@ mod tests {
             // The register's outputs read back: every column, with the last sample's values.
             let message = msgs.iter().rfind(|m| m.channel.topic == "/rkforge/outputs");
             let o = Outputs::from_cdr(&message.unwrap().data).unwrap();
-            let now = outputs::Sample::new(&sim);
+            let now = outputs::Sample::new(&sim).since(since.as_ref());
             let register = outputs::columns(sim.scene());
             assert_eq!(o.names.len(), register.len());
             for (k, c) in register.iter().enumerate() {
@@ -457,7 +463,7 @@ mod tests {
     #[test]
     fn the_file_names_its_scene_and_summary_and_attaches_the_scene() {
         let text = small_block();
-        let (bytes, _) = record(&text, "meta", 2, Compression::Zstd);
+        let (bytes, _, _) = record(&text, "meta", 2, Compression::Zstd);
         let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
         let records: BTreeMap<String, BTreeMap<String, String>> = summary
             .metadata_indexes
@@ -489,7 +495,7 @@ mod tests {
         assert_eq!(&*a.data, text.as_bytes());
         // A mass-scaled scene says so in the same record.
         let scaled = text.replace("[time]\n", "[time]\nmass_scaling = { factor = 100.0 }\n");
-        let (scaled_bytes, _) = record(&scaled, "meta_scaled", 2, Compression::Zstd);
+        let (scaled_bytes, _, _) = record(&scaled, "meta_scaled", 2, Compression::Zstd);
         let scaled_summary = mcap::Summary::read(&scaled_bytes).unwrap().unwrap();
         let time = scaled_summary
             .metadata_indexes
@@ -509,7 +515,7 @@ mod tests {
     fn chunks_hold_whole_samples() {
         let samples = 150;
         for compression in [Compression::Zstd, Compression::None] {
-            let (bytes, _) = record(
+            let (bytes, _, _) = record(
                 include_str!("../../scenes/block_forging.toml"),
                 "chk",
                 samples,

@@ -10,6 +10,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
+use rkforge_core::outputs::Since;
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::{SolidSimulation, SolidState};
 use rkforge_core::{outputs, IntegrationRule, State};
@@ -127,6 +128,8 @@ struct Inner {
     pool: Option<rayon::ThreadPool>,
     /// When it was created: the summary's wall time counts from here.
     started: Instant,
+    /// The last `sample`, where the outputs' interval means start (none: the start).
+    since: Option<Since>,
 }
 
 impl Inner {
@@ -306,7 +309,12 @@ impl Simulation {
                 }
                 .map_err(to_py)?;
                 Ok(Simulation {
-                    inner: Mutex::new(Inner { sim, pool, started }),
+                    inner: Mutex::new(Inner {
+                        sim,
+                        pool,
+                        started,
+                        since: None,
+                    }),
                 })
             })
         })
@@ -383,20 +391,30 @@ impl Simulation {
     }
 
     /// Record a history row now, as `rkforge run` does at its samples (this also updates
-    /// the run's largest penetration): a dict of history.csv's columns. SimulationError
-    /// when a particle lies deeper inside a tool than `checks.max_penetration_rel`.
+    /// the run's largest penetration): a dict of history.csv's columns, the interval means
+    /// (`<tool>.force_mean_N`) since the last `sample` (the start for the first).
+    /// SimulationError when a particle lies deeper inside a tool than
+    /// `checks.max_penetration_rel`.
     fn sample<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (columns, row) = self.with(py, |s| match &mut s.sim {
-            Sim::Plane(sim) => {
-                let mut history = rkforge_runner::History::new(sim);
-                history.record(sim).map_err(to_py)?;
-                Ok((history.columns().to_vec(), history.rows()[0].clone()))
-            }
-            Sim::Solid(sim) => {
-                let mut history = rkforge_runner::History::solid(sim);
-                history.record_solid(sim).map_err(to_py)?;
-                Ok((history.columns().to_vec(), history.rows()[0].clone()))
-            }
+        let (columns, row) = self.with(py, |s| {
+            let since = s.since.take();
+            let (recorded, columns, row, next) = match &mut s.sim {
+                Sim::Plane(sim) => {
+                    let mut history = rkforge_runner::History::new(sim).since(since);
+                    let recorded = history.record(sim);
+                    let (columns, row) = (history.columns().to_vec(), history.rows()[0].clone());
+                    (recorded, columns, row, history.next_since().cloned())
+                }
+                Sim::Solid(sim) => {
+                    let mut history = rkforge_runner::History::solid(sim).since(since);
+                    let recorded = history.record_solid(sim);
+                    let (columns, row) = (history.columns().to_vec(), history.rows()[0].clone());
+                    (recorded, columns, row, history.next_since().cloned())
+                }
+            };
+            s.since = next;
+            recorded.map_err(to_py)?;
+            Ok((columns, row))
         })?;
         let d = PyDict::new(py);
         for (c, v) in columns.into_iter().zip(row) {
@@ -407,18 +425,20 @@ impl Simulation {
 
     /// Every output of the register of outputs (`rkforge_core::outputs`) now, by its name:
     /// each column (history.csv's, and those only the summary and the FMU show) as a float,
-    /// each field (`particles.*`, `points.*`) as a numpy array. Unlike `sample`, reading
-    /// changes nothing (the run's largest penetration is not updated).
+    /// each field (`particles.*`, `points.*`) as a numpy array; the interval means since the
+    /// last `sample` (the start before the first). Unlike `sample`, reading changes nothing
+    /// (the run's largest penetration is not updated).
     fn outputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let (values, fields) = self.with(py, |s| {
+            let since = s.since.as_ref();
             Ok(match &s.sim {
                 Sim::Plane(sim) => read(
-                    &outputs::Sample::new(&**sim),
+                    &outputs::Sample::new(&**sim).since(since),
                     outputs::columns(sim.scene()),
                     outputs::fields(sim.scene()),
                 ),
                 Sim::Solid(sim) => read(
-                    &outputs::Sample::new(&**sim),
+                    &outputs::Sample::new(&**sim).since(since),
                     outputs::solid_columns(sim.scene()),
                     outputs::solid_fields(sim.scene()),
                 ),
@@ -563,7 +583,13 @@ impl Simulation {
                     ))
                 }
             }
-            .map_err(to_py)
+            .map_err(to_py)?;
+            // The interval means start again at the state restored.
+            s.since = Some(match &s.sim {
+                Sim::Plane(sim) => Since::of(&**sim),
+                Sim::Solid(sim) => Since::of(&**sim),
+            });
+            Ok(())
         })
     }
 

@@ -15,7 +15,7 @@ use rkforge_core::{Scene, SceneSource, Simulation, MAX_SAMPLES};
 use rkforge_ros::action::{GoalId, GoalStatusEnum};
 use rkforge_ros::control::{self, check_reset, check_step, transition, Request, Transition};
 use rkforge_ros::dds::{domain_id_from_env, Command, Node};
-use rkforge_ros::frame::{sample, Published, Sample};
+use rkforge_ros::frame::{Published, Sample, Sampler};
 use rkforge_ros::msgs::{ResultMsg, SimulationState};
 use rkforge_ros::params::Settings;
 use rkforge_ros::record::{Compression, Provenance, Recorder};
@@ -363,14 +363,18 @@ fn simulate<S: NodeSim>(
     progress: &AtomicU64,
 ) {
     let mut run = Run::new(sim, schedule);
+    let mut sampler = Sampler::default();
     let mut steps = 0;
     loop {
         if let Err(e) = run.record(sim) {
-            let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
+            let _ = tx.send(FromSim::Failed(
+                e.to_string(),
+                Box::new(sampler.sample(sim)),
+            ));
             return;
         }
         if tx
-            .send(FromSim::Sample(sample(sim), run.finished(), steps))
+            .send(FromSim::Sample(sampler.sample(sim), run.finished(), steps))
             .is_err()
         {
             return;
@@ -392,9 +396,10 @@ fn simulate<S: NodeSim>(
                     Ok(s) => {
                         *sim = s;
                         run.restart(sim);
+                        sampler = Sampler::default();
                     }
                     Err(e) => {
-                        let _ = tx.send(FromSim::Failed(e, Box::new(sample(sim))));
+                        let _ = tx.send(FromSim::Failed(e, Box::new(sampler.sample(sim))));
                         return;
                     }
                 }
@@ -424,7 +429,10 @@ fn simulate<S: NodeSim>(
         match run.advance(sim, until, between) {
             Ok(advance) => steps = advance.steps,
             Err(e) => {
-                let _ = tx.send(FromSim::Failed(e.to_string(), Box::new(sample(sim))));
+                let _ = tx.send(FromSim::Failed(
+                    e.to_string(),
+                    Box::new(sampler.sample(sim)),
+                ));
                 return;
             }
         }

@@ -108,7 +108,7 @@ fn a_second_node_reads_the_state_and_commands_a_tool() {
     for _ in 0..30 {
         sim.step(None).unwrap();
     }
-    let s = sample(&sim);
+    let s = sample(&sim, None);
     let sent_state = JointStateMsg::from_cdr(&s.messages[2]).unwrap();
     let sent_wrench = WrenchMsg::from_cdr(&s.messages[0]).unwrap();
     let start = Instant::now();

@@ -18,9 +18,10 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-/// The format of the checkpoint files this build writes and reads: 2 since a 3D run's frames
-/// carry the particles' displacements and velocities and the cells' von Mises stress.
-pub const FORMAT: u32 = 2;
+/// The format of the checkpoint files this build writes and reads: 3 since each tool's state
+/// carries its impulse and work ([`rkforge_core::tools::Account`]; 2: a 3D run's frames carry
+/// the particles' displacements and velocities and the cells' von Mises stress).
+pub const FORMAT: u32 = 3;
 
 /// The checkpoint file in a run's output folder.
 pub const FILE: &str = "checkpoint.cbor";

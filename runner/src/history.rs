@@ -2,7 +2,7 @@
 //! the register's ([`rkforge_core::outputs`]) that are shown in the history, in register
 //! order: the 2D register's for a [`Simulation`], the 3D one's for a [`SolidSimulation`].
 
-use rkforge_core::outputs::{columns, solid_columns, Body, Column, Penetration, Sample};
+use rkforge_core::outputs::{columns, solid_columns, At, Body, Column, Penetration, Sample, Since};
 use rkforge_core::solver::SolidSimulation;
 use rkforge_core::Simulation;
 use std::path::Path;
@@ -12,6 +12,8 @@ pub struct History<S: Body = Simulation> {
     columns: Vec<Column<S>>,
     names: Vec<String>,
     rows: Vec<Vec<f64>>,
+    /// The last row's time and impulses, where the next row's interval means start.
+    since: Option<Since>,
 }
 
 impl History {
@@ -32,7 +34,8 @@ impl History {
             Ok(d) => Penetration::of(d),
             Err(_) => Penetration::largest(sim),
         };
-        self.push(&Sample::<Simulation>::measured(sim, positions, depths));
+        let sample = Sample::<Simulation>::measured(sim, positions, depths);
+        self.push(sample);
         measured.map(|_| ())
     }
 }
@@ -54,7 +57,8 @@ impl History<SolidSimulation> {
             Ok((tools, planes)) => [*tools, *planes],
             Err(_) => [sim.state().max_penetration, sim.state().max_beyond_plane],
         };
-        self.push(&Sample::<SolidSimulation>::measured(sim, positions, depths));
+        let sample = Sample::<SolidSimulation>::measured(sim, positions, depths);
+        self.push(sample);
         measured.map(|_| ())
     }
 }
@@ -70,7 +74,21 @@ impl<S: Body> History<S> {
             names: columns.iter().map(|c| c.name.clone()).collect(),
             columns,
             rows: Vec::new(),
+            since: None,
         }
+    }
+
+    /// The same history, its next row's interval means taken since `since` (none: since
+    /// the start): a history that goes on from another's last row.
+    pub fn since(mut self, since: Option<Since>) -> Self {
+        self.since = since;
+        self
+    }
+
+    /// Where the next row's interval means start: the last row (none before the first and
+    /// without [`History::since`]).
+    pub fn next_since(&self) -> Option<&Since> {
+        self.since.as_ref()
     }
 
     /// `history` (empty) with the `rows` of a checkpoint.
@@ -86,14 +104,35 @@ impl<S: Body> History<S> {
                 history.names.len()
             ));
         }
+        history.since = rows.last().map(|row| history.since_row(row));
         history.rows = rows;
         Ok(history)
     }
 
-    /// Record a row of `sample`.
-    pub fn push(&mut self, sample: &Sample<'_, S>) {
+    /// Where the interval means of the row after `row` start: its time and its tools'
+    /// impulses.
+    fn since_row(&self, row: &[f64]) -> Since {
+        let of = |name: &str| self.columns.iter().position(|c| c.output.name == name);
+        let mut impulse = Vec::new();
+        for (c, v) in self.columns.iter().zip(row) {
+            if let (At::Tool(k), "impulse_N_s") = (c.at, c.output.name) {
+                impulse.resize(k + 1, 0.0);
+                impulse[k] = *v;
+            }
+        }
+        Since {
+            time: of("time_s").map_or(0.0, |k| row[k]),
+            impulse,
+        }
+    }
+
+    /// Record a row of `sample`, its interval means since the last row (the start for the
+    /// first).
+    pub fn push(&mut self, sample: Sample<'_, S>) {
+        let sample = sample.since(self.since.as_ref());
         self.rows
-            .push(self.columns.iter().map(|c| c.value(sample)).collect());
+            .push(self.columns.iter().map(|c| c.value(&sample)).collect());
+        self.since = Some(Since::of(&*sample));
     }
 
     /// The column names: `time_s`, `dt_s`, per tool `<tool>.stroke_m` ..., `workpiece.*`,

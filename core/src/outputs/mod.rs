@@ -48,6 +48,8 @@ use crate::geometry::Extents;
 use crate::math::Real;
 use crate::scene::{Edge, Kinematics, Scene};
 use crate::solver::{Depths, Energy, Fields, Filled, Simulation, SolidSimulation};
+use crate::tools::Account;
+use serde::{Deserialize, Serialize};
 use std::cell::OnceCell;
 use std::ops::Deref;
 
@@ -70,6 +72,10 @@ pub trait Body: Sized + 'static {
     fn thermal_now(&self) -> Option<[Real; 9]>;
     /// When each fill point was reached, tool by tool (the state's).
     fn fill_state(&self) -> &[Option<Filled>];
+    /// What each tool received from the workpiece since the start, in scene order.
+    fn tool_accounts(&self) -> Vec<Account>;
+    /// The force of the workpiece on tool `k` along its axis over the last step (N).
+    fn tool_axial_force(&self, k: usize) -> Real;
 }
 
 impl Body for Simulation {
@@ -92,6 +98,12 @@ impl Body for Simulation {
     fn fill_state(&self) -> &[Option<Filled>] {
         &self.state().fill
     }
+    fn tool_accounts(&self) -> Vec<Account> {
+        self.tools().iter().map(|t| t.state.account).collect()
+    }
+    fn tool_axial_force(&self, k: usize) -> Real {
+        self.tools()[k].axial_force()
+    }
 }
 
 impl Body for SolidSimulation {
@@ -113,6 +125,12 @@ impl Body for SolidSimulation {
     }
     fn fill_state(&self) -> &[Option<Filled>] {
         &self.state().fill
+    }
+    fn tool_accounts(&self) -> Vec<Account> {
+        self.tools().iter().map(|t| t.state.account).collect()
+    }
+    fn tool_axial_force(&self, k: usize) -> Real {
+        self.tools()[k].axial_force()
     }
 }
 
@@ -531,6 +549,48 @@ pub struct Sample<'a, S: Body = Simulation> {
     sim: &'a S,
     cache: S::Cache,
     thermal: OnceCell<Option<[Real; 9]>>,
+    since: Option<Since>,
+}
+
+/// The sample before, as an interval mean reads it ([`force_mean`]): its time and each
+/// tool's impulse. Each front end keeps its own: `history.csv` its last row, the FMU the
+/// start of its communication step, the ROS node its last publication, Python its last
+/// `outputs()`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Since {
+    /// Time of the sample (s).
+    pub time: Real,
+    /// Each tool's impulse along its axis at the sample (N s, [`Account::impulse`]).
+    pub impulse: Vec<Real>,
+}
+
+impl Since {
+    /// The simulation now, as the next sample's interval means start from it.
+    pub fn of<S: Body>(sim: &S) -> Since {
+        Since {
+            time: sim.time_now(),
+            impulse: sim.tool_accounts().iter().map(|a| a.impulse).collect(),
+        }
+    }
+}
+
+/// The force of the workpiece on tool `k` along its axis averaged over the interval since
+/// the sample before ([`Sample::since`]; the start of the run when none was given):
+/// `(I - I_0) / (t - t_0)` (N), `I` the tool's impulse ([`Account::impulse`]) and `t` the
+/// time, now and at that sample. It is what the tool's momentum took over the interval, so
+/// a sample that falls on a shortened step or on one peak of the impact's ringing reads the
+/// interval's force; over a zero interval, the force of the last step.
+pub fn force_mean<S: Body>(s: &Sample<'_, S>, k: usize) -> Real {
+    let (t, impulse) = (s.time_now(), s.tool_accounts()[k].impulse);
+    let (t0, i0) = s
+        .since
+        .as_ref()
+        .map_or((0.0, 0.0), |p| (p.time, p.impulse[k]));
+    if t > t0 {
+        (impulse - i0) / (t - t0)
+    } else {
+        s.tool_axial_force(k)
+    }
 }
 
 /// The measures a sample of a 2D simulation takes once.
@@ -549,7 +609,14 @@ impl<'a, S: Body> Sample<'a, S> {
             sim,
             cache: S::Cache::default(),
             thermal: OnceCell::new(),
+            since: None,
         }
+    }
+
+    /// The same sample, its interval means taken since `since` (none: since the start).
+    pub fn since(mut self, since: Option<&Since>) -> Sample<'a, S> {
+        self.since = since.cloned();
+        self
     }
 
     /// The thermal measures ([`Body::thermal_now`]).

@@ -2,7 +2,7 @@
 //! `history.csv`'s columns. Forces are for the whole ring in axisymmetry and per
 //! `model.depth_m` of depth in plane strain, as are energies and heat.
 
-use super::{mean_contact_pressure, Body, Output, Read, Sample, Shown, When};
+use super::{force_mean, mean_contact_pressure, Body, Output, Read, Sample, Shown, When};
 use crate::math::Real;
 use crate::scene::Edge;
 use crate::solver::Simulation;
@@ -42,7 +42,7 @@ pub(super) const fn time<S: Body>() -> [Output<S>; 2] {
 }
 
 /// Each tool.
-const TOOLS: [Output; 9] = [
+const TOOLS: [Output; 12] = [
     tool::<Simulation>(
         "stroke_m",
         "m",
@@ -63,6 +63,7 @@ const TOOLS: [Output; 9] = [
         |s, k| s.tools()[k].axial_force(),
     )
     .showing(Shown::NOT_IN_SUMMARY),
+    mean_force(),
     tool::<Simulation>(
         "force_x_N",
         "N",
@@ -96,6 +97,8 @@ const TOOLS: [Output; 9] = [
         |s, k| s.contact_length(k),
     )
     .showing(Shown::NOT_IN_HISTORY),
+    impulse(),
+    work(),
     tool::<Simulation>(
         "peak_force_N",
         "N",
@@ -104,6 +107,40 @@ const TOOLS: [Output; 9] = [
     )
     .showing(Shown::NOT_IN_HISTORY),
 ];
+
+/// The force of the workpiece on a tool along its axis averaged since the sample before
+/// ([`force_mean`]), in either dimension.
+pub(super) const fn mean_force<S: Body>() -> Output<S> {
+    tool::<S>(
+        "force_mean_N",
+        "N",
+        "force of the workpiece on tool {tool} along its axis averaged over the interval since the sample before (history.csv's row, the FMU's communication step, the ROS node's publication, Python's outputs()): the change of impulse_N_s over the change of time",
+        force_mean::<S>,
+    )
+    .showing(Shown::NOT_IN_SUMMARY)
+}
+
+/// A tool's impulse since the start ([`crate::tools::Account::impulse`]), in either
+/// dimension.
+pub(super) const fn impulse<S: Body>() -> Output<S> {
+    tool::<S>(
+        "impulse_N_s",
+        "N.s",
+        "impulse of the workpiece's force on tool {tool} along its axis since the start: force_N times each step's corrector step, summed (the momentum the workpiece gave up to the tool)",
+        |s, k| s.tool_accounts()[k].impulse,
+    )
+}
+
+/// The work of a tool on the workpiece since the start ([`crate::tools::Account::work`]),
+/// in either dimension.
+pub(super) const fn work<S: Body>() -> Output<S> {
+    tool::<S>(
+        "work_J",
+        "J",
+        "work of tool {tool} on the workpiece since the start (positive while it presses); the tools' sum is energy.tool_work_J",
+        |s, k| s.tool_accounts()[k].work,
+    )
+}
 
 /// Each fill point of a tool (die fill).
 const FILL: [Output; 1] = [filled()];

@@ -9,8 +9,8 @@
 //! values onto the particles), followed faces and laps.
 
 use super::register::{
-    energy, filled, kinetic_to_internal_max, particles, points, scalar, thermal_measures,
-    thermoelastic, time, tool,
+    energy, filled, impulse, kinetic_to_internal_max, mean_force, particles, points, scalar,
+    thermal_measures, thermoelastic, time, tool, work,
 };
 use super::{expand, fields_of, fill_instances, At, Column, Kind, Output, Sample, Shown, When};
 use crate::math::Real;
@@ -40,7 +40,7 @@ const THERMAL: [Output<SolidSimulation>; 9] = thermal_measures();
 const FILL: [Output<SolidSimulation>; 1] = [filled()];
 
 /// Each tool (the symmetry planes are not tools).
-const TOOLS: [Output<SolidSimulation>; 12] = [
+const TOOLS: [Output<SolidSimulation>; 15] = [
     tool::<SolidSimulation>(
         "stroke_m",
         "m",
@@ -61,6 +61,7 @@ const TOOLS: [Output<SolidSimulation>; 12] = [
         |s, k| s.tools()[k].axial_force(),
     )
     .showing(Shown::NOT_IN_SUMMARY),
+    mean_force(),
     tool::<SolidSimulation>(
         "force_x_N",
         "N",
@@ -107,6 +108,8 @@ const TOOLS: [Output<SolidSimulation>; 12] = [
             }
         },
     ),
+    impulse(),
+    work(),
     tool::<SolidSimulation>(
         "peak_force_N",
         "N",

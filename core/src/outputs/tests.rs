@@ -78,17 +78,20 @@ fn a_scene_expands_tool_by_tool_in_history_order() {
         "stroke_m",
         "velocity_m_per_s",
         "force_N",
+        "force_mean_N",
         "force_x_N",
         "force_y_N",
         "contact_fraction",
         "pressure_mean_Pa",
+        "impulse_N_s",
+        "work_J",
     ]
     .iter()
     .map(|c| format!("{tool}.{c}"))
     .collect();
     assert_eq!(&history[..2], ["time_s", "dt_s"]);
-    assert_eq!(history[2..9], first);
-    assert!(history[9].starts_with(&format!("{}.", s.tools[1].name)));
+    assert_eq!(history[2..12], first);
+    assert!(history[12].starts_with(&format!("{}.", s.tools[1].name)));
     // Axisymmetric: the radius, not the width; thermal: the measures and heated tools.
     assert!(history.contains(&"workpiece.radius_m"));
     assert!(!history.contains(&"workpiece.width_m"));
@@ -164,4 +167,47 @@ fn a_sample_reads_every_column_and_field() {
         };
         assert_eq!(f.field(&sample).unwrap().len(), n, "{}", f.full_name());
     }
+}
+
+/// The tools' accounts: their work sums to the energy account's tool work, and the force
+/// averaged over an interval is the change of impulse over it, over the whole run when no
+/// sample came before, and the last step's force over an empty interval.
+#[test]
+fn the_tools_work_sums_to_the_tool_work_and_the_mean_force_to_the_impulse() {
+    let text = include_str!("../../../scenes/block_forging.toml")
+        .replace("particles = [21, 21]", "particles = [6, 6]");
+    let scene = Scene::from_str_named(&text, "block").unwrap();
+    let mut sim = Simulation::new(&scene).unwrap();
+    let columns = columns(&scene);
+    let column = |name: &str| columns.iter().find(|c| c.name == name).unwrap();
+    for _ in 0..300 {
+        sim.step(None).unwrap();
+    }
+    let before = Since::of(&sim);
+    for _ in 0..200 {
+        sim.step(None).unwrap();
+    }
+    let (t, t0) = (sim.time(), before.time);
+    let accounts = sim.tool_accounts();
+    let work: Real = accounts.iter().map(|a| a.work).sum();
+    let tool_work = sim.energy().tool_work;
+    assert!(tool_work > 0.0);
+    assert!(
+        (work - tool_work).abs() < 1e-12 * tool_work,
+        "{work} {tool_work}"
+    );
+    let mean = column("top.force_mean_N");
+    let since = Sample::new(&sim).since(Some(&before));
+    let interval = (accounts[0].impulse - before.impulse[0]) / (t - t0);
+    assert_eq!(mean.value(&since), interval);
+    assert!(
+        interval < 0.0,
+        "the top die pressed against its axis: {interval} N"
+    );
+    let whole = Sample::new(&sim);
+    assert_eq!(mean.value(&whole), accounts[0].impulse / t);
+    let empty = Sample::new(&sim).since(Some(&Since::of(&sim)));
+    assert_eq!(mean.value(&empty), sim.tools()[0].axial_force());
+    assert_eq!(column("top.impulse_N_s").value(&whole), accounts[0].impulse);
+    assert_eq!(column("bottom.work_J").value(&whole), accounts[1].work);
 }

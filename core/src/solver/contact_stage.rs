@@ -1,6 +1,7 @@
 //! Stage 4 of the step: the tools advance over the step at their mid-step velocity, the
 //! contact stage ([`crate::contact`], the paper's eqs. 4-7) finds the penalty forces on the
-//! predicted positions, and the surface's self-contacts grow the laps ([`crate::laps`]).
+//! predicted positions, each tool books its impulse and work ([`crate::tools::Account`]),
+//! and the surface's self-contacts grow the laps ([`crate::laps`]).
 //! Also the contact stage's construction for a scene, at setup and at a re-reference.
 
 use super::discretization::Discretization;
@@ -75,6 +76,10 @@ pub(super) fn run(
         step.avg,
     );
     st.plane_feedback_max = st.plane_feedback_max.max(touch.feedback);
+    for t in tools.iter_mut() {
+        let f = t.axial_force();
+        t.state.account.book(f, t.state.velocity, step.avg);
+    }
     if let Some(strokes) = strokes {
         for (t, stroke) in tools.iter_mut().zip(strokes) {
             t.state.stroke = stroke;

@@ -275,3 +275,39 @@ fn contact_skipping_gives_the_bits_of_checking_every_particle() {
         );
     }
 }
+
+/// Each tool's impulse is the momentum the workpiece gave up to it: on the Taylor bar
+/// against its wall (the only outside force; the internal forces sum to zero by the shape
+/// functions' partition of unity, and the axis holds only radial motion), the bar's axial
+/// momentum `sum_I M_I v_I` changes by minus the wall's impulse along its axis, to
+/// round-off, with every rule; and the wall, fixed, does no work.
+#[test]
+fn a_tools_impulse_is_the_momentum_the_workpiece_gave_up() {
+    for rule in RULES {
+        let mut sim = Simulation::new(&taylor(rule, [11, 26])).unwrap();
+        let momentum = |sim: &Simulation| -> Real {
+            sim.disc
+                .mass
+                .iter()
+                .zip(&sim.st.v)
+                .map(|(m, v)| m * v[1])
+                .sum()
+        };
+        let p0 = momentum(&sim);
+        sim.run_to(30e-6, |_| {}).unwrap();
+        let wall = &sim.tools()[0];
+        let (axis, account) = (wall.axis[1], wall.state.account);
+        let lost = (p0 - momentum(&sim)) * axis;
+        assert!(
+            account.impulse > 0.3 * p0.abs(),
+            "{rule:?}: the wall took {} N s of {p0} N s",
+            account.impulse
+        );
+        assert!(
+            (lost - account.impulse).abs() < 1e-9 * p0.abs(),
+            "{rule:?}: momentum lost {lost} N s, impulse {} N s",
+            account.impulse
+        );
+        assert_eq!(account.work, 0.0);
+    }
+}

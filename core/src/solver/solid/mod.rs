@@ -456,6 +456,10 @@ impl SolidSimulation {
                 t.state.stroke += (step.full - dt) * t.state.velocity;
             }
             let mut touch = ws.contact.stage(&ws.team, disc, tools, st, &ws.out, step);
+            for t in tools.iter_mut() {
+                let f = t.axial_force();
+                t.state.account.book(f, t.state.velocity, step.avg);
+            }
             let on_itself = SelfStage {
                 tools: &tools[..disc.scene_tools],
                 out: &ws.out,

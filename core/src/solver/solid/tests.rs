@@ -565,3 +565,31 @@ fn the_cells_volume_follows_the_material_s_own() {
     );
     assert!((cells - points).abs() < 0.01, "{cells} {points}");
 }
+
+/// A tool's impulse is the momentum the body gave up to it, in 3D as in 2D: the quarter
+/// bar's axial momentum `sum_I M_I v_I` changes by minus the wall's impulse along its axis
+/// (the symmetry planes push along x and y only), to round-off.
+#[test]
+fn a_tools_impulse_is_the_momentum_the_body_gave_up() {
+    let mut sim = SolidSimulation::new(&quarter_bar([4, 2, 16], "q2", 4e-6)).unwrap();
+    let momentum = |sim: &SolidSimulation| -> Real {
+        sim.disc
+            .mass
+            .iter()
+            .zip(&sim.st.v)
+            .map(|(m, v)| m * v[2])
+            .sum()
+    };
+    let p0 = momentum(&sim);
+    sim.run_toward(4e-6, u64::MAX, |_, _| true).unwrap();
+    let wall = &sim.tools()[0];
+    let (axis, account) = (wall.axis[2], wall.state.account);
+    let lost = (p0 - momentum(&sim)) * axis;
+    assert!(account.impulse > 0.05 * p0.abs(), "{account:?} of {p0} N s");
+    assert!(
+        (lost - account.impulse).abs() < 1e-9 * p0.abs(),
+        "momentum lost {lost} N s, impulse {} N s",
+        account.impulse
+    );
+    assert_eq!(account.work, 0.0);
+}
