@@ -554,8 +554,8 @@ pub struct Sample<'a, S: Body = Simulation> {
 
 /// The sample before, as an interval mean reads it ([`force_mean`]): its time and each
 /// tool's impulse. Each front end keeps its own: `history.csv` its last row, the FMU the
-/// start of its communication step, the ROS node its last publication, Python its last
-/// `outputs()`.
+/// start of its communication step, the ROS node and `rkforge run --mcap` their last
+/// sample, Python its last `sample()`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Since {
     /// Time of the sample (s).

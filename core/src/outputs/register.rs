@@ -114,7 +114,7 @@ pub(super) const fn mean_force<S: Body>() -> Output<S> {
     tool::<S>(
         "force_mean_N",
         "N",
-        "force of the workpiece on tool {tool} along its axis averaged over the interval since the sample before (history.csv's row, the FMU's communication step, the ROS node's publication, Python's outputs()): the change of impulse_N_s over the change of time",
+        "force of the workpiece on tool {tool} along its axis averaged over the interval since the sample before (history.csv's row before, the FMU's communication step, the ROS node's or the recording's sample before, Python's last sample()): the change of impulse_N_s over the change of time",
         force_mean::<S>,
     )
     .showing(Shown::NOT_IN_SUMMARY)
