@@ -165,14 +165,14 @@ pub struct Isolation {
 
 impl Isolation {
     /// Measures the isolation of every particle of `body` against the initial nearest
-    /// distances `initial` (m) at time `time_s`; returns the largest now (-).
+    /// distances `initial` (m) at time `time_s`, recorded in the watch.
     pub(super) fn measure_body<const D: usize>(
         &mut self,
         body: &Body<'_, D>,
         initial: &[Real],
         time_s: Real,
-    ) -> Real {
-        self.measure(body.particles, &point_distances(body), initial, time_s)
+    ) {
+        self.measure(body.particles, &point_distances(body), initial, time_s);
     }
 
     /// Measures the isolation of every particle at `positions` (m) against the initial

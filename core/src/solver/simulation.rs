@@ -601,9 +601,8 @@ impl Simulation {
     }
 
     /// Every particle's isolation with the particles at `positions` (m, now): its nearest
-    /// integration point over that distance at the start, recorded in the state; the
-    /// largest (-).
-    fn measure_isolation(&mut self, positions: &[[Real; 2]]) -> Real {
+    /// integration point over that distance at the start, recorded in the state.
+    fn measure_isolation(&mut self, positions: &[[Real; 2]]) {
         let d = &self.disc;
         let body = Body {
             scatter: &d.scatter,
@@ -615,7 +614,7 @@ impl Simulation {
         let time = self.st.time;
         self.st
             .isolation
-            .measure_body(&body, &d.initial_spacing, time)
+            .measure_body(&body, &d.initial_spacing, time);
     }
 
     /// Every particle against every tool at any depth and every symmetry plane, and the

@@ -968,9 +968,8 @@ impl SolidSimulation {
     }
 
     /// Every particle's isolation with the particles at `positions` (m, now): its nearest
-    /// integration point over that distance at the start, recorded in the state; the
-    /// largest (-).
-    fn measure_isolation(&mut self, positions: &[[Real; 3]]) -> Real {
+    /// integration point over that distance at the start, recorded in the state.
+    fn measure_isolation(&mut self, positions: &[[Real; 3]]) {
         let d = &self.disc;
         let body = Body {
             scatter: &d.scatter,
@@ -982,7 +981,7 @@ impl SolidSimulation {
         let time = self.st.time;
         self.st
             .isolation
-            .measure_body(&body, &d.initial_spacing, time)
+            .measure_body(&body, &d.initial_spacing, time);
     }
 
     /// The warning of a run in which a particle left the body, naming it
