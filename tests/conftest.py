@@ -12,7 +12,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 # The FMU driver and the press plants of examples/presses are imported by the FMU tests.
 sys.path.insert(0, str(ROOT / "examples" / "presses"))
 
-# The longest a test may take (s); the longest takes about a minute with both cores loaded.
+# The longest a test may take (s); each takes at most about a minute with both cores loaded.
 WATCHDOG_S = 900
 
 

@@ -23,6 +23,12 @@ use std::time::{Duration, Instant};
 /// the particles' displacements and velocities and the cells' von Mises stress).
 pub const FORMAT: u32 = 3;
 
+/// The one field every checkpoint format has, read before the rest.
+#[derive(Deserialize)]
+struct Format {
+    format: u32,
+}
+
 /// The checkpoint file in a run's output folder.
 pub const FILE: &str = "checkpoint.cbor";
 
@@ -345,18 +351,25 @@ pub fn resume<S: Runnable, Fr: DeserializeOwned>(
         ),
         _ => at(format!("cannot read: {e}")),
     })?;
-    let saved: Checkpoint<serde_json::Value, S::State, Fr> =
-        ciborium::from_reader(std::io::BufReader::new(file)).map_err(|e| {
-            at(format!(
-                "not a checkpoint of this build (format {FORMAT}): {e}"
-            ))
-        })?;
-    if saved.format != FORMAT {
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::BufReader::new(file), &mut bytes)
+        .map_err(|e| at(format!("cannot read: {e}")))?;
+    let not_one = |e: ciborium::de::Error<std::io::Error>| {
+        at(format!(
+            "not a checkpoint of this build (format {FORMAT}): {e}"
+        ))
+    };
+    // The format first, so that a checkpoint of another build is named as such, not by the
+    // first field its state lacks.
+    let header: Format = ciborium::from_reader(&bytes[..]).map_err(not_one)?;
+    if header.format != FORMAT {
         return Err(at(format!(
             "format {} (this build reads {FORMAT})",
-            saved.format
+            header.format
         )));
     }
+    let saved: Checkpoint<serde_json::Value, S::State, Fr> =
+        ciborium::from_reader(&bytes[..]).map_err(not_one)?;
     let scene = serde_json::to_value(sim.scene()).map_err(|e| at(e.to_string()))?;
     if let Some(key) = first_difference(&scene, &saved.scene, "") {
         return Err(at(format!(
@@ -571,6 +584,19 @@ mod tests {
             .err()
             .unwrap();
         assert!(missing.contains("no checkpoint to resume"), "{missing}");
+        // A checkpoint of an older format, whose state lacks what this build's has, is named
+        // by its format, not by the first field it lacks.
+        let older = dir.path().join("older.cbor");
+        let file = std::fs::File::create(&older).unwrap();
+        ciborium::into_writer(&json!({"format": FORMAT - 1, "state": {}}), file).unwrap();
+        let refused = resume::<_, usize>(&older, &mut sim, 0).err().unwrap();
+        assert!(
+            refused.ends_with(&format!(
+                "format {} (this build reads {FORMAT})",
+                FORMAT - 1
+            )),
+            "{refused}"
+        );
     }
 
     #[test]
