@@ -89,11 +89,14 @@ class Simulation:
     def tool_strokes(self) -> Dict[str, float]:
         """Stroke of each tool along its axis (m), by tool name."""
     def sample(self) -> Dict[str, float]:
-        """Record a history row now, as ``rkforge run`` does at its samples."""
+        """Record a history row now, as ``rkforge run`` does at its samples; its
+        ``<tool>.force_mean_N`` is the force averaged since the last ``sample()`` (the start
+        for the first)."""
     def outputs(self) -> Dict[str, Union[float, npt.NDArray[np.float64]]]:
         """Every output of the register now, by name: each column (history.csv's and those
         only the summary and the FMU show, e.g. ``top.pressure_mean_Pa``) as a float, each
-        field (``particles.*``, ``points.*``) as a numpy array."""
+        field (``particles.*``, ``points.*``) as a numpy array; ``<tool>.force_mean_N``
+        averaged since the last ``sample()``."""
     def tools(self) -> List[Dict[str, Any]]:
         """Every tool as in summary.json."""
     def laps(self) -> List[Dict[str, Any]]:
