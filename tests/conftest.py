@@ -17,12 +17,16 @@ WATCHDOG_S = 900
 
 
 @pytest.fixture(autouse=True)
-def watchdog():
+def watchdog(request):
     """A test that hangs (a DDS peer library stuck in native code holding the GIL, as
     cyclonedds once did inside `Topic(...)`; a process that never answers) prints every
     thread's stack and ends the session after `WATCHDOG_S`, instead of holding CI until its
-    limit. faulthandler's watchdog is a native thread: it needs no GIL to fire."""
-    faulthandler.dump_traceback_later(WATCHDOG_S, exit=True)
+    limit. faulthandler's watchdog is a native thread: it needs no GIL to fire. It writes to
+    the copy of the terminal's stderr that pytest's faulthandler plugin keeps: the test's
+    own stderr is captured, and a dump there would be lost with the process."""
+    from _pytest.faulthandler import fault_handler_stderr_fd_key
+    terminal = request.config.stash[fault_handler_stderr_fd_key]
+    faulthandler.dump_traceback_later(WATCHDOG_S, exit=True, file=terminal)
     yield
     faulthandler.cancel_dump_traceback_later()
 
