@@ -1,6 +1,6 @@
 //! One run of a scene: the time loop, samples, frames and the files written.
 
-use crate::output::{plots, vtu, HistoryPlots};
+use crate::output::{plots, vtu, HistoryPlots, Plotted};
 use crate::recording::{Mcap, McapOptions};
 use indicatif::{ProgressBar, ProgressStyle};
 use rkforge_core::{Kinematics, Scene, Simulation};
@@ -125,7 +125,7 @@ pub fn run(scene: &Scene, opts: &Options) -> Result<Report, String> {
     let plotted = if opts.frames {
         outcome
             .history
-            .plots(&sim, &opts.out)
+            .plots(&Plotted::plane(&sim), &opts.out)
             .and_then(|()| write_stages(&sim, opts, &outputs.taken.shapes))
     } else {
         Ok(())

@@ -18,6 +18,7 @@
 
 use crate::output::plots::{solid_plot, SolidPanel, View};
 use crate::output::vtu::{write_pvd, write_vtu_3d, write_vtu_triangles};
+use crate::output::{HistoryPlots, Plotted};
 use crate::recording::{Mcap, McapOptions};
 use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::{DiePressure, SolidSimulation};
@@ -60,10 +61,19 @@ pub fn run(
     };
     let outcome = started.go(&mut sim, nframes, &mut shots)?;
     let clock = Instant::now();
-    if !shots.frames.is_empty() {
-        write_frames(&sim, &shots.frames, out, &scene.name)?;
-    }
     outcome.history.write(&out.join("history.csv"))?;
+    // Plots come before the summary so that their time is in it; the summary is written
+    // even when a plot fails, and the plot's error is returned after it.
+    let plotted = match frames {
+        true => outcome
+            .history
+            .plots(&Plotted::solid(&sim), out)
+            .and_then(|()| match shots.frames.is_empty() {
+                true => Ok(()),
+                false => write_frames(&sim, &shots.frames, out, &scene.name),
+            }),
+        false => Ok(()),
+    };
     let output_time = outcome.output_time + clock.elapsed();
     let mut summary = solid_summary(
         &sim,
@@ -78,6 +88,7 @@ pub fn run(
     if let Some(m) = shots.mcap {
         m.finish(&text)?;
     }
+    plotted?;
     Ok(SolidReport {
         summary,
         error: outcome.failure,

@@ -4,28 +4,91 @@
 pub mod plots;
 pub mod vtu;
 
+use rkforge_core::outputs::Body;
+use rkforge_core::scene::Motion;
+use rkforge_core::scene::Reference;
+use rkforge_core::solver::SolidSimulation;
+use rkforge_core::tools::Driven;
 use rkforge_core::Simulation;
 use rkforge_runner::History;
 use std::path::Path;
 
+/// What the history plots read of a run besides its history, in 2D or 3D.
+pub struct Plotted<'a> {
+    /// The scene's name, in each title.
+    pub name: &'a str,
+    /// The integration rule's name, in each title.
+    pub rule: &'static str,
+    /// The end time (s), which picks the time axis' unit and places the references.
+    pub end_s: f64,
+    /// The history key of the lateral size (`radius_m`, `width_m`) after `workpiece.`.
+    pub lateral: &'static str,
+    /// The tools' names, each with whether it moves (then it has a force-stroke curve).
+    pub tools: Vec<(&'a str, bool)>,
+    /// The scene's published values, drawn at the end time.
+    pub references: &'a [Reference],
+}
+
+impl<'a> Plotted<'a> {
+    /// The tools' names of `tools`, each with whether it moves.
+    fn tools<T: Driven>(tools: &'a [T]) -> Vec<(&'a str, bool)> {
+        tools
+            .iter()
+            .map(|t| (t.name(), !matches!(t.motion(), Motion::Fixed)))
+            .collect()
+    }
+
+    /// A 2D run's: the lateral size is the axisymmetric radius or the plane-strain width.
+    pub fn plane(sim: &'a Simulation) -> Self {
+        let scene = sim.scene();
+        Plotted {
+            name: &scene.name,
+            rule: scene.discretization.integration.name(),
+            end_s: scene.time.end_s,
+            lateral: sim.extents().lateral(scene.model.kinematics).0,
+            tools: Self::tools(sim.tools()),
+            references: &scene.reference,
+        }
+    }
+
+    /// A 3D run's: the lateral size is the largest distance of a particle from the z axis.
+    pub fn solid(sim: &'a SolidSimulation) -> Self {
+        let scene = sim.scene();
+        Plotted {
+            name: &scene.name,
+            rule: scene.discretization.integration.name(),
+            end_s: scene.time.end_s,
+            lateral: "radius_m",
+            tools: Self::tools(sim.tools()),
+            references: &scene.reference,
+        }
+    }
+}
+
 /// The plots drawn from a run's history.
 pub trait HistoryPlots {
-    /// Write the history plots into `out`.
+    /// Write the history plots of the run `what` describes into `out`.
     ///
     /// # Errors
     ///
     /// A plot cannot be drawn or written.
-    fn plots(&self, sim: &Simulation, out: &Path) -> Result<(), String>;
+    fn plots(&self, what: &Plotted, out: &Path) -> Result<(), String>;
 }
 
-impl HistoryPlots for History {
+impl<S: Body> HistoryPlots for History<S> {
     /// History plots: lateral size and height over time with the scene's references
-    /// (paper Figures 5-6), tool forces over time, force against stroke for the tools that
-    /// move, and the energy account.
-    fn plots(&self, sim: &Simulation, out: &Path) -> Result<(), String> {
-        let name = &sim.scene().name;
-        let rule = sim.scene().discretization.integration.name();
-        let end = sim.scene().time.end_s;
+    /// (paper Figures 5-6), tool forces over time (each tool's sampled force and its mean
+    /// over each sampling interval, `force_mean_N`, drawn dashed as a staircase over the
+    /// interval it averages), force against stroke for the tools that move, and the energy
+    /// account.
+    fn plots(&self, what: &Plotted, out: &Path) -> Result<(), String> {
+        let Plotted {
+            name,
+            rule,
+            end_s: end,
+            lateral: lat,
+            ..
+        } = *what;
         let (tscale, tlabel) = if end < 1e-3 {
             (1e6, "time (us)")
         } else {
@@ -37,7 +100,6 @@ impl HistoryPlots for History {
             .iter()
             .map(|v| v * tscale)
             .collect();
-        let (lat, _) = sim.extents().lateral(sim.scene().model.kinematics);
         let lat_label = lat.trim_end_matches("_m");
         for (key, label) in [(lat, lat_label), ("height_m", "height")] {
             let y: Vec<f64> = self
@@ -46,9 +108,8 @@ impl HistoryPlots for History {
                 .iter()
                 .map(|v| v * 1e3)
                 .collect();
-            let markers: Vec<plots::Marker> = sim
-                .scene()
-                .reference
+            let markers: Vec<plots::Marker> = what
+                .references
                 .iter()
                 .filter_map(|r| {
                     r.values
@@ -75,16 +136,29 @@ impl HistoryPlots for History {
             )?;
         }
         let force = |tool: &str| self.column(&format!("{tool}.force_N")).unwrap_or_default();
-        let over_time: Vec<plots::Series> = sim
-            .tools()
-            .iter()
-            .map(|tool| plots::Series {
-                label: tool.name.clone(),
+        let mut over_time = Vec::new();
+        for (k, &(tool, _)) in what.tools.iter().enumerate() {
+            over_time.push(plots::Series {
+                label: format!("{tool}, sampled"),
                 x: t.clone(),
-                y: force(&tool.name),
-                ..plots::Series::default()
-            })
-            .collect();
+                y: force(tool),
+                colour: plots::Colour::Palette(k),
+                dashed: false,
+            });
+            let (x, y) = staircase(
+                &t,
+                &self
+                    .column(&format!("{tool}.force_mean_N"))
+                    .unwrap_or_default(),
+            );
+            over_time.push(plots::Series {
+                label: format!("{tool}, mean over each interval"),
+                x,
+                y,
+                colour: plots::Colour::Palette(k),
+                dashed: true,
+            });
+        }
         if !over_time.is_empty() {
             plots::line_plot(
                 &out.join("forces.png"),
@@ -95,19 +169,19 @@ impl HistoryPlots for History {
                 &[],
             )?;
         }
-        let strokes: Vec<plots::Series> = sim
-            .tools()
+        let strokes: Vec<plots::Series> = what
+            .tools
             .iter()
-            .filter(|tool| tool.is_movable())
-            .map(|tool| plots::Series {
-                label: tool.name.clone(),
+            .filter(|(_, moves)| *moves)
+            .map(|&(tool, _)| plots::Series {
+                label: tool.to_string(),
                 x: self
-                    .column(&format!("{}.stroke_m", tool.name))
+                    .column(&format!("{tool}.stroke_m"))
                     .unwrap_or_default()
                     .iter()
                     .map(|s| s * 1e3)
                     .collect(),
-                y: force(&tool.name).iter().map(|f| -f).collect(),
+                y: force(tool).iter().map(|f| -f).collect(),
                 ..plots::Series::default()
             })
             .collect();
@@ -144,5 +218,29 @@ impl HistoryPlots for History {
             &energy,
             &[],
         )
+    }
+}
+
+/// The staircase of interval means `mean` (each row's value the mean over the interval
+/// since the row before, as `<tool>.force_mean_N`) at the sample times `t`: each mean held
+/// flat from the sample before to its own; the first row, an interval of no length, draws
+/// nothing.
+fn staircase(t: &[f64], mean: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    t.windows(2)
+        .zip(mean.iter().skip(1))
+        .flat_map(|(w, &m)| [(w[0], m), (w[1], m)])
+        .unzip()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::staircase;
+
+    #[test]
+    fn each_mean_is_held_over_the_interval_it_averages() {
+        let (x, y) = staircase(&[0.0, 1.0, 3.0], &[0.0, 5.0, 7.0]);
+        assert_eq!(x, [0.0, 1.0, 1.0, 3.0]);
+        assert_eq!(y, [5.0, 5.0, 7.0, 7.0]);
+        assert_eq!(staircase(&[0.0], &[0.0]), (vec![], vec![]));
     }
 }
