@@ -247,6 +247,26 @@ def test_bad_inputs_are_refused_with_a_message_and_the_instance_lives_on(adaptiv
     s.close()
 
 
+def test_a_step_past_the_stop_time_is_refused_and_logged_with_debug_logging_off(adaptive_fmus):
+    """FMI 2.0, 4.2.2: with a stop time set up, computing past it is an error. The error is
+    logged although the host switched debug logging off (fmpy's default), so that a failed
+    call names what failed."""
+    s = Slave(adaptive_fmus["block_forging"], params=COARSE, stop_time=50e-6, logging_on=False)
+    s.set("top.velocity_m_per_s", 10.0)
+    s.step(30e-6)
+    raises(s, lambda: s.fmu.doStep(30e-6, 30e-6), "would pass the stop time 5e-5 s")
+    assert s.messages[-1][0] == 3  # fmi2Error
+    # The instance lives on: up to the stop time exactly, within an importer's rounding.
+    s.step(20e-6 * (1 + 1e-12))
+    assert s.get("top.stroke_m")[0] == pytest.approx(10.0 * 50e-6)
+    raises(s, lambda: s.fmu.doStep(s.t, 1e-9), "would pass the stop time")
+    # Debug messages stay off: the refusals are the only messages.
+    assert [m[0] for m in s.messages] == [3, 3]
+    s.close()
+    with pytest.raises(FMICallException):
+        Slave(adaptive_fmus["block_forging"], params=COARSE, stop_time=-1.0)
+
+
 def test_parameters_out_of_range_and_wrong_state_calls(fmus):
     s = Slave(fmus["taylor_bar"], init=False)
     raises(s, lambda: s.fmu.doStep(0.0, 1e-6), "not allowed")

@@ -90,7 +90,8 @@ def test_fmi2_and_fmi3_give_the_same_bits(rkforge_bin, tmp_path):
 class Slave3:
     """One FMI 3.0 instance, initialised, with its log messages kept."""
 
-    def __init__(self, path, params=None, early_return=False, intermediate_update=None):
+    def __init__(self, path, params=None, early_return=False, intermediate_update=None,
+                 stop_time=None, logging_on=True):
         self.md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.messages = []
@@ -101,7 +102,7 @@ class Slave3:
         self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=extract(path),
                              modelIdentifier=self.md.coSimulation.modelIdentifier,
                              instanceName="rkforge3")
-        self.fmu.instantiate(loggingOn=True, logMessage=log, earlyReturnAllowed=early_return,
+        self.fmu.instantiate(loggingOn=logging_on, logMessage=log, earlyReturnAllowed=early_return,
                              intermediateUpdate=intermediate_update)
         for k, v in (params or {}).items():
             if isinstance(v, bool):
@@ -110,7 +111,7 @@ class Slave3:
                 self.fmu.setInt32([self.vr[k]], [v])
             else:
                 self.fmu.setFloat64([self.vr[k]], [v])
-        self.fmu.enterInitializationMode(startTime=0.0)
+        self.fmu.enterInitializationMode(startTime=0.0, stopTime=stop_time)
         self.fmu.exitInitializationMode()
         self.t = 0.0
 
@@ -271,6 +272,9 @@ def test_intermediate_updates_follow_every_solver_step(rkforge_bin, tmp_path):
     assert seen == expected
     assert seen[-1][2] == s.get("top.force_N")[0]
     assert refused == [t for t, _, _ in seen]
+    # Each refusal is logged, naming the call and why.
+    why = [m for m in s.messages if "inside this instance's intermediate update" in m]
+    assert len(why) == len(refused) and why[0].startswith("fmi3SetFloat64: not allowed"), why[:1]
     s.fmu.freeInstance()
 
     seen.clear()
@@ -278,6 +282,16 @@ def test_intermediate_updates_follow_every_solver_step(rkforge_bin, tmp_path):
     holder["s"] = s = Slave3(fmu, COARSE, early_return=True, intermediate_update=update)
     early, last = s.step(1e-3)
     assert early and last == expected[4][0] and len(seen) == 5
+    s.fmu.freeInstance()
+
+
+def test_a_step_past_the_stop_time_is_an_error_logged_with_debug_logging_off(fmus):
+    s = Slave3(fmus["block_forging"], COARSE, stop_time=2e-4, logging_on=False)
+    s.step(1e-4)
+    with pytest.raises(FMICallException):
+        s.fmu.doStep(currentCommunicationPoint=1e-4, communicationStepSize=2e-4)
+    assert s.messages == ["fmi3DoStep: a step from 1e-4 s by 2e-4 s would pass the stop time 2e-4 s the host set up"]
+    assert s.step(1e-4) == (False, pytest.approx(2e-4, rel=1e-12))
     s.fmu.freeInstance()
 
 

@@ -105,3 +105,22 @@ def test_bad_press_parameters_are_refused_by_name(presses):
         s.fmu.exitInitializationMode()
     assert "`area` = -1: must be positive and finite" in s.last_error()
     s.fmu.freeInstance()
+    for value, words in [(2.5, "`substeps` = 2.5: must be a whole number from 1 to 1000000"),
+                         (1e12, "`substeps` = 1000000000000: must be a whole number")]:
+        s = Slave(presses["hydraulic"], init=False)
+        s.fmu.setupExperiment(startTime=0.0)
+        s.fmu.setReal([s.vr["substeps"]], [value])
+        s.fmu.enterInitializationMode()
+        with pytest.raises(FMICallException):
+            s.fmu.exitInitializationMode()
+        assert words in s.last_error()
+        s.fmu.freeInstance()
+
+
+def test_a_press_refuses_a_step_past_its_stop_time(presses):
+    s = Slave(presses["hydraulic"], stop_time=1e-3)
+    s.step(1e-3)
+    with pytest.raises(FMICallException):
+        s.step(1e-4)
+    assert "would pass the stop time 1e-3 s" in s.last_error()
+    s.fmu.freeInstance()

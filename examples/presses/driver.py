@@ -39,9 +39,12 @@ MASS_SCALING_LINE = "mass_scaling = { target_dt_s = 20.0e-6 }"
 
 
 class Slave:
-    """One FMU instance driven step by step, with its log messages captured."""
+    """One FMU instance driven step by step, with its log messages captured; `stop_time` (s)
+    is the stop time set up (none when None), `logging_on` the instance's debug logging
+    (errors are logged either way)."""
 
-    def __init__(self, path, name="rkforge", params=None, unzip=None, init=True):
+    def __init__(self, path, name="rkforge", params=None, unzip=None, init=True, stop_time=None,
+                 logging_on=True):
         self.md = read_model_description(path)
         self.dir = unzip or extract(path)
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
@@ -57,10 +60,10 @@ class Slave:
         addLoggerProxy(ctypes.byref(self.callbacks))
         self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self.dir,
                              modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(callbacks=self.callbacks, loggingOn=True)
+        self.fmu.instantiate(callbacks=self.callbacks, loggingOn=logging_on)
         self.t = 0.0
         if init:
-            self.fmu.setupExperiment(startTime=0.0)
+            self.fmu.setupExperiment(startTime=0.0, stopTime=stop_time)
             unknown = [k for k in (params or {}) if k not in self.vr]
             if unknown:
                 known = sorted(v.name for v in self.md.modelVariables if v.causality == "parameter")

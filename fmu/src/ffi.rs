@@ -108,10 +108,13 @@ pub extern "C" fn fmi2SetupExperiment(
     _tol_defined: c_int,
     _tol: f64,
     start: f64,
-    _stop_defined: c_int,
-    _stop: f64,
+    stop_defined: c_int,
+    stop: f64,
 ) -> fmi2Status {
-    component::call::<Fmi2>(c, "fmi2SetupExperiment", |s| s.setup_experiment(start))
+    let stop = (stop_defined != 0).then_some(stop);
+    component::call::<Fmi2>(c, "fmi2SetupExperiment", |s| {
+        s.setup_experiment(start, stop)
+    })
 }
 
 #[no_mangle]

@@ -28,6 +28,8 @@ use crate::{fmu_state, resources, values};
 use rkforge_core::Error;
 use std::ffi::{c_char, c_int, c_void};
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::rc::Rc;
+use std::sync::Arc;
 
 /// `fmi3Status`.
 pub type fmi3Status = c_int;
@@ -65,6 +67,14 @@ struct HostEnv(Env);
 // SAFETY: the pointer is only handed back to the host's own callback, synchronously, while
 // the host's thread is blocked in fmi3DoStep.
 unsafe impl Send for HostEnv {}
+
+/// The instance's logger, carried into its step's intermediate updates to log the calls
+/// refused there.
+struct HostLog(Log);
+// SAFETY: as `HostEnv`: the logger's environment and callback are only used synchronously,
+// while the host's thread is blocked in fmi3DoStep.
+unsafe impl Send for HostLog {}
+unsafe impl Sync for HostLog {}
 
 impl HostEnv {
     /// The pointer (a method, so that a closure captures the whole `HostEnv`).
@@ -205,11 +215,11 @@ pub extern "C" fn fmi3EnterInitializationMode(
     _tolerance_defined: bool,
     _tolerance: f64,
     start: f64,
-    _stop_defined: bool,
-    _stop: f64,
+    stop_defined: bool,
+    stop: f64,
 ) -> fmi3Status {
     component::call::<Fmi3>(c, "fmi3EnterInitializationMode", |s| {
-        s.setup_experiment(start)?;
+        s.setup_experiment(start, stop_defined.then_some(stop))?;
         s.enter_initialization()
     })
 }
@@ -282,7 +292,8 @@ unsafe fn intermediate_floats(
     };
     match catch_unwind(AssertUnwindSafe(read)) {
         Ok(Ok(())) => OK,
-        _ => ERROR,
+        Ok(Err(why)) => host::refuse_intermediate(c, "fmi3GetFloat64", &format!("inside the intermediate update: {why} (only `time` and the outputs are readable then)")),
+        Err(_) => host::refuse_intermediate(c, "fmi3GetFloat64", "inside the intermediate update: internal error (panic)"),
     }
 }
 
@@ -514,24 +525,33 @@ pub unsafe extern "C" fn fmi3DoStep(
                     model.early_return,
                     model.time_vr,
                 );
+                let log = Arc::new(HostLog(comp.log.clone()));
                 let mut observe = move |time: f64, outputs: &[(Vr, f64)]| -> bool {
                     let (mut requested, mut when) = (false, 0.0);
-                    host::during_intermediate(key, (time, time_vr), outputs.to_vec(), || {
-                        // SAFETY: the host's callback with its environment and two
-                        // writable locals, called synchronously.
-                        unsafe {
-                            update(
-                                env.get(),
-                                time,
-                                false,
-                                true,
-                                true,
-                                early,
-                                &mut requested,
-                                &mut when,
-                            )
-                        }
-                    });
+                    let log = log.clone();
+                    let report: Rc<dyn Fn(&str)> = Rc::new(move |m: &str| log.0.log(ERROR, m));
+                    host::during_intermediate(
+                        key,
+                        (time, time_vr),
+                        outputs.to_vec(),
+                        report,
+                        || {
+                            // SAFETY: the host's callback with its environment and two
+                            // writable locals, called synchronously.
+                            unsafe {
+                                update(
+                                    env.get(),
+                                    time,
+                                    false,
+                                    true,
+                                    true,
+                                    early,
+                                    &mut requested,
+                                    &mut when,
+                                )
+                            }
+                        },
+                    );
                     requested
                 };
                 model.instance.do_step_observed(t, h, early, &mut observe)

@@ -6,6 +6,7 @@
 use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::rc::Rc;
 
 /// `fmi2OK` / `fmi3OK`.
 pub const OK: c_int = 0;
@@ -37,6 +38,8 @@ pub struct Intermediate {
     pub values: Vec<(u32, f64)>,
     /// Value reference of the independent variable `time`.
     pub time_vr: u32,
+    /// Logs an error through the instance's logger (the instance itself is being stepped).
+    pub report: Rc<dyn Fn(&str)>,
 }
 
 thread_local! {
@@ -46,11 +49,13 @@ thread_local! {
 
 /// Call `host` (the host's intermediate-update callback) with `values` readable through
 /// [`intermediate_value`], the component at `c` marked busy meanwhile: a call into it other
-/// than an intermediate read answers `Error` without touching it (it is being stepped).
+/// than an intermediate read answers `Error` without touching it (it is being stepped),
+/// logged through `report` ([`refuse_intermediate`]).
 pub fn during_intermediate<R>(
     c: usize,
     (time, time_vr): (f64, u32),
     values: Vec<(u32, f64)>,
+    report: Rc<dyn Fn(&str)>,
     host: impl FnOnce() -> R,
 ) -> R {
     STEPPING.with(|s| s.set(c));
@@ -60,6 +65,7 @@ pub fn during_intermediate<R>(
             time,
             values,
             time_vr,
+            report,
         })
     });
     let r = host();
@@ -87,6 +93,21 @@ pub fn in_intermediate(c: usize) -> bool {
     c != 0 && STEPPING.with(|s| s.get()) == c
 }
 
+/// A call `what` into the component at `c` inside its own step's intermediate update,
+/// refused with `Error` and logged with `why` through the instance's logger.
+pub fn refuse_intermediate(c: usize, what: &str, why: &str) -> c_int {
+    let report = INTERMEDIATE.with(|i| {
+        i.borrow()
+            .as_ref()
+            .filter(|i| i.component == c)
+            .map(|i| i.report.clone())
+    });
+    if let Some(report) = report {
+        report(&format!("{what}: {why}"));
+    }
+    ERROR
+}
+
 /// Run `body` on the component behind `c`, catching panics and turning errors into a
 /// logged error status (a panic into `Fatal`). A call into a component that is inside its
 /// own step's intermediate update answers `Error` without touching it.
@@ -95,8 +116,15 @@ pub fn with<C: Host>(
     what: &str,
     body: impl FnOnce(&mut C) -> Result<c_int, String>,
 ) -> c_int {
-    if c.is_null() || in_intermediate(c as usize) {
+    if c.is_null() {
         return ERROR;
+    }
+    if in_intermediate(c as usize) {
+        return refuse_intermediate(
+            c as usize,
+            what,
+            "not allowed inside this instance's intermediate update (it is being stepped): only fmi3GetFloat64 of `time` and the outputs",
+        );
     }
     // SAFETY: a non-null component is a pointer returned by the instantiate function of its
     // API and not yet freed (the host's duty under the FMI standard); one call at a time.

@@ -324,6 +324,8 @@ pub struct Instance {
     model: Box<dyn Plant>,
     phase: Phase,
     start_time: f64,
+    /// The stop time the host set up (s), past which a step is an error.
+    stop_time: Option<f64>,
 }
 
 fn request(msg: String) -> Error {
@@ -353,6 +355,7 @@ impl Instance {
             model,
             phase: Phase::Instantiated,
             start_time: 0.0,
+            stop_time: None,
         })
     }
 
@@ -457,12 +460,15 @@ impl Instance {
         }
     }
 
-    /// `fmi2SetupExperiment`: the start time (s); stop time and tolerance are not used.
-    pub fn setup_experiment(&mut self, start_time: f64) -> Result<()> {
+    /// `fmi2SetupExperiment`: the start time (s) and the stop time (s) if the host defines
+    /// one, past which a step is an error ([`crate::slave::within_stop`]); the tolerance is
+    /// not used.
+    pub fn setup_experiment(&mut self, start_time: f64, stop_time: Option<f64>) -> Result<()> {
         self.expect(&[Phase::Instantiated], "fmi2SetupExperiment")?;
         if !start_time.is_finite() {
             return Err(request(format!("start time {start_time} is not finite")));
         }
+        self.stop_time = crate::slave::stop_time(start_time, stop_time)?;
         self.start_time = start_time;
         Ok(())
     }
@@ -499,6 +505,7 @@ impl Instance {
         self.model.clear();
         self.phase = Phase::Instantiated;
         self.start_time = 0.0;
+        self.stop_time = None;
     }
 
     /// Outputs are read from a simulation; during initialisation one is built on demand.
@@ -690,6 +697,7 @@ impl Instance {
                 "communication point {t} s does not match the FMU time {now} s"
             )));
         }
+        crate::slave::within_stop(self.stop_time, t, h)?;
         let target = now - self.start_time + h;
         let armed: Vec<EarlyReturn> = self.early.iter().map(|e| e.armed(early)).collect();
         let start = self.start_time;

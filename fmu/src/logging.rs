@@ -90,6 +90,7 @@ pub unsafe fn early(callback: Option<Callback>, env: Env, name: *const c_char, m
 }
 
 /// The logging of one instance: the host's logger and what the host asked it to log.
+#[derive(Clone)]
 pub struct Log {
     callback: Option<Callback>,
     env: Env,
@@ -116,10 +117,13 @@ impl Log {
         self.env
     }
 
-    /// Log `message` with `status`, if logging is on for its category.
+    /// Log `message` with `status`: an error always (as the FMU SDK's template does: with
+    /// debug logging off, fmpy's default, a failed call would otherwise say nothing of what
+    /// failed), a warning or an info message if logging is on for its category.
     pub fn log(&self, status: c_int, message: &str) {
         let category = category(status);
-        if !(self.on && (self.categories[category] || self.categories[2])) {
+        let wanted = self.on && (self.categories[category] || self.categories[2]);
+        if !(wanted || status >= ERROR) {
             return;
         }
         if let Some(callback) = self.callback {

@@ -65,7 +65,16 @@ pub struct Press {
     values: Vec<f64>,
     state: State,
     phase: Phase,
+    /// The stop time the host set up (s), past which a step is an error.
+    stop_time: Option<f64>,
 }
+
+/// Most sub-steps of the hydraulic press's semi-implicit Euler in one communication step: a
+/// million take some 20 ms (1e12, accepted before, held a step for hours).
+const MAX_SUBSTEPS: f64 = 1e6;
+
+/// Most blows of the hammer.
+const MAX_BLOWS: f64 = 1e6;
 
 fn request(msg: String) -> Error {
     Error::Request(msg)
@@ -90,6 +99,7 @@ impl Press {
             values,
             state: State::default(),
             phase: Phase::Instantiated,
+            stop_time: None,
         };
         p.start();
         p
@@ -198,6 +208,17 @@ impl Press {
                     } else {
                         "positive"
                     }
+                )));
+            }
+            let most = match v.name.as_str() {
+                "substeps" => MAX_SUBSTEPS,
+                "max_blows" => MAX_BLOWS,
+                _ => continue,
+            };
+            if x.fract() != 0.0 || x > most {
+                return Err(request(format!(
+                    "`{}` = {x}: must be a whole number from 1 to {most}",
+                    v.name
                 )));
             }
         }
@@ -346,10 +367,11 @@ impl crate::slave::Slave for Press {
     fn time(&self) -> f64 {
         self.state.time
     }
-    fn setup_experiment(&mut self, start: f64) -> Result<()> {
+    fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Result<()> {
         if self.phase != Phase::Instantiated || !start.is_finite() {
             return Err(request(format!("setup at {start} s is not allowed now")));
         }
+        self.stop_time = crate::slave::stop_time(start, stop)?;
         self.state.time = start;
         Ok(())
     }
@@ -452,6 +474,7 @@ impl crate::slave::Slave for Press {
                 self.state.time
             )));
         }
+        crate::slave::within_stop(self.stop_time, t, h)?;
         self.advance(h);
         self.state.time += h;
         Ok(())

@@ -18,8 +18,9 @@ pub trait Slave {
     fn phase(&self) -> Phase;
     /// Current time (s).
     fn time(&self) -> f64;
-    /// `fmi2SetupExperiment`.
-    fn setup_experiment(&mut self, start: f64) -> Result<()>;
+    /// `fmi2SetupExperiment` (`fmi3EnterInitializationMode`'s times): the start time (s)
+    /// and the stop time (s) when the host defines one ([`within_stop`]).
+    fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Result<()>;
     /// `fmi2EnterInitializationMode`.
     fn enter_initialization(&mut self) -> Result<()>;
     /// `fmi2ExitInitializationMode`.
@@ -69,8 +70,8 @@ impl Slave for Instance {
     fn time(&self) -> f64 {
         Instance::time(self)
     }
-    fn setup_experiment(&mut self, start: f64) -> Result<()> {
-        Instance::setup_experiment(self, start)
+    fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Result<()> {
+        Instance::setup_experiment(self, start, stop)
     }
     fn enter_initialization(&mut self) -> Result<()> {
         Instance::enter_initialization(self)
@@ -116,5 +117,30 @@ impl Slave for Instance {
     }
     fn deserialize(&self, bytes: &[u8]) -> Result<Saved> {
         Ok(Box::new(Snapshot::from_bytes(bytes)?))
+    }
+}
+
+/// The stop time the host defined (s), checked when it is set: finite, and not before the
+/// start time `start` (s).
+pub(crate) fn stop_time(start: f64, stop: Option<f64>) -> Result<Option<f64>> {
+    match stop {
+        Some(s) if !s.is_finite() || s < start => Err(Error::Request(format!(
+            "stop time {s} s: must be finite and not before the start time {start} s"
+        ))),
+        _ => Ok(stop),
+    }
+}
+
+/// FMI 2.0 (section 4.2.2) and 3.0: when the host defined a stop time `stop` (s), a step that
+/// would compute past it is an error. A communication step from `t` by `h` (s) may end past
+/// `stop` by a relative `1e-9` of the larger of the two, the tolerance importers compare
+/// times with (fmpy's `math.isclose`): a grid ending at `0.0038000000000000004` for a stop
+/// time of 3.8e-3 s passes.
+pub(crate) fn within_stop(stop: Option<f64>, t: f64, h: f64) -> Result<()> {
+    match stop {
+        Some(stop) if t + h > stop + 1e-9 * stop.abs().max(h) => Err(Error::Request(format!(
+            "a step from {t:e} s by {h:e} s would pass the stop time {stop:e} s the host set up"
+        ))),
+        _ => Ok(()),
     }
 }
