@@ -195,6 +195,34 @@ def test_sweep_writes_csv_markdown_and_the_pareto_plot(rkforge_bin, tmp_path):
     assert bad.returncode == 1 and "--resolution `11by26`" in bad.stderr
 
 
+def test_a_failed_sweep_run_is_a_row_with_its_error_and_the_others_are_tabled(rkforge_bin, tmp_path):
+    # At 10 km/s the block's tools pass a spacing per step and the runs stop; at 10 m/s they run.
+    scene = ROOT / "scenes" / "block_forging.toml"
+    out = tmp_path / "sweep"
+    proc = subprocess.run([rkforge_bin, "sweep", str(scene), "--resolution", "5x5,7x7", "--integration", "q2",
+                           "--set", "tools.top.motion.velocity_m_per_s=10000,10", "--set", "time.end_s=2e-3",
+                           "--out", str(out)], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 1 and "2 of 4 runs failed" in proc.stderr, proc.stderr
+    with open(out / "sweep.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 4
+    failed = [r for r in rows if r["failure"]]
+    assert [r["tools.top.motion.velocity_m_per_s"] for r in failed] == ["10000", "10000"]
+    assert all(r["width_m"] == "NaN" and r["pareto"] == "false" for r in failed)
+    assert all(float(r["error_rel"]) >= 0 and r["width_m"] != "NaN" for r in rows if not r["failure"])
+    md = (out / "sweep.md").read_text()
+    assert "| failed |" in md and "q2 5x5 dt_safety 0.5 failed: step" in md
+    assert "order 1.00 (assumed)" in md  # two grids: the order is not measured
+    # One grid gives no reference: no run is given an error.
+    one = subprocess.run([rkforge_bin, "sweep", str(scene), "--resolution", "5x5", "--integration", "q2",
+                          "--set", "time.end_s=2e-3", "--out", str(tmp_path / "one")],
+                         capture_output=True, text=True, timeout=600)
+    assert one.returncode == 0, one.stderr
+    assert "Reference (extrapolated, +- uncertainty): none" in one.stdout
+    with open(tmp_path / "one" / "sweep.csv") as f:
+        assert [r["error_rel"] for r in csv.DictReader(f)] == ["NaN"]
+
+
 def test_sweep_holds_the_added_mass_of_a_selectively_scaled_scene(rkforge_bin, tmp_path):
     # The press upsetting scales its masses to a 20 us step: at one target a grid twice as
     # fine would add four times the mass (another, heavier problem); the sweep holds it.

@@ -185,7 +185,7 @@ def test_sweep_of_the_3d_bar_on_two_grids(rkforge_bin, tmp_path):
         header, rows = reader.fieldnames, list(reader)
     assert header[:3] == ["time.end_s", "integration", "cells"] and "nx" not in header
     # The fixed wall's peak force is not compared (as in 2D).
-    assert "peak_force_N" not in header and header[-2:] == ["error_rel", "pareto"]
+    assert "peak_force_N" not in header and header[-3:] == ["error_rel", "pareto", "failure"]
     assert [(r["integration"], r["cells"], r["time.end_s"]) for r in rows] == [
         ("q2", "2x1x10", "20e-6"), ("q2", "4x2x16", "20e-6")]
     radius = [float(r["radius_m"]) for r in rows]

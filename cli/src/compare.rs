@@ -71,11 +71,20 @@ fn outcome(summary: &Value) -> Outcome {
     }
 }
 
+/// What a comparison wrote: the table (compare.md's text) and the scenes whose runs failed.
+pub struct Compared {
+    /// compare.md's text.
+    pub table: String,
+    /// Scenes with a failed run (each a row of the table, its reason under the table).
+    pub failed: usize,
+}
+
 /// Run every scene `repeat` times with each rule (alternating), write `compare.md` into
 /// `out`, and return the table: wall times and their ratio beside the paper's Table 5, the
 /// stress stage's cost per integration point and step and the per-particle stages' cost
-/// per particle and step (medians, ns), and how far the two rules' results differ.
-pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, String> {
+/// per particle and step (medians, ns), and how far the two rules' results differ. A scene
+/// whose run fails is a row saying so, its reason under the table, and the others go on.
+pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<Compared, String> {
     let mut table = String::new();
     let _ = writeln!(
         table,
@@ -85,10 +94,12 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
         table,
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
+    let mut failures = Vec::new();
     for path in scenes {
         let scene = Scene::from_file(path).map_err(|e| e.to_string())?;
         let mut results: Vec<Option<Outcome>> = vec![None, None];
-        for _ in 0..repeat {
+        let mut failure = None;
+        'runs: for _ in 0..repeat {
             for (k, rule) in [IntegrationRule::Q4, IntegrationRule::Q2]
                 .into_iter()
                 .enumerate()
@@ -101,8 +112,13 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
                     mcap: None,
                     restart: Default::default(),
                 };
-                let report = run::run(&s, &opts)
-                    .map_err(|e| format!("{} ({}): {e}", scene.name, rule.name()))?;
+                let report = match run::run(&s, &opts) {
+                    Ok(report) => report,
+                    Err(e) => {
+                        failure = Some(format!("{} ({}): {e}", scene.name, rule.name()));
+                        break 'runs;
+                    }
+                };
                 let o = outcome(&report.summary);
                 match &mut results[k] {
                     Some(prev) => {
@@ -113,6 +129,17 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
                     slot => *slot = Some(o),
                 }
             }
+        }
+        if let Some(why) = failure {
+            eprintln!("{why}");
+            let _ = writeln!(
+                table,
+                "| {} | failed: see below |{}",
+                scene.name,
+                " |".repeat(13)
+            );
+            failures.push(why);
+            continue;
         }
         let (Some(q4), Some(q2)) = (&results[0], &results[1]) else {
             continue;
@@ -149,8 +176,14 @@ pub fn compare(scenes: &[PathBuf], repeat: usize, out: &Path) -> Result<String, 
         rayon::current_num_threads()
     );
     table.push_str(&note);
+    for why in &failures {
+        let _ = writeln!(table, "\n- failed: {why}");
+    }
     std::fs::create_dir_all(out).map_err(|e| e.to_string())?;
     std::fs::write(out.join("compare.md"), &table)
         .map_err(|e| format!("cannot write compare.md: {e}"))?;
-    Ok(table)
+    Ok(Compared {
+        table,
+        failed: failures.len(),
+    })
 }

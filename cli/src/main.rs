@@ -436,10 +436,16 @@ fn compare_command(a: CompareArgs) -> Result<(), String> {
     let out = a
         .out
         .unwrap_or_else(|| PathBuf::from("out").join("compare"));
-    let report = compare::compare(&a.scenes, a.repeat, &out)?;
-    println!("{report}");
+    let compared = compare::compare(&a.scenes, a.repeat, &out)?;
+    println!("{}", compared.table);
     println!("runs and compare.md in {}", out.display());
-    Ok(())
+    match compared.failed {
+        0 => Ok(()),
+        n => Err(format!(
+            "the runs of {n} of {} scenes failed (their rows in compare.md say why)",
+            a.scenes.len()
+        )),
+    }
 }
 
 /// The scenes of the `--set KEY=V1,V2` grid (every combination, the first key varying
@@ -544,10 +550,16 @@ fn sweep_scenes<S: sweep::Sweepable>(
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(format!("sweep_{}", scene.name())));
     let restart = a.checkpoints.restart()?;
-    let table = sweep::sweep(cases, &grids, &rules, &a.dt_safety, &out, restart)?;
-    println!("{table}");
+    let swept = sweep::sweep(cases, &grids, &rules, &a.dt_safety, &out, restart)?;
+    println!("{}", swept.table);
     println!("sweep.csv, sweep.md and sweep.png in {}", out.display());
-    Ok(())
+    match swept.failed {
+        0 => Ok(()),
+        n => Err(format!(
+            "{n} of {} runs failed (their rows in sweep.csv and sweep.md say why); the others are in the table",
+            swept.runs
+        )),
+    }
 }
 
 fn default_run() -> Result<(), String> {

@@ -3,9 +3,14 @@
 //!
 //! Error is measured against a converged reference: for each rule, the two or three finest
 //! resolutions (at the smallest safety factor) are extrapolated (Richardson, with the order
-//! estimated from three grids when they converge monotonically, else order 1); the reference
-//! is the mean over the rules, its uncertainty the larger of their spread and the distance of
-//! the finest run from its extrapolation.
+//! estimated from three grids when they converge monotonically, else order 1, said to be
+//! assumed); the reference is the mean over the rules, its uncertainty the larger of their
+//! spread and the distance of the finest run from its extrapolation. A rule with fewer than
+//! two grids that ran gives no reference; with none, the runs have no error.
+//!
+//! A run that fails is a row with its error (`failure` in sweep.csv, the reason under the
+//! table in sweep.md), and the sweep goes on; the command then exits with an error naming how
+//! many failed.
 //!
 //! Selective mass scaling (`time.mass_scaling.target_dt_s`) is held across the runs: each
 //! run's target follows its critical step and step safety ([`hold_added_mass`]), so that
@@ -306,7 +311,10 @@ struct Row {
     memory: f64,
     /// Mass the run's mass scaling added, relative to the workpiece's (-); 0 without.
     added_mass: f64,
+    /// The quantities compared ([`quantities`]); none for a run that failed.
     values: Vec<f64>,
+    /// Why the run failed.
+    failure: Option<String>,
 }
 
 /// The quantities compared: the lateral size, the height, and the peak force of moving tools.
@@ -336,22 +344,21 @@ fn quantities(summary: &Value) -> (Vec<&'static str>, Vec<f64>) {
     (names, values)
 }
 
-/// Richardson extrapolation of values on grids of spacing ratio `r` (coarse to fine):
-/// returns (extrapolated value, order used).
-fn extrapolate(v: &[f64], r: f64) -> (f64, f64) {
+/// Richardson extrapolation of values `v` on at least two grids, coarse to fine, `r[k]` the
+/// spacing ratio from grid `k` to grid `k + 1`: returns the extrapolated value, the order
+/// used, and whether it was measured (three grids of one ratio converging monotonically)
+/// rather than assumed (order 1).
+fn extrapolate(v: &[f64], r: &[f64]) -> (f64, f64, bool) {
     let n = v.len();
-    if n == 1 {
-        return (v[0], 0.0);
-    }
-    let (c, f) = (v[n - 2], v[n - 1]);
-    let mut p = 1.0;
-    if n >= 3 {
+    let (c, f, ratio) = (v[n - 2], v[n - 1], r[n - 2]);
+    let mut p = (1.0, false);
+    if n >= 3 && (r[n - 3] / ratio - 1.0).abs() < 1e-6 {
         let (d1, d2) = (v[n - 2] - v[n - 3], v[n - 1] - v[n - 2]);
         if d1 * d2 > 0.0 && d2.abs() < d1.abs() {
-            p = ((d1 / d2).ln() / r.ln()).clamp(0.5, 4.0);
+            p = (((d1 / d2).ln() / ratio.ln()).clamp(0.5, 4.0), true);
         }
     }
-    (f + (f - c) / (r.powf(p) - 1.0), p)
+    (f + (f - c) / (ratio.powf(p.0) - 1.0), p.0, p.1)
 }
 
 /// One combination of the `--set` values: the keys and values as given, and its scene.
@@ -374,8 +381,34 @@ struct Assessed {
     orders: String,
 }
 
+impl Assessed {
+    /// The runs that failed.
+    fn failed(&self) -> usize {
+        self.rows.iter().filter(|r| r.failure.is_some()).count()
+    }
+}
+
+/// What a sweep wrote: the table (sweep.md's text), and how many of how many runs failed.
+pub struct Swept {
+    /// sweep.md's text.
+    pub table: String,
+    /// Runs that failed.
+    pub failed: usize,
+    /// Runs in all.
+    pub runs: usize,
+}
+
+/// A text as one CSV field: quoted, its quotes doubled, its line breaks as spaces.
+fn csv_field(text: &str) -> String {
+    format!(
+        "\"{}\"",
+        text.replace('"', "\"\"").replace(['\n', '\r'], " ")
+    )
+}
+
 /// Run the grid for every case, write sweep.csv, sweep.md and sweep.png into `out`, return
-/// the table. Each case has its own reference (its physics differs); its runs go to
+/// the table and the failures (a failed run is a row with its error, and the others go on).
+/// Each case has its own reference (its physics differs); its runs go to
 /// `out/<key=value,...>/` when there are `--set` keys, else to `out/`, each with checkpoints
 /// as `restart` asks ([`run_kept`]).
 pub fn sweep<S: Sweepable>(
@@ -385,8 +418,9 @@ pub fn sweep<S: Sweepable>(
     safeties: &[f64],
     out: &Path,
     restart: Restart,
-) -> Result<String, String> {
+) -> Result<Swept, String> {
     std::fs::create_dir_all(out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let (mut failed, mut runs) = (0, 0);
     let keys: Vec<&str> = cases
         .first()
         .map(|c| c.inputs.iter().map(|(k, _)| k.as_str()).collect())
@@ -400,6 +434,7 @@ pub fn sweep<S: Sweepable>(
         let _ = write!(md, "{note}\n\n");
     }
     let mut series = Vec::new();
+    let mut assessed = Vec::new();
     for case in cases {
         let label = case
             .inputs
@@ -413,20 +448,8 @@ pub fn sweep<S: Sweepable>(
             out.join(label.replace(['/', '\\', ' ', '"', '\''], "_"))
         };
         let a = assess(&case.scene, grids, rules, safeties, &dir, restart)?;
-        if csv.is_empty() {
-            for k in &keys {
-                let _ = write!(csv, "{k},");
-            }
-            let _ = write!(
-                csv,
-                "integration,{},dt_safety,steps,wall_s,memory_MB,added_mass_rel",
-                case.scene.grid_columns()
-            );
-            for n in &a.names {
-                let _ = write!(csv, ",{n}");
-            }
-            csv.push_str(",error_rel,pareto\n");
-        }
+        failed += a.failed();
+        runs += a.rows.len();
         if !label.is_empty() {
             let _ = write!(md, "## {label}\n\n");
         }
@@ -444,27 +467,14 @@ pub fn sweep<S: Sweepable>(
         );
         md.push_str("| rule | grid | dt_safety | steps | wall (s) | memory (MB) | added mass | error | Pareto |\n|---|---|---|---|---|---|---|---|---|\n");
         for ((r, p), error) in a.rows.iter().zip(&a.pareto).zip(&a.errors) {
-            for (_, v) in &case.inputs {
-                let _ = write!(csv, "{v},");
-            }
-            let _ = write!(
-                csv,
-                "{},{},{},{},{:.6},{:.3},{:e}",
-                r.rule.name(),
-                S::grid_fields(&r.grid),
-                r.safety,
-                r.steps,
-                r.wall,
-                r.memory,
-                r.added_mass
-            );
-            for v in &r.values {
-                let _ = write!(csv, ",{v:e}");
-            }
-            let _ = writeln!(csv, ",{error:e},{p}");
+            let error = match (&r.failure, error.is_nan()) {
+                (Some(_), _) => "failed".to_string(),
+                (None, true) => "-".to_string(),
+                (None, false) => format!("{error:.2e}"),
+            };
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {:.2} | {:.1} | {:.3} | {:.2e} | {} |",
+                "| {} | {} | {} | {} | {:.2} | {:.1} | {:.3} | {error} | {} |",
                 r.rule.name(),
                 grid_label(&r.grid),
                 r.safety,
@@ -472,11 +482,23 @@ pub fn sweep<S: Sweepable>(
                 r.wall,
                 r.memory,
                 r.added_mass,
-                error,
                 if *p { "yes" } else { "" }
             );
         }
         md.push('\n');
+        for r in a.rows.iter().filter(|r| r.failure.is_some()) {
+            let _ = writeln!(
+                md,
+                "- {} {} dt_safety {} failed: {}",
+                r.rule.name(),
+                grid_label(&r.grid),
+                r.safety,
+                r.failure.as_deref().unwrap_or_default()
+            );
+        }
+        if a.failed() > 0 {
+            md.push('\n');
+        }
         // One line per rule and step safety, through its grids from coarse to fine (a line
         // through both safeties of each grid would zigzag).
         for &rule in rules {
@@ -485,7 +507,7 @@ pub fn sweep<S: Sweepable>(
                     .rows
                     .iter()
                     .zip(&a.errors)
-                    .filter(|(r, _)| r.rule == rule && r.safety == safety)
+                    .filter(|(r, e)| r.rule == rule && r.safety == safety && e.is_finite())
                     .map(|(r, e)| (r.wall.log10(), e.max(1e-12).log10()))
                     .unzip();
                 let mut name = rule.name().to_string();
@@ -503,6 +525,50 @@ pub fn sweep<S: Sweepable>(
                 });
             }
         }
+        assessed.push((case, a));
+    }
+    // The table's columns: the quantities of the runs that ran (a case whose runs all failed
+    // has none of its own).
+    let names = assessed
+        .iter()
+        .map(|(_, a)| &a.names)
+        .find(|n| !n.is_empty())
+        .cloned()
+        .unwrap_or_default();
+    for k in &keys {
+        let _ = write!(csv, "{k},");
+    }
+    let grid_columns = cases.first().map_or("", |c| c.scene.grid_columns());
+    let _ = write!(
+        csv,
+        "integration,{grid_columns},dt_safety,steps,wall_s,memory_MB,added_mass_rel"
+    );
+    for n in &names {
+        let _ = write!(csv, ",{n}");
+    }
+    csv.push_str(",error_rel,pareto,failure\n");
+    for (case, a) in &assessed {
+        for ((r, p), error) in a.rows.iter().zip(&a.pareto).zip(&a.errors) {
+            for (_, v) in &case.inputs {
+                let _ = write!(csv, "{v},");
+            }
+            let _ = write!(
+                csv,
+                "{},{},{},{},{:.6},{:.3},{:e}",
+                r.rule.name(),
+                S::grid_fields(&r.grid),
+                r.safety,
+                r.steps,
+                r.wall,
+                r.memory,
+                r.added_mass
+            );
+            for k in 0..names.len() {
+                let _ = write!(csv, ",{:e}", r.values.get(k).copied().unwrap_or(f64::NAN));
+            }
+            let failure = r.failure.as_deref().map(csv_field).unwrap_or_default();
+            let _ = writeln!(csv, ",{error:e},{p},{failure}");
+        }
     }
     std::fs::write(out.join("sweep.csv"), &csv)
         .map_err(|e| format!("cannot write sweep.csv: {e}"))?;
@@ -518,7 +584,11 @@ pub fn sweep<S: Sweepable>(
         &series,
         &[],
     )?;
-    Ok(md)
+    Ok(Swept {
+        table: md,
+        failed,
+        runs,
+    })
 }
 
 /// Run the grid of one scene into `out` and assess every run.
@@ -550,22 +620,37 @@ fn assess<S: Sweepable>(
             let mut step_rel = None;
             for &safety in safeties {
                 let label = format!("{}_{}_{}", rule.name(), grid_label(grid), safety);
-                let summary = scene
-                    .variant(rule, grid, safety)
-                    .and_then(|mut s| {
-                        if held {
-                            let rel = match step_rel {
-                                Some(r) => r,
-                                None => *step_rel.insert(s.unscaled_critical_step()? / own_step),
-                            };
-                            let safety_rel = safety / scene.time().dt_safety;
-                            hold_added_mass(s.time_mut(), rel, safety_rel);
-                        }
-                        run_kept(&s, &out.join(&label), restart)
-                    })
-                    .map_err(|e| format!("{label}: {e}"))?;
-                let (n, values) = quantities(&summary);
-                names = n;
+                let run = scene.variant(rule, grid, safety).and_then(|mut s| {
+                    if held {
+                        let rel = match step_rel {
+                            Some(r) => r,
+                            None => *step_rel.insert(s.unscaled_critical_step()? / own_step),
+                        };
+                        let safety_rel = safety / scene.time().dt_safety;
+                        hold_added_mass(s.time_mut(), rel, safety_rel);
+                    }
+                    run_kept(&s, &out.join(&label), restart)
+                });
+                let (summary, failure) = match run {
+                    Ok(summary) => (summary, None),
+                    Err(e) => {
+                        eprintln!("{label}: {e}");
+                        let written =
+                            std::fs::read_to_string(out.join(&label).join("summary.json"))
+                                .ok()
+                                .and_then(|t| serde_json::from_str(&t).ok())
+                                .unwrap_or(Value::Null);
+                        (written, Some(e))
+                    }
+                };
+                let values = match failure {
+                    Some(_) => Vec::new(),
+                    None => {
+                        let (n, values) = quantities(&summary);
+                        names = n;
+                        values
+                    }
+                };
                 rows.push(Row {
                     rule,
                     grid: grid.clone(),
@@ -577,34 +662,46 @@ fn assess<S: Sweepable>(
                         .as_f64()
                         .unwrap_or(0.0),
                     values,
+                    failure,
                 });
             }
         }
     }
-    // Reference: per rule, extrapolate the finest grids at the smallest safety factor.
+    // Reference: per rule, extrapolate the finest grids that ran at the smallest safety
+    // factor; a rule with fewer than two gives none.
     let smin = safeties.iter().copied().fold(f64::INFINITY, f64::min);
-    let ratio = if grids.len() >= 2 {
-        let (a, b) = (&grids[grids.len() - 2], &grids[grids.len() - 1]);
-        scene.spacing_ratio(a, b).max(1.0 + 1e-9)
-    } else {
-        2.0
-    };
     let mut reference = Vec::new();
     let mut uncertainty = Vec::new();
-    let mut orders = String::new();
+    let mut orders = Vec::new();
     for (q, name) in names.iter().enumerate() {
         let mut per_rule = Vec::new();
         let mut distance: f64 = 0.0;
         for &rule in rules {
-            let series: Vec<f64> = rows
+            let ran: Vec<&Row> = rows
                 .iter()
-                .filter(|r| r.rule == rule && r.safety == smin)
-                .map(|r| r.values[q])
+                .filter(|r| r.rule == rule && r.safety == smin && r.failure.is_none())
                 .collect();
-            let (x, p) = extrapolate(&series, ratio);
+            if ran.len() < 2 {
+                continue;
+            }
+            let series: Vec<f64> = ran.iter().map(|r| r.values[q]).collect();
+            let ratios: Vec<f64> = ran
+                .windows(2)
+                .map(|w| scene.spacing_ratio(&w[0].grid, &w[1].grid).max(1.0 + 1e-9))
+                .collect();
+            let (x, p, measured) = extrapolate(&series, &ratios);
             distance = distance.max((x - series[series.len() - 1]).abs());
-            let _ = write!(orders, "{} {name} order {p:.2}; ", rule.name());
+            orders.push(format!(
+                "{} {name} order {p:.2}{}",
+                rule.name(),
+                if measured { "" } else { " (assumed)" }
+            ));
             per_rule.push(x);
+        }
+        if per_rule.is_empty() {
+            reference.push(f64::NAN);
+            uncertainty.push(f64::NAN);
+            continue;
         }
         let mean = per_rule.iter().sum::<f64>() / per_rule.len() as f64;
         let spread = per_rule
@@ -614,25 +711,45 @@ fn assess<S: Sweepable>(
         reference.push(mean);
         uncertainty.push(spread.max(distance));
     }
+    // A run's error: the largest relative error over the quantities with a reference (NaN
+    // for a run that failed, or with no reference at all).
     let error = |r: &Row| {
         r.values
             .iter()
             .zip(&reference)
+            .filter(|(_, x)| x.is_finite())
             .map(|(v, x)| ((v - x) / x).abs())
-            .fold(0.0, f64::max)
+            .fold(f64::NAN, f64::max)
     };
+    let errors: Vec<f64> = rows.iter().map(error).collect();
     // Pareto front: no other run is both faster and more accurate.
     let pareto: Vec<bool> = rows
         .iter()
-        .map(|a| !rows.iter().any(|b| b.wall < a.wall && error(b) < error(a)))
+        .zip(&errors)
+        .map(|(a, &ea)| {
+            ea.is_finite()
+                && !rows
+                    .iter()
+                    .zip(&errors)
+                    .any(|(b, &eb)| b.wall < a.wall && eb < ea)
+        })
         .collect();
-    let errors = rows.iter().map(error).collect();
-    let reference = names
-        .iter()
-        .zip(reference.iter().zip(&uncertainty))
-        .map(|(n, (x, u))| format!("{n} = {x:.6e} +- {u:.1e}"))
-        .collect::<Vec<_>>()
-        .join(", ");
+    let reference = match reference.iter().any(|x| x.is_finite()) {
+        true => names
+            .iter()
+            .zip(reference.iter().zip(&uncertainty))
+            .filter(|(_, (x, _))| x.is_finite())
+            .map(|(n, (x, u))| format!("{n} = {x:.6e} +- {u:.1e}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        false => format!(
+            "none: it takes two grids that ran at dt_safety {smin} for some rule, so the runs have no error"
+        ),
+    };
+    let orders = match orders.is_empty() {
+        true => "none".to_string(),
+        false => orders.join("; "),
+    };
     Ok(Assessed {
         names,
         rows,
