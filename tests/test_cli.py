@@ -195,6 +195,25 @@ def test_sweep_writes_csv_markdown_and_the_pareto_plot(rkforge_bin, tmp_path):
     assert bad.returncode == 1 and "--resolution `11by26`" in bad.stderr
 
 
+def test_a_closed_standard_output_does_not_stop_a_run(rkforge_bin, tmp_path):
+    # `rkforge run ... | head -1`: printing to the closed pipe panicked before.
+    out = tmp_path / "o"
+    proc = subprocess.Popen([rkforge_bin, "run", str(ROOT / "scenes" / "taylor_bar.toml"), "--set", "time.end_s=2e-6",
+                             "--no-frames", "--quiet", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc.stdout.close()
+    stderr = proc.stderr.read()
+    assert proc.wait(timeout=600) == 0 and "panicked" not in stderr, stderr
+    assert json.loads((out / "summary.json").read_text())["status"] == "ok"
+
+
+def test_a_step_safety_that_would_never_end_is_refused_by_name(rkforge_bin, tmp_path):
+    proc = subprocess.run([rkforge_bin, "run", str(ROOT / "scenes" / "taylor_ofhc.toml"), "--set", "time.dt_safety=1e-20",
+                           "--out", str(tmp_path / "o")], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 1 and "time.dt_safety = 1e-20 of the critical step" in proc.stderr, proc.stderr
+    assert "more than 1e9: raise time.dt_safety" in proc.stderr
+
+
 def test_a_failed_sweep_run_is_a_row_with_its_error_and_the_others_are_tabled(rkforge_bin, tmp_path):
     # At 10 km/s the block's tools pass a spacing per step and the runs stop; at 10 m/s they run.
     scene = ROOT / "scenes" / "block_forging.toml"

@@ -5,6 +5,7 @@ import csv
 import json
 import pickle
 import subprocess
+import sys
 import threading
 import time
 
@@ -233,6 +234,11 @@ def test_bad_input_raises_and_the_interpreter_lives_on(tmp_path):
         rkforge.Simulation(scene, integration="q9")
     with pytest.raises(ValueError, match="threads must be at least 1"):
         rkforge.Simulation(scene, threads=0)
+    # A million threads never finished starting: refused by name, at once.
+    with pytest.raises(ValueError, match="threads = 1000000: at most 256"):
+        rkforge.Simulation(scene, threads=1_000_000)
+    with pytest.raises(ValueError, match="threads = 257: at most 256"):
+        rkforge.run(scene, threads=257)
     other = scene.copy()
     other.set("tools.top.friction", 0.05)
     with pytest.raises(rkforge.StateError, match="other settings"):
@@ -251,6 +257,55 @@ def test_bad_input_raises_and_the_interpreter_lives_on(tmp_path):
     # Still usable after every refusal.
     sim.run_to(2e-4)
     assert sim.time == pytest.approx(2e-4, rel=1e-12)
+
+
+def test_numpy_integers_and_bools_set_integer_and_boolean_keys():
+    scene = rkforge.Scene.from_file(ROOT / "scenes" / "block_forging.toml")
+    scene.set("output.frames", np.int64(3))
+    scene.set("workpiece.particles", list(np.array([9, 7], dtype=np.int32)))
+    scene.set("tools.top.separation", np.bool_(False))
+    scene.set("tools.top.friction", np.float32(0.25))
+    set_to = dict(scene.overrides)
+    assert set_to["output.frames"] == 3 and type(set_to["output.frames"]) is int
+    assert set_to["workpiece.particles"] == [9, 7]
+    assert set_to["tools.top.separation"] is False
+    assert set_to["tools.top.friction"] == 0.25
+    with pytest.raises(rkforge.SceneError, match="expected usize"):
+        scene.set("output.frames", np.float64(3.5))
+
+
+INTERRUPTED = """
+import os, signal, sys, threading, time
+import rkforge
+scene = rkforge.Scene.from_file(sys.argv[1])
+scene.set("workpiece.particles", [61, 61])
+call = sys.argv[2]
+threading.Timer(1.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+start = time.perf_counter()
+try:
+    if call == "run":
+        rkforge.run(scene, threads=1)
+    else:
+        rkforge.Simulation(scene, threads=1).run_to(0.015)
+    print("finished", time.perf_counter() - start)
+except KeyboardInterrupt:
+    print("interrupted", time.perf_counter() - start)
+"""
+
+
+@pytest.mark.parametrize("call", ["run", "run_to"])
+def test_ctrl_c_stops_a_run_with_keyboard_interrupt(call, tmp_path):
+    """The 61 x 61 block takes a minute; a SIGINT 1.5 s in stops it within a second or two
+    with KeyboardInterrupt (before, the run went on to its end, and a first call then
+    panicked in numpy's import with the interrupt pending)."""
+    script = tmp_path / "interrupted.py"
+    script.write_text(INTERRUPTED)
+    proc = subprocess.run([sys.executable, str(script), str(ROOT / "scenes" / "block_forging.toml"), call],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    word, seconds = proc.stdout.split()
+    assert word == "interrupted" and float(seconds) < 20, proc.stdout
+    assert "panic" not in proc.stderr.lower()
 
 
 def test_a_failed_run_raises_with_its_summary_and_history():

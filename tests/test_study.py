@@ -146,6 +146,25 @@ def test_the_study_on_a_dask_cluster_gives_the_local_rows_bit_for_bit(cluster, l
     assert_same_histories(remote, local)
 
 
+def test_cases_past_the_timeout_are_cancelled_and_are_rows_with_their_error(cluster):
+    """A study whose cases (a finer block, several seconds each) cannot finish in 0.3 s:
+    each unfinished case is an error row naming the timeout, and the cluster holds none of
+    its tasks afterwards (they were cancelled, not left running)."""
+    text = scene_variant("block_forging.toml", {"particles = [21, 21]": "particles = [41, 41]"})
+    slow = rkforge.Scene.from_toml(text, "block.toml")
+    table = rkforge.study(slow, {"tools.top.friction": [0.1, 0.2, 0.3]}, client=cluster.client,
+                          progress=False, timeout=0.3)
+    late = table[table["status"] == "error"]
+    assert len(late) >= 1
+    assert all(e.startswith("TimeoutError: not finished within the study's timeout of 0.3 s")
+               and e.endswith("cancelled") for e in late["error"])
+    assert all(h is None for h in late["history"])
+    deadline = time.time() + 60
+    while any(cluster.client.processing().values()) and time.time() < deadline:
+        time.sleep(0.2)
+    assert not any(cluster.client.processing().values())
+
+
 def test_a_worker_killed_mid_study_loses_no_case(cluster, local, tmp_path):
     """A worker killed while it runs a case: the case is rescheduled on the other worker
     and, with checkpoints in a folder both reach, goes on from its last one; the table is the

@@ -3,6 +3,15 @@
 //! With no arguments it runs the built-in Taylor bar (the paper's Tables 1-2) with the
 //! two-point rule and prints its radius and height beside the paper's Table 3.
 
+/// `println!` that drops what a closed standard output cannot take (`rkforge run ... |
+/// head -1`): the run goes on and writes its files, where `println!` panicked.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod compare;
 mod fmu;
 mod output;
@@ -230,7 +239,7 @@ fn main() -> ExitCode {
         Some(Command::Compare(a)) => compare_command(a),
         Some(Command::Sweep(a)) => sweep_command(a),
         Some(Command::Ssp(a)) => ssp::pack(&a.scene, &a.press, &a.tool, &a.out)
-            .map(|()| println!("wrote {}", a.out.display())),
+            .map(|()| say!("wrote {}", a.out.display())),
         Some(Command::RingChart(a)) => ring_chart_command(a),
         Some(Command::Fmu(a)) => match (&a.scene, &a.press) {
             (Some(scene), _) => fmu::pack(scene, &a.out, fmu::Version::from_arg(&a.fmi)),
@@ -238,7 +247,7 @@ fn main() -> ExitCode {
             (None, Some(_)) => Err("--press packs an FMI 2.0 FMU (leave out --fmi 3)".into()),
             (None, None) => Err("give a scene file or --press".into()),
         }
-        .map(|id| println!("wrote {} (model identifier {id})", a.out.display())),
+        .map(|id| say!("wrote {} (model identifier {id})", a.out.display())),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -302,21 +311,21 @@ fn run_solid_command(a: &RunArgs, mut scene: SolidScene) -> Result<(), String> {
         mcap_options(a).as_ref(),
         restart(a)?,
     )?;
-    println!(
+    say!(
         "{}",
         rkforge_runner::references_beside(&scene.name, &scene.reference, &report.summary)
     );
     let s = &report.summary;
     print_resumed(s);
-    println!(
+    say!(
         "{:.3} us per particle-step; energy balance {:.2e}; deepest in a tool {:.3e} m, beyond a symmetry plane {:.3e} m",
         s["us_per_particle_step"].as_f64().unwrap_or(0.0),
         s["energy"]["balance_error_rel"].as_f64().unwrap_or(0.0),
         s["contact"]["max_penetration_m"].as_f64().unwrap_or(0.0),
         s["contact"]["max_beyond_plane_m"].as_f64().unwrap_or(0.0),
     );
-    println!("{}", run::stage_line(s));
-    println!("results in {}", out.display());
+    say!("{}", run::stage_line(s));
+    say!("results in {}", out.display());
     match report.error {
         Some(e) => Err(e),
         None => Ok(()),
@@ -339,7 +348,7 @@ fn print_resumed(summary: &serde_json::Value) {
             .iter()
             .map(|t| format!("{:.4e} s", t.as_f64().unwrap_or(f64::NAN)))
             .collect();
-        println!(
+        say!(
             "resumed from its checkpoint at t = {} (wall and stage times over every process)",
             times.join(", ")
         );
@@ -380,13 +389,13 @@ fn run_command(a: RunArgs) -> Result<(), String> {
         restart: restart(&a)?,
     };
     let report = run::run(&scene, &opts)?;
-    println!("{}", report.table());
+    say!("{}", report.table());
     print_resumed(&report.summary);
-    println!("{}", run::stage_line(&report.summary));
+    say!("{}", run::stage_line(&report.summary));
     for w in report.summary["warnings"].as_array().into_iter().flatten() {
         eprintln!("warning: {}", w.as_str().unwrap_or_default());
     }
-    println!("results in {}", opts.out.display());
+    say!("results in {}", opts.out.display());
     Ok(())
 }
 
@@ -409,20 +418,21 @@ fn ring_chart_command(a: RingChartArgs) -> Result<(), String> {
         .unwrap_or_else(|| PathBuf::from("out").join("ring_chart"));
     match ring_chart::chart(&scene, &laws, &out)? {
         Some(rows) => {
-            println!(
-                "Decrease of the inner diameter (%), simulated against Avitzur's upper bound:"
+            say!("Decrease of the inner diameter (%), simulated against Avitzur's upper bound:");
+            say!(
+                "{}",
+                ring_chart::comparison_table(&rows).trim_end_matches('\n')
             );
-            print!("{}", ring_chart::comparison_table(&rows));
-            println!(
+            say!(
                 "ring_chart.csv, ring_chart_comparison.csv and ring_chart.png in {}",
                 out.display()
             );
         }
         None => {
-            println!(
+            say!(
                 "no upper-bound reference: the scene is not a half ring mirrored at its y_min edge"
             );
-            println!("ring_chart.csv and ring_chart.png in {}", out.display());
+            say!("ring_chart.csv and ring_chart.png in {}", out.display());
         }
     }
     Ok(())
@@ -437,8 +447,8 @@ fn compare_command(a: CompareArgs) -> Result<(), String> {
         .out
         .unwrap_or_else(|| PathBuf::from("out").join("compare"));
     let compared = compare::compare(&a.scenes, a.repeat, &out)?;
-    println!("{}", compared.table);
-    println!("runs and compare.md in {}", out.display());
+    say!("{}", compared.table);
+    say!("runs and compare.md in {}", out.display());
     match compared.failed {
         0 => Ok(()),
         n => Err(format!(
@@ -551,8 +561,8 @@ fn sweep_scenes<S: sweep::Sweepable>(
         .unwrap_or_else(|| PathBuf::from("out").join(format!("sweep_{}", scene.name())));
     let restart = a.checkpoints.restart()?;
     let swept = sweep::sweep(cases, &grids, &rules, &a.dt_safety, &out, restart)?;
-    println!("{}", swept.table);
-    println!("sweep.csv, sweep.md and sweep.png in {}", out.display());
+    say!("{}", swept.table);
+    say!("sweep.csv, sweep.md and sweep.png in {}", out.display());
     match swept.failed {
         0 => Ok(()),
         n => Err(format!(
@@ -573,20 +583,20 @@ fn default_run() -> Result<(), String> {
         mcap: None,
         restart: Default::default(),
     };
-    println!(
+    say!(
         "rkforge: {} ({}), the paper's Table 3 setting",
         scene.description,
         scene.discretization.integration.name()
     );
     let report = run::run(&scene, &opts)?;
-    println!("{}", report.table());
+    say!("{}", report.table());
     print_resumed(&report.summary);
-    println!("{}", run::stage_line(&report.summary));
-    println!(
+    say!("{}", run::stage_line(&report.summary));
+    say!(
         "results in {} (summary.json, history.csv, frames/, *.png)",
         opts.out.display()
     );
-    println!(
+    say!(
         "run another scene: rkforge run scenes/<name>.toml [--integration q2|q4|scni] [--out DIR]"
     );
     Ok(())

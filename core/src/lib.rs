@@ -54,16 +54,32 @@ pub use solver::{Energy, Fields, MassScalingReport, Ran, Simulation, StageTimes,
 ///
 /// # Errors
 ///
-/// `Some(0)`, or the pool cannot be built (for example because it already was).
+/// `Some(0)` or more than [`MAX_THREADS`], or the pool cannot be built (for example because
+/// it already was).
 pub fn set_threads(threads: Option<usize>) -> Result<()> {
     let Some(n) = threads else {
         return Ok(());
     };
-    if n == 0 {
-        return Err(Error::Request("--threads must be at least 1".into()));
-    }
+    check_threads(n).map_err(|why| Error::Request(format!("--threads {why}")))?;
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build_global()
         .map_err(|e| Error::Request(format!("cannot start {n} threads: {e}")))
+}
+
+/// Most worker threads a run may ask for: a thousand threads took 40 s to start on a
+/// two-core machine, and a million never finished starting.
+pub const MAX_THREADS: usize = 256;
+
+/// A thread count a run can use: 1 to [`MAX_THREADS`]; the error says why not (after the
+/// option's or argument's name).
+pub fn check_threads(n: usize) -> std::result::Result<(), String> {
+    match n {
+        0 => Err("must be at least 1".into()),
+        n if n > MAX_THREADS => Err(format!(
+            "= {n}: at most {MAX_THREADS} (this machine has {} cores; results are the same bits for any count)",
+            std::thread::available_parallelism().map_or(1, |c| c.get())
+        )),
+        _ => Ok(()),
+    }
 }

@@ -234,7 +234,7 @@ fn build<S: Overridable>(text: &str, file: &str, overrides: &[(String, Value)]) 
             file: file.to_string(),
             line: key_line(text, "model.kinematics").unwrap_or(0),
             key: "model.kinematics".into(),
-            message: "a 3D scene: `rkforge run`, `rkforge sweep`, `rkforge fmu` and the Python package take it; the ROS node, `compare` and the SSP take 2D scenes for now (issue 36)".into(),
+            message: "a 3D scene, which `rkforge compare` (the paper's Table 5) and `rkforge ring-chart` do not take: they compare 2D runs; `rkforge run`, `sweep`, `fmu`, `ssp`, the ROS node and the Python package take it".into(),
         });
     }
     if overrides.is_empty() {

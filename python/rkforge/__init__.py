@@ -61,7 +61,9 @@ def run(
     ``integration`` ("q4", "q2", "scni") overrides the scene's rule; ``threads`` runs on a
     pool of that many threads (results do not depend on it). A run that fails midway raises
     :class:`SimulationError` carrying ``summary`` (``"status": "error"``) and ``history`` up
-    to the failure; with ``check=False`` they are returned instead.
+    to the failure; with ``check=False`` they are returned instead. A scene its setup refuses
+    before the first step (a fixed ``time.dt_s`` above the measured critical step) raises
+    :class:`SimulationError` without them, ``check=False`` too: there is no run to return.
 
     With ``checkpoint`` (a folder), the run writes ``checkpoint.cbor`` there every
     ``checkpoint_every_s`` seconds of wall time; a run given a folder that holds the

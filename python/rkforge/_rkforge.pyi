@@ -16,7 +16,9 @@ class StateError(ValueError):
 
 class SimulationError(RuntimeError):
     """A simulation that failed: divergence, energy balance or stability, with the step and
-    time named. From :func:`rkforge.run`, it carries ``summary`` and ``history``."""
+    time named. From :func:`rkforge.run` once the run has started, it carries ``summary`` and
+    ``history`` (a scene the setup refuses, e.g. a fixed step above the critical one, has
+    none)."""
 
     summary: Dict[str, Any]
     history: Any
@@ -101,8 +103,8 @@ class Simulation:
         """Every tool as in summary.json."""
     def laps(self) -> List[Dict[str, Any]]:
         """The laps so far, as in summary.json: ``formed_s``, ``formed_stroke_m`` (by tool),
-        ``start_m``, ``end_m``, ``length_m``, ``reference_m``, ``particles`` (2D only: a
-        3D run raises ValueError)."""
+        ``start_m``, ``end_m``, ``length_m`` (2D) or ``extent_m`` (3D), ``reference_m``,
+        ``particles``."""
     def fields(self) -> Dict[str, npt.NDArray[Any]]:
         """Particle fields: ``positions``, ``displacement``, ``velocity`` (n, 2);
         ``plastic_strain``, ``von_mises``, ``lap`` (n,), and ``temperature`` with heat.

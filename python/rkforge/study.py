@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import asyncio
 import math
 import os
 import time
@@ -133,6 +134,12 @@ def _bar(total: int, progress: bool):
     return tqdm(total=total, unit="case", desc="rkforge study")
 
 
+def _error_row(error: str) -> dict:
+    """The result of a case that gave no run: its error only."""
+    return {"summary": None, "history": None, "status": "error", "error": error,
+            "case_wall_s": math.nan}
+
+
 def study(
     scene,
     cases: Cases,
@@ -155,7 +162,8 @@ def study(
     unique key, ``retries`` for cases that raise; cases on a worker that dies are
     rescheduled by the scheduler). ``progress`` shows a tqdm bar; ``on_case(index, result)``
     is called as each case finishes. ``timeout`` (s) bounds the wait for the cluster's
-    results (``TimeoutError`` past it).
+    results: past it the cases not finished are cancelled on the cluster and each is a row
+    with its error (``TimeoutError: ...``), the finished ones rows as usual.
 
     ``checkpoints`` (a folder every worker can reach, e.g. on a shared file system) gives
     each case a folder ``case-<index>`` in it where its run writes a checkpoint every
@@ -208,14 +216,21 @@ def study(
                                   checkpoint_every_s, key=f"rkforge-case-{i}-{token}",
                                   pure=False, retries=retries)
                 futures[f] = i
-            for future in as_completed(futures, timeout=timeout):
-                i = futures[future]
-                try:
-                    result = future.result()
-                except Exception as e:  # noqa: BLE001 - a lost case becomes its row
-                    result = {"summary": None, "history": None, "status": "error",
-                              "error": f"{type(e).__name__}: {e}", "case_wall_s": math.nan}
-                done(i, result)
+            try:
+                for future in as_completed(futures, timeout=timeout):
+                    i = futures[future]
+                    try:
+                        result = future.result()
+                    except Exception as e:  # noqa: BLE001 - a lost case becomes its row
+                        result = _error_row(f"{type(e).__name__}: {e}")
+                    done(i, result)
+            except (TimeoutError, asyncio.TimeoutError):
+                late = [f for f, i in futures.items() if i not in results]
+                client.cancel(late)
+                for f in late:
+                    done(futures[f], _error_row(
+                        f"TimeoutError: not finished within the study's timeout of {timeout} s "
+                        f"({len(futures) - len(late)} of {len(futures)} cases were); cancelled"))
     finally:
         if bar is not None:
             bar.close()

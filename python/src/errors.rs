@@ -1,11 +1,17 @@
-//! The Python exceptions of the package and the two guards every entry point uses: solver
-//! errors turned into the exception that names them ([`to_py`]), and panics caught before
-//! they reach the interpreter ([`guarded`]).
+//! The Python exceptions of the package and the guards the entry points use: solver errors
+//! turned into the exception that names them ([`to_py`]), panics caught before they reach
+//! the interpreter ([`guarded`]), and Ctrl-C heard during a long call ([`interruptible`]).
 
 use pyo3::create_exception;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// How often a long call looks for a signal (Ctrl-C) while it runs.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
 create_exception!(
     rkforge,
@@ -52,4 +58,47 @@ pub(crate) fn guarded<T>(f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
             "rkforge internal error (a Rust panic, caught): {message}"
         )))
     })
+}
+
+/// Run `work` (a run or a stretch of steps, with the GIL released) on a thread of its own,
+/// while the calling thread, Python's, asks the interpreter for signals every
+/// [`SIGNAL_POLL`]: a Ctrl-C (`KeyboardInterrupt`, or whatever a signal handler raised) sets
+/// the flag `work` is handed, which it reads between steps to stop there, and is raised
+/// once `work` has returned. Without a signal, `work`'s own result. Python runs signal
+/// handlers only on its main thread, and the solver's loop runs on the rayon pool's
+/// workers: so the watching is done here, not in the loop.
+pub(crate) fn interruptible<R: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(&AtomicBool) -> PyResult<R> + Send,
+) -> PyResult<R> {
+    let cancel = AtomicBool::new(false);
+    let mut raised = None;
+    let out = py.detach(|| {
+        std::thread::scope(|scope| {
+            let (done, finished) = mpsc::channel::<()>();
+            let cancel = &cancel;
+            let worker = scope.spawn(move || {
+                let out = guarded(|| work(cancel));
+                let _ = done.send(());
+                out
+            });
+            while let Err(mpsc::RecvTimeoutError::Timeout) = finished.recv_timeout(SIGNAL_POLL) {
+                if raised.is_none() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        raised = Some(e);
+                        cancel.store(true, Ordering::Relaxed);
+                    }
+                }
+            }
+            worker.join().unwrap_or_else(|_| {
+                Err(PyRuntimeError::new_err(
+                    "rkforge internal error: the thread of the run was lost",
+                ))
+            })
+        })
+    });
+    match raised {
+        Some(e) => Err(e),
+        None => out,
+    }
 }

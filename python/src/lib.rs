@@ -23,5 +23,8 @@ fn _rkforge(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("StateError", py.get_type::<StateError>())?;
     m.add("SimulationError", py.get_type::<SimulationError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // numpy's C API, imported now: imported at the first array instead, with a Ctrl-C
+    // pending it failed, and the package panicked there.
+    numpy::PyArray1::<f64>::zeros(py, 0, false);
     Ok(())
 }

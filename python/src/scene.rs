@@ -331,7 +331,34 @@ fn to_toml(v: &Bound<'_, PyAny>) -> Result<Value, String> {
         }
         return Ok(Value::Table(t));
     }
-    // numpy scalars and other numbers: by their float value.
+    // numpy scalars: a numpy bool as a bool, an integer (any `numbers.Integral`, numpy's
+    // among them) by its `__index__`, and other numbers by their float value.
+    let py = v.py();
+    let module = v
+        .get_type()
+        .module()
+        .map(|m| m.to_string())
+        .unwrap_or_default();
+    let name = v
+        .get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_default();
+    if module == "numpy" && (name == "bool" || name == "bool_") {
+        return v.is_truthy().map(Value::Boolean).map_err(|e| e.to_string());
+    }
+    let integral = py
+        .import("numbers")
+        .and_then(|m| m.getattr("Integral"))
+        .and_then(|t| v.is_instance(&t))
+        .unwrap_or(false);
+    if integral {
+        return v
+            .call_method0("__index__")
+            .and_then(|i| i.extract::<i64>())
+            .map(Value::Integer)
+            .map_err(|_| format!("integer {v} does not fit in 64 bits"));
+    }
     if let Ok(x) = v.extract::<f64>() {
         return Ok(Value::Float(x));
     }

@@ -4,7 +4,7 @@
 //! [`rkforge_runner`], so the same bits as the command line), for a 2D scene or a 3D one
 //! (`model.kinematics = "3d"`, the 3D register's outputs).
 
-use crate::errors::{guarded, to_py, StateError};
+use crate::errors::{guarded, interruptible, to_py, StateError};
 use crate::scene::{Scene, Source};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -15,6 +15,7 @@ use rkforge_core::scene::SolidScene;
 use rkforge_core::solver::{SolidSimulation, SolidState};
 use rkforge_core::{outputs, IntegrationRule, State};
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -49,11 +50,13 @@ impl Sim {
         }
     }
 
-    /// Step to time `t` (s), the last step landing on it.
-    fn run_to(&mut self, t: f64) -> rkforge_core::Result<()> {
+    /// Step to time `t` (s), the last step landing on it, or until `cancel` is set (read
+    /// before each step).
+    fn run_to(&mut self, t: f64, cancel: &AtomicBool) -> rkforge_core::Result<()> {
+        let go_on = || !cancel.load(Ordering::Relaxed);
         match self {
-            Sim::Plane(s) => s.run_to(t, |_| {}),
-            Sim::Solid(s) => s.run_toward(t, u64::MAX, |_, _| true).map(|_| ()),
+            Sim::Plane(s) => s.run_toward(t, u64::MAX, |_, _| go_on()).map(|_| ()),
+            Sim::Solid(s) => s.run_toward(t, u64::MAX, |_, _| go_on()).map(|_| ()),
         }
     }
 
@@ -208,17 +211,19 @@ fn configured(scene: &Scene, integration: Option<&str>) -> PyResult<Configured> 
     })
 }
 
-/// A rayon pool of `threads` workers, or None for the global pool.
+/// A rayon pool of `threads` workers ([`rkforge_core::check_threads`]: 1 to
+/// [`rkforge_core::MAX_THREADS`]), or None for the global pool.
 fn pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
-    match threads {
-        None => Ok(None),
-        Some(0) => Err(PyValueError::new_err("threads must be at least 1")),
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map(Some)
-            .map_err(|e| PyRuntimeError::new_err(format!("cannot start {n} threads: {e}"))),
-    }
+    let Some(n) = threads else {
+        return Ok(None);
+    };
+    rkforge_core::check_threads(n)
+        .map_err(|why| PyValueError::new_err(format!("threads {why}")))?;
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .map(Some)
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot start {n} threads: {e}")))
 }
 
 /// Positions or velocities as an (n, D) array.
@@ -250,15 +255,15 @@ impl Simulation {
         py: Python<'_>,
         f: impl FnOnce(&mut Inner) -> PyResult<R> + Send,
     ) -> PyResult<R> {
-        py.detach(|| {
-            guarded(|| {
-                let mut inner = self.inner.lock().map_err(|_| {
-                    PyRuntimeError::new_err(
-                        "this simulation is unusable after an internal error; create a new one",
-                    )
-                })?;
-                f(&mut inner)
-            })
+        py.detach(|| guarded(|| f(&mut *self.lock()?)))
+    }
+
+    /// The simulation, locked for one call.
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Inner>> {
+        self.inner.lock().map_err(|_| {
+            PyRuntimeError::new_err(
+                "this simulation is unusable after an internal error; create a new one",
+            )
         })
     }
 
@@ -341,16 +346,18 @@ impl Simulation {
         })
     }
 
-    /// Step until the time reaches `t` (s), the last step shortened to land on it.
+    /// Step until the time reaches `t` (s), the last step shortened to land on it; a
+    /// Ctrl-C stops it at the next step and raises `KeyboardInterrupt`.
     fn run_to(&self, py: Python<'_>, t: f64) -> PyResult<f64> {
-        self.with(py, |s| {
+        interruptible(py, |cancel| {
+            let mut s = self.lock()?;
             let now = s.sim.time();
             if !t.is_finite() || t < now {
                 return Err(PyValueError::new_err(format!(
                     "run_to({t}): the time must be finite and not before the current time {now:e} s"
                 )));
             }
-            s.install(|sim| sim.run_to(t).map(|()| sim.time()))
+            s.install(|sim| sim.run_to(t, cancel).map(|()| sim.time()))
                 .map_err(to_py)
         })
     }
@@ -669,11 +676,18 @@ fn ran<S: outputs::Body>(summary: serde_json::Value, outcome: rkforge_runner::Ou
 }
 
 /// Checkpoints of a run in Python: written into a folder every interval of wall time.
-struct Saving {
+struct Saving<'a> {
     checkpoints: Option<rkforge_runner::Checkpoints>,
+    /// Set by a Ctrl-C ([`interruptible`]): the run stops at the next instant.
+    cancel: &'a AtomicBool,
 }
 
-impl<S: rkforge_runner::Runnable> rkforge_runner::Observer<S> for Saving {
+impl<S: rkforge_runner::Runnable> rkforge_runner::Observer<S> for Saving<'_> {
+    fn stop(&self, _sim: &S) -> Option<String> {
+        self.cancel
+            .load(Ordering::Relaxed)
+            .then(|| "interrupted (KeyboardInterrupt)".to_string())
+    }
     fn checkpoint(
         &mut self,
         sim: &S,
@@ -691,6 +705,7 @@ fn drive_saving<S: rkforge_runner::Runnable>(
     sim: &mut S,
     folder: Option<&std::path::Path>,
     every: std::time::Duration,
+    cancel: &AtomicBool,
     summary: impl Fn(&S, f64, f64, rkforge_runner::Ending<'_>) -> serde_json::Value,
 ) -> PyResult<Ran> {
     use rkforge_runner::checkpoint::{self, Restart};
@@ -708,6 +723,7 @@ fn drive_saving<S: rkforge_runner::Runnable>(
         checkpoint::start::<S, ()>(sim, 0, folder, how).map_err(PyValueError::new_err)?;
     let mut saving = Saving {
         checkpoints: started.checkpoints.take(),
+        cancel,
     };
     let outcome = started
         .go(sim, 0, &mut saving)
@@ -745,24 +761,26 @@ pub fn run_scene<'py>(
     let every = std::time::Duration::from_secs_f64(checkpoint_every_s);
     let scene = configured(scene, integration)?;
     let pool = pool(threads)?;
-    let (summary, columns, rows, failure) = py.detach(|| {
-        guarded(|| {
-            let go = || -> PyResult<_> {
-                let folder = checkpoint.as_deref();
-                match scene.build().map_err(to_py)? {
-                    Sim::Plane(mut sim) => {
-                        drive_saving(&mut *sim, folder, every, rkforge_runner::summary)
-                    }
-                    Sim::Solid(mut sim) => {
-                        drive_saving(&mut *sim, folder, every, rkforge_runner::solid_summary)
-                    }
+    let (summary, columns, rows, failure) = interruptible(py, |cancel| {
+        let go = || -> PyResult<_> {
+            let folder = checkpoint.as_deref();
+            match scene.build().map_err(to_py)? {
+                Sim::Plane(mut sim) => {
+                    drive_saving(&mut *sim, folder, every, cancel, rkforge_runner::summary)
                 }
-            };
-            match &pool {
-                Some(p) => p.install(go),
-                None => go(),
+                Sim::Solid(mut sim) => drive_saving(
+                    &mut *sim,
+                    folder,
+                    every,
+                    cancel,
+                    rkforge_runner::solid_summary,
+                ),
             }
-        })
+        };
+        match &pool {
+            Some(p) => p.install(go),
+            None => go(),
+        }
     })?;
     let n = columns.len();
     let count = rows.len() / n.max(1);

@@ -5,6 +5,7 @@ pub mod plots;
 pub mod vtu;
 
 use rkforge_core::outputs::Body;
+use rkforge_core::scene::solid::ShapeKind;
 use rkforge_core::scene::Motion;
 use rkforge_core::scene::Reference;
 use rkforge_core::solver::SolidSimulation;
@@ -21,8 +22,9 @@ pub struct Plotted<'a> {
     pub rule: &'static str,
     /// The end time (s), which picks the time axis' unit and places the references.
     pub end_s: f64,
-    /// The history key of the lateral size (`radius_m`, `width_m`) after `workpiece.`.
-    pub lateral: &'static str,
+    /// The history key of the lateral size (`radius_m`, `width_m`) after `workpiece.`; none
+    /// for a 3D box, which has no one lateral size (its extents are in the history).
+    pub lateral: Option<&'static str>,
     /// The tools' names, each with whether it moves (then it has a force-stroke curve).
     pub tools: Vec<(&'a str, bool)>,
     /// The scene's published values, drawn at the end time.
@@ -45,20 +47,24 @@ impl<'a> Plotted<'a> {
             name: &scene.name,
             rule: scene.discretization.integration.name(),
             end_s: scene.time.end_s,
-            lateral: sim.extents().lateral(scene.model.kinematics).0,
+            lateral: Some(sim.extents().lateral(scene.model.kinematics).0),
             tools: Self::tools(sim.tools()),
             references: &scene.reference,
         }
     }
 
-    /// A 3D run's: the lateral size is the largest distance of a particle from the z axis.
+    /// A 3D run's: a cylinder's lateral size is the largest distance of a particle from the
+    /// z axis (its radius); a box has none.
     pub fn solid(sim: &'a SolidSimulation) -> Self {
         let scene = sim.scene();
         Plotted {
             name: &scene.name,
             rule: scene.discretization.integration.name(),
             end_s: scene.time.end_s,
-            lateral: "radius_m",
+            lateral: match scene.workpiece.shape {
+                ShapeKind::Cylinder => Some("radius_m"),
+                ShapeKind::Box => None,
+            },
             tools: Self::tools(sim.tools()),
             references: &scene.reference,
         }
@@ -100,8 +106,8 @@ impl<S: Body> HistoryPlots for History<S> {
             .iter()
             .map(|v| v * tscale)
             .collect();
-        let lat_label = lat.trim_end_matches("_m");
-        for (key, label) in [(lat, lat_label), ("height_m", "height")] {
+        let lateral = lat.map(|key| (key, key.trim_end_matches("_m")));
+        for (key, label) in lateral.into_iter().chain([("height_m", "height")]) {
             let y: Vec<f64> = self
                 .column(&format!("workpiece.{key}"))
                 .unwrap_or_default()

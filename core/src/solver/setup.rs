@@ -27,7 +27,7 @@ use crate::integration::{orthant_shapes, point_shapes, PointSet};
 use crate::material::{HenckyJ2, PointState};
 use crate::math::Real;
 use crate::rk_shape::{Lattice, ShapeTable, Site};
-use crate::scene::{Component, Edge, IntegrationRule, Kinematics, Scene};
+use crate::scene::{Component, Edge, IntegrationRule, Kinematics, Scene, TimeSpec};
 use crate::team::Team;
 use crate::tools::{Tool, SEARCH_DEPTH_SPACINGS};
 use std::f64::consts::PI;
@@ -252,19 +252,28 @@ impl Simulation {
                 ..Default::default()
             },
         };
-        check_fixed_step(
-            scene.time.dt_s,
-            sim.st.stable_dt,
-            h[0].min(h[1]) / wave_speed,
-        )?;
+        check_fixed_step(&scene.time, sim.st.stable_dt, h[0].min(h[1]) / wave_speed)?;
         Ok(sim)
     }
 }
 
-/// A scene's fixed step `fixed` (`time.dt_s`, s) above the critical step `stable_dt` (s)
-/// stops the setup; `h_c` is `h_min / c` (s), quoted in the message.
-pub(super) fn check_fixed_step(fixed: Option<Real>, stable_dt: Real, h_c: Real) -> Result<()> {
-    match fixed {
+/// Most steps a run may take at its setup's natural step: as for a fixed `time.dt_s`, past
+/// it the run would not end (a `dt_safety` of 1e-20 ran with no sign of progress).
+const MOST_STEPS: Real = 1e9;
+
+/// The step of `time` against the setup's critical step `stable_dt` (s): a fixed step
+/// (`time.dt_s`) above it stops the setup, `h_c` (`h_min / c`, s) quoted in the message; a
+/// natural step (`dt_safety` of it) that would take more than [`MOST_STEPS`] steps to the
+/// end time stops it too, naming `time.dt_safety`.
+pub(super) fn check_fixed_step(time: &TimeSpec, stable_dt: Real, h_c: Real) -> Result<()> {
+    let steps = time.end_s / (time.dt_safety * stable_dt);
+    if time.dt_s.is_none() && !(steps <= MOST_STEPS) {
+        return Err(Error::Request(format!(
+            "time.dt_safety = {:e} of the critical step {stable_dt:.3e} s gives {steps:.1e} steps to time.end_s = {:e} s, more than {MOST_STEPS:e}: raise time.dt_safety",
+            time.dt_safety, time.end_s
+        )));
+    }
+    match time.dt_s {
         Some(dt) if dt > stable_dt => Err(Error::Unstable {
             step: 0,
             time: 0.0,

@@ -563,11 +563,7 @@ impl SolidSimulation {
                 ..Default::default()
             },
         };
-        check_fixed_step(
-            scene.time.dt_s,
-            sim.st.stable_dt,
-            sim.disc.h_min / wave_speed,
-        )?;
+        check_fixed_step(&scene.time, sim.st.stable_dt, sim.disc.h_min / wave_speed)?;
         Ok(sim)
     }
 }
