@@ -267,7 +267,7 @@ const MOST_STEPS: Real = 1e9;
 /// end time stops it too, naming `time.dt_safety`.
 pub(super) fn check_fixed_step(time: &TimeSpec, stable_dt: Real, h_c: Real) -> Result<()> {
     let steps = time.end_s / (time.dt_safety * stable_dt);
-    if time.dt_s.is_none() && !(steps <= MOST_STEPS) {
+    if time.dt_s.is_none() && (steps > MOST_STEPS || steps.is_nan()) {
         return Err(Error::Request(format!(
             "time.dt_safety = {:e} of the critical step {stable_dt:.3e} s gives {steps:.1e} steps to time.end_s = {:e} s, more than {MOST_STEPS:e}: raise time.dt_safety",
             time.dt_safety, time.end_s
