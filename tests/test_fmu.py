@@ -267,6 +267,26 @@ def test_a_step_past_the_stop_time_is_refused_and_logged_with_debug_logging_off(
         Slave(adaptive_fmus["block_forging"], params=COARSE, stop_time=-1.0)
 
 
+def test_a_tools_direction_is_set_component_by_component_and_checked_whole(adaptive_fmus):
+    """A unit vector cannot be turned into another one component at a time: the components
+    are taken as set, and the direction is checked whole when the simulation is built."""
+    s = Slave(adaptive_fmus["block_forging"], params=COARSE, init=False)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.setReal([s.vr["tools.top.axis[0]"], s.vr["tools.top.axis[1]"]], [0.6, -0.8])
+    s.fmu.enterInitializationMode()
+    s.fmu.exitInitializationMode()
+    s.set("top.velocity_m_per_s", 10.0)
+    s.step(1e-5)
+    assert s.get("top.stroke_m")[0] == pytest.approx(1e-4)
+    s.close()
+    s = Slave(adaptive_fmus["block_forging"], params=COARSE, init=False)
+    s.fmu.setupExperiment(startTime=0.0)
+    s.fmu.setReal([s.vr["tools.top.axis[0]"]], [1.0])
+    s.fmu.enterInitializationMode()
+    raises(s, lambda: s.fmu.exitInitializationMode(), "fmi2ExitInitializationMode", "axis")
+    s.fmu.freeInstance()
+
+
 def test_parameters_out_of_range_and_wrong_state_calls(fmus):
     s = Slave(fmus["taylor_bar"], init=False)
     raises(s, lambda: s.fmu.doStep(0.0, 1e-6), "not allowed")

@@ -332,6 +332,16 @@ fn request(msg: String) -> Error {
     Error::Request(msg)
 }
 
+/// Whether the parameter `name` is a component of a tool's direction, a unit vector
+/// (`tools.top.axis[1]`, `tools.wall.normal[2]`, `tools.pin.axis_direction[0]`).
+fn is_direction_component(name: &str) -> bool {
+    name.rsplit_once('[').is_some_and(|(key, _)| {
+        ["axis", "normal", "axis_direction"]
+            .iter()
+            .any(|d| key.strip_suffix(d).is_some_and(|k| k.ends_with('.')))
+    })
+}
+
 impl Instance {
     /// An instance of the scene given as TOML text, 2D or 3D (`model.kinematics = "3d"`);
     /// `label` names it in errors.
@@ -428,13 +438,19 @@ impl Instance {
         )
     }
 
-    /// Set parameter `k` (the variable `v`) to `value` if the scene it gives is valid.
+    /// Set parameter `k` (the variable `v`) to `value` if the scene it gives is valid. A
+    /// component of a direction (`axis`, `normal`, `axis_direction`: unit vectors) is taken
+    /// whatever the scene then gives, as no single component can turn a unit vector into
+    /// another: the direction is checked whole when the simulation is built
+    /// (`ExitInitializationMode`, or an output read before it), the error naming its key.
     fn set_parameter(&mut self, v: &Variable, k: usize, value: toml::Value) -> Result<()> {
         let mut params = self.params.clone();
         params[k] = Some(value.clone());
-        self.model
-            .check(&self.configured_with(&params))
-            .map_err(|e| request(format!("`{}` = {value}: {e}", v.name)))?;
+        if !is_direction_component(&v.name) {
+            self.model
+                .check(&self.configured_with(&params))
+                .map_err(|e| request(format!("`{}` = {value}: {e}", v.name)))?;
+        }
         self.params = params;
         self.model.clear();
         Ok(())
@@ -658,9 +674,10 @@ impl Instance {
     }
 
     /// `fmi3DoStep` with early return allowed: as [`Instance::do_step`], but the step ends
-    /// after the solver step at which an armed event first happens (a tool's first touch of
-    /// the workpiece, a tool's force magnitude first reaching its level); returns that time
-    /// (s), or `None` when the step ran to its end.
+    /// after the first solver step at which an armed event happens (a tool coming to touch
+    /// the workpiece, a tool's force magnitude rising to its level: each rise, so a later
+    /// touch or rise ends a later step again); returns that time (s), or `None` when the
+    /// step ran to its end.
     pub fn do_step_early(&mut self, t: f64, h: f64) -> Result<Option<f64>> {
         self.step(t, h, true, None)
     }

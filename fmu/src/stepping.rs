@@ -98,9 +98,9 @@ impl Forging for SolidSimulation {
 /// The early-return events of one tool (FMI 3.0 `fmi3DoStep`).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct EarlyReturn {
-    /// At the first touch of the workpiece.
+    /// When the tool comes to touch the workpiece (each rise).
     pub(crate) contact: bool,
-    /// When the force magnitude first reaches `level`.
+    /// When the force magnitude rises to `level` (each rise).
     pub(crate) force: bool,
     /// Force level (N).
     pub(crate) level: f64,

@@ -134,9 +134,11 @@ pub enum Binding {
     ContactPressure(usize),
     /// Variable `k` of a press plant's own table (`fmu/src/press.rs`).
     Press(usize),
-    /// FMI 3.0: return early from a step when tool `k` first touches the workpiece.
+    /// FMI 3.0: return early from a step when tool `k` comes to touch the workpiece (each
+    /// time, after it lost contact).
     ReturnOnContact(usize),
-    /// FMI 3.0: return early from a step when the force on tool `k` first reaches its level.
+    /// FMI 3.0: return early from a step when the force on tool `k` rises to its level (each
+    /// time, after it fell below).
     ReturnOnForce(usize),
     /// FMI 3.0: the force level of [`Binding::ReturnOnForce`] (N, magnitude).
     ReturnForceLevel(usize),
@@ -292,14 +294,14 @@ pub fn variable_table3<S: FmuScene>(scene: &S) -> Vec<Variable> {
                 "contact",
                 Kind::Boolean(Some(false)),
                 None,
-                format!("return early from a step at the solver step where tool {name} first touches the workpiece (when the importer allows early return)"),
+                format!("return early from a step at the solver step where tool {name} comes to touch the workpiece, each time after it lost contact (when the importer allows early return)"),
                 Binding::ReturnOnContact(k),
             ),
             (
                 "force",
                 Kind::Boolean(Some(false)),
                 None,
-                format!("return early from a step at the solver step where the magnitude of the force on tool {name} first reaches {name}.early_return.force_level"),
+                format!("return early from a step at the solver step where the magnitude of the force on tool {name} rises to {name}.early_return.force_level, each time after it fell below"),
                 Binding::ReturnOnForce(k),
             ),
             (
