@@ -201,7 +201,8 @@ impl<S: Body> HistoryPlots for History<S> {
                 &[],
             )?;
         }
-        let energy: Vec<plots::Series> = [
+        let energy_of = |c: &str| self.column(&format!("energy.{c}")).unwrap_or_default();
+        let mut energy: Vec<plots::Series> = [
             "kinetic_J",
             "elastic_J",
             "plastic_J",
@@ -212,10 +213,22 @@ impl<S: Body> HistoryPlots for History<S> {
         .map(|c| plots::Series {
             label: c.trim_end_matches("_J").replace('_', " "),
             x: t.clone(),
-            y: self.column(&format!("energy.{c}")).unwrap_or_default(),
+            y: energy_of(c),
             ..plots::Series::default()
         })
         .collect();
+        // What the tools put in and the contact did not pass on: friction heat and penalty
+        // losses (summary.json's `contact_interface_J`), so that the curves add up.
+        energy.push(plots::Series {
+            label: "contact interface (tool work - contact)".into(),
+            x: t.clone(),
+            y: energy_of("tool_work_J")
+                .iter()
+                .zip(energy_of("contact_J"))
+                .map(|(w, c)| w - c)
+                .collect(),
+            ..plots::Series::default()
+        });
         plots::line_plot(
             &out.join("energy.png"),
             &format!("{name}: energy account ({rule})"),
