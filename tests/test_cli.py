@@ -195,6 +195,22 @@ def test_sweep_writes_csv_markdown_and_the_pareto_plot(rkforge_bin, tmp_path):
     assert bad.returncode == 1 and "--resolution `11by26`" in bad.stderr
 
 
+def test_a_failed_compare_run_is_a_row_and_the_other_scenes_are_tabled(rkforge_bin, tmp_path):
+    # The block at 10 km/s stops in its first steps; the coarse Taylor bar runs.
+    fast = tmp_path / "block_fast.toml"
+    fast.write_text(scene_variant("block_forging.toml", {"particles = [21, 21]": "particles = [7, 7]"})
+                    .replace("velocity_m_per_s = 10.0 }", "velocity_m_per_s = 10000.0 }"))
+    bar = tmp_path / "taylor_small.toml"
+    bar.write_text(scene_variant("taylor_bar.toml", {**COARSE, "end_s = 80.0e-6": "end_s = 5.0e-6"}))
+    out = tmp_path / "cmp"
+    proc = subprocess.run([rkforge_bin, "compare", str(bar), str(fast), "--out", str(out)],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 1 and "the runs of 1 of 2 scenes failed" in proc.stderr, proc.stderr
+    table = (out / "compare.md").read_text()
+    assert "| taylor_bar | " in table and "| block_forging | failed: see below |" in table
+    assert "- failed: block_forging (q4): step" in table
+
+
 def test_a_closed_standard_output_does_not_stop_a_run(rkforge_bin, tmp_path):
     # `rkforge run ... | head -1`: printing to the closed pipe panicked before.
     out = tmp_path / "o"

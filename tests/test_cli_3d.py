@@ -102,6 +102,17 @@ def test_frames_are_hexahedra_with_plastic_strain_and_a_picture(coarse_run):
     assert not (out / "force_stroke.png").exists()
 
 
+def test_a_box_has_the_history_plots_but_no_radius(rkforge_bin, tmp_path):
+    # A box's largest distance from the z axis is no size of the part: no radius plot.
+    out = tmp_path / "box"
+    subprocess.run([rkforge_bin, "run", str(ROOT / "scenes" / "block_upsetting_3d.toml"), "--set",
+                    "workpiece.particles=[3, 3, 3]", "--set", "time.end_s=0.02", "--quiet", "--out", str(out)],
+                   check=True, capture_output=True, text=True, timeout=600)
+    for png in ["height_history.png", "forces.png", "force_stroke.png", "energy.png"]:
+        assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
+    assert not (out / "radius_history.png").exists()
+
+
 @pytest.mark.parametrize("old, new, expected", [
     ("cells = [8, 4, 60]", "cells = [7, 4, 60]", "taylor_bar_3d.toml:29: `workpiece.cells`"),
     ("normal = [0.0, 0.0, 1.0]", "normal = [0.0, 0.0, 0.5]", "`tools[0].normal`"),
