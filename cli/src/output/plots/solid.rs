@@ -6,8 +6,10 @@
 //! The outer surface is every hex face no other hex shares (found by sorting the faces' node
 //! sets); of a quarter model that includes the faces on its symmetry planes, so a view from the
 //! positive x, y side shows the outside and one from the opposite side the sections. Faces are
-//! painted from the farthest to the nearest (painter's algorithm) after dropping those that
-//! face away from the viewer.
+//! painted from the farthest to the nearest (painter's algorithm), those that face away from
+//! the viewer first and unlit: on a closed surface every face toward the viewer covers them,
+//! and where the surface folds over (a crease of a coarse forging) the fold's underside shows,
+//! where dropping them left a see-through hole that read as a crack.
 
 use std::path::Path;
 
@@ -219,6 +221,8 @@ impl Camera {
 struct ShadedFace {
     nodes: [u32; 4],
     corners: [(f64, f64); 4],
+    /// Whether the face turns away from the viewer (painted before every face that does not).
+    away: bool,
     depth: f64,
     value: f64,
     light: f64,
@@ -269,7 +273,7 @@ impl PanelScene {
             .collect();
         // The sum of centre . area is three times the enclosed volume: negative if the hexes
         // are numbered inside out, then every normal is flipped. When it is not a clear sign
-        // (open or garbled meshes), no face is dropped as facing away.
+        // (open or garbled meshes), no face is taken as facing away.
         let volume: f64 = faces.iter().map(|f| dot(f.centre, f.area)).sum();
         let scale = faces
             .iter()
@@ -289,14 +293,17 @@ impl PanelScene {
             .filter_map(|f| {
                 let normal = normalized(f.area.map(|a| orientation * a));
                 let facing = normal.map_or(0.0, |n| dot(n, camera.toward));
-                if orientation != 0.0 && facing <= 0.0 {
-                    return None;
-                }
+                let away = orientation != 0.0 && facing <= 0.0;
                 let lit = normal.map_or(0.0, |n| dot(n, camera.light));
-                let lit = if orientation == 0.0 { lit.abs() } else { lit };
+                let lit = match (orientation == 0.0, away) {
+                    (true, _) => lit.abs(),
+                    (false, true) => 0.0,
+                    (false, false) => lit,
+                };
                 Some(ShadedFace {
                     nodes: f.nodes,
                     corners: f.corners.map(|p| camera.project(p).0),
+                    away,
                     depth: camera.project(f.centre).1,
                     value: panel.cell_values[f.hex],
                     light: AMBIENT + (1.0 - AMBIENT) * lit.max(0.0),
@@ -306,7 +313,7 @@ impl PanelScene {
                 f.depth.is_finite() && f.corners.iter().all(|p| p.0.is_finite() && p.1.is_finite())
             })
             .collect();
-        shaded.sort_by(|a, b| a.depth.total_cmp(&b.depth));
+        shaded.sort_by(|a, b| b.away.cmp(&a.away).then(a.depth.total_cmp(&b.depth)));
         let xs = shaded.iter().flat_map(|f| f.corners.map(|p| p.0));
         let ys = shaded.iter().flat_map(|f| f.corners.map(|p| p.1));
         let bounds = Span::of(xs).zip(Span::of(ys));
@@ -881,12 +888,14 @@ mod tests {
         let titles: Vec<&str> = plan.scenes.iter().map(|s| s.title.as_str()).collect();
         assert_eq!(titles[0], "t = 0 us, az 35°");
         assert_eq!(titles[3], "t = 80 us, az 215°");
-        // From outside the symmetry planes are hidden, from the other side they show.
+        // From outside the symmetry planes turn away (painted first, under the rest), from
+        // the other side they show.
         for axis in 0..2 {
             let on_plane = |k: usize| {
                 let positions = &panels[k].positions;
-                let on =
-                    |f: &&ShadedFace| f.nodes.iter().all(|&i| positions[i as usize][axis] == 0.0);
+                let on = |f: &&ShadedFace| {
+                    !f.away && f.nodes.iter().all(|&i| positions[i as usize][axis] == 0.0)
+                };
                 plan.scenes[k].faces.iter().filter(on).count()
             };
             assert_eq!(on_plane(2), 0, "axis {axis}");
@@ -914,8 +923,12 @@ mod tests {
         assert_eq!(png_size(&path), plan.layout.size);
         assert!(plan.layout.size.0 >= MIN_WIDTH);
         assert!(plan.layout.size.1 > PLOT_H / 2);
-        // Three faces of four quads each face the viewer.
-        assert_eq!(plan.scenes[0].faces.len(), 12);
+        // Three faces of four quads each face the viewer; the three others, turned away, are
+        // painted first.
+        let faces = &plan.scenes[0].faces;
+        assert_eq!(faces.iter().filter(|f| !f.away).count(), 12);
+        assert_eq!(faces.len(), 24);
+        assert!(faces[..12].iter().all(|f| f.away && f.light == AMBIENT));
         assert_eq!(plan.scenes[0].title, "t = 1 ms");
         // Pixels in the drawing area take viridis colours, shaded.
         let pixels = render(plan.layout.size, |root| plan.draw(root).expect("draw"));
@@ -1038,11 +1051,15 @@ mod tests {
         }
         let plan = SolidPlan::new("t", &[good.clone(), cases_inside_out]).expect("plan");
         assert_eq!(
-            plan.scenes[0].faces.len(),
+            plan.scenes[0].faces.iter().filter(|f| !f.away).count(),
             5,
             "2 x 1 x 1 hexes show 5 faces"
         );
-        assert_eq!(plan.scenes[1].faces.len(), 5, "so do inside-out ones");
+        assert_eq!(
+            plan.scenes[1].faces.iter().filter(|f| !f.away).count(),
+            5,
+            "so do inside-out ones"
+        );
     }
 
     #[test]
