@@ -290,7 +290,7 @@ impl PanelScene {
         };
         let mut shaded: Vec<ShadedFace> = faces
             .iter()
-            .filter_map(|f| {
+            .map(|f| {
                 let normal = normalized(f.area.map(|a| orientation * a));
                 let facing = normal.map_or(0.0, |n| dot(n, camera.toward));
                 let away = orientation != 0.0 && facing <= 0.0;
@@ -300,14 +300,14 @@ impl PanelScene {
                     (false, true) => 0.0,
                     (false, false) => lit,
                 };
-                Some(ShadedFace {
+                ShadedFace {
                     nodes: f.nodes,
                     corners: f.corners.map(|p| camera.project(p).0),
                     away,
                     depth: camera.project(f.centre).1,
                     value: panel.cell_values[f.hex],
                     light: AMBIENT + (1.0 - AMBIENT) * lit.max(0.0),
-                })
+                }
             })
             .filter(|f| {
                 f.depth.is_finite() && f.corners.iter().all(|p| p.0.is_finite() && p.1.is_finite())
