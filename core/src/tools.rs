@@ -274,11 +274,6 @@ impl Tool {
         piece * 2.0 * std::f64::consts::PI * r.abs()
     }
 
-    /// Whether the tool can move (its velocity is an input of the FMU and ROS node).
-    pub fn is_movable(&self) -> bool {
-        !matches!(self.motion, Motion::Fixed)
-    }
-
     /// Velocity along the axis (m/s) at time `t` (s): the command if one was given, else
     /// the scene motion (tables interpolate linearly and hold their ends).
     pub fn velocity_at(&self, t: Real) -> Real {
@@ -412,6 +407,11 @@ pub trait Driven {
     fn command(&self) -> Option<Real>;
     /// Set the velocity from outside (m/s).
     fn set_command(&mut self, v: Real);
+    /// Whether the tool can move (its velocity is an input of the FMU and ROS node): any
+    /// motion but `fixed`.
+    fn is_movable(&self) -> bool {
+        !matches!(self.motion(), Motion::Fixed)
+    }
 }
 
 /// Command tool `k` of `tools` to move at `v` (m/s, along its axis) from the next step on,
@@ -424,7 +424,7 @@ pub fn command_velocity<T: Driven>(tools: &mut [T], k: usize, v: Real) -> crate:
     let t = tools
         .get_mut(k)
         .ok_or_else(|| crate::Error::Request(format!("no tool with index {k}")))?;
-    if matches!(t.motion(), Motion::Fixed) {
+    if !t.is_movable() {
         return Err(crate::Error::Request(format!(
             "tool `{}` is fixed in the scene",
             t.name()

@@ -6,7 +6,6 @@ pub mod vtu;
 
 use rkforge_core::outputs::Body;
 use rkforge_core::scene::solid::ShapeKind;
-use rkforge_core::scene::Motion;
 use rkforge_core::scene::Reference;
 use rkforge_core::solver::SolidSimulation;
 use rkforge_core::tools::Driven;
@@ -34,10 +33,7 @@ pub struct Plotted<'a> {
 impl<'a> Plotted<'a> {
     /// The tools' names of `tools`, each with whether it moves.
     fn tools<T: Driven>(tools: &'a [T]) -> Vec<(&'a str, bool)> {
-        tools
-            .iter()
-            .map(|t| (t.name(), !matches!(t.motion(), Motion::Fixed)))
-            .collect()
+        tools.iter().map(|t| (t.name(), t.is_movable())).collect()
     }
 
     /// A 2D run's: the lateral size is the axisymmetric radius or the plane-strain width.

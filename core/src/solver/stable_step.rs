@@ -4,7 +4,6 @@
 
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::scene::Motion;
 use crate::scene::TimeSpec;
 use crate::tools::Driven;
 
@@ -112,10 +111,7 @@ pub(super) fn tool_step_limit<T: Driven>(
 ) -> std::result::Result<Real, String> {
     let travel = TOOL_TRAVEL_SPACINGS * h;
     let mut limited = Real::INFINITY;
-    for tool in tools
-        .iter()
-        .filter(|t| !matches!(t.motion(), Motion::Fixed))
-    {
+    for tool in tools.iter().filter(|t| t.is_movable()) {
         let velocity = |t: Real| tool.motion().velocity_at(t, tool.command());
         let speed = velocity(t).abs().max(velocity(t + dt).abs());
         if speed * dt <= travel {

@@ -7,6 +7,7 @@ use super::Simulation;
 use crate::integration::point_shapes;
 use crate::math::Real;
 use crate::rk_shape::{Lattice, ShapeTable};
+use crate::tools::Driven;
 use crate::{IntegrationRule, Scene};
 
 const RULES: [IntegrationRule; 3] = [
