@@ -82,15 +82,25 @@ impl Doc {
     }
 }
 
-/// The SI base units of a unit the variables use.
-fn unit_base(unit: &str) -> &'static [(&'static str, &'static str)] {
-    match unit {
+/// The SI base units of a unit the variables use, as the attributes of its `<BaseUnit>`
+/// (exponents of kg, m, s, K, rad; `factor` and `offset` for a unit that is not coherent:
+/// a value `x` in it is `factor x + offset` in the base units); `None` for a unit this
+/// table does not know.
+fn unit_base(unit: &str) -> Option<&'static [(&'static str, &'static str)]> {
+    Some(match unit {
         "m" => &[("m", "1")],
         "m2" => &[("m", "2")],
+        "m3" => &[("m", "3")],
+        "m3/s" => &[("m", "3"), ("s", "-1")],
         "s" => &[("s", "1")],
+        "kg" => &[("kg", "1")],
+        "kg.m2" => &[("kg", "1"), ("m", "2")],
         "m/s" => &[("m", "1"), ("s", "-1")],
+        "rad" => &[("rad", "1")],
+        "rad/s" => &[("rad", "1"), ("s", "-1")],
         "N" => &[("kg", "1"), ("m", "1"), ("s", "-2")],
         "N.s" => &[("kg", "1"), ("m", "1"), ("s", "-1")],
+        "N.s/m" => &[("kg", "1"), ("s", "-1")],
         "J" => &[("kg", "1"), ("m", "2"), ("s", "-2")],
         "W" => &[("kg", "1"), ("m", "2"), ("s", "-3")],
         "W/(m.K)" => &[("kg", "1"), ("m", "1"), ("s", "-3"), ("K", "-1")],
@@ -98,26 +108,33 @@ fn unit_base(unit: &str) -> &'static [(&'static str, &'static str)] {
         "Pa" => &[("kg", "1"), ("m", "-1"), ("s", "-2")],
         "kg/m3" => &[("kg", "1"), ("m", "-3")],
         "1/s" => &[("s", "-1")],
+        "1/min" => &[("s", "-1"), ("factor", "0.016666666666666666")],
         "1/K" => &[("K", "-1")],
         "degC" => &[("K", "1"), ("offset", "273.15")],
         "K" => &[("K", "1")],
         "J/(kg.K)" => &[("m", "2"), ("s", "-2"), ("K", "-1")],
-        _ => &[],
-    }
+        _ => return None,
+    })
 }
 
-/// `<UnitDefinitions>`: every unit the variables use, with its SI base units.
+/// `<UnitDefinitions>`: every unit the variables use, with its SI base units; a unit
+/// [`unit_base`] does not know is an error naming it and a variable that uses it (a
+/// `<BaseUnit>` with no exponents would declare it dimensionless).
 fn write_units(w: &mut Doc, vars: &[Variable]) -> Result<(), String> {
     let mut units: Vec<&str> = vars.iter().filter_map(|v| v.unit).collect();
     units.sort_unstable();
     units.dedup();
     w.around("UnitDefinitions", |w| {
         for u in units {
+            let base = unit_base(u).ok_or_else(|| {
+                let user = vars.iter().find(|v| v.unit == Some(u)).map(|v| &v.name);
+                format!("unit `{u}` of variable `{}` has no SI base units in the model description's table", user.map_or("", |n| n))
+            })?;
             let mut e = BytesStart::new("Unit");
             e.push_attribute(("name", u));
             w.start(e)?;
             let mut b = BytesStart::new("BaseUnit");
-            for &(k, v) in unit_base(u) {
+            for &(k, v) in base {
                 b.push_attribute((k, v));
             }
             w.empty(b)?;

@@ -356,6 +356,7 @@ fn writes_files_only(key: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rkforge_core::scene::solid::SceneFile;
 
     fn scene() -> Scene {
         Scene::from_str_named(
@@ -442,6 +443,46 @@ mod tests {
             assert!(back.units.iter().any(|x| x == u), "unit {u}");
         }
         assert_eq!(back.log_categories.len(), 3);
+    }
+
+    /// Every shipped scene's FMI 2.0 and 3.0 documents write: each unit its variables use
+    /// has base units.
+    #[test]
+    fn every_shipped_scene_writes_its_units() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+        let mut written = 0;
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().and_then(|e| e.to_str()) != Some("toml") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            let file = path.file_name().unwrap().to_string_lossy().into_owned();
+            let header = |name: &str| xml::Header {
+                model_name: name.into(),
+                model_identifier: name.into(),
+                guid: xml::guid(&text),
+                description: String::new(),
+                stop_time: 1.0,
+                step_size: 1e-6,
+            };
+            let (t2, t3, vr) = match SceneFile::from_file(&path).unwrap() {
+                SceneFile::Solid(s) => (
+                    variable_table(&*s),
+                    variable_table3(&*s),
+                    time_value_reference(&*s),
+                ),
+                SceneFile::Plane(s) => (
+                    variable_table(&*s),
+                    variable_table3(&*s),
+                    time_value_reference(&*s),
+                ),
+            };
+            xml::write(&header(&file), &t2).unwrap_or_else(|e| panic!("{file}: {e}"));
+            xml3::write(&header(&file), &t3, vr).unwrap_or_else(|e| panic!("{file}: {e}"));
+            written += 1;
+        }
+        assert!(written >= 20, "{written}");
     }
 
     #[test]

@@ -38,9 +38,9 @@ pub type Param = (&'static str, f64, Option<&'static str>, &'static str);
 pub fn parameters(kind: PressKind) -> &'static [Param] {
     match kind {
         PressKind::Hydraulic => &[
-            ("flow", 1.0e-3, None, "pump flow Q (m^3/s)"),
-            ("area", 0.05, None, "ram (piston) area A (m^2)"),
-            ("oil_volume", 0.005, None, "oil under compression V (m^3)"),
+            ("flow", 1.0e-3, Some("m3/s"), "pump flow Q"),
+            ("area", 0.05, Some("m2"), "ram (piston) area A"),
+            ("oil_volume", 0.005, Some("m3"), "oil under compression V"),
             ("bulk_modulus", 1.4e9, Some("Pa"), "oil bulk modulus beta"),
             (
                 "relief_pressure",
@@ -48,8 +48,8 @@ pub fn parameters(kind: PressKind) -> &'static [Param] {
                 Some("Pa"),
                 "relief valve setting: the tonnage is p_relief A",
             ),
-            ("ram_mass", 2000.0, None, "ram and moving platen m_r (kg)"),
-            ("damping", 5.0e5, None, "seals and guides c (N s/m)"),
+            ("ram_mass", 2000.0, Some("kg"), "ram and moving platen m_r"),
+            ("damping", 5.0e5, Some("N.s/m"), "seals and guides c"),
             (
                 "substeps",
                 20.0,
@@ -63,21 +63,21 @@ pub fn parameters(kind: PressKind) -> &'static [Param] {
             (
                 "strokes_per_minute",
                 20.0,
-                None,
-                "strokes per minute at no load (1/min)",
+                Some("1/min"),
+                "strokes per minute at no load",
             ),
             (
                 "inertia",
                 3.0e4,
-                None,
-                "flywheel inertia referred to the crankshaft I (kg m^2)",
+                Some("kg.m2"),
+                "flywheel inertia referred to the crankshaft I",
             ),
             ("rated_force", 1.2e6, Some("N"), "rated tonnage"),
             (
                 "rated_angle",
                 20.0 * PI / 180.0,
-                None,
-                "rated angle before bottom dead centre (rad)",
+                Some("rad"),
+                "rated angle before bottom dead centre",
             ),
             (
                 "shut_height",
@@ -100,12 +100,12 @@ pub fn parameters(kind: PressKind) -> &'static [Param] {
             (
                 "end_angle",
                 15.0 * PI / 180.0,
-                None,
-                "after bottom dead centre, where the cycle ends (rad)",
+                Some("rad"),
+                "after bottom dead centre, where the cycle ends",
             ),
         ],
         PressKind::Hammer => &[
-            ("ram_mass", 200.0, None, "ram mass m (kg)"),
+            ("ram_mass", 200.0, Some("kg"), "ram mass m"),
             (
                 "impact_speed",
                 5.0,
@@ -136,11 +136,11 @@ pub fn parameters(kind: PressKind) -> &'static [Param] {
             (
                 "inertia",
                 40.0,
-                None,
-                "inertia of flywheel, screw and ram referred to the screw I (kg m^2)",
+                Some("kg.m2"),
+                "inertia of flywheel, screw and ram referred to the screw I",
             ),
             ("lead", 0.25, Some("m"), "screw lead p, ram travel per turn"),
-            ("omega", 12.0, None, "flywheel speed at contact (rad/s)"),
+            ("omega", 12.0, Some("rad/s"), "flywheel speed at contact"),
         ],
     }
 }
@@ -190,10 +190,10 @@ pub fn outputs(kind: PressKind) -> &'static [(&'static str, Option<&'static str>
         PressKind::Crank => &[
             (
                 "crank_angle_rad",
-                None,
-                "crank angle from top dead centre (rad)",
+                Some("rad"),
+                "crank angle from top dead centre",
             ),
-            ("crank_speed_rad_per_s", None, "crank speed (rad/s)"),
+            ("crank_speed_rad_per_s", Some("rad/s"), "crank speed"),
             (
                 "flywheel_energy_J",
                 Some("J"),
@@ -212,7 +212,7 @@ pub fn outputs(kind: PressKind) -> &'static [(&'static str, Option<&'static str>
         ],
         PressKind::Hammer => &[("blow", None, "number of the blow under way (-)")],
         PressKind::Screw => &[
-            ("flywheel_speed_rad_per_s", None, "flywheel speed (rad/s)"),
+            ("flywheel_speed_rad_per_s", Some("rad/s"), "flywheel speed"),
             (
                 "flywheel_energy_J",
                 Some("J"),
@@ -314,6 +314,58 @@ pub fn header(kind: PressKind, model_identifier: &str) -> xml::Header {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::xml3;
+
+    /// Every press's variables carry an SI unit, but for its counts and flags; the FMI 2.0
+    /// and 3.0 documents write each unit with its base units (an unknown unit is an error).
+    #[test]
+    fn every_quantity_of_a_press_has_a_unit_with_its_base_units() {
+        let dimensionless = [
+            "finished",
+            "overload",
+            "blow",
+            "substeps",
+            "max_blows",
+            "model_copies",
+        ];
+        for kind in [
+            PressKind::Hydraulic,
+            PressKind::Crank,
+            PressKind::Hammer,
+            PressKind::Screw,
+        ] {
+            let vars = variable_table(kind, 1.0);
+            for v in &vars {
+                let counted = dimensionless.contains(&v.name.as_str());
+                assert_eq!(v.unit.is_none(), counted, "{kind:?} {}", v.name);
+            }
+            let text = xml::write(&header(kind, "press"), &vars).unwrap();
+            let back = xml::read(&text).unwrap();
+            for v in vars.iter().filter_map(|v| v.unit) {
+                assert!(back.units.iter().any(|u| u == v), "{kind:?} {v}");
+            }
+            xml3::write(&header(kind, "press"), &vars, vars.len() as u32).unwrap();
+        }
+        let crank = xml::write(
+            &header(PressKind::Crank, "press"),
+            &variable_table(PressKind::Crank, 1.0),
+        )
+        .unwrap();
+        assert!(
+            crank.contains(r#"<Unit name="1/min">"#)
+                && crank.contains(r#"<BaseUnit s="-1" factor="0.016666666666666666"/>"#),
+            "{crank}"
+        );
+    }
+
+    /// A unit without base units is refused, naming it and a variable that uses it.
+    #[test]
+    fn an_unknown_unit_is_refused_by_name() {
+        let mut vars = variable_table(PressKind::Screw, 1.0);
+        vars[0].unit = Some("furlong");
+        let e = xml::write(&header(PressKind::Screw, "press"), &vars).unwrap_err();
+        assert!(e.contains("furlong") && e.contains(&vars[0].name), "{e}");
+    }
 
     #[test]
     fn a_plane_along_the_axis_doubles_the_force_and_one_across_it_does_not() {
