@@ -230,6 +230,25 @@ def test_a_step_safety_that_would_never_end_is_refused_by_name(rkforge_bin, tmp_
     assert "more than 1e9: raise time.dt_safety" in proc.stderr
 
 
+
+def test_a_grid_beyond_the_machines_memory_is_refused_by_key(rkforge_bin, tmp_path):
+    """Under a 3 GB address-space limit a 2000 x 2000 block is refused before its tables are
+    allocated (before, the allocation failed and the process aborted with SIGABRT); the 3D
+    bar's cells likewise."""
+    import resource
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (3_000_000_000, resource.RLIM_INFINITY))
+
+    for scene, key, value in [("block_forging", "workpiece.particles", "[2000, 2000]"),
+                              ("taylor_bar_3d", "workpiece.cells", "[40, 20, 200]")]:
+        proc = subprocess.run([rkforge_bin, "run", str(ROOT / "scenes" / f"{scene}.toml"), "--set",
+                               f"{key}={value}", "--no-frames", "--quiet", "--out", str(tmp_path / scene)],
+                              capture_output=True, text=True, timeout=600, preexec_fn=limit)
+        assert proc.returncode == 1, (proc.returncode, proc.stderr[-2000:])
+        assert f"`{key}`" in proc.stderr and "need at least" in proc.stderr, proc.stderr
+        assert "GB of address space" in proc.stderr and "fewer particles" in proc.stderr
+
 def test_a_failed_sweep_run_is_a_row_with_its_error_and_the_others_are_tabled(rkforge_bin, tmp_path):
     # At 10 km/s the block's tools pass a spacing per step and the runs stop; at 10 m/s they run.
     scene = ROOT / "scenes" / "block_forging.toml"

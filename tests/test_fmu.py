@@ -4,6 +4,7 @@ import csv
 import math
 import shutil
 import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -486,3 +487,41 @@ def test_a_hot_forging_fmu_reports_temperatures_and_heat(fmus):
     # The anvil chills the billet's foot from the start; the ram's face once it arrives.
     assert res["thermal.temperature_min_c"][-1] < 1090.0
     assert res["thermal.anvil.heat_flow_W"][-1] > 0.0 and res["thermal.heat_to_tools_J"][-1] > 0.0
+
+
+
+def test_a_grid_beyond_the_hosts_memory_is_refused_and_the_host_lives_on(adaptive_fmus):
+    """A 2000 x 2000 block under a 3 GB address-space limit (`ulimit -v`): the FMU refuses it
+    at initialization, naming the key and the sizes, where the failed allocation aborted the
+    host before. The host (a Python process with fmpy) then goes on with a coarse grid."""
+    script = f"""
+import resource, sys
+sys.path.insert(0, {str(ROOT / "examples" / "presses")!r})
+from fmpy.fmi1 import FMICallException
+from driver import Slave
+resource.setrlimit(resource.RLIMIT_AS, (3_000_000_000, resource.RLIM_INFINITY))
+path = {adaptive_fmus["block_forging"]!r}
+s = Slave(path, init=False)
+s.fmu.setupExperiment(startTime=0.0)
+s.fmu.setInteger([s.vr["workpiece.particles[0]"], s.vr["workpiece.particles[1]"]], [2000, 2000])
+s.fmu.enterInitializationMode()
+try:
+    s.fmu.exitInitializationMode()
+    print("NOT REFUSED")
+except FMICallException:
+    print("REFUSED:", s.last_error())
+s.fmu.freeInstance()
+s = Slave(path, params={{"workpiece.particles[0]": 11, "workpiece.particles[1]": 11}})
+s.set("top.velocity_m_per_s", 10.0)
+s.step(1e-5)
+print("STROKE", s.get("top.stroke_m")[0])
+s.close()
+"""
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    lines = r.stdout.splitlines()
+    refused = next(l for l in lines if l.startswith(("REFUSED", "NOT REFUSED")))
+    for w in ["REFUSED:", "workpiece.particles", "4000000 particles", "need at least", "GB of address space"]:
+        assert w in refused, (w, refused)
+    stroke = float(next(l for l in lines if l.startswith("STROKE")).split()[1])
+    assert stroke == pytest.approx(10.0 * 1e-5)

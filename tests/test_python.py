@@ -313,6 +313,32 @@ def test_ctrl_c_stops_a_run_with_keyboard_interrupt(call, tmp_path):
     assert "panic" not in proc.stderr.lower()
 
 
+
+def test_a_grid_beyond_the_machines_memory_raises_and_python_lives_on():
+    """Under a 3 GB address-space limit a 2000 x 2000 block raises MemoryError naming the key
+    (before, the failed allocation aborted the interpreter); the session goes on."""
+    script = """
+import resource, sys
+import rkforge
+resource.setrlimit(resource.RLIMIT_AS, (3_000_000_000, resource.RLIM_INFINITY))
+scene = rkforge.Scene.from_file(sys.argv[1])
+scene.set("workpiece.particles", [2000, 2000])
+try:
+    rkforge.Simulation(scene)
+    print("NOT REFUSED")
+except MemoryError as e:
+    print("REFUSED:", e)
+scene.set("workpiece.particles", [11, 11])
+summary, history = rkforge.run(scene)
+print("RAN", summary["status"])
+"""
+    proc = subprocess.run([sys.executable, "-c", script, str(ROOT / "scenes" / "block_forging.toml")],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "REFUSED: `workpiece.particles`: 4000000 particles" in proc.stdout, proc.stdout
+    assert "RAN ok" in proc.stdout, proc.stdout
+
+
 def test_a_failed_run_raises_with_its_summary_and_history():
     scene = block_scene()
     # An energy bound that the second step breaks.

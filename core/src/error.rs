@@ -70,6 +70,10 @@ pub enum Error {
     /// A request from a wrapper (FMU, ROS node) that the simulation cannot honour.
     #[error("{0}")]
     Request(String),
+    /// A run that needs more memory than the process can have ([`crate::memory`]), refused
+    /// before its tables are allocated.
+    #[error("{0}")]
+    Memory(String),
     /// A saved state that cannot be restored.
     #[error("state: {0}")]
     State(String),

@@ -23,6 +23,7 @@ pub mod lanes;
 pub mod laps;
 pub mod material;
 pub mod math;
+pub mod memory;
 pub mod outputs;
 pub mod rk_shape;
 pub mod sampling;

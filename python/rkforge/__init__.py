@@ -63,7 +63,9 @@ def run(
     :class:`SimulationError` carrying ``summary`` (``"status": "error"``) and ``history`` up
     to the failure; with ``check=False`` they are returned instead. A scene its setup refuses
     before the first step (a fixed ``time.dt_s`` above the measured critical step) raises
-    :class:`SimulationError` without them, ``check=False`` too: there is no run to return.
+    :class:`SimulationError` without them, ``check=False`` too: there is no run to return. A
+grid beyond the memory or address space the process can have raises ``MemoryError``
+naming the key, before the setup allocates its tables.
 
     With ``checkpoint`` (a folder), the run writes ``checkpoint.cbor`` there every
     ``checkpoint_every_s`` seconds of wall time; a run given a folder that holds the

@@ -3,7 +3,7 @@
 //! the interpreter ([`guarded`]), and Ctrl-C heard during a long call ([`interruptible`]).
 
 use pyo3::create_exception;
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -42,6 +42,7 @@ pub(crate) fn to_py(e: rkforge_core::Error) -> PyErr {
         }
         Error::State(_) => StateError::new_err(text),
         Error::Request(_) => PyValueError::new_err(text),
+        Error::Memory(_) => PyMemoryError::new_err(text),
         _ => SimulationError::new_err(text),
     }
 }

@@ -26,6 +26,7 @@ use crate::error::{Error, Result};
 use crate::integration::{orthant_shapes, point_shapes, PointSet};
 use crate::material::{HenckyJ2, PointState};
 use crate::math::Real;
+use crate::memory;
 use crate::rk_shape::{Lattice, ShapeTable, Site};
 use crate::scene::{Component, Edge, IntegrationRule, Kinematics, Scene, TimeSpec};
 use crate::team::Team;
@@ -48,6 +49,14 @@ impl Simulation {
             scene.discretization.support[0] * h[0],
             scene.discretization.support[1] * h[1],
         ];
+        let [sx, sy] = scene.discretization.support;
+        memory::check(
+            nx * ny,
+            2,
+            scene.discretization.integration,
+            (sx * sy).sqrt(),
+            "workpiece.particles",
+        )?;
         let t_shapes = Instant::now();
         let lattice = Lattice::new(w.origin_m, h, [nx, ny], support);
         let ref_pos = lattice.cloud().positions.clone();

@@ -13,6 +13,7 @@ use crate::error::{Error, Result};
 use crate::integration::{orthant_shapes, point_shapes, smoothed, DomainBoundaries};
 use crate::material::{HenckyJ2, PointState3};
 use crate::math::Real;
+use crate::memory;
 use crate::rk_shape::{for_each_index, KernelCloud, Lattice, ShapeTable, Site};
 use crate::scene::solid::{CylinderPart, SolidScene, SolidShape, ToolShape};
 use crate::scene::IntegrationRule;
@@ -177,6 +178,8 @@ fn cylinder(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
     let grid = CylinderGrid::new(radius_m, length_m, cells, core_ratio, sector)
         .map_err(|m| Error::Request(format!("workpiece: {m}")))?;
     let rule = scene.discretization.integration;
+    let support = scene.discretization.support;
+    memory::check(grid.positions.len(), 3, rule, support, "workpiece.cells")?;
     let supports = grid.supports(scene.discretization.support);
     let cloud = KernelCloud::with_supports(grid.positions.clone(), grid.volumes.clone(), supports);
     let (points, weights, pt, layer_points) = if rule == IntegrationRule::Scni {
@@ -227,6 +230,13 @@ fn lattice(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
     else {
         unreachable!("called for a box")
     };
+    memory::check(
+        particles.iter().product(),
+        3,
+        scene.discretization.integration,
+        scene.discretization.support,
+        "workpiece.particles",
+    )?;
     let h: [Real; 3] = std::array::from_fn(|k| size_m[k] / (particles[k] - 1) as Real);
     let support = h.map(|hk| scene.discretization.support * hk);
     let lattice = Lattice::new(origin_m, h, particles, support);
