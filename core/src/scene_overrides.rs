@@ -260,6 +260,16 @@ fn build<S: Overridable>(text: &str, file: &str, overrides: &[(String, Value)]) 
     let mut paths = Vec::with_capacity(overrides.len());
     let mut scene = None;
     for (key, value) in overrides {
+        if key == "model.kinematics" && (value.as_str() == Some("3d")) != S::SOLID {
+            return Err(Error::Override {
+                key: key.clone(),
+                message: match S::SOLID {
+                    false => "`3d` would make this 2D scene a 3D one, whose workpiece and tools take other keys (a cylinder's `cells` or a box's three `particles`, tools in space): start from a 3D scene file (`model.kinematics = \"3d\"`, as scenes/taylor_bar_3d.toml)",
+                    true => "this 3D scene stays 3D: a 2D scene (`plane_strain` or `axisymmetric`) takes other keys; start from a 2D scene file (as scenes/taylor_bar.toml)",
+                }
+                .into(),
+            });
+        }
         paths.push(apply(&mut doc, &defaults, key, value.clone())?);
         // Deserialising after each override names the first one that breaks the scene.
         scene = Some(
@@ -469,6 +479,33 @@ friction = 0.2
                 velocity_m_per_s: -2.5
             }
         );
+    }
+
+    /// A 2D scene cannot become 3D by an override (nor back): the message says why and what
+    /// to start from, where it listed the 2D kinematics alone; the 2D kinematics switch.
+    #[test]
+    fn kinematics_between_2d_and_3d_are_refused_with_the_reason() {
+        let e = with("model.kinematics", "3d").unwrap_err().to_string();
+        assert!(
+            e.contains("model.kinematics")
+                && e.contains("would make this 2D scene a 3D one")
+                && e.contains("3D scene file"),
+            "{e}"
+        );
+        let s = with("model.kinematics", "axisymmetric").unwrap();
+        assert_eq!(
+            s.scene().model.kinematics,
+            crate::scene::Kinematics::Axisymmetric
+        );
+        let solid = include_str!("../../scenes/taylor_bar_3d.toml");
+        let e = build::<crate::scene::SolidScene>(
+            solid,
+            "t.toml",
+            &[("model.kinematics".into(), parse_value("plane_strain"))],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("this 3D scene stays 3D"), "{e}");
     }
 
     #[test]
