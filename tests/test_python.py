@@ -339,6 +339,18 @@ print("RAN", summary["status"])
     assert "RAN ok" in proc.stdout, proc.stdout
 
 
+def test_the_type_stubs_match_the_built_module(tmp_path):
+    """mypy's stubtest: every name, signature and class of the installed package (the Rust
+    extension and the Python modules) against its stubs, as a user's type checker reads
+    them (`Simulation(...)` through `__new__`, the classes final). pandas and tqdm ship no
+    stubs here: their imports are left untyped."""
+    config = tmp_path / "mypy.ini"
+    config.write_text(f"[mypy]\nignore_missing_imports = True\ncache_dir = {tmp_path / 'cache'}\n")
+    proc = subprocess.run([sys.executable, "-m", "mypy.stubtest", "rkforge", "--mypy-config-file", str(config)],
+                          capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout[-4000:] + proc.stderr[-2000:]
+    assert "Success: no issues found" in proc.stdout, proc.stdout
+
 def test_a_failed_run_raises_with_its_summary_and_history():
     scene = block_scene()
     # An energy bound that the second step breaks.

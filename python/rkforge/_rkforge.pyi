@@ -1,9 +1,11 @@
 """Type stubs of the Rust extension ``rkforge._rkforge``."""
 from os import PathLike
-from typing import Any, Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
+
+__all__ = ["Scene", "Simulation", "run_scene", "SceneError", "StateError", "SimulationError", "__version__"]
 
 __version__: str
 
@@ -23,8 +25,9 @@ class SimulationError(RuntimeError):
     summary: Dict[str, Any]
     history: Any
 
-Value = Union[bool, int, float, str, List[Any], Tuple[Any, ...], Dict[str, Any]]
+_Value = Union[bool, int, float, str, List[Any], Tuple[Any, ...], Dict[str, Any]]
 
+@final
 class Scene:
     """A validated scene: its text, and overrides set by dotted key."""
 
@@ -34,7 +37,7 @@ class Scene:
     @staticmethod
     def from_toml(text: str, name: str = "<scene text>") -> Scene:
         """Parse and validate scene text; ``name`` stands for the file in error messages."""
-    def set(self, key: str, value: Value) -> None:
+    def set(self, key: str, value: _Value) -> None:
         """Override the key at a dotted path, e.g. ``set("tools.top.friction", 0.1)``; tools
         by name (or ``tools[1]``). Validated at once like a file: SceneError names the key,
         TypeError a value that cannot be a TOML value; on error the scene is unchanged."""
@@ -50,7 +53,7 @@ class Scene:
     def tools(self) -> List[str]:
         """The names of the tools, in scene order."""
     @property
-    def overrides(self) -> List[Tuple[str, Value]]:
+    def overrides(self) -> List[Tuple[str, _Value]]:
         """The overrides set so far, as (dotted key, value) pairs in order."""
     @property
     def text(self) -> str:
@@ -65,12 +68,14 @@ class Scene:
         ``unit`` (``1`` for a pure number), ``kind``, ``description`` and whether
         ``history``, ``summary`` and ``fmu`` show it."""
 
+@final
 class Simulation:
     """A simulation of a scene, stepped from Python with the GIL released."""
 
-    def __init__(self, scene: Scene, integration: Optional[str] = None, threads: Optional[int] = None) -> None:
+    def __new__(cls, scene: Scene, integration: Optional[str] = None, threads: Optional[int] = None) -> Simulation:
         """Set up the discretisation; ``integration`` ("q4", "q2", "scni") overrides the
-        scene's rule, ``threads`` gives the simulation its own pool of that many threads."""
+        scene's rule, ``threads`` gives the simulation its own pool of that many threads.
+        MemoryError, naming the key, for a grid beyond what the process can have."""
     def step(self, toward: Optional[float] = None) -> float:
         """One time step; returns the new time (s). With ``toward`` (s), the step
         ``run_to(toward)`` would take next (shortened and evened out to land on it).

@@ -56,7 +56,7 @@ def _cloud(msg) -> Dict[str, np.ndarray]:
         "itemsize": msg.point_step,
     })
     points = np.frombuffer(bytes(msg.data), dtype=dtype, count=msg.width * msg.height)
-    return {name: points[name].copy() for name in dtype.names}
+    return {name: points[name].copy() for name in dtype.names or ()}
 
 
 def _kinematics(path) -> str:

@@ -238,7 +238,7 @@ def study(
     for i, case in enumerate(explicit):
         r = results[i]
         summary = r["summary"] or {}
-        row = {"case": i}
+        row: Dict[str, Any] = {"case": i}
         row.update({k: case.get(k) for k in keys})
         row.update(status=r["status"], error=r["error"], wall_s=summary.get("wall_s", math.nan),
                    case_wall_s=r["case_wall_s"], resumed_at_s=summary.get("resumed_at_s"))
