@@ -2,6 +2,7 @@
 //! a run whose account does not close (a discretisation error or an instability) or whose
 //! contact interface generates energy.
 
+use super::stable_step::above_estimate;
 use crate::error::{Error, Result};
 use crate::math::{dot, Real};
 use serde::{Deserialize, Serialize};
@@ -167,6 +168,7 @@ impl Energy {
         time: Real,
         dt: Real,
         stable_dt: Real,
+        fixed: Option<Real>,
     ) -> Result<()> {
         let e = self;
         let rel = e.balance_error_rel();
@@ -190,7 +192,7 @@ impl Energy {
                     e.initial,
                     dt,
                     stable_dt,
-                    if dt > stable_dt { " (the step exceeds the estimate: likely an instability)" } else { "" }
+                    above_estimate(fixed, dt, stable_dt)
                 ),
             });
         }
@@ -202,8 +204,8 @@ impl Energy {
                 error_rel: gain / e.reference(),
                 bound: tol,
                 detail: format!(
-                    "the contact interface generated {gain:.4e} J: the contact forces did {:.4e} J of work on the workpiece while the tools delivered {:.4e} J",
-                    e.contact_work, e.tool_work
+                    "the contact interface generated {gain:.4e} J: the contact forces did {:.4e} J of work on the workpiece while the tools delivered {:.4e} J{}",
+                    e.contact_work, e.tool_work, above_estimate(fixed, dt, stable_dt)
                 ),
             });
         }

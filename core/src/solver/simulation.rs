@@ -200,7 +200,7 @@ impl Simulation {
         });
         timed(&mut times.integration, || -> Result<()> {
             update::correct(disc, tools, st, ws, touch.any, dt.avg);
-            let u = update::advance(disc, tools, st, ws, touch.any, dt)?;
+            let u = update::advance(disc, tools, st, ws, touch.any, dt, scene.time.dt_s)?;
             st.energy.add_step(StepEnergy {
                 kinetic: u.kinetic,
                 elastic,
@@ -216,7 +216,7 @@ impl Simulation {
             }
             let tol = scene.checks.energy_balance_tol;
             st.energy
-                .check(tol, st.step, st.time, dt.dt, st.stable_dt)?;
+                .check(tol, st.step, st.time, dt.dt, st.stable_dt, scene.time.dt_s)?;
             quasi_static::watch(
                 &scene.checks,
                 scene.time.end_s,

@@ -141,6 +141,22 @@ pub(super) fn natural_step(time: &TimeSpec, stable_dt: Real) -> Real {
     time.dt_s.unwrap_or(time.dt_safety * stable_dt)
 }
 
+/// What a failed step's diagnosis adds when the step `dt` (s) ran above the stable estimate
+/// `stable_dt` (s) of the deformed body (its smallest deformed cell, `stress.rs`): with a
+/// fixed step `fixed` (`time.dt_s`, s) above the estimate, that the key holds the step past
+/// it and what to do; else the step against the estimate. Empty when the step was within it.
+pub(super) fn above_estimate(fixed: Option<Real>, dt: Real, stable_dt: Real) -> String {
+    match fixed {
+        Some(f) if f > stable_dt => format!(
+            "; the fixed step time.dt_s = {f:.3e} s is above the stable estimate {stable_dt:.3e} s of the deformed body (likely an instability): lower time.dt_s, or remove it to step at time.dt_safety of the estimate"
+        ),
+        _ if dt > stable_dt => format!(
+            "; the step {dt:.3e} s was above the stable estimate {stable_dt:.3e} s (likely an instability)"
+        ),
+        _ => String::new(),
+    }
+}
+
 /// The step's first check, for both dimensions ([`tool_step_limit`] on the natural step at
 /// `stable_dt`, s): the longest step the tools' speeds allow (s), or an error naming the
 /// step `step` at time `t` (s) and the tool too fast for it, before anything changes.
@@ -197,8 +213,46 @@ pub(super) fn length(
 
 #[cfg(test)]
 mod tests {
-    use super::{landing_step, LANDING_HOLD};
+    use super::{above_estimate, landing_step, LANDING_HOLD};
     use crate::math::Real;
+
+    /// A failed step's diagnosis names a fixed step above the estimate with the key and what
+    /// to do, a natural step above it with the two lengths, and nothing within it.
+    #[test]
+    fn a_step_above_the_estimate_is_named_in_the_diagnosis() {
+        let fixed = above_estimate(Some(2.5e-8), 2.5e-8, 1.0e-9);
+        assert!(
+            fixed.contains("time.dt_s = 2.500e-8 s is above the stable estimate 1.000e-9 s")
+                && fixed.contains("lower time.dt_s"),
+            "{fixed}"
+        );
+        let natural = above_estimate(None, 3e-9, 2e-9);
+        assert!(
+            natural.contains("the step 3.000e-9 s was above the stable estimate 2.000e-9 s"),
+            "{natural}"
+        );
+        assert_eq!(above_estimate(Some(1e-9), 1e-9, 2e-9), "");
+        assert_eq!(above_estimate(None, 1e-9, 2e-9), "");
+    }
+
+    /// The Taylor bar at a fixed step of 0.95 of its critical step (2.62e-8 s): the foot's
+    /// cells shrink the stable estimate below it, and the run stops (an energy balance
+    /// error at step 1060) with the diagnosis naming the key.
+    #[test]
+    fn a_fixed_step_the_deformed_body_outgrew_is_named_when_the_run_stops() {
+        let text = include_str!("../../../scenes/taylor_bar.toml")
+            .replace("dt_s = 5.0e-9", "dt_s = 2.5e-8");
+        let scene = crate::scene::Scene::from_str_named(&text, "t.toml").unwrap();
+        let mut sim = crate::Simulation::new(&scene).unwrap();
+        let e = sim
+            .run_to(scene.time.end_s, |_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("the fixed step time.dt_s = 2.500e-8 s is above the stable estimate"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn landing_steps_are_equal_and_never_overshoot() {

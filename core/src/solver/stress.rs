@@ -24,6 +24,7 @@ use super::heat::{Heat, Heating};
 use super::layout::{Scatter, MAX_GROUP, MAX_GROUP_3D};
 use super::nodal_stabilization;
 use super::point_outputs::PointOut;
+use super::stable_step::above_estimate;
 use super::state::State;
 use super::workspace::Workspace;
 use crate::error::{Error, Result};
@@ -1116,8 +1117,9 @@ pub(super) fn run(
         step: st.step,
         time: st.time,
         what: format!(
-            "integration point {p} (reference position {:?} m): {m}",
-            disc.points.positions[p]
+            "integration point {p} (reference position {:?} m): {m}{}",
+            disc.points.positions[p],
+            above_estimate(scene.time.dt_s, st.dt_prev, st.stable_dt)
         ),
     })?;
     st.stable_dt = disc.critical_dt0 * sums.min_altitude / disc.h_min();

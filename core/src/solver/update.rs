@@ -13,7 +13,7 @@
 use super::discretization::Discretization;
 use super::energy::kinetic_energy;
 use super::layout::{Scatter, BLOCK};
-use super::stable_step::StepLength;
+use super::stable_step::{above_estimate, StepLength};
 use super::state::State;
 use super::workspace::Workspace;
 use crate::constraints::Constraints;
@@ -336,7 +336,8 @@ pub(super) fn correct(
 
 /// Stage 6: the update of the coefficients over the step `step` ([`update`]), recording the
 /// move bound for the contact stage; a velocity that is not finite stops the run naming
-/// the particle.
+/// the particle, and the scene's fixed step `fixed` (`time.dt_s`, s) when the step ran
+/// above the stable estimate ([`above_estimate`]).
 pub(super) fn advance(
     disc: &Discretization,
     tools: &[Tool],
@@ -344,6 +345,7 @@ pub(super) fn advance(
     ws: &mut Workspace,
     contact: bool,
     step: StepLength,
+    fixed: Option<Real>,
 ) -> Result<Sums> {
     let motion = Motion {
         v: &st.v,
@@ -365,8 +367,9 @@ pub(super) fn advance(
             step: st.step,
             time: st.time,
             what: format!(
-                "velocity of particle {i} at {:?} m is not finite",
-                disc.original[i]
+                "velocity of particle {i} at {:?} m is not finite{}",
+                disc.original[i],
+                above_estimate(fixed, step.dt, st.stable_dt)
             ),
         });
     }

@@ -317,11 +317,13 @@ fn timed<T>(into: &mut Duration, f: impl FnOnce() -> T) -> T {
 /// in (`Energy::thermoelastic`, J; the 2D stage's); sets the stable
 /// step estimate `dt_crit0 a_min` from the smallest deformed cell altitude `a_min` of a
 /// unit cell (-); returns the elastic and plastic energy (J). A point whose update fails
-/// stops the run naming it.
+/// stops the run naming it, and the scene's fixed step `fixed` (`time.dt_s`, s) when the
+/// last step ran above the estimate ([`stable_step::above_estimate`]).
 fn stress_stage(
     disc: &SolidDisc,
     st: &mut SolidState,
     ws: &mut SolidWorkspace,
+    fixed: Option<Real>,
 ) -> Result<(Real, Real)> {
     let input = Inputs {
         d: &st.d,
@@ -348,8 +350,9 @@ fn stress_stage(
         step: st.step,
         time: st.time,
         what: format!(
-            "integration point {p} (reference position {:?} m): {m}",
-            disc.point_positions[p]
+            "integration point {p} (reference position {:?} m): {m}{}",
+            disc.point_positions[p],
+            stable_step::above_estimate(fixed, st.dt_prev, st.stable_dt)
         ),
     })?;
     st.stable_dt = disc.critical_dt0 * sums.min_altitude;
@@ -429,7 +432,9 @@ impl SolidSimulation {
             st.stable_dt,
             disc.h_min,
         )?;
-        let (elastic, plastic) = timed(&mut times.stress, || stress_stage(disc, st, ws))?;
+        let (elastic, plastic) = timed(&mut times.stress, || {
+            stress_stage(disc, st, ws, scene.time.dt_s)
+        })?;
         if st.stable_dt < CRUSHED * disc.critical_dt0 {
             return Err(Error::Diverged {
                 step: st.step,
@@ -500,8 +505,9 @@ impl SolidSimulation {
                     step: st.step,
                     time: st.time,
                     what: format!(
-                        "velocity of particle {i} at {:?} m is not finite",
-                        disc.ref_pos[i]
+                        "velocity of particle {i} at {:?} m is not finite{}",
+                        disc.ref_pos[i],
+                        stable_step::above_estimate(scene.time.dt_s, dt, st.stable_dt)
                     ),
                 });
             }
@@ -537,6 +543,7 @@ impl SolidSimulation {
                 st.time,
                 dt,
                 st.stable_dt,
+                scene.time.dt_s,
             )?;
             quasi_static::watch(
                 &scene.checks,

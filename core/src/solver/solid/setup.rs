@@ -559,7 +559,7 @@ impl SolidSimulation {
             disc.scaling_target = target.and_then(|t| t.acting(scene.time.mass_scaling));
         }
         st.stable_dt = disc.critical_dt0;
-        super::stress_stage(&disc, &mut st, &mut ws)?;
+        super::stress_stage(&disc, &mut st, &mut ws, scene.time.dt_s)?;
         super::gather(&disc, &mut st, &mut ws, None);
         let sim = SolidSimulation {
             scene: scene.clone(),
@@ -592,7 +592,7 @@ pub(super) fn measure_critical_step(
     let inv_sqrt_m: Vec<Real> = disc.mass.iter().map(|m| 1.0 / m.sqrt()).collect();
     let dt = critical_step(&inv_sqrt_m, 1e-7 * disc.h_min, |d| {
         st.d = d;
-        super::stress_stage(disc, st, ws)?;
+        super::stress_stage(disc, st, ws, None)?;
         super::gather(disc, st, ws, None);
         Ok(ws.f_int.clone())
     });
