@@ -15,7 +15,8 @@ import pandas as pd
 Cases = Union[Mapping[str, Sequence[Any]], Sequence[Mapping[str, Any]]]
 
 #: Summary keys that are not figures of the case (timing and the machine it ran on).
-_NOT_FIGURES = ("stage_seconds", "threads", "wall_s", "error", "status", "resumed_at_s")
+_NOT_FIGURES = ("stage_seconds", "threads", "wall_s", "us_per_particle_step", "error", "status",
+                "resumed_at_s")
 
 
 def expand(cases: Cases) -> List[Dict[str, Any]]:
