@@ -178,8 +178,13 @@ fn cylinder(shape: &SolidShape, scene: &SolidScene) -> Result<Particles> {
     let grid = CylinderGrid::new(radius_m, length_m, cells, core_ratio, sector)
         .map_err(|m| Error::Request(format!("workpiece: {m}")))?;
     let rule = scene.discretization.integration;
-    let support = scene.discretization.support;
-    memory::check(grid.positions.len(), 3, rule, support, "workpiece.cells")?;
+    memory::check(
+        grid.positions.len(),
+        3,
+        rule,
+        scene.discretization.support,
+        "workpiece.cells",
+    )?;
     let supports = grid.supports(scene.discretization.support);
     let cloud = KernelCloud::with_supports(grid.positions.clone(), grid.volumes.clone(), supports);
     let (points, weights, pt, layer_points) = if rule == IntegrationRule::Scni {
