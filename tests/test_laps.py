@@ -122,3 +122,22 @@ def test_the_node_records_the_lap(pin, cli, rkforge_ros_bin, tmp_path):
     msgs = laps_messages(path)
     assert [len(m.formed_time) for _, m in msgs] == [r["workpiece.laps"] for r in rows]
     assert msgs[-1][1].formed_time[0] == summary["laps"][0]["formed_s"]
+
+
+def test_a_3d_fold_within_the_support_is_reported_where_its_faces_cross(rkforge_bin, tmp_path):
+    """The conrod on its coarsest grid (15 x 5 x 7): the bar's top edge by the boss curls onto
+    its side within a cell, where the self-contact and its lap rule do not look. The run's
+    summary says so in a warning with when and where, the history counts the crossings of the
+    surface's faces from that sample on, and no lap is claimed."""
+    out, summary, rows = run_cli(
+        rkforge_bin, ROOT / "scenes" / "conrod_3d.toml", tmp_path, "--no-frames",
+        "--set", "workpiece.particles=[15, 5, 7]", "--set", "time.end_s=0.026")
+    crossings = [r["workpiece.fold_crossings"] for r in rows]
+    first = next(k for k, c in enumerate(crossings) if c > 0)
+    assert 0.020 < rows[first]["time_s"] and set(crossings[:first]) == {0.0}
+    assert summary["contact"]["max_fold_crossings"] == max(crossings)
+    [warning] = summary["warnings"]
+    assert warning.startswith("the root of a fold passed through itself"), warning
+    at = float(re.search(r"first at t = (\S+) s", warning).group(1))
+    assert abs(at - rows[first]["time_s"]) <= 1e-4 * at, warning
+    assert summary["laps"] == []

@@ -183,7 +183,7 @@ pub fn solid_summary(
         "smallest_spacing_m": sim.h_min(),
         "critical_dt_s": sim.critical_dt0(),
         "mass_scaling": sim.mass_scaling(),
-        "warnings": sim.quasi_static_warning().into_iter().chain(sim.detached_warning()).collect::<Vec<_>>(),
+        "warnings": sim.quasi_static_warning().into_iter().chain(sim.surface_warning()).chain(sim.detached_warning()).collect::<Vec<_>>(),
         "workpiece": {
             "x_range_m": b.extents[0],
             "y_range_m": b.extents[1],
@@ -197,6 +197,8 @@ pub fn solid_summary(
             "max_beyond_plane_rel": st.max_beyond_plane / sim.h_min(),
             "plane_feedback_max": st.plane_feedback_max,
             "plane_penalty_scale_min": sim.plane_penalty_scale_min(),
+            "max_fold_crossings": sim.max_fold_crossings(),
+            "self_contact": scene.self_contact.enabled,
         },
         "tools": sim.tools().iter().enumerate().map(|(k, t)| json!({
             "name": t.name,

@@ -55,6 +55,9 @@ use crate::tools::Penetration;
 use crate::triangle_surface::{box_distance2, closest_on_triangle, Feature};
 use std::collections::HashMap;
 
+mod crossings;
+pub use crossings::{Crossing, Crossings};
+
 /// The winding number above which a surface particle has passed through another part of
 /// the surface ([`Surface::passed_through`]): halfway between a surface point's 1/2 and a
 /// passed-through point's 3/2, with room for a bent neighbourhood.

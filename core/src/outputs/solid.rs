@@ -13,6 +13,7 @@ use super::register::{
     thermal_measures, thermoelastic, time, tool, work,
 };
 use super::{expand, fields_of, fill_instances, At, Column, Kind, Output, Sample, Shown, When};
+use crate::contact::self_contact_3d::Crossings;
 use crate::math::Real;
 use crate::scene::solid::SolidScene;
 use crate::solver::{BodyReadings, SolidSimulation};
@@ -138,7 +139,7 @@ const TOOLS: [Output<SolidSimulation>; 15] = [
 ];
 
 /// The workpiece as a whole, from its particles' physical positions.
-const WORKPIECE: [Output<SolidSimulation>; 13] = [
+const WORKPIECE: [Output<SolidSimulation>; 14] = [
     bound("x_min_m", "least x of the particles", 0, 0),
     bound("x_max_m", "largest x of the particles", 0, 1),
     bound("y_min_m", "least y of the particles", 1, 0),
@@ -194,6 +195,14 @@ const WORKPIECE: [Output<SolidSimulation>; 13] = [
         "1",
         "deepest a particle lies beyond a symmetry plane, in smallest particle spacings",
         |s| s.penetration()[1] / s.h_min(),
+    )
+    .showing(Shown::NOT_IN_SUMMARY),
+    scalar::<SolidSimulation>(
+        "workpiece",
+        "fold_crossings",
+        "1",
+        "crossings of the surface's faces within the kernel's support of each other (a fold's root passed through itself, which the self-contact leaves out; 0: none)",
+        |s| s.fold_crossings().count as Real,
     )
     .showing(Shown::NOT_IN_SUMMARY),
 ];
@@ -279,6 +288,7 @@ pub struct SolidCache {
     positions: OnceCell<Vec<[Real; 3]>>,
     readings: OnceCell<BodyReadings>,
     penetration: OnceCell<[Real; 2]>,
+    crossings: OnceCell<Crossings>,
 }
 
 impl<'a> Sample<'a, SolidSimulation> {
@@ -332,6 +342,15 @@ impl<'a> Sample<'a, SolidSimulation> {
             let [tools, planes] = self.sim.penetration_at(self.positions());
             [tools.0, planes.0]
         })
+    }
+
+    /// The crossings of the surface's faces within the support of each other, measured
+    /// when first read ([`SolidSimulation::fold_crossings_at`]).
+    pub fn fold_crossings(&self) -> Crossings {
+        *self
+            .cache
+            .crossings
+            .get_or_init(|| self.sim.fold_crossings_at(self.positions()))
     }
 }
 

@@ -64,6 +64,7 @@ use super::heat_readings;
 use super::layout::Scatter;
 use super::mass_scaling::Target;
 use super::nodal_stabilization::{self, Forces, Tables};
+use super::penetration::CROSSING_TOLERANCE_SPACINGS;
 use super::point_outputs::PointOut;
 use super::quasi_static;
 use super::simulation::{stepping_loop, Ran, StageTimes, Stepping};
@@ -71,6 +72,7 @@ use super::stable_step;
 use super::state::Filled;
 use super::stress::{self, has_avx2, Inputs};
 use super::update::{self, Motion, Predictor};
+use crate::contact::self_contact_3d::{Crossing, Crossings};
 use crate::error::{Error, Result};
 use crate::laps::{SolidLap, SolidLapReport};
 use crate::material::{HenckyJ2, PointState3};
@@ -250,6 +252,15 @@ pub struct SolidState {
     /// The laps (folds of the surface onto itself) found so far, in the order they formed.
     #[serde(default)]
     pub laps: Vec<SolidLap>,
+    /// Most crossings of the surface's faces within the kernel's support of each other at
+    /// a sample (0: no fold's root passed through itself;
+    /// [`crate::contact::self_contact_3d::Surface::fold_crossings`]).
+    #[serde(default)]
+    pub max_fold_crossings: u32,
+    /// The first sample at which a fold's root passed through itself: its time (s) and its
+    /// first crossing.
+    #[serde(default)]
+    pub first_fold_crossing: Option<(Real, Crossing)>,
     /// The particles' isolation at the samples, and the first that left the body
     /// ([`crate::solver::detachment`]).
     #[serde(default)]
@@ -959,6 +970,43 @@ impl SolidSimulation {
         self.ws.self_contact.passed_through(&self.positions())
     }
 
+    /// The crossings of the workpiece's surface's faces within the kernel's support of
+    /// each other (a fold's root, which the self-contact leaves out) at the particles'
+    /// physical positions `positions` (m), whether the scene's self-contact is on or off,
+    /// with 2D's tolerance ([`CROSSING_TOLERANCE_SPACINGS`] smallest spacings;
+    /// [`crate::contact::self_contact_3d::Surface::fold_crossings`]).
+    pub fn fold_crossings_at(&self, positions: &[[Real; 3]]) -> Crossings {
+        self.ws
+            .self_contact
+            .fold_crossings(positions, CROSSING_TOLERANCE_SPACINGS * self.disc.h_min)
+    }
+
+    /// Most crossings of faces within the support of each other at a sample (0: no fold's
+    /// root passed through itself).
+    pub fn max_fold_crossings(&self) -> u32 {
+        self.st.max_fold_crossings
+    }
+
+    /// A warning when a fold's root passed through itself at a sample
+    /// ([`SolidSimulation::fold_crossings_at`]), naming when and where it first did, how
+    /// far apart those faces started and how long their longest edge is now: the contact
+    /// holds nothing there, so the volume, the pictures and the laps are not to be trusted
+    /// there.
+    pub fn surface_warning(&self) -> Option<String> {
+        let (time, c) = self.st.first_fold_crossing?;
+        let h = self.disc.h_min;
+        Some(format!(
+            "the root of a fold passed through itself ({} crossings of faces within the kernel's support of each other at a sample at most; first at t = {time:.4e} s at ({:.3}, {:.3}, {:.3}) mm, between faces whose centres started {:.2} smallest spacings apart, their longest edge now {:.2} spacings): the self-contact leaves out the faces within {} cells of a particle in the undeformed body, so such a fold is neither held nor named a lap (a face stretched over several spacings is also a chord that can cut the surface where the material does not); look at the pictures there, and at a finer grid, on which a fold that outgrows the support is held and named a lap",
+            self.st.max_fold_crossings,
+            1e3 * c.at[0],
+            1e3 * c.at[1],
+            1e3 * c.at[2],
+            c.apart / h,
+            c.longest_edge / h,
+            self.ws.self_contact.neighbours(),
+        ))
+    }
+
     /// A history sample's measures of the whole body over the particles' physical positions,
     /// formed once: every particle's isolation ([`crate::solver::detachment`]) and
     /// [`SolidSimulation::measure_penetration`], both recorded in the state. Returns the
@@ -970,8 +1018,19 @@ impl SolidSimulation {
     pub fn measure_sample(&mut self) -> (Vec<[Real; 3]>, Result<(Real, Real)>) {
         let positions = self.positions();
         self.measure_isolation(&positions);
+        self.measure_crossings(&positions);
         let depths = self.measure_penetration_at(&positions);
         (positions, depths)
+    }
+
+    /// The fold crossings at `positions` (m, now), the most and the first recorded in the
+    /// state.
+    fn measure_crossings(&mut self, positions: &[[Real; 3]]) {
+        let c = self.fold_crossings_at(positions);
+        self.st.max_fold_crossings = self.st.max_fold_crossings.max(c.count as u32);
+        if self.st.first_fold_crossing.is_none() {
+            self.st.first_fold_crossing = c.first.map(|first| (self.st.time, first));
+        }
     }
 
     /// Every particle's isolation with the particles at `positions` (m, now): its nearest

@@ -18,7 +18,7 @@
 use super::contact::{flow_stress, interface, predicted};
 use super::heat::HeatSurface;
 use super::{SolidDisc, SolidState};
-use crate::contact::self_contact_3d::{SelfContact3, Surface};
+use crate::contact::self_contact_3d::{Crossings, SelfContact3, Surface};
 use crate::contact::sidibe2009::Interface;
 use crate::contact::Forces;
 use crate::laps::{self, SolidLap, SolidLapReport};
@@ -198,5 +198,23 @@ impl SolidSelfContact {
             .collect();
         let (depth, s) = surface.passed_through(&x, &self.mirrors, self.search.neighbours);
         (depth, surface.particles.get(s).map_or(0, |&j| j as usize))
+    }
+
+    /// The crossings of the surface's faces within the kernel's support of each other at
+    /// the particles' positions `positions` (m), corners within `tolerance` (m) of the other
+    /// face let through ([`Surface::fold_crossings`]).
+    pub(super) fn fold_crossings(&self, positions: &[[Real; 3]], tolerance: Real) -> Crossings {
+        let surface = &self.search.surface;
+        let x: Vec<[Real; 3]> = surface
+            .particles
+            .iter()
+            .map(|&j| positions[j as usize])
+            .collect();
+        surface.fold_crossings(&x, tolerance, self.search.neighbours)
+    }
+
+    /// The cells on either side of a surface particle whose faces its contact leaves out.
+    pub(super) fn neighbours(&self) -> usize {
+        self.search.neighbours
     }
 }

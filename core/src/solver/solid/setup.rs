@@ -522,6 +522,8 @@ impl SolidSimulation {
             reference: None,
             self_touching: vec![false; ws.self_contact.slots()],
             laps: Vec::new(),
+            max_fold_crossings: 0,
+            first_fold_crossing: None,
         };
         disc.critical_dt0 = measure_critical_step(&disc, &mut st, &mut ws)?;
         if let Some(ms) = scene.time.mass_scaling {
