@@ -206,6 +206,7 @@ fn variability(v: Variability) -> &'static str {
     match v {
         Variability::Fixed => "fixed",
         Variability::Continuous => "continuous",
+        Variability::Discrete => "discrete",
     }
 }
 

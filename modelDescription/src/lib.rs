@@ -102,6 +102,8 @@ pub enum Variability {
     Fixed,
     /// Changes continuously in time.
     Continuous,
+    /// Changes only in steps (a count or a flag).
+    Discrete,
 }
 
 /// FMI 2.0 base type with the start value.
@@ -223,7 +225,11 @@ pub fn variable_table<S: FmuScene>(scene: &S) -> Vec<Variable> {
         push(
             c.name.clone(),
             Output,
-            Continuous,
+            if c.output.discrete {
+                Discrete
+            } else {
+                Continuous
+            },
             Kind::Real(None),
             (c.unit() != "1").then(|| c.unit()),
             scene.describe(c),
@@ -506,6 +512,64 @@ mod tests {
         assert!(t.iter().any(|v| v.name == "workpiece.radius_m"));
         assert!(t.iter().any(|v| v.name == "time.end_s"));
         assert!(!t.iter().any(|v| v.name == "output.frames"));
+    }
+
+    /// The outputs that count or flag (laps, crossings, a fill point reached) are declared
+    /// `discrete` in both versions, every other output `continuous`.
+    #[test]
+    fn counts_and_flags_are_discrete_outputs() {
+        let is_discrete = |n: &str| {
+            n.ends_with(".filled")
+                || ["laps", "boundary_crossings", "fold_crossings"]
+                    .iter()
+                    .any(|c| n == format!("workpiece.{c}"))
+        };
+        let check = |file: &str, t: &[Variable], expect: &[&str]| {
+            for v in t.iter().filter(|v| v.causality == Causality::Output) {
+                let want = if is_discrete(&v.name) {
+                    Variability::Discrete
+                } else {
+                    Variability::Continuous
+                };
+                assert_eq!(v.variability, want, "{file}: {}", v.name);
+            }
+            for n in expect {
+                assert!(t.iter().any(|v| v.name == *n), "{file}: {n}");
+            }
+        };
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes");
+        let plane = Scene::from_file(&dir.join("closed_die_hub.toml")).unwrap();
+        check(
+            "closed_die_hub.toml",
+            &variable_table(&plane),
+            &["workpiece.laps", "workpiece.boundary_crossings"],
+        );
+        let SceneFile::Solid(conrod) = SceneFile::from_file(&dir.join("conrod_3d.toml")).unwrap()
+        else {
+            panic!("conrod_3d.toml is 3D")
+        };
+        let t3 = variable_table3(&*conrod);
+        check(
+            "conrod_3d.toml",
+            &t3,
+            &["workpiece.fold_crossings", "die.boss_end.filled"],
+        );
+        let header = xml::Header {
+            model_name: "conrod".into(),
+            model_identifier: "conrod".into(),
+            guid: xml::guid("conrod"),
+            description: String::new(),
+            stop_time: 1.0,
+            step_size: 1e-6,
+        };
+        for text in [
+            xml::write(&header, &variable_table(&*conrod)).unwrap(),
+            xml3::write(&header, &t3, time_value_reference(&*conrod)).unwrap(),
+        ] {
+            let at = text.find(r#"name="workpiece.fold_crossings""#).unwrap();
+            let element = &text[at..at + text[at..].find('>').unwrap()];
+            assert!(element.contains(r#"variability="discrete""#), "{element}");
+        }
     }
 
     /// A 3D scene's table: the 2D interface over the 3D register and scene, names unique

@@ -183,7 +183,8 @@ pub fn model_copies(plane_axes: &[usize], axis: [f64; 3]) -> Result<f64, String>
     Ok(copies)
 }
 
-/// The outputs of each press besides `ram.velocity_m_per_s`: name, unit, description.
+/// The outputs of each press besides `ram.velocity_m_per_s` and `finished`: name, unit,
+/// description; those without a unit are flags and counts (`discrete`).
 pub fn outputs(kind: PressKind) -> &'static [(&'static str, Option<&'static str>, &'static str)] {
     match kind {
         PressKind::Hydraulic => &[("pressure_Pa", Some("Pa"), "cylinder pressure")],
@@ -268,7 +269,7 @@ pub fn variable_table(kind: PressKind, copies: f64) -> Vec<Variable> {
     push(
         "finished".into(),
         Causality::Output,
-        Variability::Continuous,
+        Variability::Discrete,
         Kind::Real(None),
         None,
         "1 once the press's cycle is over (stall, overload, end angle, target height, stopped flywheel), else 0".into(),
@@ -277,7 +278,10 @@ pub fn variable_table(kind: PressKind, copies: f64) -> Vec<Variable> {
         push(
             (*name).into(),
             Causality::Output,
-            Variability::Continuous,
+            match unit {
+                Some(_) => Variability::Continuous,
+                None => Variability::Discrete,
+            },
             Kind::Real(None),
             *unit,
             (*d).into(),
@@ -338,13 +342,28 @@ mod tests {
             for v in &vars {
                 let counted = dimensionless.contains(&v.name.as_str());
                 assert_eq!(v.unit.is_none(), counted, "{kind:?} {}", v.name);
+                // The outputs that are flags and counts change in steps.
+                let discrete = counted && v.causality == Causality::Output;
+                assert_eq!(
+                    v.variability == Variability::Discrete,
+                    discrete,
+                    "{kind:?} {}",
+                    v.name
+                );
             }
             let text = xml::write(&header(kind, "press"), &vars).unwrap();
             let back = xml::read(&text).unwrap();
             for v in vars.iter().filter_map(|v| v.unit) {
                 assert!(back.units.iter().any(|u| u == v), "{kind:?} {v}");
             }
-            xml3::write(&header(kind, "press"), &vars, vars.len() as u32).unwrap();
+            let text3 = xml3::write(&header(kind, "press"), &vars, vars.len() as u32).unwrap();
+            for doc in [&text, &text3] {
+                assert!(
+                    doc.contains(r#"name="finished" valueReference"#)
+                        && doc.contains(r#"causality="output" variability="discrete""#),
+                    "{doc}"
+                );
+            }
         }
         let crank = xml::write(
             &header(PressKind::Crank, "press"),

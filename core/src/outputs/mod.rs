@@ -150,6 +150,9 @@ pub struct Output<S: Body = Simulation> {
     pub when: When,
     /// The front ends that show it beside those that show every output.
     pub shown: Shown,
+    /// Whether it changes only in steps, a count or a flag (the FMU declares it `discrete`,
+    /// the others `continuous`).
+    pub discrete: bool,
     /// How it is read, which also gives its kind.
     pub read: Read<S>,
 }

@@ -155,6 +155,7 @@ pub(super) const fn filled<S: Body>() -> Output<S> {
             "1 once the material has reached point {point} of tool {tool} (die fill), else 0",
         when: When::Always,
         shown: Shown::NOT_IN_SUMMARY,
+        discrete: true,
         read: Read::FillPoint(|s, i| match s.fill_state()[i] {
             Some(_) => 1.0,
             None => 0.0,
@@ -271,7 +272,8 @@ const WORKPIECE: [Output; 15] = [
         "crossings of the boundary's segments (0: the surface does not pass through itself)",
         |s| s.penetration().crossings,
     )
-    .showing(Shown::NOT_IN_SUMMARY),
+    .showing(Shown::NOT_IN_SUMMARY)
+    .discrete(),
     scalar::<Simulation>(
         "workpiece",
         "laps",
@@ -279,7 +281,8 @@ const WORKPIECE: [Output; 15] = [
         "how many laps (folds of the surface onto itself between points apart along it) formed so far",
         |s| s.lap_count() as Real,
     )
-    .showing(Shown::NOT_IN_SUMMARY),
+    .showing(Shown::NOT_IN_SUMMARY)
+    .discrete(),
 ];
 
 /// Each followed face of the workpiece (`output.faces`): the bounds of the particles that
@@ -605,6 +608,7 @@ pub(super) const fn scalar<S: Body>(
         description,
         when: When::Always,
         shown: Shown::EVERYWHERE,
+        discrete: false,
         read: Read::Scalar(read),
     }
 }
@@ -623,6 +627,7 @@ pub(super) const fn tool<S: Body>(
         description,
         when: When::Always,
         shown: Shown::EVERYWHERE,
+        discrete: false,
         read: Read::Tool(read),
     }
 }
@@ -640,6 +645,7 @@ const fn face(
         description,
         when: When::Always,
         shown: Shown::EVERYWHERE,
+        discrete: false,
         read: Read::Face(read),
     }
 }
@@ -673,6 +679,7 @@ pub(super) const fn particles<S: Body>(
         description,
         when: When::Always,
         shown: Shown::FIELD,
+        discrete: false,
         read: Read::Particles(read),
     }
 }
@@ -691,6 +698,7 @@ pub(super) const fn points<S: Body>(
         description,
         when: When::Always,
         shown: Shown::FIELD,
+        discrete: false,
         read: Read::Points(read),
     }
 }
@@ -711,6 +719,12 @@ impl<S: Body> Output<S> {
     /// In group `group`.
     pub(super) const fn in_group(mut self, group: &'static str) -> Output<S> {
         self.group = group;
+        self
+    }
+
+    /// Changing only in steps: a count or a flag.
+    pub(super) const fn discrete(mut self) -> Output<S> {
+        self.discrete = true;
         self
     }
 }

@@ -204,7 +204,8 @@ const WORKPIECE: [Output<SolidSimulation>; 14] = [
         "crossings of the surface's faces within the kernel's support of each other (a fold's root passed through itself, which the self-contact leaves out; 0: none)",
         |s| s.fold_crossings().count as Real,
     )
-    .showing(Shown::NOT_IN_SUMMARY),
+    .showing(Shown::NOT_IN_SUMMARY)
+    .discrete(),
 ];
 
 /// A bound of the workpiece: `end` 0 (least) or 1 (largest) of coordinate `axis`.
