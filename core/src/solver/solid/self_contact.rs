@@ -174,12 +174,7 @@ impl SolidSelfContact {
 
     /// The laps of `st` as reported at the particles' positions now `positions` (m).
     pub(super) fn laps(&self, st: &SolidState, positions: &[[Real; 3]]) -> Vec<SolidLapReport> {
-        let surface = &self.search.surface;
-        let x: Vec<[Real; 3]> = surface
-            .particles
-            .iter()
-            .map(|&j| positions[j as usize])
-            .collect();
+        let (surface, x) = (&self.search.surface, self.by_slot(positions));
         st.laps
             .iter()
             .map(|lap: &SolidLap| laps::solid_report(lap, surface, &x))
@@ -190,12 +185,7 @@ impl SolidSelfContact {
     /// the particles' positions `positions` (m): `(depth (m), particle)`
     /// ([`Surface::passed_through`]).
     pub(super) fn passed_through(&self, positions: &[[Real; 3]]) -> (Real, usize) {
-        let surface = &self.search.surface;
-        let x: Vec<[Real; 3]> = surface
-            .particles
-            .iter()
-            .map(|&j| positions[j as usize])
-            .collect();
+        let (surface, x) = (&self.search.surface, self.by_slot(positions));
         let (depth, s) = surface.passed_through(&x, &self.mirrors, self.search.neighbours);
         (depth, surface.particles.get(s).map_or(0, |&j| j as usize))
     }
@@ -204,13 +194,21 @@ impl SolidSelfContact {
     /// the particles' positions `positions` (m), corners within `tolerance` (m) of the other
     /// face let through ([`Surface::fold_crossings`]).
     pub(super) fn fold_crossings(&self, positions: &[[Real; 3]], tolerance: Real) -> Crossings {
-        let surface = &self.search.surface;
-        let x: Vec<[Real; 3]> = surface
+        self.search.surface.fold_crossings(
+            &self.by_slot(positions),
+            tolerance,
+            self.search.neighbours,
+        )
+    }
+
+    /// The surface particles' positions (m) by slot, from every particle's `positions`.
+    fn by_slot(&self, positions: &[[Real; 3]]) -> Vec<[Real; 3]> {
+        self.search
+            .surface
             .particles
             .iter()
             .map(|&j| positions[j as usize])
-            .collect();
-        surface.fold_crossings(&x, tolerance, self.search.neighbours)
+            .collect()
     }
 
     /// The cells on either side of a surface particle whose faces its contact leaves out.
