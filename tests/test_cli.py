@@ -223,6 +223,19 @@ def test_a_closed_standard_output_does_not_stop_a_run(rkforge_bin, tmp_path):
     assert json.loads((out / "summary.json").read_text())["status"] == "ok"
 
 
+def test_a_step_safety_a_fixed_step_leaves_unused_is_named_in_a_warning(rkforge_bin, tmp_path):
+    """The Taylor bar fixes its step (`time.dt_s`); a `dt_safety` beside it does nothing, and
+    the run says so (on stderr and in the summary) instead of taking it silently."""
+    proc = subprocess.run([rkforge_bin, "run", str(ROOT / "scenes" / "taylor_bar.toml"), "--no-frames",
+                           "--set", "time.dt_safety=0.9", "--set", "time.end_s=1e-6",
+                           "--out", str(tmp_path / "o")], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    line = "time.dt_safety = 0.9 is not used: the fixed step time.dt_s = 5e-9 s sets every step"
+    assert f"warning: {line}" in proc.stderr, proc.stderr
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert any(w.startswith(line) for w in summary["warnings"]), summary["warnings"]
+
+
 def test_a_step_safety_that_would_never_end_is_refused_by_name(rkforge_bin, tmp_path):
     proc = subprocess.run([rkforge_bin, "run", str(ROOT / "scenes" / "taylor_ofhc.toml"), "--set", "time.dt_safety=1e-20",
                            "--out", str(tmp_path / "o")], capture_output=True, text=True, timeout=600)

@@ -71,7 +71,7 @@ pub fn summary(sim: &Simulation, wall_s: f64, output_s: f64, ending: Ending<'_>)
             "max_isolation_rel": sim.state().isolation.max,
         },
         "mass_scaling": sim.mass_scaling(),
-        "warnings": sim.quasi_static_warning().into_iter().chain(sim.surface_warning()).chain(sim.detached_warning()).collect::<Vec<_>>(),
+        "warnings": scene.time.unused_safety_warning().into_iter().chain(sim.quasi_static_warning()).chain(sim.surface_warning()).chain(sim.detached_warning()).collect::<Vec<_>>(),
         "tools": (0..sim.tools().len()).map(|k| tool_in(&sample, k)).collect::<Vec<_>>(),
         "contact": {
             "max_penetration_m": sim.max_penetration(),
@@ -183,7 +183,7 @@ pub fn solid_summary(
         "smallest_spacing_m": sim.h_min(),
         "critical_dt_s": sim.critical_dt0(),
         "mass_scaling": sim.mass_scaling(),
-        "warnings": sim.quasi_static_warning().into_iter().chain(sim.surface_warning()).chain(sim.detached_warning()).collect::<Vec<_>>(),
+        "warnings": scene.time.unused_safety_warning().into_iter().chain(sim.quasi_static_warning()).chain(sim.surface_warning()).chain(sim.detached_warning()).collect::<Vec<_>>(),
         "workpiece": {
             "x_range_m": b.extents[0],
             "y_range_m": b.extents[1],

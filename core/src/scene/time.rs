@@ -96,6 +96,22 @@ impl TimeSpec {
     }
 }
 
+impl TimeSpec {
+    /// A warning when a fixed step makes `dt_safety` (set to other than its default) do
+    /// nothing: it scales only the stable step, and a selective mass scaling's target. A
+    /// refusal would refuse `--set time.dt_s=...` on every scene that sets `dt_safety`.
+    pub fn unused_safety_warning(&self) -> Option<String> {
+        let dt = self.dt_s?;
+        let targeted = self.mass_scaling.is_some_and(|m| m.target_dt_s.is_some());
+        (self.dt_safety != default_safety() && !targeted).then(|| {
+            format!(
+                "time.dt_safety = {} is not used: the fixed step time.dt_s = {dt:e} s sets every step (remove one of the two keys)",
+                self.dt_safety
+            )
+        })
+    }
+}
+
 impl MassScaling {
     /// One of a uniform factor (at least 1) or a target step (positive), under the dotted
     /// keys `time.mass_scaling.*`; a target held at re-references needs the scene to
@@ -125,5 +141,40 @@ impl MassScaling {
                 "give one of `factor` (uniform) or `target_dt_s` (selective)".into(),
             ),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(dt_s: Option<Real>, dt_safety: Real, target: Option<Real>) -> TimeSpec {
+        TimeSpec {
+            end_s: 1e-3,
+            dt_s,
+            dt_safety,
+            mass_scaling: target.map(|t| MassScaling {
+                factor: None,
+                target_dt_s: Some(t),
+                at_rereferences: None,
+            }),
+        }
+    }
+
+    /// A fixed step with a `dt_safety` of its own is named, not refused; the default, no
+    /// fixed step, or a selective mass scaling's target (which `dt_safety` scales) is not.
+    #[test]
+    fn a_safety_a_fixed_step_leaves_unused_is_named() {
+        let w = spec(Some(2e-6), 0.9, None).unused_safety_warning().unwrap();
+        assert!(
+            w.contains("time.dt_safety = 0.9 is not used") && w.contains("time.dt_s = 2e-6 s"),
+            "{w}"
+        );
+        assert_eq!(spec(Some(2e-6), 0.5, None).unused_safety_warning(), None);
+        assert_eq!(spec(None, 0.9, None).unused_safety_warning(), None);
+        assert_eq!(
+            spec(Some(2e-6), 0.9, Some(5e-6)).unused_safety_warning(),
+            None
+        );
     }
 }
